@@ -1,0 +1,288 @@
+"""Command-line interface: ``bilevel-kit solve | check | schema | methods``.
+
+Exit codes: 0 ok, 1 the solution is invalid, 2 bad input or usage (a one-line message on
+stderr, no traceback), 3 a definite answer could not be reached within the time limit.
+Heavy back-ends are imported inside the commands, so ``bilevel-kit --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from typing import Any, NoReturn
+
+EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (exit 2) instead of the usage dump."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _key_values(text: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {item!r}")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def _weights(text: str) -> dict[str, float]:
+    out = {}
+    for k, v in _key_values(text).items():
+        key = k.upper()
+        try:
+            out[key] = float(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
+    return out
+
+
+def _scalar(value: str) -> Any:
+    low = value.lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for cast in (int, float):
+        try:
+            return cast(value)
+        except ValueError:
+            pass
+    return value
+
+
+def _param(text: str) -> tuple[str, Any]:
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"--param: expected KEY=VALUE, got {text!r}")
+    return key.replace("-", "_"), _scalar(value)
+
+
+def _nonneg(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v >= 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return v
+
+
+def _add_instance_overrides(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("instance overrides")
+    g.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
+                   help="delivery time d in seconds (overrides the instance)")
+    g.add_argument("--weights", type=_weights, metavar="W3=1,W4=1",
+                   help="override some of the paper's weights W1..W7")
+    g.add_argument("--horizon", type=_positive_int, metavar="N",
+                   help="look-ahead N of the greedy upper level (default: the instance's, 5)")
+    g.add_argument("--units", type=_positive_int, metavar="U",
+                   help="number of product units built one after another")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .methods import REGISTRY
+
+    methods = "\n".join(f"  {s.name:<16} {s.summary}" for s in REGISTRY.values())
+    parser = _Parser(
+        prog="bilevel-kit",
+        description="Just-in-time robotic kitting: solve, compare and check kitting plans.",
+        epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
+        "within the time limit\n\nmethods:\n" + methods,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    p = sub.add_parser("solve", help="solve an instance with one method",
+                       description="Solve an instance file with a registered method and print "
+                       "a summary; optionally write the solution JSON and figures.")
+    p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
+    p.add_argument("--method", "-m", required=True, metavar="NAME",
+                   help="registered method: " + ", ".join(REGISTRY))
+    p.add_argument("--out", "-o", metavar="FILE", help="write the solution JSON here")
+    p.add_argument("--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
+    p.add_argument("--tray", metavar="PNG", help="draw every kit's tray layout")
+    p.add_argument("--check", action="store_true",
+                   help="run the independent checker on the plan (exit 1 when invalid)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--time-limit", type=_nonneg, metavar="S",
+                   help="time limit in seconds for methods that take one")
+    p.add_argument("--param", "-p", type=_param, action="append", default=[],
+                   metavar="KEY=VALUE", help="method-specific option (repeatable)")
+    p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
+    _add_instance_overrides(p)
+
+    p = sub.add_parser("check", help="check a solution file against an instance",
+                       description="Run the independent checker; exit 1 and list the "
+                       "violations when the solution is invalid.")
+    p.add_argument("instance")
+    p.add_argument("solution")
+    _add_instance_overrides(p)
+
+    p = sub.add_parser("schema", help="print the JSON Schema of instance or solution files")
+    p.add_argument("--solution", action="store_true", help="the solution schema instead")
+    p.add_argument("--out", "-o", metavar="FILE", help="write it to FILE instead of stdout")
+
+    sub.add_parser("methods", help="list the registered methods")
+    return parser
+
+
+def _load_instance(args: argparse.Namespace):
+    from .instance import load
+
+    inst = load(args.instance)
+    return inst.with_overrides(
+        delivery_time=args.delivery_time, weights=args.weights, horizon=args.horizon,
+        units=args.units,
+    )
+
+
+def _fmt(v: float | None, unit: str = "") -> str:
+    return "-" if v is None else f"{v:.2f}{unit}"
+
+
+def _summary(instance, result, quiet: bool) -> str:
+    lines = []
+    m = result.metrics or {}
+    gap = "-" if result.gap is None else f"{100 * result.gap:.2f}%"
+    lines.append(
+        f"{instance.name}: {result.method} {result.status}  makespan {_fmt(m.get('makespan'))} s"
+        f"  human idle {_fmt(m.get('human_idle'))} s  robot idle {_fmt(m.get('robot_idle'))} s"
+        f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
+        f"  time {result.wall_time_s:.3f} s"
+    )
+    if quiet or result.plan is None:
+        return "\n".join(lines)
+    lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
+    for k, (kit, t) in enumerate(zip(result.plan.kits, result.timeline.kits, strict=True), 1):
+        lines.append(
+            f"{k:>3}  {t.robot_start:7.1f}-{t.robot_end:<7.1f}  {t.arrive:8.1f}  "
+            f"{t.human_start:7.1f}-{t.human_end:<7.1f}  {','.join(kit.tasks)}"
+        )
+    return "\n".join(lines)
+
+
+def _print_violations(lines: list[str], stream, limit: int = 20) -> None:
+    print(f"INVALID: {len(lines)} violation(s)", file=stream)
+    for line in lines[:limit]:
+        print(f"  {line}", file=stream)
+    if len(lines) > limit:
+        print(f"  ... and {len(lines) - limit} more", file=stream)
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    from .methods import get_method, solve
+
+    get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
+    instance = _load_instance(args)
+    params = dict(args.param)
+    result = solve(instance, args.method, seed=args.seed, time_limit=args.time_limit,
+                   check=args.check, **params)
+    figures = []
+    if result.plan is not None and (args.gantt or args.tray):
+        from . import plots
+
+        if args.gantt:
+            ax = plots.plot_gantt(instance, result.plan, result.timeline)
+            figures.append((ax.figure, args.gantt))
+        if args.tray:
+            figures.append((plots.plot_trays(instance, result.plan), args.tray))
+    if args.out:
+        from .solution import write
+
+        write(args.out, result)
+    if figures:
+        from .plots import save_figure
+
+        for fig, path in figures:
+            save_figure(fig, path)
+    print(_summary(instance, result, args.quiet))
+    violations = result.extra.get("violations")
+    if violations:
+        _print_violations([f"[{v['kind']}] {v['message']}" for v in violations], sys.stderr)
+        return EXIT_INVALID
+    if args.check and result.plan is not None:
+        print("check: valid")
+    if result.plan is None:
+        return EXIT_UNKNOWN if result.status == "unknown" else EXIT_OK
+    return EXIT_OK
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from . import solution
+    from .validate import check
+
+    instance = _load_instance(args)
+    sol = solution.read(args.solution)
+    violations = check(instance, sol.plan, reported_kits=sol.reported_kits,
+                       reported_metrics=sol.reported_metrics)
+    if violations:
+        _print_violations([str(v) for v in violations], sys.stdout)
+        return EXIT_INVALID
+    print(f"valid: {len(sol.plan.kits)} kits, {sum(len(k.tasks) for k in sol.plan.kits)} tasks")
+    return EXIT_OK
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    import json
+
+    if args.solution:
+        from .solution import schema
+    else:
+        from .instance import schema
+    text = json.dumps(schema(), indent=2) + "\n"
+    if args.out:
+        from .atomic import write_text
+
+        write_text(args.out, text)
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
+def cmd_methods(args: argparse.Namespace) -> int:
+    from .methods import REGISTRY
+
+    for s in REGISTRY.values():
+        print(f"{s.name:<16} {s.summary}")
+    return EXIT_OK
+
+
+COMMANDS = {"solve": cmd_solve, "check": cmd_check, "schema": cmd_schema,
+            "methods": cmd_methods}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from .errors import BilevelKitError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return COMMANDS[args.command](args)
+    except BilevelKitError as exc:
+        print(f"bilevel-kit {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("bilevel-kit: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,65 @@
+"""The paper's two baselines (Section V-A): Single Task and Whole Assembly.
+
+* Single Task: one kit per task ("one kit per vertex" of the task graph), tasks in the
+  deterministic topological order of :func:`bilevel_kit.instance.topological_order` (Kahn's
+  algorithm, ties broken by the order of the tasks in the file).
+* Whole Assembly: one kit per product unit holding all of that unit's tasks, in the same order.
+
+Layouts come from the shelf packer; a kit it cannot lay out raises
+:class:`~bilevel_kit.errors.KitDoesNotFit` instead of returning an overlapping layout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from ..errors import KitDoesNotFit
+from ..instance import Instance, topological_order
+from ..methods import MethodOutput
+from ..plan import Kit, Plan
+from .packing import kit_items, shelf_pack
+
+
+def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
+    """A kit of ``tasks`` laid out by the shelf packer, or :class:`KitDoesNotFit`."""
+    counts = instance.kit_parts(tasks)
+    layout = shelf_pack(instance.tray, kit_items(instance.part_types, counts))
+    if layout is None:
+        area = sum(instance.part_types[p].area * n for p, n in counts.items())
+        raise KitDoesNotFit(
+            f"{instance.source}: {label}: its {sum(counts.values())} parts "
+            f"({area:.0f} mm^2) do not fit the {instance.tray.width:g} x "
+            f"{instance.tray.height:g} mm tray ({instance.tray.area:.0f} mm^2) with the shelf "
+            "packer"
+        )
+    return Kit(tuple(tasks), layout)
+
+
+def single_task(instance: Instance, *, seed: int = 0, time_limit: float | None = None,
+                **params: Any) -> MethodOutput:
+    """One kit per task, in topological order."""
+    _no_params("single-task", params)
+    kits = tuple(packed_kit(instance, [t], f"kit for task {t!r}")
+                 for t in topological_order(instance))
+    return MethodOutput(Plan(kits), "feasible")
+
+
+def whole_assembly(instance: Instance, *, seed: int = 0, time_limit: float | None = None,
+                   **params: Any) -> MethodOutput:
+    """One kit per product unit, its tasks in topological order."""
+    _no_params("whole-assembly", params)
+    order = topological_order(instance)
+    unit = {t.id: t.unit for t in instance.tasks}
+    kits = tuple(
+        packed_kit(instance, [t for t in order if unit[t] == u], f"whole-assembly kit of unit {u}")
+        for u in range(1, instance.units + 1)
+    )
+    return MethodOutput(Plan(kits), "feasible")
+
+
+def _no_params(method: str, params: dict[str, Any]) -> None:
+    if params:
+        from ..errors import UsageError
+
+        raise UsageError(f"method {method!r} takes no option(s) {', '.join(sorted(params))}")

@@ -1,0 +1,155 @@
+"""Plans (ordered kits with tray layouts) and the one timeline evaluator (DESIGN.md section 2).
+
+For kits k = 1..m in delivery order::
+
+    R_k = o_R + sum_{i in S_k} r_i            H_k = o_H + sum_{i in S_k} h_i
+    robot_start_1 = 0,  robot_start_{k+1} = arrive_k       (the robot pushes the tray)
+    robot_end_k = robot_start_k + R_k,       arrive_k = robot_end_k + d
+    human_start_k = max(arrive_k, human_end_{k-1}),  human_end_k = human_start_k + H_k
+    C = human_end_m,  human idle = C - sum_k H_k,  robot idle = C - sum_k (R_k + d)
+
+Robot idle counts delivery as robot work, because the robot is busy while it delivers.
+Every solver, the checker, the simulator and the plots go through :func:`evaluate`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from .instance import Instance
+
+
+@dataclass(frozen=True)
+class Placement:
+    """One part on the tray: footprint centre (x, y) in mm from the tray's lower-left corner,
+    rotation ``theta`` in degrees counter-clockwise, unrotated footprint ``w`` x ``h`` in mm."""
+
+    part: str
+    type: str
+    x: float
+    y: float
+    theta: float
+    w: float
+    h: float
+
+
+@dataclass(frozen=True)
+class Kit:
+    """One tray: its tasks in the order the human does them, and its layout."""
+
+    tasks: tuple[str, ...]
+    layout: tuple[Placement, ...] = ()
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Kits in delivery order."""
+
+    kits: tuple[Kit, ...]
+
+    @property
+    def task_order(self) -> list[str]:
+        return [t for k in self.kits for t in k.tasks]
+
+
+@dataclass(frozen=True)
+class KitTimes:
+    robot_start: float
+    robot_end: float
+    arrive: float
+    human_start: float
+    human_end: float
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """The evaluated schedule of a plan and its metrics."""
+
+    kits: tuple[KitTimes, ...]
+    task_start: Mapping[str, float]
+    task_end: Mapping[str, float]
+    makespan: float
+    human_idle: float
+    robot_idle: float
+    human_work: float
+    robot_work: float
+
+    @property
+    def n_kits(self) -> int:
+        return len(self.kits)
+
+    def metrics(self) -> dict[str, float | int]:
+        return {
+            "makespan": self.makespan,
+            "human_idle": self.human_idle,
+            "robot_idle": self.robot_idle,
+            "n_kits": self.n_kits,
+        }
+
+
+def kit_durations(
+    instance: Instance,
+    tasks: Sequence[str],
+    robot_times: Mapping[str, float] | None = None,
+    human_times: Mapping[str, float] | None = None,
+) -> tuple[float, float]:
+    """(R_k, H_k) of a kit holding ``tasks``: overheads plus the tasks' robot/human times."""
+    r = instance.kit_overhead_robot
+    h = instance.kit_overhead_human
+    for t in tasks:
+        r += robot_times[t] if robot_times is not None else instance.robot_time(t)
+        h += human_times[t] if human_times is not None else instance.human_time(t)
+    return r, h
+
+
+def evaluate(
+    instance: Instance,
+    plan: Plan,
+    *,
+    robot_times: Mapping[str, float] | None = None,
+    human_times: Mapping[str, float] | None = None,
+) -> Timeline:
+    """The DESIGN.md section-2 timeline of ``plan`` (see the module docstring).
+
+    ``robot_times``/``human_times`` replace the instance's expected task times (the simulator
+    passes sampled durations); they must cover every task of the plan. The plan is not checked
+    here: see :func:`bilevel_kit.validate.check`.
+    """
+    d = instance.delivery_time
+    oh = instance.kit_overhead_human
+    kits: list[KitTimes] = []
+    task_start: dict[str, float] = {}
+    task_end: dict[str, float] = {}
+    robot_free = 0.0
+    human_free = 0.0
+    robot_work = 0.0
+    human_work = 0.0
+    for kit in plan.kits:
+        r, h = kit_durations(instance, kit.tasks, robot_times, human_times)
+        robot_start = robot_free
+        robot_end = robot_start + r
+        arrive = robot_end + d
+        human_start = max(arrive, human_free)
+        human_end = human_start + h
+        clock = human_start + oh
+        for t in kit.tasks:
+            task_start[t] = clock
+            clock += human_times[t] if human_times is not None else instance.human_time(t)
+            task_end[t] = clock
+        kits.append(KitTimes(robot_start, robot_end, arrive, human_start, human_end))
+        robot_free = arrive
+        human_free = human_end
+        robot_work += r + d
+        human_work += h
+    makespan = human_free
+    return Timeline(
+        kits=tuple(kits),
+        task_start=task_start,
+        task_end=task_end,
+        makespan=makespan,
+        human_idle=makespan - human_work,
+        robot_idle=makespan - robot_work,
+        human_work=human_work,
+        robot_work=robot_work,
+    )

@@ -1,0 +1,202 @@
+"""The independent checker: ``check(instance, plan) -> list[Violation]``.
+
+It trusts no solver. It recomputes everything from the instance and the plan alone: every task
+exactly once, precedence across and inside kits, each kit's parts against its tasks' parts,
+every footprint inside the tray and no two footprints overlapping (exact rotated rectangles,
+tolerance :data:`bilevel_kit.geometry.TOL`), and, when a solution reports times, that they
+agree with the timeline evaluator.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from itertools import combinations
+
+from . import geometry
+from .instance import Instance
+from .plan import KitTimes, Plan, evaluate
+
+#: Absolute tolerance (s) when comparing reported times with the evaluator's.
+TIME_TOL = 1e-6
+
+KINDS = (
+    "empty_kit",
+    "unknown_task",
+    "repeated_task",
+    "missing_task",
+    "precedence",
+    "unknown_part_type",
+    "duplicate_part_id",
+    "parts_mismatch",
+    "footprint_mismatch",
+    "rotation_not_allowed",
+    "outside_tray",
+    "overlap",
+    "times_inconsistent",
+)
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One problem with a plan: a machine-readable ``kind`` and a readable ``message``."""
+
+    kind: str
+    message: str
+    kit: int | None = None  # 1-based kit index, when the violation belongs to a kit
+
+    def to_dict(self) -> dict[str, object]:
+        return {"kind": self.kind, "message": self.message, "kit": self.kit}
+
+    def __str__(self) -> str:
+        return f"[{self.kind}] {self.message}"
+
+
+def check(
+    instance: Instance,
+    plan: Plan,
+    *,
+    reported_kits: Sequence[KitTimes] | None = None,
+    reported_metrics: Mapping[str, float] | None = None,
+) -> list[Violation]:
+    """All violations of ``plan`` on ``instance`` (empty list: the plan is valid).
+
+    ``reported_kits``/``reported_metrics`` are the times a solution file claims; they are
+    compared with :func:`bilevel_kit.plan.evaluate` within :data:`TIME_TOL`.
+    """
+    out: list[Violation] = []
+    out += _check_tasks(instance, plan)
+    for k, kit in enumerate(plan.kits, start=1):
+        out += _check_layout(instance, kit, k)
+    if reported_kits is not None or reported_metrics is not None:
+        out += _check_times(instance, plan, reported_kits, reported_metrics)
+    return out
+
+
+def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
+    out: list[Violation] = []
+    known = instance.task_by_id
+    position: dict[str, tuple[int, int]] = {}  # task -> (kit, index in kit), first occurrence
+    for k, kit in enumerate(plan.kits, start=1):
+        if not kit.tasks:
+            out.append(Violation("empty_kit", f"kit {k} holds no task", k))
+        for j, t in enumerate(kit.tasks):
+            if t not in known:
+                out.append(Violation("unknown_task", f"kit {k} holds unknown task {t!r}", k))
+            elif t in position:
+                out.append(Violation(
+                    "repeated_task", f"task {t!r} appears again in kit {k} "
+                    f"(first in kit {position[t][0]})", k))
+            else:
+                position[t] = (k, j)
+    missing = [t.id for t in instance.tasks if t.id not in position]
+    if missing:
+        shown = ", ".join(map(repr, missing[:8])) + (" ..." if len(missing) > 8 else "")
+        out.append(Violation("missing_task", f"{len(missing)} task(s) in no kit: {shown}"))
+    for a, b in instance.precedence:
+        if a not in position or b not in position:
+            continue
+        (ka, ia), (kb, ib) = position[a], position[b]
+        if ka > kb:
+            out.append(Violation(
+                "precedence", f"{a!r} must precede {b!r} but is delivered in kit {ka}, "
+                f"after kit {kb}", kb))
+        elif ka == kb and ia > ib:
+            out.append(Violation(
+                "precedence", f"{a!r} must precede {b!r} but comes after it inside kit {ka}",
+                ka))
+    return out
+
+
+def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
+    out: list[Violation] = []
+    types = instance.part_types
+    need = Counter()
+    for t in kit.tasks:
+        if t in instance.task_by_id:
+            for p, n in instance.task_by_id[t].parts:
+                need[p] += n
+    have: Counter[str] = Counter()
+    ids: set[str] = set()
+    shapes: list[tuple[str, object]] = []
+    tray = instance.tray
+    for pl in kit.layout:
+        if pl.part in ids:
+            out.append(Violation("duplicate_part_id", f"kit {k}: part id {pl.part!r} used twice",
+                                 k))
+        ids.add(pl.part)
+        if pl.type not in types:
+            out.append(Violation("unknown_part_type",
+                                 f"kit {k}: part {pl.part!r} has unknown type {pl.type!r}", k))
+            continue
+        have[pl.type] += 1
+        pt = types[pl.type]
+        if not (math.isclose(pl.w, pt.width, abs_tol=geometry.TOL)
+                and math.isclose(pl.h, pt.height, abs_tol=geometry.TOL)):
+            out.append(Violation(
+                "footprint_mismatch", f"kit {k}: part {pl.part!r} is drawn {pl.w:g} x {pl.h:g} "
+                f"mm but type {pt.id!r} is {pt.width:g} x {pt.height:g} mm", k))
+        if not all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta)):
+            out.append(Violation("outside_tray", f"kit {k}: part {pl.part!r} has a non-finite "
+                                 "position", k))
+            continue
+        if not pt.rotatable and abs(math.remainder(pl.theta, 180.0)) > 1e-9:
+            out.append(Violation(
+                "rotation_not_allowed", f"kit {k}: part {pl.part!r} of type {pt.id!r} may not "
+                f"rotate but lies at {pl.theta:g} deg", k))
+        c = geometry.corners(pl.x, pl.y, pt.width, pt.height, pl.theta)
+        if not geometry.inside_tray(c, tray.width, tray.height):
+            out.append(Violation(
+                "outside_tray", f"kit {k}: part {pl.part!r} at ({pl.x:g}, {pl.y:g}, "
+                f"{pl.theta:g} deg) sticks out of the {tray.width:g} x {tray.height:g} mm tray",
+                k))
+        shapes.append((pl.part, c))
+    if have != need:
+        diff = []
+        for p in sorted(set(need) | set(have)):
+            if need[p] != have[p]:
+                diff.append(f"{p}: needs {need[p]}, has {have[p]}")
+        out.append(Violation("parts_mismatch", f"kit {k}: parts do not match its tasks ("
+                             + "; ".join(diff) + ")", k))
+    for (pa, ca), (pb, cb) in combinations(shapes, 2):
+        depth = geometry.penetration(ca, cb)
+        if depth > geometry.TOL:
+            area = geometry.intersection_area(ca, cb)
+            out.append(Violation(
+                "overlap", f"kit {k}: parts {pa!r} and {pb!r} overlap "
+                f"({area:.6g} mm^2, depth {depth:.3g} mm)", k))
+    return out
+
+
+def _check_times(
+    instance: Instance,
+    plan: Plan,
+    reported_kits: Sequence[KitTimes] | None,
+    reported_metrics: Mapping[str, float] | None,
+) -> list[Violation]:
+    out: list[Violation] = []
+    known = instance.task_by_id
+    if any(t not in known for kit in plan.kits for t in kit.tasks):
+        return out  # already reported; times of unknown tasks are undefined
+    tl = evaluate(instance, plan)
+    if reported_kits is not None:
+        if len(reported_kits) != len(tl.kits):
+            out.append(Violation("times_inconsistent", f"{len(reported_kits)} kit times "
+                                 f"reported for {len(tl.kits)} kits"))
+        for k, (got, want) in enumerate(zip(reported_kits, tl.kits, strict=False), start=1):
+            for name in ("robot_start", "robot_end", "arrive", "human_start", "human_end"):
+                g, w = getattr(got, name), getattr(want, name)
+                if not math.isclose(g, w, abs_tol=TIME_TOL, rel_tol=1e-9):
+                    out.append(Violation("times_inconsistent", f"kit {k}: reported {name} "
+                                         f"{g:.6g} s, evaluator gives {w:.6g} s", k))
+    if reported_metrics is not None:
+        for name, w in tl.metrics().items():
+            if name not in reported_metrics:
+                continue
+            g = reported_metrics[name]
+            if not math.isclose(float(g), float(w), abs_tol=TIME_TOL, rel_tol=1e-9):
+                out.append(Violation("times_inconsistent",
+                                     f"reported {name} {g:.6g}, evaluator gives {w:.6g}"))
+    return out

@@ -1,0 +1,65 @@
+"""Shared fixtures: the shipped instances and a factory for small instance documents."""
+
+from __future__ import annotations
+
+import copy
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+ROOT = Path(__file__).resolve().parent.parent
+INSTANCES = ROOT / "instances"
+
+
+@pytest.fixture(scope="session")
+def root() -> Path:
+    return ROOT
+
+
+@pytest.fixture(scope="session")
+def table():
+    from bilevel_kit import load
+
+    return load(INSTANCES / "hrc_table.json")
+
+
+@pytest.fixture(scope="session")
+def stool():
+    from bilevel_kit import load
+
+    return load(INSTANCES / "stool.json")
+
+
+@pytest.fixture(scope="session")
+def tiny():
+    from bilevel_kit import load
+
+    return load(INSTANCES / "tiny.json")
+
+
+TINY_DOC = {
+    "format": "bilevel-kit/1",
+    "name": "doc",
+    "tray": {"width": 100.0, "height": 100.0},
+    "delivery_time": 1.0,
+    "kit_overhead": {"robot": 1.0, "human": 1.0},
+    "part_types": [
+        {"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0},
+        {"id": "b", "width": 40.0, "height": 5.0, "pick_time": 2.0, "rotatable": False},
+    ],
+    "tasks": [
+        {"id": "x", "parts": [{"type": "a", "count": 2}], "human_time": {"mean": 5.0}},
+        {"id": "y", "parts": [{"type": "b", "count": 1}], "human_time": {"mean": 3.0}},
+        {"id": "z", "parts": [], "human_time": {"mean": 2.0}},
+    ],
+    "precedence": [["x", "y"]],
+}
+
+
+@pytest.fixture
+def doc() -> dict:
+    """A fresh copy of a small valid instance document to break in tests."""
+    return copy.deepcopy(TINY_DOC)
