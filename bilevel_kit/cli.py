@@ -86,14 +86,32 @@ def _positive_int(text: str) -> int:
 
 def _add_instance_overrides(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("instance overrides")
-    g.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
-                   help="delivery time d in seconds (overrides the instance)")
-    g.add_argument("--weights", type=_weights, metavar="W3=1,W4=1",
-                   help="override some of the paper's weights W1..W7")
-    g.add_argument("--horizon", type=_positive_int, metavar="N",
-                   help="look-ahead N of the greedy upper level (default: the instance's, 5)")
-    g.add_argument("--units", type=_positive_int, metavar="U",
-                   help="number of product units built one after another")
+    g.add_argument(
+        "--d",
+        "--delivery-time",
+        dest="delivery_time",
+        type=_nonneg,
+        metavar="S",
+        help="delivery time d in seconds (overrides the instance)",
+    )
+    g.add_argument(
+        "--weights",
+        type=_weights,
+        metavar="W3=1,W4=1",
+        help="override some of the paper's weights W1..W7",
+    )
+    g.add_argument(
+        "--horizon",
+        type=_positive_int,
+        metavar="N",
+        help="look-ahead N of the greedy upper level (default: the instance's, 5)",
+    )
+    g.add_argument(
+        "--units",
+        type=_positive_int,
+        metavar="U",
+        help="number of product units built one after another",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -110,28 +128,93 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
 
-    p = sub.add_parser("solve", help="solve an instance with one method",
-                       description="Solve an instance file with a registered method and print "
-                       "a summary; optionally write the solution JSON and figures.")
+    p = sub.add_parser(
+        "solve",
+        help="solve an instance with one method",
+        description="Solve an instance file with a registered method and print "
+        "a summary; optionally write the solution JSON and figures.",
+    )
     p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
-    p.add_argument("--method", "-m", required=True, metavar="NAME",
-                   help="registered method: " + ", ".join(REGISTRY))
+    p.add_argument(
+        "--method",
+        "-m",
+        required=True,
+        metavar="NAME",
+        help="registered method: " + ", ".join(REGISTRY),
+    )
     p.add_argument("--out", "-o", metavar="FILE", help="write the solution JSON here")
     p.add_argument("--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
     p.add_argument("--tray", metavar="PNG", help="draw every kit's tray layout")
-    p.add_argument("--check", action="store_true",
-                   help="run the independent checker on the plan (exit 1 when invalid)")
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="run the independent checker on the plan (exit 1 when invalid)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--time-limit", type=_nonneg, metavar="S",
-                   help="time limit in seconds for methods that take one")
-    p.add_argument("--param", "-p", type=_param, action="append", default=[],
-                   metavar="KEY=VALUE", help="method-specific option (repeatable)")
+    p.add_argument(
+        "--time-limit",
+        type=_nonneg,
+        metavar="S",
+        help="time limit in seconds for methods that take one",
+    )
+    p.add_argument(
+        "--param",
+        "-p",
+        type=_param,
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="method-specific option (repeatable)",
+    )
     p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
     _add_instance_overrides(p)
 
-    p = sub.add_parser("check", help="check a solution file against an instance",
-                       description="Run the independent checker; exit 1 and list the "
-                       "violations when the solution is invalid.")
+    p = sub.add_parser(
+        "compare",
+        help="solve instances with several methods and tabulate",
+        description="One row per instance x method: makespan, human idle, "
+        "kits, status, best lower bound, gap to it, checker verdict, wall time. "
+        "Each cell is saved on its own under --cells, so an interrupted run "
+        "resumes where it stopped.",
+    )
+    p.add_argument("instances", nargs="+", metavar="INSTANCE")
+    p.add_argument(
+        "--methods",
+        default="all",
+        metavar="M1,M2",
+        help="comma-separated method names, or 'all' (default)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed of every cell (default 0)")
+    p.add_argument(
+        "--time-limit",
+        type=_nonneg,
+        metavar="S",
+        help="time limit per solve for methods that take one",
+    )
+    p.add_argument(
+        "--param",
+        "-p",
+        action="append",
+        default=[],
+        metavar="METHOD:KEY=VALUE",
+        help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
+    )
+    p.add_argument("--csv", metavar="FILE", help="write all record fields as CSV")
+    p.add_argument("--md", metavar="FILE", help="write the table as Markdown")
+    p.add_argument(
+        "--figures",
+        metavar="DIR",
+        help="write a comparison chart and one Gantt chart per method here",
+    )
+    p.add_argument("--cells", metavar="DIR", help="save/resume per-cell results in DIR")
+    _add_instance_overrides(p)
+
+    p = sub.add_parser(
+        "check",
+        help="check a solution file against an instance",
+        description="Run the independent checker; exit 1 and list the "
+        "violations when the solution is invalid.",
+    )
     p.add_argument("instance")
     p.add_argument("solution")
     _add_instance_overrides(p)
@@ -149,7 +232,9 @@ def _load_instance(args: argparse.Namespace):
 
     inst = load(args.instance)
     return inst.with_overrides(
-        delivery_time=args.delivery_time, weights=args.weights, horizon=args.horizon,
+        delivery_time=args.delivery_time,
+        weights=args.weights,
+        horizon=args.horizon,
         units=args.units,
     )
 
@@ -193,8 +278,14 @@ def cmd_solve(args: argparse.Namespace) -> int:
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
     instance = _load_instance(args)
     params = dict(args.param)
-    result = solve(instance, args.method, seed=args.seed, time_limit=args.time_limit,
-                   check=args.check, **params)
+    result = solve(
+        instance,
+        args.method,
+        seed=args.seed,
+        time_limit=args.time_limit,
+        check=args.check,
+        **params,
+    )
     figures = []
     if result.plan is not None and (args.gantt or args.tray):
         from . import plots
@@ -225,14 +316,120 @@ def cmd_solve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, Any]]:
+    from .errors import UsageError
+
+    out: dict[str, dict[str, Any]] = {m: {} for m in methods}
+    for item in items:
+        method, sep, kv = item.partition(":")
+        if not sep or method not in out:
+            raise UsageError(
+                f"--param {item!r}: expected METHOD:KEY=VALUE with METHOD one of "
+                f"{', '.join(methods)}"
+            )
+        try:
+            key, value = _param(kv)
+        except argparse.ArgumentTypeError as exc:
+            raise UsageError(f"--param {item!r}: {exc}") from None
+        out[method][key] = value
+    return out
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    from .experiments import (
+        CompareCell,
+        add_best_bound_gap,
+        compare_cell,
+        format_markdown,
+        format_table,
+        run_cells,
+        write_csv,
+    )
+    from .instance import load
+    from .methods import get_method, method_names
+
+    methods = (
+        method_names()
+        if args.methods == "all"
+        else [m.strip() for m in args.methods.split(",") if m.strip()]
+    )
+    for m in methods:
+        get_method(m)
+    params = _method_params(args.param, methods)
+    overrides = {
+        k: v
+        for k, v in (
+            ("delivery_time", args.delivery_time),
+            ("weights", args.weights),
+            ("horizon", args.horizon),
+            ("units", args.units),
+        )
+        if v is not None
+    }
+    for path in args.instances:  # validate every input before any solve or write
+        load(path).with_overrides(**overrides)
+    cells = [
+        CompareCell(str(path), m, args.seed, args.time_limit, params[m], overrides)
+        for path in args.instances
+        for m in methods
+    ]
+    records = add_best_bound_gap(
+        run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
+    )
+    print(format_table(records))
+    errors = [r for r in records if r["status"] == "error"]
+    for r in errors:
+        print(f"{r['instance']} / {r['method']}: {r['error']}", file=sys.stderr)
+    if args.figures:
+        _compare_figures(records, args.figures)
+    if args.csv:
+        write_csv(args.csv, records)
+    if args.md:
+        from .atomic import write_text
+
+        write_text(args.md, format_markdown(records))
+    if any(
+        r.get("valid") is False and r["status"] != "error" and r["makespan"] is not None
+        for r in records
+    ):
+        print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
+        return EXIT_INVALID
+    return EXIT_OK
+
+
+def _compare_figures(records: list[dict[str, Any]], folder: str) -> None:
+    from pathlib import Path
+
+    from . import plots, solution
+    from .instance import load
+
+    out = Path(folder)
+    by_instance: dict[str, list[dict[str, Any]]] = {}
+    for r in records:
+        by_instance.setdefault(r["instance_file"], []).append(r)
+    for path, rows in by_instance.items():
+        inst = load(path)
+        ok = [r for r in rows if r.get("makespan") is not None]
+        if not ok:
+            continue
+        ax = plots.plot_comparison(ok)
+        plots.save_figure(ax.figure, out / f"{inst.name}_compare.png")
+        for r in ok:
+            sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
+            ax = plots.plot_gantt(inst, sol.plan)
+            ax.set_title(f"{inst.name} / {r['method']}: " + ax.get_title())
+            plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")
+
+
 def cmd_check(args: argparse.Namespace) -> int:
     from . import solution
     from .validate import check
 
     instance = _load_instance(args)
     sol = solution.read(args.solution)
-    violations = check(instance, sol.plan, reported_kits=sol.reported_kits,
-                       reported_metrics=sol.reported_metrics)
+    violations = check(
+        instance, sol.plan, reported_kits=sol.reported_kits, reported_metrics=sol.reported_metrics
+    )
     if violations:
         _print_violations([str(v) for v in violations], sys.stdout)
         return EXIT_INVALID
@@ -265,15 +462,23 @@ def cmd_methods(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-COMMANDS = {"solve": cmd_solve, "check": cmd_check, "schema": cmd_schema,
-            "methods": cmd_methods}
+COMMANDS = {
+    "solve": cmd_solve,
+    "compare": cmd_compare,
+    "check": cmd_check,
+    "schema": cmd_schema,
+    "methods": cmd_methods,
+}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     from .errors import BilevelKitError
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, or a usage error already printed on one line
+        return int(exc.code or 0)
     try:
         return COMMANDS[args.command](args)
     except BilevelKitError as exc:

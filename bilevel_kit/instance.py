@@ -357,8 +357,9 @@ _ID = {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"}
 
 def schema() -> dict[str, Any]:
     """JSON Schema (draft 2020-12) of the instance format ``bilevel-kit/1``."""
-    weight_props = {k: {"type": "number", "description": f"default {v}"} for k, v in
-                    DEFAULT_WEIGHTS.items()}
+    weight_props = {
+        k: {"type": "number", "description": f"default {v}"} for k, v in DEFAULT_WEIGHTS.items()
+    }
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "$id": "https://bilevel-kit/schemas/instance-1.json",
@@ -516,8 +517,9 @@ def read_json(path: str | Path, error: type = InstanceError) -> Any:
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise error(src, "$", f"malformed JSON at line {exc.lineno} column {exc.colno}: "
-                    f"{exc.msg}") from None
+        raise error(
+            src, "$", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
+        ) from None
     bad = _non_finite(doc)
     if bad is not None:
         raise error(src, _json_path(bad), "must be a finite number (NaN/Infinity not allowed)")
@@ -549,8 +551,11 @@ def validate_document(doc: Any, source: str, doc_schema: Mapping[str, Any], erro
 def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     """Validate a parsed JSON document and build the :class:`Instance`."""
     if isinstance(doc, dict) and "format" in doc and doc["format"] != FORMAT:
-        raise InstanceError(source, "$.format", f"unsupported format {doc['format']!r}; "
-                            f"this version reads {FORMAT!r}")
+        raise InstanceError(
+            source,
+            "$.format",
+            f"unsupported format {doc['format']!r}; this version reads {FORMAT!r}",
+        )
     validate_document(doc, source, schema(), InstanceError)
 
     def fail(path: str, msg: str) -> InstanceError:
@@ -575,8 +580,11 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
             fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
         if not fits:
             orient = "either axis-aligned orientation" if pt.rotatable else "its fixed orientation"
-            raise fail(f"$.part_types[{i}]", f"part {pt.id!r} ({pt.width:g} x {pt.height:g} mm) "
-                       f"does not fit the {tray.width:g} x {tray.height:g} mm tray in {orient}")
+            raise fail(
+                f"$.part_types[{i}]",
+                f"part {pt.id!r} ({pt.width:g} x {pt.height:g} mm) "
+                f"does not fit the {tray.width:g} x {tray.height:g} mm tray in {orient}",
+            )
         part_types[pt.id] = pt
 
     name = doc["name"]
@@ -593,20 +601,24 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
             if req["type"] not in part_types:
                 raise fail(f"$.tasks[{i}].parts[{j}].type", f"unknown part type {req['type']!r}")
             if any(req["type"] == q for q, _ in parts):
-                raise fail(f"$.tasks[{i}].parts[{j}].type",
-                           f"part type {req['type']!r} listed twice; give one count")
+                raise fail(
+                    f"$.tasks[{i}].parts[{j}].type",
+                    f"part type {req['type']!r} listed twice; give one count",
+                )
             parts.append((req["type"], int(req["count"])))
         ht = t["human_time"]
-        tasks.append(Task(
-            id=t["id"],
-            name=t.get("name", t["id"]),
-            parts=tuple(parts),
-            human_mean=float(ht["mean"]),
-            human_sd=float(ht.get("sd", 0.0)),
-            robot_time=float(t["robot_time"]) if "robot_time" in t else None,
-            product=t.get("product", name),
-            base_id=t["id"],
-        ))
+        tasks.append(
+            Task(
+                id=t["id"],
+                name=t.get("name", t["id"]),
+                parts=tuple(parts),
+                human_mean=float(ht["mean"]),
+                human_sd=float(ht.get("sd", 0.0)),
+                robot_time=float(t["robot_time"]) if "robot_time" in t else None,
+                product=t.get("product", name),
+                base_id=t["id"],
+            )
+        )
 
     edges: list[tuple[str, str]] = []
     edge_set: set[tuple[str, str]] = set()

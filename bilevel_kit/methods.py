@@ -159,3 +159,8 @@ def solve(
         instance=instance.name,
         extra=extra,
     )
+register(
+    "greedy-ce",
+    "bilevel_kit.heuristics.greedy:greedy_ce",
+    "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
+)

@@ -45,15 +45,24 @@ def result_to_dict(result: Result) -> dict[str, Any]:
     kits = []
     if result.plan is not None and result.timeline is not None:
         for kit, times in zip(result.plan.kits, result.timeline.kits, strict=True):
-            kits.append({
-                "tasks": list(kit.tasks),
-                **{k: getattr(times, k) for k in _TIME_KEYS},
-                "layout": [
-                    {"part": p.part, "type": p.type, "x": p.x, "y": p.y, "theta": p.theta,
-                     "w": p.w, "h": p.h}
-                    for p in kit.layout
-                ],
-            })
+            kits.append(
+                {
+                    "tasks": list(kit.tasks),
+                    **{k: getattr(times, k) for k in _TIME_KEYS},
+                    "layout": [
+                        {
+                            "part": p.part,
+                            "type": p.type,
+                            "x": p.x,
+                            "y": p.y,
+                            "theta": p.theta,
+                            "w": p.w,
+                            "h": p.h,
+                        }
+                        for p in kit.layout
+                    ],
+                }
+            )
     return {
         "format": FORMAT,
         "instance": result.instance,
@@ -84,8 +93,11 @@ def schema() -> dict[str, Any]:
     placement = {
         "type": "object",
         "required": ["part", "type", "x", "y", "theta", "w", "h"],
-        "properties": {"part": {"type": "string"}, "type": {"type": "string"},
-                       **{k: _NUM for k in ("x", "y", "theta", "w", "h")}},
+        "properties": {
+            "part": {"type": "string"},
+            "type": {"type": "string"},
+            **{k: _NUM for k in ("x", "y", "theta", "w", "h")},
+        },
     }
     kit = {
         "type": "object",
@@ -129,8 +141,15 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
     times = []
     for kd in doc["kits"]:
         layout = tuple(
-            Placement(p["part"], p["type"], float(p["x"]), float(p["y"]), float(p["theta"]),
-                      float(p["w"]), float(p["h"]))
+            Placement(
+                p["part"],
+                p["type"],
+                float(p["x"]),
+                float(p["y"]),
+                float(p["theta"]),
+                float(p["w"]),
+                float(p["h"]),
+            )
             for p in kd["layout"]
         )
         kits.append(Kit(tuple(kd["tasks"]), layout))

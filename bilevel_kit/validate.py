@@ -86,9 +86,13 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
             if t not in known:
                 out.append(Violation("unknown_task", f"kit {k} holds unknown task {t!r}", k))
             elif t in position:
-                out.append(Violation(
-                    "repeated_task", f"task {t!r} appears again in kit {k} "
-                    f"(first in kit {position[t][0]})", k))
+                out.append(
+                    Violation(
+                        "repeated_task",
+                        f"task {t!r} appears again in kit {k} (first in kit {position[t][0]})",
+                        k,
+                    )
+                )
             else:
                 position[t] = (k, j)
     missing = [t.id for t in instance.tasks if t.id not in position]
@@ -100,13 +104,19 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
             continue
         (ka, ia), (kb, ib) = position[a], position[b]
         if ka > kb:
-            out.append(Violation(
-                "precedence", f"{a!r} must precede {b!r} but is delivered in kit {ka}, "
-                f"after kit {kb}", kb))
+            out.append(
+                Violation(
+                    "precedence",
+                    f"{a!r} must precede {b!r} but is delivered in kit {ka}, after kit {kb}",
+                    kb,
+                )
+            )
         elif ka == kb and ia > ib:
-            out.append(Violation(
-                "precedence", f"{a!r} must precede {b!r} but comes after it inside kit {ka}",
-                ka))
+            out.append(
+                Violation(
+                    "precedence", f"{a!r} must precede {b!r} but comes after it inside kit {ka}", ka
+                )
+            )
     return out
 
 
@@ -124,49 +134,82 @@ def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
     tray = instance.tray
     for pl in kit.layout:
         if pl.part in ids:
-            out.append(Violation("duplicate_part_id", f"kit {k}: part id {pl.part!r} used twice",
-                                 k))
+            out.append(
+                Violation("duplicate_part_id", f"kit {k}: part id {pl.part!r} used twice", k)
+            )
         ids.add(pl.part)
         if pl.type not in types:
-            out.append(Violation("unknown_part_type",
-                                 f"kit {k}: part {pl.part!r} has unknown type {pl.type!r}", k))
+            out.append(
+                Violation(
+                    "unknown_part_type",
+                    f"kit {k}: part {pl.part!r} has unknown type {pl.type!r}",
+                    k,
+                )
+            )
             continue
         have[pl.type] += 1
         pt = types[pl.type]
-        if not (math.isclose(pl.w, pt.width, abs_tol=geometry.TOL)
-                and math.isclose(pl.h, pt.height, abs_tol=geometry.TOL)):
-            out.append(Violation(
-                "footprint_mismatch", f"kit {k}: part {pl.part!r} is drawn {pl.w:g} x {pl.h:g} "
-                f"mm but type {pt.id!r} is {pt.width:g} x {pt.height:g} mm", k))
+        if not (
+            math.isclose(pl.w, pt.width, abs_tol=geometry.TOL)
+            and math.isclose(pl.h, pt.height, abs_tol=geometry.TOL)
+        ):
+            out.append(
+                Violation(
+                    "footprint_mismatch",
+                    f"kit {k}: part {pl.part!r} is drawn {pl.w:g} x {pl.h:g} "
+                    f"mm but type {pt.id!r} is {pt.width:g} x {pt.height:g} mm",
+                    k,
+                )
+            )
         if not all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta)):
-            out.append(Violation("outside_tray", f"kit {k}: part {pl.part!r} has a non-finite "
-                                 "position", k))
+            out.append(
+                Violation("outside_tray", f"kit {k}: part {pl.part!r} has a non-finite position", k)
+            )
             continue
         if not pt.rotatable and abs(math.remainder(pl.theta, 180.0)) > 1e-9:
-            out.append(Violation(
-                "rotation_not_allowed", f"kit {k}: part {pl.part!r} of type {pt.id!r} may not "
-                f"rotate but lies at {pl.theta:g} deg", k))
+            out.append(
+                Violation(
+                    "rotation_not_allowed",
+                    f"kit {k}: part {pl.part!r} of type {pt.id!r} may not "
+                    f"rotate but lies at {pl.theta:g} deg",
+                    k,
+                )
+            )
         c = geometry.corners(pl.x, pl.y, pt.width, pt.height, pl.theta)
         if not geometry.inside_tray(c, tray.width, tray.height):
-            out.append(Violation(
-                "outside_tray", f"kit {k}: part {pl.part!r} at ({pl.x:g}, {pl.y:g}, "
-                f"{pl.theta:g} deg) sticks out of the {tray.width:g} x {tray.height:g} mm tray",
-                k))
+            out.append(
+                Violation(
+                    "outside_tray",
+                    f"kit {k}: part {pl.part!r} at ({pl.x:g}, {pl.y:g}, "
+                    f"{pl.theta:g} deg) sticks out of the {tray.width:g} x {tray.height:g} mm tray",
+                    k,
+                )
+            )
         shapes.append((pl.part, c))
     if have != need:
         diff = []
         for p in sorted(set(need) | set(have)):
             if need[p] != have[p]:
                 diff.append(f"{p}: needs {need[p]}, has {have[p]}")
-        out.append(Violation("parts_mismatch", f"kit {k}: parts do not match its tasks ("
-                             + "; ".join(diff) + ")", k))
+        out.append(
+            Violation(
+                "parts_mismatch",
+                f"kit {k}: parts do not match its tasks (" + "; ".join(diff) + ")",
+                k,
+            )
+        )
     for (pa, ca), (pb, cb) in combinations(shapes, 2):
         depth = geometry.penetration(ca, cb)
         if depth > geometry.TOL:
             area = geometry.intersection_area(ca, cb)
-            out.append(Violation(
-                "overlap", f"kit {k}: parts {pa!r} and {pb!r} overlap "
-                f"({area:.6g} mm^2, depth {depth:.3g} mm)", k))
+            out.append(
+                Violation(
+                    "overlap",
+                    f"kit {k}: parts {pa!r} and {pb!r} overlap "
+                    f"({area:.6g} mm^2, depth {depth:.3g} mm)",
+                    k,
+                )
+            )
     return out
 
 
@@ -183,20 +226,32 @@ def _check_times(
     tl = evaluate(instance, plan)
     if reported_kits is not None:
         if len(reported_kits) != len(tl.kits):
-            out.append(Violation("times_inconsistent", f"{len(reported_kits)} kit times "
-                                 f"reported for {len(tl.kits)} kits"))
+            out.append(
+                Violation(
+                    "times_inconsistent",
+                    f"{len(reported_kits)} kit times reported for {len(tl.kits)} kits",
+                )
+            )
         for k, (got, want) in enumerate(zip(reported_kits, tl.kits, strict=False), start=1):
             for name in ("robot_start", "robot_end", "arrive", "human_start", "human_end"):
                 g, w = getattr(got, name), getattr(want, name)
                 if not math.isclose(g, w, abs_tol=TIME_TOL, rel_tol=1e-9):
-                    out.append(Violation("times_inconsistent", f"kit {k}: reported {name} "
-                                         f"{g:.6g} s, evaluator gives {w:.6g} s", k))
+                    out.append(
+                        Violation(
+                            "times_inconsistent",
+                            f"kit {k}: reported {name} {g:.6g} s, evaluator gives {w:.6g} s",
+                            k,
+                        )
+                    )
     if reported_metrics is not None:
         for name, w in tl.metrics().items():
             if name not in reported_metrics:
                 continue
             g = reported_metrics[name]
             if not math.isclose(float(g), float(w), abs_tol=TIME_TOL, rel_tol=1e-9):
-                out.append(Violation("times_inconsistent",
-                                     f"reported {name} {g:.6g}, evaluator gives {w:.6g}"))
+                out.append(
+                    Violation(
+                        "times_inconsistent", f"reported {name} {g:.6g}, evaluator gives {w:.6g}"
+                    )
+                )
     return out

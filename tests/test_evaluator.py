@@ -35,7 +35,9 @@ def test_stool_two_kits(stool):
     # kit 2 {a3}: robot 45..63, arrives 68, human waits for kit 1: 81..97
     tl = evaluate(stool, _plan(["a1", "a2"], ["a3"]))
     assert [(k.robot_end, k.arrive, k.human_start, k.human_end) for k in tl.kits] == [
-        (40, 45, 45, 81), (63, 68, 81, 97)]
+        (40, 45, 45, 81),
+        (63, 68, 81, 97),
+    ]
     assert tl.makespan == 97 and tl.human_idle == 97 - 52
 
 

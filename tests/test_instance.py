@@ -21,7 +21,12 @@ def test_table_instance_numbers(table):
     assert table.weights == DEFAULT_WEIGHTS
     assert table.horizon == 5
     assert dict(table.kit_parts([t.id for t in table.tasks])) == {
-        "leg": 4, "foot": 4, "connector": 4, "screw_short": 8, "screw_long": 8}
+        "leg": 4,
+        "foot": 4,
+        "connector": 4,
+        "screw_short": 8,
+        "screw_long": 8,
+    }
 
 
 def test_every_shipped_instance_validates_against_schema(root):
@@ -39,7 +44,8 @@ def test_round_trip_is_lossless(table, stool, tiny):
 
 def test_topological_order_is_leg_by_leg(table):
     assert topological_order(table) == [
-        f"{k}{i}" for i in range(1, 5) for k in ("foot", "conn", "top")]
+        f"{k}{i}" for i in range(1, 5) for k in ("foot", "conn", "top")
+    ]
 
 
 def test_units_expand_tasks_and_chain_units(stool):

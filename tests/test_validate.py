@@ -13,14 +13,20 @@ from bilevel_kit.heuristics.baselines import single_task, whole_assembly
 @pytest.fixture
 def valid(tiny):
     # tray 120 x 100; block 50 x 50 (rotatable), bar 100 x 20 (fixed)
-    k1 = Kit(("t1", "t2"), (
-        Placement("block-1", "block", 25, 25, 0, 50, 50),
-        Placement("bar-1", "bar", 50, 90, 0, 100, 20),
-    ))
-    k2 = Kit(("t3",), (
-        Placement("block-1", "block", 84, 36, 45, 50, 50),  # a diamond: x 48.6..119.4
-        Placement("bar-1", "bar", 50, 90, 180, 100, 20),
-    ))
+    k1 = Kit(
+        ("t1", "t2"),
+        (
+            Placement("block-1", "block", 25, 25, 0, 50, 50),
+            Placement("bar-1", "bar", 50, 90, 0, 100, 20),
+        ),
+    )
+    k2 = Kit(
+        ("t3",),
+        (
+            Placement("block-1", "block", 84, 36, 45, 50, 50),  # a diamond: x 48.6..119.4
+            Placement("bar-1", "bar", 50, 90, 180, 100, 20),
+        ),
+    )
     return Plan((k1, k2))
 
 
@@ -63,10 +69,10 @@ def test_parts_mismatch(tiny, valid):
 
 def test_outside_tray(tiny, valid):
     # a 50 x 50 block turned by 45 degrees needs 35.36 mm of clearance around its centre
-    moved = (replace(valid.kits[1].layout[0], x=120 - 35.0),) + valid.kits[1].layout[1:]
+    moved = (replace(valid.kits[1].layout[0], x=120 - 35.0), *valid.kits[1].layout[1:])
     v = check(tiny, Plan((valid.kits[0], replace(valid.kits[1], layout=moved))))
     assert kinds(v) == ["outside_tray"] and v[0].kit == 2
-    ok = (replace(valid.kits[1].layout[0], x=120 - 35.3554),) + valid.kits[1].layout[1:]
+    ok = (replace(valid.kits[1].layout[0], x=120 - 35.3554), *valid.kits[1].layout[1:])
     assert check(tiny, Plan((valid.kits[0], replace(valid.kits[1], layout=ok)))) == []
 
 
@@ -82,12 +88,15 @@ def test_overlap_exact_rotated(tiny, valid):
 
 
 def test_touching_parts_are_fine(tiny, valid):
-    lay = (Placement("block-1", "block", 25, 25, 0, 50, 50),
-           Placement("bar-1", "bar", 50, 60, 0, 100, 20))  # bar bottom edge on the block top
+    lay = (
+        Placement("block-1", "block", 25, 25, 0, 50, 50),
+        Placement("bar-1", "bar", 50, 60, 0, 100, 20),
+    )  # bar bottom edge on the block top
     assert check(tiny, Plan((replace(valid.kits[0], layout=lay), valid.kits[1]))) == []
     lay = (lay[0], replace(lay[1], y=60 - 1e-4))
     assert kinds(check(tiny, Plan((replace(valid.kits[0], layout=lay), valid.kits[1])))) == [
-        "overlap"]
+        "overlap"
+    ]
 
 
 def test_rotation_not_allowed_and_footprint(tiny, valid):
@@ -96,16 +105,19 @@ def test_rotation_not_allowed_and_footprint(tiny, valid):
     assert "rotation_not_allowed" in kinds(v)
     lay = (replace(valid.kits[0].layout[0], w=40), valid.kits[0].layout[1])
     assert kinds(check(tiny, Plan((replace(valid.kits[0], layout=lay), valid.kits[1])))) == [
-        "footprint_mismatch"]
+        "footprint_mismatch"
+    ]
 
 
 def test_duplicate_part_id_and_unknown_type(tiny, valid):
     lay = (valid.kits[0].layout[0], replace(valid.kits[0].layout[1], part="block-1"))
-    assert "duplicate_part_id" in kinds(check(tiny, Plan((replace(valid.kits[0], layout=lay),
-                                                            valid.kits[1]))))
+    assert "duplicate_part_id" in kinds(
+        check(tiny, Plan((replace(valid.kits[0], layout=lay), valid.kits[1])))
+    )
     lay = (valid.kits[0].layout[0], replace(valid.kits[0].layout[1], type="gear"))
-    assert "unknown_part_type" in kinds(check(tiny, Plan((replace(valid.kits[0], layout=lay),
-                                                            valid.kits[1]))))
+    assert "unknown_part_type" in kinds(
+        check(tiny, Plan((replace(valid.kits[0], layout=lay), valid.kits[1])))
+    )
 
 
 def test_empty_kit(tiny, valid):
@@ -116,8 +128,10 @@ def test_reported_times(tiny, valid):
     tl = evaluate(tiny, valid)
     assert check(tiny, valid, reported_kits=tl.kits, reported_metrics=tl.metrics()) == []
     bad = list(tl.kits)
-    bad[1] = KitTimes(*(getattr(bad[1], f) for f in ("robot_start", "robot_end", "arrive",
-                                                     "human_start")), bad[1].human_end + 0.5)
+    bad[1] = KitTimes(
+        *(getattr(bad[1], f) for f in ("robot_start", "robot_end", "arrive", "human_start")),
+        bad[1].human_end + 0.5,
+    )
     v = check(tiny, valid, reported_kits=bad, reported_metrics={"makespan": tl.makespan + 1})
     assert kinds(v) == ["times_inconsistent"] and len(v) == 2
     assert "kit 2: reported human_end" in v[0].message

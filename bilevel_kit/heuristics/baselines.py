@@ -36,17 +36,20 @@ def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
     return Kit(tuple(tasks), layout)
 
 
-def single_task(instance: Instance, *, seed: int = 0, time_limit: float | None = None,
-                **params: Any) -> MethodOutput:
+def single_task(
+    instance: Instance, *, seed: int = 0, time_limit: float | None = None, **params: Any
+) -> MethodOutput:
     """One kit per task, in topological order."""
     _no_params("single-task", params)
-    kits = tuple(packed_kit(instance, [t], f"kit for task {t!r}")
-                 for t in topological_order(instance))
+    kits = tuple(
+        packed_kit(instance, [t], f"kit for task {t!r}") for t in topological_order(instance)
+    )
     return MethodOutput(Plan(kits), "feasible")
 
 
-def whole_assembly(instance: Instance, *, seed: int = 0, time_limit: float | None = None,
-                   **params: Any) -> MethodOutput:
+def whole_assembly(
+    instance: Instance, *, seed: int = 0, time_limit: float | None = None, **params: Any
+) -> MethodOutput:
     """One kit per product unit, its tasks in topological order."""
     _no_params("whole-assembly", params)
     order = topological_order(instance)

@@ -18,18 +18,16 @@ from ..instance import PartType, Tray
 from ..plan import Placement
 
 
-def kit_items(part_types: Mapping[str, PartType], counts: Mapping[str, int]) -> list[
-        tuple[str, PartType]]:
+def kit_items(
+    part_types: Mapping[str, PartType], counts: Mapping[str, int]
+) -> list[tuple[str, PartType]]:
     """The parts of a kit as (part id, type) pairs; ids are ``type-k`` in sorted type order."""
-    return [
-        (f"{t}-{k}", part_types[t])
-        for t in sorted(counts)
-        for k in range(1, counts[t] + 1)
-    ]
+    return [(f"{t}-{k}", part_types[t]) for t in sorted(counts) for k in range(1, counts[t] + 1)]
 
 
-def _ffdh(width: float, height: float, items: list[tuple[str, PartType, bool]]
-          ) -> list[tuple[str, PartType, float, float, bool]] | None:
+def _ffdh(
+    width: float, height: float, items: list[tuple[str, PartType, bool]]
+) -> list[tuple[str, PartType, float, float, bool]] | None:
     """Shelf FFDH of (id, type, rotated) items in a width x height box; None if they don't fit."""
 
     def dims(pt: PartType, rot: bool) -> tuple[float, float]:

@@ -1,0 +1,228 @@
+"""The CLI: solve/check/schema, exit codes, one-line errors and no half-written output."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from bilevel_kit import load
+from bilevel_kit.cli import main
+from bilevel_kit.solution import read
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
+    out = tmp_path / "s.json"
+    code, text, _ = run(
+        capsys,
+        "solve",
+        root / "instances/hrc_table.json",
+        "--method",
+        "single-task",
+        "--out",
+        out,
+        "--check",
+    )
+    assert code == 0
+    assert "makespan 459.78 s" in text and "check: valid" in text
+    doc = json.loads(out.read_text())
+    for key in (
+        "method",
+        "status",
+        "objective",
+        "bound",
+        "seed",
+        "params",
+        "wall_time_s",
+        "metrics",
+        "kits",
+    ):
+        assert key in doc
+    assert doc["metrics"] == {
+        "makespan": pytest.approx(459.78),
+        "human_idle": pytest.approx(37),
+        "robot_idle": pytest.approx(131.78),
+        "n_kits": 12,
+    }
+    assert set(doc["kits"][0]) == {
+        "tasks",
+        "robot_start",
+        "robot_end",
+        "arrive",
+        "human_start",
+        "human_end",
+        "layout",
+    }
+    assert set(doc["kits"][0]["layout"][0]) == {"part", "type", "x", "y", "theta", "w", "h"}
+    code, text, _ = run(capsys, "check", root / "instances/hrc_table.json", out)
+    assert code == 0 and text.startswith("valid: 12 kits, 12 tasks")
+
+
+def test_solution_json_round_trip_is_lossless(capsys, tmp_path, root, table):
+    from bilevel_kit import solve
+
+    for method in ("single-task", "whole-assembly"):
+        out = tmp_path / f"{method}.json"
+        assert (
+            run(capsys, "solve", root / "instances/hrc_table.json", "-m", method, "-o", out)[0] == 0
+        )
+        loaded = read(out)
+        assert loaded.plan == solve(table, method).plan
+        from bilevel_kit.plan import evaluate
+
+        assert loaded.reported_kits == evaluate(table, loaded.plan).kits
+
+
+def test_check_reports_violations_with_exit_1(capsys, tmp_path, root):
+    out = tmp_path / "s.json"
+    run(capsys, "solve", root / "instances/hrc_table.json", "-m", "single-task", "-o", out)
+    doc = json.loads(out.read_text())
+    doc["kits"][0], doc["kits"][1] = doc["kits"][1], doc["kits"][0]
+    out.write_text(json.dumps(doc))
+    code, text, _ = run(capsys, "check", root / "instances/hrc_table.json", out)
+    assert code == 1
+    assert "[precedence] 'foot1' must precede 'conn1'" in text
+    assert "[times_inconsistent]" in text
+
+
+def test_overrides_change_the_timeline(capsys, root):
+    code, text, _ = run(
+        capsys, "solve", root / "instances/stool.json", "-m", "single-task", "--d", "0", "-q"
+    )
+    assert code == 0 and "makespan 77.00 s" in text
+
+
+def test_schema_command(capsys):
+    code, text, _ = run(capsys, "schema")
+    assert code == 0 and json.loads(text)["properties"]["format"]["const"] == "bilevel-kit/1"
+    code, text, _ = run(capsys, "schema", "--solution")
+    assert json.loads(text)["title"] == "bilevel-kit solution"
+
+
+def test_figures_are_written(capsys, tmp_path, root):
+    g, t = tmp_path / "g.png", tmp_path / "t.png"
+    code, _, _ = run(
+        capsys,
+        "solve",
+        root / "instances/stool.json",
+        "-m",
+        "single-task",
+        "--gantt",
+        g,
+        "--tray",
+        t,
+    )
+    assert code == 0
+    assert g.read_bytes()[:4] == b"\x89PNG" and t.read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.png", "t.png"]
+
+
+BAD_CASES = {
+    "malformed JSON": ('{"format": "bilevel-kit/1",', "$: malformed JSON"),
+    "missing field": (lambda d: d.pop("part_types"), "$: missing required field 'part_types'"),
+    "unknown part type": (
+        lambda d: d["tasks"][0]["parts"][0].update(type="gear"),
+        "$.tasks[0].parts[0].type: unknown part type 'gear'",
+    ),
+    "duplicate task id": (
+        lambda d: d["tasks"][1].update(id="x"),
+        "$.tasks[1].id: duplicate task id 'x'",
+    ),
+    "precedence cycle": (
+        lambda d: d["precedence"].append(["y", "x"]),
+        "$.precedence: precedence cycle x -> y -> x",
+    ),
+    "edge to unknown task": (
+        lambda d: d["precedence"].append(["q", "x"]),
+        "$.precedence[1][0]: unknown task 'q'",
+    ),
+    "negative time": (
+        lambda d: d["part_types"][0].update(pick_time=-1),
+        "$.part_types[0].pick_time: -1 is less than the minimum of 0",
+    ),
+    "NaN time": (
+        lambda d: d["tasks"][2]["human_time"].update(mean=float("nan")),
+        "$.tasks[2].human_time.mean: must be a finite number",
+    ),
+    "part larger than tray": (
+        lambda d: d["part_types"][0].update(width=101, height=101),
+        "$.part_types[0]: part 'a' (101 x 101 mm) does not fit",
+    ),
+    "empty task list": (lambda d: d.update(tasks=[]), "$.tasks: [] should be non-empty"),
+    "wrong format version": (
+        lambda d: d.update(format="bilevel-kit/9"),
+        "$.format: unsupported format 'bilevel-kit/9'",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_CASES))
+def test_bad_input_exits_2_with_one_line(case, capsys, tmp_path, doc):
+    change, expected = BAD_CASES[case]
+    path = tmp_path / "bad.json"
+    if isinstance(change, str):
+        path.write_text(change)
+    else:
+        change(doc)
+        path.write_text(json.dumps(doc))
+    out = tmp_path / "out.json"
+    code, _text, err = run(capsys, "solve", path, "-m", "single-task", "-o", out)
+    assert code == 2
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert f"{path}: " in err and expected in err
+    assert not out.exists()
+
+
+def test_missing_file_exits_2(capsys, tmp_path):
+    code, _, err = run(capsys, "solve", tmp_path / "none.json", "-m", "single-task")
+    assert code == 2 and err.strip().endswith("none.json: $: file not found")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["solve", "instances/tiny.json", "-m", "nope"],
+        ["solve", "instances/tiny.json", "-m", "single-task", "--weights", "W3"],
+        ["solve", "instances/tiny.json", "-m", "single-task", "--weights", "W9=1"],
+        ["solve", "instances/tiny.json", "-m", "single-task", "--d", "-1"],
+        ["solve", "instances/tiny.json", "-m", "single-task", "--horizon", "0"],
+        ["solve", "instances/tiny.json", "-m", "single-task", "-p", "foo=1"],
+        ["solve", "instances/tiny.json"],
+        ["frobnicate"],
+    ],
+)
+def test_usage_errors_exit_2(argv, capsys, root, monkeypatch):
+    monkeypatch.chdir(root)
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_kit_that_does_not_fit_is_a_clear_error(capsys, tmp_path, doc):
+    doc["part_types"][0].update(width=60, height=60)  # two 60 x 60 blocks on a 100 x 100 tray
+    path = tmp_path / "tight.json"
+    path.write_text(json.dumps(doc))
+    code, _, err = run(capsys, "solve", path, "-m", "whole-assembly")
+    assert code == 2 and "do not fit the 100 x 100 mm tray" in err
+    assert load(path).n_tasks == 3
+
+
+def test_bad_solution_file_exits_2(capsys, tmp_path, root):
+    bad = tmp_path / "sol.json"
+    bad.write_text(
+        json.dumps(
+            {
+                "format": "bilevel-kit-solution/1",
+                "method": "x",
+                "status": "feasible",
+                "kits": [{"tasks": "t1", "layout": []}],
+            }
+        )
+    )
+    code, _, err = run(capsys, "check", root / "instances/tiny.json", bad)
+    assert code == 2 and "$.kits[0].tasks: 't1' is not of type 'array'" in err
