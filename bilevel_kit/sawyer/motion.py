@@ -1,0 +1,262 @@
+"""Robot motion times for pick-and-place: bin -> tray slot, from joint-space distances.
+
+Every move is a straight line in joint space between two IK solutions, timed with a
+**synchronised trapezoidal velocity profile**: all joints start and stop together and follow
+the same normalised profile s(t) in [0, 1], so joint i moves at ``d_i * s'(t)``. The path speed
+and acceleration limits are ``min_i v_i / |d_i|`` and ``min_i a_i / |d_i|``, i.e. the slowest
+joint governs; the profile accelerates at the limit, cruises at the speed limit, and brakes
+at the limit (a triangle when the move is too short to reach the cruise speed). This is the
+time-optimal timing of that joint path under the box limits.
+
+Limits: velocities are the Sawyer's (``model.V_MAX``, times ``speed_scale``); the Sawyer
+publishes no acceleration limits, so we assume each joint reaches its velocity limit in
+:data:`ACCEL_RAMP` = 0.5 s, i.e. ``a_i = 2 v_i`` (3.5 rad/s^2 for ``right_j0`` up to 9.1
+rad/s^2 for ``right_j6``), also scaled by ``accel_scale``.
+
+One pick-and-place cycle starts and ends above the part's bin (``approach_height`` above the
+grasp point) and is, in order:
+
+1. approach: descend to the grasp pose; 2. grasp (:data:`GRASP_TIME`); 3. retreat up;
+4. transfer to the pose above the slot; 5. approach: descend to the release pose;
+6. release (:data:`RELEASE_TIME`); 7. retreat up; 8. return to above the bin (optional).
+
+The vertical approach / retreat moves are timed as joint-space lines too (over 100 mm the
+Cartesian deviation is small). At the slot, the gripper yaw among the station's allowed yaws
+is the one that needs the least ``right_j6`` travel from the pose above the bin. The IK at
+the slot is warm-started from the bin pose, which keeps the arm on the same branch.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from .errors import UnreachableError
+from .ik import IKSolution, solve_top_down
+from .model import V_MAX, Arm
+from .station import Station
+
+#: Seconds for a joint to reach its velocity limit from rest (defines the assumed accels).
+ACCEL_RAMP = 0.5
+#: Assumed joint acceleration limits [rad/s^2].
+A_MAX = V_MAX / ACCEL_RAMP
+#: Gripper close time at the bin [s] (assumed, Rethink electric gripper class).
+GRASP_TIME = 0.5
+#: Gripper open time at the slot [s] (assumed).
+RELEASE_TIME = 0.3
+
+
+@dataclass(frozen=True)
+class MotionParams:
+    """Timing assumptions; the defaults are documented in the module docstring."""
+
+    #: Fraction of the velocity limits used (Intera's own default joint speed ratio is 0.3).
+    speed_scale: float = 1.0
+    #: Fraction of :data:`A_MAX` used.
+    accel_scale: float = 1.0
+    grasp_time: float = GRASP_TIME
+    release_time: float = RELEASE_TIME
+    #: Whether a cycle includes the move back above the bin.
+    return_to_bin: bool = True
+
+    def __post_init__(self) -> None:
+        if not (self.speed_scale > 0 and self.accel_scale > 0):
+            raise ValueError("speed_scale and accel_scale must be positive")
+        if self.grasp_time < 0 or self.release_time < 0:
+            raise ValueError("grasp_time and release_time must be >= 0")
+
+    @property
+    def v_max(self) -> np.ndarray:
+        return V_MAX * self.speed_scale
+
+    @property
+    def a_max(self) -> np.ndarray:
+        return A_MAX * self.accel_scale
+
+
+DEFAULT_PARAMS = MotionParams()
+
+
+def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
+    """Minimum time to move ``distance`` from rest to rest under speed ``v_max`` and
+    acceleration ``a_max`` (trapezoid, or triangle for short moves)."""
+    d = abs(float(distance))
+    if d == 0.0:
+        return 0.0
+    if d * a_max <= v_max * v_max:  # never reaches the cruise speed
+        return 2.0 * math.sqrt(d / a_max)
+    return d / v_max + v_max / a_max
+
+
+def _path_limits(
+    q0: np.ndarray, q1: np.ndarray, params: MotionParams
+) -> tuple[np.ndarray, float, float]:
+    d = np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)
+    ad = np.abs(d)
+    moving = ad > 1e-12
+    if not moving.any():
+        return d, math.inf, math.inf
+    v = float(np.min(params.v_max[moving] / ad[moving]))
+    a = float(np.min(params.a_max[moving] / ad[moving]))
+    return d, v, a
+
+
+def move_time(q0: np.ndarray, q1: np.ndarray, params: MotionParams = DEFAULT_PARAMS) -> float:
+    """Duration [s] of the synchronised joint-space move ``q0 -> q1`` (rest to rest)."""
+    _, v, a = _path_limits(q0, q1, params)
+    return 0.0 if math.isinf(v) else trapezoid_time(1.0, v, a)
+
+
+def move_profile(
+    q0: np.ndarray, q1: np.ndarray, t: float | np.ndarray, params: MotionParams = DEFAULT_PARAMS
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, velocities and accelerations at time(s) ``t`` of :func:`move_time`'s move.
+
+    Shapes (..., 7). Lets tests and animations check the limits.
+    """
+    d, v, a = _path_limits(q0, q1, params)
+    t = np.asarray(t, dtype=float)[..., None]
+    q0 = np.asarray(q0, dtype=float)
+    if math.isinf(v):
+        zero = np.zeros((*t.shape[:-1], 7))
+        return np.broadcast_to(q0, zero.shape).copy(), zero, zero.copy()
+    total = trapezoid_time(1.0, v, a)
+    ta = min(v / a, total / 2.0)  # acceleration phase
+    vp = a * ta  # peak path speed
+    tc = np.clip(t, 0.0, total)
+    s = np.where(
+        tc < ta,
+        0.5 * a * tc**2,
+        np.where(
+            tc <= total - ta, 0.5 * a * ta**2 + vp * (tc - ta), 1.0 - 0.5 * a * (total - tc) ** 2
+        ),
+    )
+    sd = np.where(tc < ta, a * tc, np.where(tc <= total - ta, vp, a * (total - tc)))
+    sdd = np.where(tc < ta, a, np.where(tc <= total - ta, 0.0, -a))
+    return q0 + s * d, sd * d, sdd * d
+
+
+@dataclass(frozen=True)
+class PickPlace:
+    """One pick-and-place cycle: the key configurations and the time of each step [s]."""
+
+    q_bin_above: np.ndarray
+    q_bin: np.ndarray
+    q_slot_above: np.ndarray
+    q_slot: np.ndarray
+    #: Gripper yaw at the slot, degrees from the tray x axis (one of ``station.grasp_yaws``).
+    slot_yaw: float
+    steps: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def total(self) -> float:
+        return float(sum(self.steps.values()))
+
+
+def _solve(
+    arm: Arm, point: np.ndarray, yaws: tuple[float, ...], q_start: np.ndarray | None, what: str
+) -> IKSolution:
+    """Top-down IK warm-started from ``q_start`` (so it stays on that branch, with the yaw
+    needing the least ``right_j6`` travel), falling back to the seeds; raises when
+    unreachable."""
+    q6 = None if q_start is None else float(q_start[6])
+    sol = solve_top_down(arm, point, yaws, q_init=q_start, q6_ref=q6)
+    if sol is None:
+        raise UnreachableError(f"{what} is out of the Sawyer's reach")
+    return sol
+
+
+@lru_cache(maxsize=256)
+def _bin_configs(station: Station, part_type: str) -> tuple[np.ndarray, np.ndarray]:
+    """IK above and at the bin of ``part_type`` (cached per station and part type)."""
+    arm = Arm(station.tool_offset_m)
+    grasp = station.bin_point(part_type)
+    above = grasp + np.array([0.0, 0.0, station.approach_height / 1000.0])
+    where = f"the bin of part type {part_type!r} at {station.bin_xyz(part_type)} mm"
+    sol = _solve(arm, above, station.grasp_yaws, None, f"the pose above {where}")
+    q_grasp = _solve(arm, grasp, (sol.yaw_deg,), sol.q, f"the grasp pose in {where}").q
+    return sol.q, q_grasp
+
+
+def pick_place(
+    station: Station,
+    part_type: str,
+    slot_xy_mm: tuple[float, float] | np.ndarray,
+    params: MotionParams = DEFAULT_PARAMS,
+) -> PickPlace:
+    """Plan one cycle (see the module docstring); raises :class:`UnreachableError` when the
+    bin or the slot (release or approach pose) cannot be reached."""
+    arm = Arm(station.tool_offset_m)
+    q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type))
+    x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
+    place = station.tray_to_base(x, y, station.place_height)
+    above = place + np.array([0.0, 0.0, station.approach_height / 1000.0])
+    where = f"tray slot ({x:g}, {y:g}) mm"
+    sol = _solve(arm, above, station.slot_yaws(), q_ba, f"the approach pose above {where}")
+    q_sa, yaw = sol.q, sol.yaw_deg
+    q_sp = _solve(arm, place, (yaw,), q_sa, where).q
+    down_bin = move_time(q_ba, q_bg, params)
+    down_slot = move_time(q_sa, q_sp, params)
+    steps = {
+        "approach_bin": down_bin,
+        "grasp": params.grasp_time,
+        "retreat_bin": down_bin,
+        "transfer": move_time(q_ba, q_sa, params),
+        "approach_slot": down_slot,
+        "release": params.release_time,
+        "retreat_slot": down_slot,
+    }
+    if params.return_to_bin:
+        steps["return"] = move_time(q_sa, q_ba, params)
+    slot_yaw = station.grasp_yaws[station.slot_yaws().index(yaw)]
+    return PickPlace(q_ba, q_bg, q_sa, q_sp, slot_yaw, steps)
+
+
+def pick_place_time(
+    station: Station,
+    part_type: str,
+    slot_xy_mm: tuple[float, float] | np.ndarray,
+    params: MotionParams = DEFAULT_PARAMS,
+) -> float:
+    """Seconds for one pick at the bin of ``part_type`` and place at tray point (x, y) mm."""
+    return pick_place(station, part_type, slot_xy_mm, params).total
+
+
+def layout_time(
+    station: Station, layout: Iterable[Any], params: MotionParams = DEFAULT_PARAMS
+) -> float:
+    """Robot seconds to kit a layout: the sum of :func:`pick_place_time` over its placements
+    (objects with ``type``, ``x`` and ``y``, e.g. :class:`bilevel_kit.plan.Placement`)."""
+    return float(
+        sum(pick_place_time(station, str(p.type), (float(p.x), float(p.y)), params) for p in layout)
+    )
+
+
+def tray_average_time(
+    station: Station,
+    part_type: str,
+    width: float,
+    height: float,
+    resolution: float = 50.0,
+    params: MotionParams = DEFAULT_PARAMS,
+) -> float:
+    """Mean :func:`pick_place_time` over the reachable cell centres of a ``width`` x
+    ``height`` mm tray at ``resolution`` mm: a layout-free robot time per part, for when the
+    placement is not known yet. Raises :class:`UnreachableError` when no cell is reachable."""
+    from .reach import build_reach_map, ensure_placeable
+
+    reach_map = ensure_placeable(
+        build_reach_map(station, width, height, resolution), f"a part of type {part_type!r}"
+    )
+    times = [
+        pick_place_time(
+            station, part_type, (float(reach_map.xs[c]), float(reach_map.ys[r])), params
+        )
+        for r, c in np.argwhere(reach_map.reachable)
+    ]
+    return float(np.mean(times))
