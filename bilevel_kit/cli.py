@@ -152,6 +152,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument(
+        "--convergence", metavar="PNG", help="plot the cross-entropy trace of one kit (greedy-ce)"
+    )
+    p.add_argument(
+        "--convergence-kit",
+        type=_positive_int,
+        metavar="K",
+        help="kit for --convergence (default: the kit with the most parts)",
+    )
+    p.add_argument(
         "--time-limit",
         type=_nonneg,
         metavar="S",
@@ -272,6 +281,27 @@ def _print_violations(lines: list[str], stream, limit: int = 20) -> None:
         print(f"  ... and {len(lines) - limit} more", file=stream)
 
 
+def _convergence_figure(result, kit: int | None):
+    from . import plots
+    from .errors import UsageError
+
+    terms = result.extra.get("kit_terms")
+    if not terms:
+        raise UsageError(f"--convergence: method {result.method!r} records no CE trace")
+    if kit is None:
+        kit = 1 + max(range(len(terms)), key=lambda k: (terms[k]["n_parts"], -k))
+    if kit > len(terms):
+        raise UsageError(f"--convergence-kit {kit}: the plan has {len(terms)} kits")
+    t = terms[kit - 1]
+    ax = plots.plot_convergence(t["trace"], label=f"kit {kit} ({t['n_parts']} parts)")
+    ax.set_title(
+        f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
+        f"{t['layout_source']}"
+    )
+    ax.legend()
+    return ax.figure
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
     from .methods import get_method, solve
 
@@ -287,6 +317,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
         **params,
     )
     figures = []
+    if args.convergence:
+        figures.append((_convergence_figure(result, args.convergence_kit), args.convergence))
     if result.plan is not None and (args.gantt or args.tray):
         from . import plots
 

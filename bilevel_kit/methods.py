@@ -159,6 +159,8 @@ def solve(
         instance=instance.name,
         extra=extra,
     )
+
+
 register(
     "greedy-ce",
     "bilevel_kit.heuristics.greedy:greedy_ce",

@@ -1,0 +1,222 @@
+"""The paper's upper level (greedy-ce): validity, memoisation, weights, online policy."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bilevel_kit import check, load, solve
+from bilevel_kit.heuristics.cross_entropy import CEParams
+from bilevel_kit.heuristics.greedy import GreedyCEPolicy, GreedyParams, PolicyState, plan
+from bilevel_kit.instance import from_dict
+
+FAST_CE = CEParams(samples=60, elite=10, max_iter=30)
+
+
+def test_plans_pass_the_checker_on_every_instance(root):
+    for path in sorted((root / "instances").rglob("*.json")):
+        inst = load(path)
+        res = solve(inst, "greedy-ce", check=True)
+        assert res.extra["violations"] == [], path.name
+        assert res.status == "feasible" and res.objective >= res.bound - 1e-9
+
+
+def test_table_plan_numbers(table):
+    res = solve(table, "greedy-ce", seed=0)
+    sizes = [len(k.tasks) for k in res.plan.kits]
+    # Eq. 6 pairs the first tasks of each leg (foot+conn), the tops follow one by one
+    assert sizes == [2, 2, 2, 2, 1, 1, 1, 1]
+    assert res.objective == pytest.approx(459.78)
+    assert res.metrics["human_idle"] == pytest.approx(53.0)
+    st_ = solve(table, "single-task")
+    wa = solve(table, "whole-assembly")
+    assert res.objective <= st_.objective + 1e-9 < wa.objective
+
+
+def test_memoisation_each_multiset_arranged_once(table):
+    policy = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE), seed=0)
+    p = plan(table, policy=policy)
+    assert check(table, p) == []
+    st_ = policy.stats
+    # every CE call is a distinct part multiset, and most look-ups were served from the cache
+    assert st_.ce_calls == len(policy._arrangements)
+    assert st_.fitness_cache_hits > st_.ce_calls
+    # asking for a kit already arranged does not call CE again
+    calls = st_.ce_calls
+    policy.arrangement(table.kit_parts(["foot1"]))
+    assert policy.stats.ce_calls == calls
+
+
+def test_w2_controls_kit_size(table):
+    big = solve(table.with_overrides(weights={"W2": 200}), "greedy-ce")
+    small = solve(table.with_overrides(delivery_time=0, weights={"W2": 0}), "greedy-ce")
+    big_sizes = [len(k.tasks) for k in big.plan.kits]
+    small_sizes = [len(k.tasks) for k in small.plan.kits]
+    # W2 = 200 s/task outweighs every timing term: the horizon's 5 tasks go in one kit twice
+    assert big_sizes == [5, 5, 2]
+    # W2 = 0, d = 0: only the timing terms count; no kit holds more than 2 tasks and half of
+    # the kits are single tasks (the tops, once the legs are prepared)
+    assert max(small_sizes) == 2 and small_sizes.count(1) == 4 and len(small_sizes) == 8
+    assert sum(big_sizes) / len(big_sizes) > 2 * sum(small_sizes) / len(small_sizes)
+
+
+def test_same_seed_same_plan_and_options_reach_the_method(stool):
+    a = solve(stool, "greedy-ce", seed=3, samples=50, elite=10, max_iter=20)
+    b = solve(stool, "greedy-ce", seed=3, samples=50, elite=10, max_iter=20)
+    assert a.plan == b.plan
+    assert a.params["samples"] == 50
+
+
+def test_unknown_option_is_a_usage_error(stool):
+    from bilevel_kit import UsageError
+
+    with pytest.raises(UsageError, match="unknown option"):
+        solve(stool, "greedy-ce", colour="red")
+
+
+def test_online_policy_decides_from_state(table):
+    policy = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE), seed=0)
+    first = policy.decide(PolicyState())
+    assert first.tasks[0] == "foot1"
+    done = frozenset(t.id for t in table.tasks) - {"top4"}
+    assert policy.decide(PolicyState(done=done)).tasks == ("top4",)
+    assert policy.decide(PolicyState(done=frozenset(t.id for t in table.tasks))) is None
+
+
+def test_w7_avoids_unavailable_parts(table):
+    policy = GreedyCEPolicy(
+        table.with_overrides(weights={"W7": 1000}), GreedyParams(ce=FAST_CE), seed=0
+    )
+    # no legs available: the first kits must be the connector-free... only foot tasks need legs
+    kit = policy.decide(
+        PolicyState(
+            available={"leg": 0, "foot": 4, "connector": 4, "screw_short": 8, "screw_long": 8}
+        )
+    )
+    # every task that can go first (foot1..4) needs a leg, so W7 cannot be avoided; the policy
+    # takes exactly one leg-needing task (one unavailable part), never several
+    assert table.kit_parts(kit.tasks)["leg"] == 1
+    default = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE), seed=0).decide(PolicyState())
+    assert table.kit_parts(default.tasks)["leg"] == 1  # (the default also starts with one leg)
+    done = frozenset({"foot1", "foot2"})
+    kit = policy.decide(
+        PolicyState(
+            done=done,
+            available={"leg": 0, "foot": 4, "connector": 4, "screw_short": 8, "screw_long": 8},
+        )
+    )
+    assert all(not any(p == "leg" for p, _ in table.task_by_id[t].parts) for t in kit.tasks)
+
+
+def test_signed_and_penalty_forms_run(stool):
+    for opts in ({"signed": True}, {"precedence": "penalty"}):
+        res = solve(stool, "greedy-ce", check=True, **opts)
+        assert res.extra["violations"] == []
+
+
+@st.composite
+def small_instances(draw):
+    n_types = draw(st.integers(1, 3))
+    types = [
+        {
+            "id": f"p{k}",
+            "width": draw(st.integers(5, 60)) * 1.0,
+            "height": draw(st.integers(5, 60)) * 1.0,
+            "pick_time": draw(st.integers(0, 9)) * 1.0,
+            "rotatable": draw(st.booleans()),
+        }
+        for k in range(n_types)
+    ]
+    n = draw(st.integers(1, 6))
+    tasks = []
+    for j in range(n):
+        parts = [
+            {"type": f"p{k}", "count": draw(st.integers(1, 2))}
+            for k in range(n_types)
+            if draw(st.booleans())
+        ]
+        tasks.append(
+            {"id": f"t{j}", "parts": parts, "human_time": {"mean": draw(st.integers(1, 30)) * 1.0}}
+        )
+    edges = [
+        [f"t{a}", f"t{b}"]
+        for a in range(n)
+        for b in range(a + 1, n)
+        if draw(st.integers(0, 3)) == 0
+    ]
+    return from_dict(
+        {
+            "format": "bilevel-kit/1",
+            "name": "h",
+            "tray": {"width": 200.0, "height": 150.0},
+            "delivery_time": draw(st.integers(0, 10)) * 1.0,
+            "kit_overhead": {"robot": draw(st.integers(0, 5)) * 1.0, "human": 1.0},
+            "part_types": types,
+            "tasks": tasks,
+            "precedence": edges,
+            "horizon": draw(st.integers(1, 4)),
+        }
+    )
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_instances(), st.integers(0, 3))
+def test_property_greedy_plan_is_always_valid(inst, seed):
+    p = plan(inst, GreedyParams(ce=FAST_CE), seed=seed)
+    assert check(inst, p) == []
+
+
+def test_cli_greedy_figures_and_options(capsys, tmp_path, root):
+    from bilevel_kit.cli import main
+
+    tray, conv, out = tmp_path / "tray.png", tmp_path / "conv.png", tmp_path / "s.json"
+    code = main(
+        [
+            "solve",
+            str(root / "instances/stool.json"),
+            "--method",
+            "greedy-ce",
+            "--horizon",
+            "2",
+            "--weights",
+            "W3=1,W4=1",
+            "--seed",
+            "0",
+            "-p",
+            "samples=80",
+            "--tray",
+            str(tray),
+            "--convergence",
+            str(conv),
+            "--out",
+            str(out),
+            "--check",
+        ]
+    )
+    text = capsys.readouterr().out
+    assert code == 0 and "check: valid" in text
+    assert tray.read_bytes()[:4] == b"\x89PNG" and conv.read_bytes()[:4] == b"\x89PNG"
+    import json
+
+    doc = json.loads(out.read_text())
+    assert doc["params"]["samples"] == 80 and doc["extra"]["ce_calls"] >= 1
+    assert (
+        len(doc["extra"]["kit_terms"][0]["trace"]) == doc["extra"]["kit_terms"][0]["ce_iterations"]
+    )
+    # --convergence needs a CE trace: a baseline gives exit 2 and writes nothing
+    bad = tmp_path / "none.png"
+    code = main(
+        [
+            "solve",
+            str(root / "instances/stool.json"),
+            "-m",
+            "single-task",
+            "--convergence",
+            str(bad),
+            "--out",
+            str(tmp_path / "x.json"),
+        ]
+    )
+    assert code == 2 and not bad.exists() and not (tmp_path / "x.json").exists()
+    assert "records no CE trace" in capsys.readouterr().err
