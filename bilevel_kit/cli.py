@@ -219,6 +219,21 @@ def build_parser() -> argparse.ArgumentParser:
     _add_instance_overrides(p)
 
     p = sub.add_parser(
+        "generate",
+        help="write a generated instance",
+        description="Families: table (units of the paper's table), mixed (table + stool + "
+        "chair per unit), intree and series-parallel (random task graphs of SIZE tasks; "
+        "--tightness = total part area / tray area).",
+    )
+    p.add_argument("family", help="table | mixed | intree | series-parallel")
+    p.add_argument("--size", type=_positive_int, required=True, help="units or tasks")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--tightness", type=float, default=0.6, help="part area / tray area (0.6)")
+    p.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
+                   help="delivery time d (default: the family's)")
+    p.add_argument("--out", "-o", metavar="FILE", help="write here instead of stdout")
+
+    p = sub.add_parser(
         "check",
         help="check a solution file against an instance",
         description="Run the independent checker; exit 1 and list the "
@@ -453,6 +468,26 @@ def _compare_figures(records: list[dict[str, Any]], folder: str) -> None:
             plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")
 
 
+def cmd_generate(args: argparse.Namespace) -> int:
+    import json
+
+    from .generate import generate
+    from .instance import from_dict
+
+    doc = generate(args.family, args.size, args.seed, args.tightness, args.delivery_time)
+    from_dict(doc, f"<generated {args.family}>")  # never write an instance that doesn't load
+    text = json.dumps(doc, indent=2) + "\n"
+    if args.out:
+        from .atomic import write_text
+
+        write_text(args.out, text)
+        print(f"wrote {args.out}: {doc['name']}, {len(doc['tasks'])} tasks x "
+              f"{doc.get('units', 1)} unit(s)")
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
 def cmd_check(args: argparse.Namespace) -> int:
     from . import solution
     from .validate import check
@@ -497,6 +532,7 @@ def cmd_methods(args: argparse.Namespace) -> int:
 COMMANDS = {
     "solve": cmd_solve,
     "compare": cmd_compare,
+    "generate": cmd_generate,
     "check": cmd_check,
     "schema": cmd_schema,
     "methods": cmd_methods,

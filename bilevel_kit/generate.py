@@ -1,0 +1,196 @@
+"""Instance generators: several units of the table, mixed products, random task graphs.
+
+Every generator is a pure function of its arguments (a seeded ``numpy.random.Generator`` makes
+every random choice) and returns an instance *document* (a dict in format ``bilevel-kit/1``),
+so generated files are reproducible from the command that made them, which is recorded in
+their ``description``.
+
+Families:
+
+* ``table``: ``size`` units of the paper's table (``instances/hrc_table.json``).
+* ``mixed``: ``size`` units of a mixed-model line: the table, the stool of Fig. 2 and a
+  chair-like product built from the same HRC model-set parts.
+* ``intree``: a random assembly tree of ``size`` tasks (each task feeds one later task).
+* ``series-parallel``: a random series-parallel graph of ``size`` tasks.
+
+``tightness`` sets the tray for the random families: tray area = total part area / tightness
+(1.0: the whole product exactly fills the tray by area; larger values force more kits).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import UsageError
+
+FAMILIES = ("table", "mixed", "intree", "series-parallel")
+_ROOT = Path(__file__).resolve().parent.parent
+_SD_RATIO = 61.14 / 374.78
+
+
+def _table_doc() -> dict[str, Any]:
+    path = _ROOT / "instances" / "hrc_table.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    raise UsageError(f"generate: the table family needs {path}")
+
+
+def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
+    """``size`` units of the paper's table."""
+    doc = _table_doc()
+    doc["name"] = f"table_u{size}"
+    doc["units"] = size
+    if delivery_time is not None:
+        doc["delivery_time"] = float(delivery_time)
+    doc["description"] = f"{size} units of the paper's table (bilevel-kit generate table --size {size})."
+    return doc
+
+
+def _task(tid: str, name: str, product: str, parts: dict[str, int], human: float) -> dict[str, Any]:
+    return {
+        "id": tid,
+        "name": name,
+        "product": product,
+        "parts": [{"type": t, "count": n} for t, n in parts.items()],
+        "human_time": {"mean": human, "sd": round(human * _SD_RATIO, 3)},
+    }
+
+
+def mixed(size: int, delivery_time: float | None = None) -> dict[str, Any]:
+    """A mixed-model line: table + stool + chair per unit, sharing the model-set part types."""
+    base = _table_doc()
+    part_types = copy.deepcopy(base["part_types"])
+    part_types += [
+        {"id": "seat", "name": "stool top", "width": 120.0, "height": 120.0, "pick_time": 10.0,
+         "rotatable": True},
+        {"id": "stool_leg", "name": "stool leg", "width": 150.0, "height": 15.0, "pick_time": 8.0,
+         "rotatable": True},
+    ]
+    tasks = [dict(t, id=f"T{t['id']}", product="table") for t in copy.deepcopy(base["tasks"])]
+    edges = [[f"T{a}", f"T{b}"] for a, b in base["precedence"]]
+    # the stool of Fig. 2 (numbers as in instances/stool.json)
+    tasks += [
+        _task("Sa1", "stool: insert screws to top", "stool", {"seat": 1, "screw_long": 4}, 20.0),
+        _task("Sa2", "stool: insert front legs", "stool", {"stool_leg": 2}, 15.0),
+        _task("Sa3", "stool: insert back legs", "stool", {"stool_leg": 2}, 15.0),
+    ]
+    edges += [["Sa1", "Sa2"], ["Sa1", "Sa3"]]
+    # a chair: four legs with feet, two back posts with connectors, then the backrest
+    for i in range(1, 5):
+        tasks.append(_task(f"Cfoot{i}", f"chair leg {i}: foot bracket", "chair",
+                           {"leg": 1, "foot": 1, "screw_short": 1}, 30.0))
+        tasks.append(_task(f"Cseat{i}", f"chair leg {i}: to the seat", "chair",
+                           {"screw_long": 2}, 32.0))
+        edges.append([f"Cfoot{i}", f"Cseat{i}"])
+    for j in range(1, 3):
+        tasks.append(_task(f"Cpost{j}", f"chair back post {j}", "chair",
+                           {"leg": 1, "connector": 1, "screw_short": 1}, 28.0))
+    tasks.append(_task("Cback", "chair: attach the backrest", "chair", {"screw_long": 4}, 40.0))
+    edges += [[f"Cseat{i}", "Cback"] for i in range(1, 5)] + [["Cpost1", "Cback"],
+                                                              ["Cpost2", "Cback"]]
+    doc = {
+        "format": "bilevel-kit/1",
+        "name": f"mixed_u{size}",
+        "description": "Mixed-model line: the paper's table, the stool of Fig. 2 and a chair-like "
+        f"product from the same HRC model-set parts, {size} unit(s) "
+        f"(bilevel-kit generate mixed --size {size}).",
+        "assumptions": [
+            "Table tasks and numbers as in instances/hrc_table.json; stool as instances/stool.json "
+            "(its screws are the model set's long screws); chair: 4 legs with foot brackets "
+            "screwed to the seat, 2 back posts with connectors, then the backrest; human times "
+            "chosen in the range of the table's.",
+        ],
+        "tray": base["tray"],
+        "delivery_time": base["delivery_time"] if delivery_time is None else float(delivery_time),
+        "kit_overhead": base["kit_overhead"],
+        "part_types": part_types,
+        "tasks": tasks,
+        "precedence": edges,
+        "units": size,
+    }
+    return doc
+
+
+def _random_parts(rng: np.random.Generator, n_types: int) -> list[dict[str, Any]]:
+    out = []
+    for k in range(n_types):
+        w, h = sorted(rng.integers(8, 90, size=2).tolist(), reverse=True)
+        out.append({"id": f"p{k}", "width": float(w), "height": float(h),
+                    "pick_time": float(rng.integers(2, 9)), "rotatable": bool(rng.random() < 0.8)})
+    return out
+
+
+def _series_parallel(rng: np.random.Generator, ids: list[str]) -> tuple[list[list[str]], list[str],
+                                                                        list[str]]:
+    """Edges, sources and sinks of a random series-parallel graph over ``ids``."""
+    if len(ids) == 1:
+        return [], ids[:], ids[:]
+    cut = int(rng.integers(1, len(ids)))
+    ea, sa, ta = _series_parallel(rng, ids[:cut])
+    eb, sb, tb = _series_parallel(rng, ids[cut:])
+    if rng.random() < 0.5:  # series: every sink of A precedes every source of B
+        return ea + eb + [[t, s] for t in ta for s in sb], sa, tb
+    return ea + eb, sa + sb, ta + tb
+
+
+def random_graph(family: str, size: int, seed: int, tightness: float = 0.6,
+                 delivery_time: float = 5.0) -> dict[str, Any]:
+    """A random in-tree or series-parallel product of ``size`` tasks."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, size, FAMILIES.index(family)]))
+    types = _random_parts(rng, int(rng.integers(2, 5)))
+    ids = [f"t{j}" for j in range(size)]
+    if family == "intree":
+        # task j > 0 feeds a random earlier-numbered parent: the root t0 is the final assembly
+        edges = [[f"t{j}", f"t{int(rng.integers(0, j))}"] for j in range(1, size)]
+    else:
+        edges, _, _ = _series_parallel(rng, ids)
+    tasks = []
+    area = 0.0
+    for tid in ids:
+        chosen = rng.choice(len(types), size=int(rng.integers(1, 3)), replace=False)
+        parts = {types[k]["id"]: int(rng.integers(1, 3)) for k in sorted(chosen.tolist())}
+        area += sum(types[int(k[1:])]["width"] * types[int(k[1:])]["height"] * n
+                    for k, n in parts.items())
+        tasks.append(_task(tid, f"task {tid}", "product", parts, float(rng.integers(10, 41))))
+    side = math.sqrt(area / tightness / 1.5)  # a 3:2 tray of the requested area
+    width = max(math.ceil(side * 1.5), max(t["width"] for t in types))
+    height = max(math.ceil(side), max(t["height"] for t in types))
+    return {
+        "format": "bilevel-kit/1",
+        "name": f"{family}_n{size}_s{seed}",
+        "description": f"Random {family} product (bilevel-kit generate {family} --size {size} "
+        f"--seed {seed} --tightness {tightness:g} --d {delivery_time:g}).",
+        "assumptions": ["Random: part sizes 8-90 mm, pick times 2-8 s, human times 10-40 s, "
+                        "1-2 part types per task with 1-2 parts each, per-kit overheads 2 s "
+                        "(robot) and 1 s (human)."],
+        "tray": {"width": float(width), "height": float(height)},
+        "delivery_time": float(delivery_time),
+        "kit_overhead": {"robot": 2.0, "human": 1.0},
+        "part_types": types,
+        "tasks": tasks,
+        "precedence": edges,
+        "units": 1,
+    }
+
+
+def generate(family: str, size: int, seed: int = 0, tightness: float = 0.6,
+             delivery_time: float | None = None) -> dict[str, Any]:
+    """An instance document of the given family (see the module docstring)."""
+    if family not in FAMILIES:
+        raise UsageError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
+    if size < 1:
+        raise UsageError("--size must be >= 1")
+    if not tightness > 0:
+        raise UsageError("--tightness must be > 0")
+    if family == "table":
+        return table(size, delivery_time)
+    if family == "mixed":
+        return mixed(size, delivery_time)
+    return random_graph(family, size, seed, tightness,
+                        5.0 if delivery_time is None else delivery_time)
