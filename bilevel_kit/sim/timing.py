@@ -1,0 +1,186 @@
+"""Task-time model of the shop-floor simulation: sampled participants and robot pick times.
+
+Why a model at all: the paper samples "a participant's task times and the robot's task times as
+recorded from the user study" (Section V-B), but publishes only the per-table summary of the
+human's active time, 374.78 s mean and 61.14 s SD. We therefore draw *participants*:
+
+* Human. Per unit one participant with speed factor ``s`` (mean 1, SD ``participant_cv``;
+  lognormal by default, or a normal truncated to ``s > 0`` by resampling). Every task of that
+  unit takes ``mean_i * s * e_i`` where ``e_i`` is independent per-task noise (lognormal, mean
+  1, SD ``task_cv``; **0 by default**). With ``task_cv = 0`` the per-unit total is
+  ``s * sum(mean_i)``, so for the table (means summing to 374.78 s) it has mean 374.78 s and SD
+  374.78 * cv = 61.14 s, exactly the paper's numbers. The instance's per-task ``human_sd``
+  fields are *not* used by default: for the table they are ``mean_i * 61.14 / 374.78``, i.e.
+  this same perfectly correlated model; ``participant_cv=None`` derives the factor's SD from
+  the instance instead (``sum(sd_i) / sum(mean_i)`` over one unit's tasks).
+  The per-kit overhead ``o_H`` (taking the parts off the tray) is not scaled by ``s``.
+* Robot. Each part's pick time is the instance's ``pick_time`` (after ``robot_scale``), times
+  independent lognormal noise of SD ``robot_cv`` (0 by default: deterministic picks). A task
+  with a ``robot_time`` override spreads it evenly over its parts, or is one block when it has
+  no parts.
+
+Calibration knobs (``human_scale``, ``robot_scale``, ``kit_overhead_*``) are applied to the
+instance itself (:func:`bilevel_kit.sim.shopfloor.effective_instance`), so the policies plan with
+the same expected times the simulation samples around.
+
+All times for a run are drawn up front from dedicated random streams, so they do not depend on
+the policy: two policies run with the same seed see the same participants (common random
+numbers, which makes paired comparisons between policies much sharper).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import UsageError
+from ..instance import Instance
+
+#: The paper's per-table human active time (Section VI): mean and SD in seconds.
+PAPER_TABLE_MEAN = 374.78
+PAPER_TABLE_SD = 61.14
+#: Coefficient of variation of a participant's speed implied by those two numbers.
+PAPER_CV = PAPER_TABLE_SD / PAPER_TABLE_MEAN
+
+_DISTS = ("lognormal", "normal")
+
+
+@dataclass(frozen=True)
+class TimingModel:
+    """How task times are drawn, plus the calibration knobs ``paper_repro`` may fit.
+
+    Fields:
+        participant_cv: SD of the per-unit participant speed factor (mean 1). Default: the
+            paper's 61.14 / 374.78. ``None``: from the instance, ``sum(sd_i) / sum(mean_i)``.
+        participant_dist: ``"lognormal"`` (default) or ``"normal"`` (truncated to > 0).
+        task_cv: SD of independent per-task multiplicative noise (mean 1); default 0.
+        human_scale: multiplies every task's mean human time (calibration).
+        robot_scale: multiplies every pick time and robot-time override (calibration).
+        robot_cv: SD of independent multiplicative noise per pick (mean 1); default 0.
+        kit_overhead_robot: overrides the instance's ``o_R`` when not None (s per kit).
+        kit_overhead_human: overrides the instance's ``o_H`` when not None (the human's
+            per-kit pickup time).
+    """
+
+    participant_cv: float | None = PAPER_CV
+    participant_dist: str = "lognormal"
+    task_cv: float = 0.0
+    human_scale: float = 1.0
+    robot_scale: float = 1.0
+    robot_cv: float = 0.0
+    kit_overhead_robot: float | None = None
+    kit_overhead_human: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.participant_dist not in _DISTS:
+            raise UsageError(
+                f"participant_dist must be one of {', '.join(_DISTS)}, "
+                f"got {self.participant_dist!r}"
+            )
+        for name in ("task_cv", "robot_cv", "participant_cv"):
+            v = getattr(self, name)
+            if v is not None and (not math.isfinite(v) or v < 0):
+                raise UsageError(f"{name} must be finite and >= 0, got {v!r}")
+        for name in ("human_scale", "robot_scale"):
+            v = getattr(self, name)
+            if not math.isfinite(v) or v <= 0:
+                raise UsageError(f"{name} must be finite and > 0, got {v!r}")
+        for name in ("kit_overhead_robot", "kit_overhead_human"):
+            v = getattr(self, name)
+            if v is not None and (not math.isfinite(v) or v < 0):
+                raise UsageError(f"{name} must be finite and >= 0, got {v!r}")
+
+    @classmethod
+    def deterministic(cls, **changes: float | None) -> TimingModel:
+        """No randomness at all: humans take the mean times, picks the instance's times."""
+        return cls(**{"participant_cv": 0.0, "task_cv": 0.0, "robot_cv": 0.0, **changes})
+
+    @property
+    def is_deterministic(self) -> bool:
+        return self.participant_cv == 0 and self.task_cv == 0 and self.robot_cv == 0
+
+    def cv_for(self, instance: Instance) -> float:
+        """The participant factor's SD for this instance (resolves ``participant_cv=None``)."""
+        if self.participant_cv is not None:
+            return self.participant_cv
+        total = sum(t.human_mean for t in instance.base_tasks)
+        return sum(t.human_sd for t in instance.base_tasks) / total if total > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class SampledTimes:
+    """The times of one run: per task the human duration and the robot's pick durations.
+
+    ``picks[task]`` holds ``(part type or None, seconds)`` in picking order; ``None`` marks the
+    single block of a task with a robot-time override and no parts.
+    """
+
+    human: dict[str, float]
+    picks: dict[str, tuple[tuple[str | None, float], ...]]
+    speed: tuple[float, ...] = field(default=())  # participant factor per unit
+
+    def robot(self, task: str) -> float:
+        return sum(d for _, d in self.picks[task])
+
+    def robot_times(self) -> dict[str, float]:
+        return {t: self.robot(t) for t in self.picks}
+
+
+def _mean_one(rng: np.random.Generator, cv: float, size: int, dist: str) -> np.ndarray:
+    """``size`` positive factors with mean 1 and SD ``cv``."""
+    if cv == 0 or size == 0:
+        return np.ones(size)
+    if dist == "lognormal":
+        sigma2 = math.log1p(cv * cv)
+        return rng.lognormal(-sigma2 / 2, math.sqrt(sigma2), size)
+    out = rng.normal(1.0, cv, size)
+    bad = out <= 0
+    while bad.any():  # truncation by resampling; P(s <= 0) is ~1e-9 at the paper's cv
+        out[bad] = rng.normal(1.0, cv, int(bad.sum()))
+        bad = out <= 0
+    return out
+
+
+def sample_participants(
+    instance: Instance, model: TimingModel, rng: np.random.Generator, n: int
+) -> np.ndarray:
+    """``n`` participant speed factors (mean 1, SD ``model.cv_for(instance)``)."""
+    return _mean_one(rng, model.cv_for(instance), n, model.participant_dist)
+
+
+def sample_times(
+    instance: Instance,
+    model: TimingModel,
+    human_rng: np.random.Generator,
+    robot_rng: np.random.Generator,
+) -> SampledTimes:
+    """Human and robot times of every task of ``instance`` (already the effective instance:
+    scales and overheads applied, units expanded)."""
+    speed = sample_participants(instance, model, human_rng, instance.units)
+    tasks = instance.tasks
+    noise = _mean_one(human_rng, model.task_cv, len(tasks), "lognormal")
+    human = {
+        t.id: t.human_mean * float(speed[t.unit - 1]) * float(e)
+        for t, e in zip(tasks, noise, strict=True)
+    }
+    picks: dict[str, tuple[tuple[str | None, float], ...]] = {}
+    n_picks = sum(max(1, sum(n for _, n in t.parts)) for t in tasks)
+    rnoise = iter(_mean_one(robot_rng, model.robot_cv, n_picks, "lognormal").tolist())
+    for t in tasks:
+        n_parts = sum(n for _, n in t.parts)
+        if t.robot_time is not None and n_parts == 0:
+            picks[t.id] = ((None, t.robot_time * next(rnoise)),)
+            continue
+        if n_parts == 0:
+            next(rnoise)
+            picks[t.id] = ()
+            continue
+        each = t.robot_time / n_parts if t.robot_time is not None else None
+        seq = []
+        for p, n in t.parts:
+            base = each if each is not None else instance.part_types[p].pick_time
+            seq += [(p, base * next(rnoise)) for _ in range(n)]
+        picks[t.id] = tuple(seq)
+    return SampledTimes(human, picks, tuple(float(s) for s in speed))
