@@ -64,6 +64,18 @@ def _param(text: str) -> tuple[str, Any]:
     return key.replace("-", "_"), _scalar(value)
 
 
+def _float_map(text: str) -> dict[str, float]:
+    out = {}
+    for k, v in _key_values(text).items():
+        try:
+            out[k] = float(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
+        if not out[k] > 0 or out[k] == float("inf"):
+            raise argparse.ArgumentTypeError(f"{k} must be a finite number > 0")
+    return out
+
+
 def _nonneg(text: str) -> float:
     try:
         v = float(text)
@@ -217,6 +229,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--cells", metavar="DIR", help="save/resume per-cell results in DIR")
     _add_instance_overrides(p)
+
+    p = sub.add_parser(
+        "simulate",
+        help="shop-floor simulation (SimPy) of a kitting policy",
+        description="Replications of the paper's shop-floor simulation (Section V-B): feeders "
+        "with Poisson arrivals (mean inter-arrival MAT) and exponential failures (MTTF, fixed "
+        "repair), the robot asking its policy for the next kit at each epoch, the human "
+        "assembling with sampled participant times. Replication r uses seed SEED + r.",
+    )
+    p.add_argument("instance")
+    p.add_argument("--policy", default="optimized", metavar="NAME",
+                   help="single-task | whole-assembly | optimized | cpsat-rolling (default "
+                   "optimized)")
+    p.add_argument("--mat", type=_float_map, default={}, metavar="leg=60,foot=60",
+                   help="mean inter-arrival time (s) per part type; other types always there")
+    p.add_argument("--mttf", type=_nonneg, metavar="S", help="mean time to failure of feeders")
+    p.add_argument("--repair", type=_nonneg, metavar="S", help="repair time (default 30 s)")
+    p.add_argument("--buffer", type=int, metavar="K",
+                   help="kits allowed to wait at the human before the robot stops "
+                   "(default unlimited, the evaluator's semantics; 0 = the user study)")
+    p.add_argument("--reps", type=_positive_int, default=30, help="replications (default 30)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the first replication")
+    p.add_argument("--csv", metavar="FILE", help="one row per replication")
+    p.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
+                   help="delivery time d in seconds (overrides the instance)")
+    p.add_argument("--units", type=_positive_int, metavar="U",
+                   help="tables built in sequence (default: the instance's; the paper: 10)")
+    p.add_argument("--horizon", type=_positive_int, metavar="N", help="greedy look-ahead N")
+    p.add_argument("--weights", type=_weights, metavar="W7=30",
+                   help="override some of the weights W1..W7 (optimized policy)")
 
     p = sub.add_parser(
         "generate",
@@ -468,6 +510,50 @@ def _compare_figures(records: list[dict[str, Any]], folder: str) -> None:
             plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")
 
 
+SIM_COLUMNS = ("makespan", "human_idle", "robot_idle", "n_kits", "robot_wait", "n_waits",
+               "robot_blocked")
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    import statistics
+
+    from .errors import UsageError
+    from .instance import load
+    from .sim import POLICIES, SimParams, replicate
+
+    if args.policy not in POLICIES:
+        raise UsageError(f"unknown policy {args.policy!r}; choose from {', '.join(POLICIES)}")
+    instance = load(args.instance)
+    unknown = sorted(set(args.mat) - set(instance.part_types))
+    if unknown:
+        raise UsageError(f"--mat: unknown part type(s) {', '.join(unknown)}")
+    if args.mttf is not None and not args.mat and not instance.supply:
+        raise UsageError("--mttf needs feeders: give --mat or an instance 'supply' section")
+    if args.buffer is not None and args.buffer < 0:
+        raise UsageError("--buffer must be >= 0")
+    params = SimParams(units=args.units, delivery_time=args.delivery_time, mat=args.mat,
+                       mttf=args.mttf, repair_time=args.repair, buffer=args.buffer,
+                       horizon=args.horizon, weights=args.weights)
+    records = replicate(instance, args.policy, params,
+                        seeds=range(args.seed, args.seed + args.reps),
+                        progress=sys.stderr.isatty())
+    units = records[0]["units"]
+    print(f"{instance.name}: policy {args.policy}, {units} unit(s), {args.reps} replication(s)")
+    for col in SIM_COLUMNS:
+        vals = [float(r[col]) for r in records]
+        sd = statistics.stdev(vals) if len(vals) > 1 else 0.0
+        print(f"  {col:<14} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
+              f"min {min(vals):10.2f}   max {max(vals):10.2f}")
+    if args.csv:
+        from .experiments import write_csv
+
+        rows = [{"instance": instance.name, "policy": args.policy,
+                 **{k: r[k] for k in ("seed", "units", *SIM_COLUMNS, "human_work",
+                                      "robot_work", "max_queue")}} for r in records]
+        write_csv(args.csv, rows)
+    return EXIT_OK
+
+
 def cmd_generate(args: argparse.Namespace) -> int:
     import json
 
@@ -533,6 +619,7 @@ COMMANDS = {
     "solve": cmd_solve,
     "compare": cmd_compare,
     "generate": cmd_generate,
+    "simulate": cmd_simulate,
     "check": cmd_check,
     "schema": cmd_schema,
     "methods": cmd_methods,
