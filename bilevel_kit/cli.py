@@ -239,26 +239,72 @@ def build_parser() -> argparse.ArgumentParser:
         "assembling with sampled participant times. Replication r uses seed SEED + r.",
     )
     p.add_argument("instance")
-    p.add_argument("--policy", default="optimized", metavar="NAME",
-                   help="single-task | whole-assembly | optimized | cpsat-rolling (default "
-                   "optimized)")
-    p.add_argument("--mat", type=_float_map, default={}, metavar="leg=60,foot=60",
-                   help="mean inter-arrival time (s) per part type; other types always there")
+    p.add_argument(
+        "--policy",
+        default="optimized",
+        metavar="NAME",
+        help="single-task | whole-assembly | optimized | cpsat-rolling (default optimized)",
+    )
+    p.add_argument(
+        "--mat",
+        type=_float_map,
+        default={},
+        metavar="leg=60,foot=60",
+        help="mean inter-arrival time (s) per part type; other types always there",
+    )
     p.add_argument("--mttf", type=_nonneg, metavar="S", help="mean time to failure of feeders")
     p.add_argument("--repair", type=_nonneg, metavar="S", help="repair time (default 30 s)")
-    p.add_argument("--buffer", type=int, metavar="K",
-                   help="kits allowed to wait at the human before the robot stops "
-                   "(default unlimited, the evaluator's semantics; 0 = the user study)")
+    p.add_argument(
+        "--buffer",
+        type=int,
+        metavar="K",
+        help="kits allowed to wait at the human before the robot stops "
+        "(default unlimited, the evaluator's semantics; 0 = the user study)",
+    )
     p.add_argument("--reps", type=_positive_int, default=30, help="replications (default 30)")
     p.add_argument("--seed", type=int, default=0, help="seed of the first replication")
     p.add_argument("--csv", metavar="FILE", help="one row per replication")
-    p.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
-                   help="delivery time d in seconds (overrides the instance)")
-    p.add_argument("--units", type=_positive_int, metavar="U",
-                   help="tables built in sequence (default: the instance's; the paper: 10)")
+    p.add_argument(
+        "--d",
+        "--delivery-time",
+        dest="delivery_time",
+        type=_nonneg,
+        metavar="S",
+        help="delivery time d in seconds (overrides the instance)",
+    )
+    p.add_argument(
+        "--units",
+        type=_positive_int,
+        metavar="U",
+        help="tables built in sequence (default: the instance's; the paper: 10)",
+    )
     p.add_argument("--horizon", type=_positive_int, metavar="N", help="greedy look-ahead N")
-    p.add_argument("--weights", type=_weights, metavar="W7=30",
-                   help="override some of the weights W1..W7 (optimized policy)")
+    p.add_argument(
+        "--weights",
+        type=_weights,
+        metavar="W7=30",
+        help="override some of the weights W1..W7 (optimized policy)",
+    )
+
+    p = sub.add_parser(
+        "reach",
+        help="Sawyer reachability map of the tray (Pinocchio)",
+        description="Discretise the tray, solve a top-down grasp (and its approach pose) per "
+        "cell with the project's own Sawyer model, and print/draw the map: reachable cells "
+        "coloured by manipulability. The instance's 'station' section places the tray "
+        "(default station otherwise). With --solution, kit K's layout is drawn on top and "
+        "its unreachable parts are listed.",
+    )
+    p.add_argument("instance")
+    p.add_argument(
+        "--resolution",
+        type=float,
+        metavar="MM",
+        help="cell size in mm (default: the instance's reach_resolution, 10)",
+    )
+    p.add_argument("--png", metavar="FILE", help="draw the map here")
+    p.add_argument("--solution", metavar="FILE", help="solution whose kit to draw on the map")
+    p.add_argument("--kit", type=_positive_int, default=1, help="kit of --solution (default 1)")
 
     p = sub.add_parser(
         "generate",
@@ -271,8 +317,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--size", type=_positive_int, required=True, help="units or tasks")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--tightness", type=float, default=0.6, help="part area / tray area (0.6)")
-    p.add_argument("--d", "--delivery-time", dest="delivery_time", type=_nonneg, metavar="S",
-                   help="delivery time d (default: the family's)")
+    p.add_argument(
+        "--d",
+        "--delivery-time",
+        dest="delivery_time",
+        type=_nonneg,
+        metavar="S",
+        help="delivery time d (default: the family's)",
+    )
     p.add_argument("--out", "-o", metavar="FILE", help="write here instead of stdout")
 
     p = sub.add_parser(
@@ -510,8 +562,15 @@ def _compare_figures(records: list[dict[str, Any]], folder: str) -> None:
             plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")
 
 
-SIM_COLUMNS = ("makespan", "human_idle", "robot_idle", "n_kits", "robot_wait", "n_waits",
-               "robot_blocked")
+SIM_COLUMNS = (
+    "makespan",
+    "human_idle",
+    "robot_idle",
+    "n_kits",
+    "robot_wait",
+    "n_waits",
+    "robot_blocked",
+)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -531,27 +590,106 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         raise UsageError("--mttf needs feeders: give --mat or an instance 'supply' section")
     if args.buffer is not None and args.buffer < 0:
         raise UsageError("--buffer must be >= 0")
-    params = SimParams(units=args.units, delivery_time=args.delivery_time, mat=args.mat,
-                       mttf=args.mttf, repair_time=args.repair, buffer=args.buffer,
-                       horizon=args.horizon, weights=args.weights)
-    records = replicate(instance, args.policy, params,
-                        seeds=range(args.seed, args.seed + args.reps),
-                        progress=sys.stderr.isatty())
+    params = SimParams(
+        units=args.units,
+        delivery_time=args.delivery_time,
+        mat=args.mat,
+        mttf=args.mttf,
+        repair_time=args.repair,
+        buffer=args.buffer,
+        horizon=args.horizon,
+        weights=args.weights,
+    )
+    records = replicate(
+        instance,
+        args.policy,
+        params,
+        seeds=range(args.seed, args.seed + args.reps),
+        progress=sys.stderr.isatty(),
+    )
     units = records[0]["units"]
     print(f"{instance.name}: policy {args.policy}, {units} unit(s), {args.reps} replication(s)")
     for col in SIM_COLUMNS:
         vals = [float(r[col]) for r in records]
         sd = statistics.stdev(vals) if len(vals) > 1 else 0.0
-        print(f"  {col:<14} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
-              f"min {min(vals):10.2f}   max {max(vals):10.2f}")
+        print(
+            f"  {col:<14} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
+            f"min {min(vals):10.2f}   max {max(vals):10.2f}"
+        )
     if args.csv:
         from .experiments import write_csv
 
-        rows = [{"instance": instance.name, "policy": args.policy,
-                 **{k: r[k] for k in ("seed", "units", *SIM_COLUMNS, "human_work",
-                                      "robot_work", "max_queue")}} for r in records]
+        rows = [
+            {
+                "instance": instance.name,
+                "policy": args.policy,
+                **{
+                    k: r[k]
+                    for k in (
+                        "seed",
+                        "units",
+                        *SIM_COLUMNS,
+                        "human_work",
+                        "robot_work",
+                        "max_queue",
+                    )
+                },
+            }
+            for r in records
+        ]
         write_csv(args.csv, rows)
     return EXIT_OK
+
+
+def cmd_reach(args: argparse.Namespace) -> int:
+    from .errors import UsageError
+    from .instance import load
+
+    instance = load(args.instance)
+    resolution = instance.reach_resolution if args.resolution is None else args.resolution
+    if not resolution > 0:
+        raise UsageError("--resolution must be > 0")
+    layout = None
+    if args.solution:
+        from . import solution
+
+        sol = solution.read(args.solution)
+        if args.kit > len(sol.plan.kits):
+            raise UsageError(f"--kit {args.kit}: the solution has {len(sol.plan.kits)} kits")
+        layout = sol.plan.kits[args.kit - 1].layout
+    from .sawyer import DEFAULT_STATION, build_reach_map, ensure_placeable
+
+    station = instance.station or DEFAULT_STATION
+    m = build_reach_map(station, instance.tray.width, instance.tray.height, resolution)
+    ny, nx = m.shape
+    print(
+        f"{instance.name}: tray {instance.tray.width:g} x {instance.tray.height:g} mm at "
+        f"({station.tray_x:g}, {station.tray_y:g}, {station.tray_z:g}) mm, yaw "
+        f"{station.tray_yaw:g} deg; {nx} x {ny} cells of {m.cell_size[0]:.1f} x "
+        f"{m.cell_size[1]:.1f} mm; reachable {100 * m.fraction:.1f}%; built in "
+        f"{m.build_time:.3f} s"
+    )
+    if not m.is_empty:
+        manip = m.manipulability[m.reachable]
+        print(
+            f"manipulability of reachable cells: min {manip.min():.4f}  mean "
+            f"{manip.mean():.4f}  max {manip.max():.4f}"
+        )
+    bad: list[str] = []
+    if layout is not None:
+        ensure_placeable(m, f"kit {args.kit} of {args.solution}")
+        bad = [p.part for p in layout if not m.reachable_at(p.x, p.y)]
+        print(
+            f"kit {args.kit}: {len(layout)} parts, {len(bad)} unreachable"
+            + (f": {', '.join(bad)}" if bad else "")
+        )
+    if args.png:
+        from .plots import save_figure
+        from .sawyer import plot_reach_map
+
+        ax = plot_reach_map(m, layout)
+        save_figure(ax.figure, args.png)
+    return EXIT_INVALID if bad else EXIT_OK
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
@@ -567,8 +705,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
         from .atomic import write_text
 
         write_text(args.out, text)
-        print(f"wrote {args.out}: {doc['name']}, {len(doc['tasks'])} tasks x "
-              f"{doc.get('units', 1)} unit(s)")
+        print(
+            f"wrote {args.out}: {doc['name']}, {len(doc['tasks'])} tasks x "
+            f"{doc.get('units', 1)} unit(s)"
+        )
     else:
         sys.stdout.write(text)
     return EXIT_OK
@@ -619,6 +759,7 @@ COMMANDS = {
     "solve": cmd_solve,
     "compare": cmd_compare,
     "generate": cmd_generate,
+    "reach": cmd_reach,
     "simulate": cmd_simulate,
     "check": cmd_check,
     "schema": cmd_schema,

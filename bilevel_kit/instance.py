@@ -64,6 +64,8 @@ class PartType:
     pick_time: float
     rotatable: bool = True
     name: str = ""
+    #: The file's pick time when ``pick_time`` comes from the Sawyer motion model.
+    nominal_pick_time: float | None = None
 
     @property
     def area(self) -> float:
@@ -112,6 +114,15 @@ class Instance:
     units: int = 1
     description: str = ""
     assumptions: tuple[str, ...] = ()
+    #: Sawyer station geometry (:class:`bilevel_kit.sawyer.Station`), None if not given.
+    station: Any = None
+    #: Enforce Sawyer reachability of every placement (packers, CE and the checker).
+    reachability: bool = False
+    #: Cell size (mm) of the reach map that defines reachability.
+    reach_resolution: float = 10.0
+    #: ``"pick_time"``: robot times from the parts' pick times; ``"motion"``: each part's pick
+    #: time is the Sawyer motion model's mean pick-and-place time over the reachable tray.
+    robot_times: str = "pick_time"
     source: str = "<memory>"
 
     # -- the expanded (all-units) view -------------------------------------------------------
@@ -256,7 +267,7 @@ class Instance:
                 **({"name": p.name} if p.name else {}),
                 "width": p.width,
                 "height": p.height,
-                "pick_time": p.pick_time,
+                "pick_time": p.pick_time if p.nominal_pick_time is None else p.nominal_pick_time,
                 "rotatable": p.rotatable,
             }
             for p in self.part_types.values()
@@ -285,6 +296,13 @@ class Instance:
                 for k, s in self.supply.items()
             }
         doc["units"] = self.units
+        if self.station is not None:
+            doc["station"] = self.station.to_dict()
+        if self.reachability:
+            doc["reachability"] = True
+            doc["reach_resolution"] = self.reach_resolution
+        if self.robot_times != "pick_time":
+            doc["robot_times"] = self.robot_times
         return doc
 
 
@@ -477,8 +495,27 @@ def schema() -> dict[str, Any]:
                 },
             },
             "units": {"type": "integer", "minimum": 1, "default": 1},
+            "station": _station_schema(),
+            "reachability": {
+                "type": "boolean",
+                "default": False,
+                "description": "enforce Sawyer reachability of every placement (uses 'station', "
+                "or the default station)",
+            },
+            "reach_resolution": {**_POS, "default": 10.0, "description": "reach map cell (mm)"},
+            "robot_times": {
+                "enum": ["pick_time", "motion"],
+                "default": "pick_time",
+                "description": "'motion': pick times from the Sawyer motion model",
+            },
         },
     }
+
+
+def _station_schema() -> dict[str, Any]:
+    from .sawyer.station import station_schema
+
+    return station_schema()
 
 
 def _json_path(parts: Iterable[Any]) -> str:
@@ -645,6 +682,18 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
             repair_time=float(s.get("repair_time", DEFAULT_REPAIR_TIME)),
         )
 
+    station = None
+    if "station" in doc:
+        from .sawyer.station import Station, StationError
+
+        try:
+            station = Station.from_dict(doc["station"])
+        except StationError as exc:
+            raise fail("$.station", str(exc)) from None
+    robot_times = doc.get("robot_times", "pick_time")
+    if robot_times == "motion":
+        part_types = _motion_pick_times(part_types, station, tray, source)
+
     overhead = doc.get("kit_overhead", {})
     return Instance(
         name=name,
@@ -661,8 +710,30 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         units=int(doc.get("units", 1)),
         description=doc.get("description", ""),
         assumptions=tuple(doc.get("assumptions", ())),
+        station=station,
+        reachability=bool(doc.get("reachability", False)),
+        reach_resolution=float(doc.get("reach_resolution", 10.0)),
+        robot_times=robot_times,
         source=source,
     )
+
+
+def _motion_pick_times(
+    part_types: dict[str, PartType], station: Any, tray: Tray, source: str
+) -> dict[str, PartType]:
+    """Pick times from the Sawyer motion model: the mean pick-and-place time of each type over
+    the reachable cells of the tray (the layout is not known when times are planned)."""
+    from .sawyer import DEFAULT_STATION, UnreachableError, tray_average_time
+
+    st = station or DEFAULT_STATION
+    out = {}
+    for pid, pt in part_types.items():
+        try:
+            t = tray_average_time(st, pid, tray.width, tray.height)
+        except UnreachableError as exc:
+            raise InstanceError(source, "$.robot_times", str(exc)) from None
+        out[pid] = replace(pt, pick_time=t, nominal_pick_time=pt.pick_time)
+    return out
 
 
 def load(path: str | Path) -> Instance:

@@ -127,8 +127,10 @@ def solve(
     in ``result.extra["violations"]`` (an empty list means valid).
     """
     from .models.bounds import best_bound
+    from .reachability import ensure_kit_placeable
 
     fn = get_method(method).load()
+    ensure_kit_placeable(instance)  # an empty reach map is a clear error, not "no kit fits"
     t0 = time.perf_counter()
     out = fn(instance, seed=seed, time_limit=time_limit, **params)
     wall = time.perf_counter() - t0

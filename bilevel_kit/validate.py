@@ -35,6 +35,7 @@ KINDS = (
     "rotation_not_allowed",
     "outside_tray",
     "overlap",
+    "unreachable",
     "times_inconsistent",
 )
 
@@ -198,6 +199,18 @@ def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
                 k,
             )
         )
+    if instance.reachability:
+        from .reachability import unreachable
+
+        for part in unreachable(instance, [p for p in kit.layout if p.type in types]):
+            out.append(
+                Violation(
+                    "unreachable",
+                    f"kit {k}: part {part!r} lies where the Sawyer cannot place it "
+                    "(its centre is in an unreachable cell of the reach map)",
+                    k,
+                )
+            )
     for (pa, ca), (pb, cb) in combinations(shapes, 2):
         depth = geometry.penetration(ca, cb)
         if depth > geometry.TOL:

@@ -5,7 +5,9 @@
   algorithm, ties broken by the order of the tasks in the file).
 * Whole Assembly: one kit per product unit holding all of that unit's tasks, in the same order.
 
-Layouts come from the shelf packer; a kit it cannot lay out raises
+Layouts come from the shelf packer (when the instance enforces Sawyer reachability and the
+packer's layout puts a part out of reach, from cross-entropy with seed 0 instead); a kit that
+cannot be laid out raises
 :class:`~bilevel_kit.errors.KitDoesNotFit` instead of returning an overlapping layout.
 """
 
@@ -18,6 +20,7 @@ from ..errors import KitDoesNotFit
 from ..instance import Instance, topological_order
 from ..methods import MethodOutput
 from ..plan import Kit, Plan
+from ..reachability import unreachable
 from .packing import kit_items, shelf_pack
 
 
@@ -25,13 +28,27 @@ def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
     """A kit of ``tasks`` laid out by the shelf packer, or :class:`KitDoesNotFit`."""
     counts = instance.kit_parts(tasks)
     layout = shelf_pack(instance.tray, kit_items(instance.part_types, counts))
+    if layout is not None and instance.reachability and unreachable(instance, layout):
+        # the shelf packer knows nothing of the arm: let CE (seed 0) respect the reach map
+        from .cross_entropy import arrange
+
+        arr = arrange(instance, counts, rng=0)
+        layout = arr.layout if arr.fits else None
     if layout is None:
         area = sum(instance.part_types[p].area * n for p, n in counts.items())
+        how = "with the shelf packer"
+        if instance.reachability:
+            from ..reachability import reach_grid
+
+            share = reach_grid(instance).reachable.mean()
+            how = (
+                f"with every centre in the robot's reach ({100 * share:.0f}% of the tray) by the "
+                "shelf packer or cross-entropy"
+            )
         raise KitDoesNotFit(
             f"{instance.source}: {label}: its {sum(counts.values())} parts "
             f"({area:.0f} mm^2) do not fit the {instance.tray.width:g} x "
-            f"{instance.tray.height:g} mm tray ({instance.tray.area:.0f} mm^2) with the shelf "
-            "packer"
+            f"{instance.tray.height:g} mm tray ({instance.tray.area:.0f} mm^2) {how}"
         )
     return Kit(tuple(tasks), layout)
 

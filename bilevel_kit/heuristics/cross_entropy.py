@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.linalg.lapack
@@ -55,6 +56,7 @@ from ..errors import UsageError
 from ..instance import Instance, PartType, Tray
 from ..objective import PairScorer, PairTable, box_overlap_1d, layout_terms
 from ..plan import Placement
+from ..reachability import reach_grid
 
 
 @dataclass(frozen=True)
@@ -161,6 +163,8 @@ class _Kit:
     rot_idx: np.ndarray
     fixed_idx: np.ndarray
     pairs: PairTable
+    #: Reach grid when the instance enforces Sawyer reachability (else None).
+    reach: Any = None
     n: int = field(init=False)
     dim: int = field(init=False)
 
@@ -228,6 +232,7 @@ def _build_kit(instance: Instance, parts: Mapping[str, int], dtype: type) -> _Ki
         rot_idx=np.flatnonzero(rot),
         fixed_idx=np.flatnonzero(~rot),
         pairs=PairTable.build([t.id for t in types], dtype),
+        reach=reach_grid(instance),
     )
 
 
@@ -397,6 +402,10 @@ def _ce_run(
             over += np.maximum(2 * eyT - dt(H), dt(0)).sum(axis=0)
             cost += w_outf * over
             feasible &= over == 0
+        if kit.reach is not None:  # unreachable centroids cost like sticking out of the tray
+            lost = (~kit.reach.lookup(x, y)).sum(axis=0)
+            cost += w_outf * dt(kit.tray.width) * lost
+            feasible &= lost == 0
         k = int(np.argmin(cost))
         if cost[k] < best_cost:
             best_cost = float(cost[k])
@@ -438,13 +447,18 @@ def _ce_run(
 # ---------------------------------------------------------------------------------------------
 
 
-def _exactly_valid(layout: Sequence[Placement], tray: Tray) -> bool:
+def _exactly_valid(layout: Sequence[Placement], tray: Tray, reach: Any = None) -> bool:
     """Every part inside the tray and no pair penetrating deeper than ``geometry.TOL``, both
     by the exact rotated-rectangle tests of :mod:`bilevel_kit.geometry` (the final gate of
     every answer). Pairs whose bounding boxes are apart by more than TOL cannot penetrate, so
     only the others get the separating-axis test."""
     corners = [geometry.corners(p.x, p.y, p.w, p.h, p.theta) for p in layout]
     if not all(geometry.inside_tray(cn, tray.width, tray.height) for cn in corners):
+        return False
+    if (
+        reach is not None
+        and not reach.lookup(np.array([p.x for p in layout]), np.array([p.y for p in layout])).all()
+    ):
         return False
     if len(layout) < 2:
         return True
@@ -495,6 +509,8 @@ def _assess(
         box_overlap_1d(dx[hit], ex[i[hit]], ex[j[hit]])
         @ box_overlap_1d(dy[hit], ey[i[hit]], ey[j[hit]])
     )
+    if kit.reach is not None and not kit.reach.lookup(x, y).all():
+        inside = False  # an unreachable centroid is as invalid as a part off the tray
     if not inside:
         return _Candidate(x, y, theta, -(dsd + w6 * z_box), False, source)
     z = 0.0
@@ -560,7 +576,7 @@ def _choose(kit: _Kit, cands: Sequence[_Candidate]) -> _Candidate:
         cd = cands[k]
         if not cd.valid:
             break
-        if _exactly_valid(kit.layout(cd.x, cd.y, cd.theta), kit.tray):
+        if _exactly_valid(kit.layout(cd.x, cd.y, cd.theta), kit.tray, kit.reach):
             return cd
         cd.valid = False
     return cands[order[0]]
