@@ -220,3 +220,16 @@ def test_cli_greedy_figures_and_options(capsys, tmp_path, root):
     )
     assert code == 2 and not bad.exists() and not (tmp_path / "x.json").exists()
     assert "records no CE trace" in capsys.readouterr().err
+
+
+def test_polish_option_never_lowers_kit_fitness(table):
+    plain = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE), seed=0)
+    polished = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE, polish=True), seed=0)
+    for tasks in (["foot1", "conn1"], ["foot1", "foot2", "foot3"], ["top1", "conn2", "foot3"]):
+        counts = table.kit_parts(tasks)
+        a, b = plain.arrangement(counts), polished.arrangement(counts)
+        assert b.fitness >= a.fitness - 1e-9
+        assert b.source.endswith("+polish")
+    res = solve(table, "greedy-ce", polish=True, check=True)
+    assert res.extra["violations"] == []
+    assert res.params["polish"] is True

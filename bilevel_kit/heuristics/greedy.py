@@ -62,6 +62,8 @@ class GreedyParams:
     signed: bool = False
     precedence: str = "hard"  # "hard" | "penalty"
     ce: CEParams = field(default_factory=CEParams)
+    #: Polish every CE layout with the convex-concave SOCP of models/convex_layout.py.
+    polish: bool = False
 
 
 @dataclass(frozen=True)
@@ -135,6 +137,10 @@ class GreedyCEPolicy:
         )
         if not arr.fits:
             self.stats.kits_not_fitting += 1
+        elif self.params.polish:
+            from ..models.convex_layout import polish_arrangement
+
+            arr = polish_arrangement(self.instance, arr, self.instance.weights["W6"])
         self._arrangements[key] = arr
         return arr
 
@@ -297,12 +303,13 @@ def greedy_ce(
     horizon: int | None = None,
     signed: bool = False,
     precedence: str = "hard",
+    polish: bool = False,
     **options: Any,
 ) -> MethodOutput:
     """Registered method ``greedy-ce``: the paper's bilevel heuristic.
 
     Options: ``horizon`` (N), ``signed`` (Eqs. 5-6 as printed), ``precedence``
-    ("hard"/"penalty"), the weights ``W1``..``W7``, and every :class:`CEParams` field
+    ("hard"/"penalty"), ``polish`` (convex polish of every CE layout, issue 7), the weights ``W1``..``W7``, and every :class:`CEParams` field
     (``samples``, ``elite``, ``max_iter``, ``tol``, ``patience``, ``cov_smoothing`` ...).
     ``time_limit`` is accepted for the common interface; the heuristic has no time limit.
     """
@@ -313,7 +320,7 @@ def greedy_ce(
     if bad:
         raise UsageError(
             f"greedy-ce: unknown option(s) {', '.join(bad)}; options are horizon, "
-            f"signed, precedence, W1..W7, {', '.join(sorted(ce_fields))}"
+            f"signed, precedence, polish, W1..W7, {', '.join(sorted(ce_fields))}"
         )
     params = GreedyParams(
         horizon=horizon,
@@ -321,6 +328,7 @@ def greedy_ce(
         signed=bool(signed),
         precedence=precedence,
         ce=CEParams(**ce_opts),
+        polish=bool(polish),
     )
     policy = GreedyCEPolicy(instance, params, seed)
     result = plan(instance, params, seed, policy)
