@@ -309,8 +309,9 @@ def greedy_ce(
     """Registered method ``greedy-ce``: the paper's bilevel heuristic.
 
     Options: ``horizon`` (N), ``signed`` (Eqs. 5-6 as printed), ``precedence``
-    ("hard"/"penalty"), ``polish`` (convex polish of every CE layout, issue 7), the weights ``W1``..``W7``, and every :class:`CEParams` field
-    (``samples``, ``elite``, ``max_iter``, ``tol``, ``patience``, ``cov_smoothing`` ...).
+    ("hard"/"penalty"), ``polish`` (convex polish of every CE layout), the weights
+    ``W1``..``W7``, and every :class:`CEParams` field (``samples``, ``elite``, ``max_iter``,
+    ``tol``, ``patience``, ``cov_smoothing`` ...).
     ``time_limit`` is accepted for the common interface; the heuristic has no time limit.
     """
     ce_fields = {f.name for f in fields(CEParams)}
