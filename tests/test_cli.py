@@ -226,3 +226,58 @@ def test_bad_solution_file_exits_2(capsys, tmp_path, root):
     )
     code, _, err = run(capsys, "check", root / "instances/tiny.json", bad)
     assert code == 2 and "$.kits[0].tasks: 't1' is not of type 'array'" in err
+
+
+def test_compare_table_files_and_resume(capsys, tmp_path, root, monkeypatch):
+    cells, md, csv_path, figs = (
+        tmp_path / "cells",
+        tmp_path / "c.md",
+        tmp_path / "c.csv",
+        tmp_path / "figs",
+    )
+    argv = [
+        "compare",
+        str(root / "instances/stool.json"),
+        str(root / "instances/tiny.json"),
+        "--methods",
+        "single-task,whole-assembly",
+        "--cells",
+        str(cells),
+        "--md",
+        str(md),
+        "--csv",
+        str(csv_path),
+        "--figures",
+        str(figs),
+    ]
+    code, text, _ = run(capsys, *argv)
+    assert code == 0
+    assert len(list(cells.glob("*.json"))) == 4
+    lines = md.read_text().splitlines()
+    assert lines[0].startswith("| instance | method | makespan (s)") and len(lines) == 6
+    assert "| stool | single-task | 91.00 |" in md.read_text()
+    import csv
+
+    rows = list(csv.DictReader(csv_path.open()))
+    assert {r["method"] for r in rows} == {"single-task", "whole-assembly"}
+    assert all(r["valid"] == "True" for r in rows)
+    # the gap is measured against the best bound of the instance's rows
+    stool = [r for r in rows if r["instance"] == "stool"]
+    assert len({r["best_bound"] for r in stool}) == 1
+    assert sorted(p.name for p in figs.iterdir()) == [
+        "stool_compare.png",
+        "stool_single-task_gantt.png",
+        "stool_whole-assembly_gantt.png",
+        "tiny_compare.png",
+        "tiny_single-task_gantt.png",
+        "tiny_whole-assembly_gantt.png",
+    ]
+    # a second run reuses every saved cell: no method is called again
+    import bilevel_kit.methods as methods
+
+    def boom(*a, **k):
+        raise AssertionError("cell recomputed")
+
+    monkeypatch.setattr(methods, "solve", boom)
+    code, text2, _ = run(capsys, *argv)
+    assert code == 0 and text2 == text

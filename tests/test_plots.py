@@ -1,0 +1,345 @@
+"""Tests of bilevel_kit.plots: the artists drawn match the plan, its timeline and its layout."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon, Rectangle
+
+from bilevel_kit import plots
+from bilevel_kit.geometry import corners
+from bilevel_kit.instance import from_dict
+from bilevel_kit.plan import Kit, Placement, Plan, evaluate
+
+DOC = {
+    "format": "bilevel-kit/1",
+    "name": "tiny",
+    "tray": {"width": 300, "height": 200},
+    "part_types": [
+        {"id": "plate", "width": 120, "height": 80, "pick_time": 8},
+        {"id": "bolt", "width": 20, "height": 60, "pick_time": 4},
+        {"id": "gear", "width": 50, "height": 50, "pick_time": 6},
+    ],
+    "tasks": [
+        {"id": "T1", "parts": [{"type": "plate", "count": 1}], "human_time": {"mean": 20}},
+        {"id": "T2", "parts": [{"type": "bolt", "count": 2}], "human_time": {"mean": 8}},
+        {
+            "id": "T3",
+            "parts": [{"type": "gear", "count": 1}, {"type": "bolt", "count": 1}],
+            "human_time": {"mean": 15},
+        },
+        {"id": "T4", "parts": [{"type": "plate", "count": 1}], "human_time": {"mean": 3}},
+    ],
+    "precedence": [["T1", "T2"]],
+    "delivery_time": 5,
+    "kit_overhead": {"robot": 2, "human": 3},
+}
+
+P = Placement
+PLAN = Plan(
+    (
+        Kit(
+            ("T1", "T2"),
+            (
+                P("p1", "plate", 70, 50, 0, 120, 80),
+                P("b1", "bolt", 160, 50, 30, 20, 60),
+                P("b2", "bolt", 200, 50, 90, 20, 60),
+            ),
+        ),
+        Kit(("T3",), (P("g1", "gear", 50, 150, 45, 50, 50), P("b3", "bolt", 120, 150, 0, 20, 60))),
+        Kit(("T4",), (P("p2", "plate", 150, 100, 10, 120, 80),)),
+    )
+)
+
+
+@pytest.fixture
+def inst():
+    return from_dict(DOC)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def bars(ax: Axes, prefix: str) -> list[Rectangle]:
+    return [
+        p for p in ax.patches if isinstance(p, Rectangle) and (p.get_gid() or "").startswith(prefix)
+    ]
+
+
+def span(r: Rectangle) -> tuple[float, float]:
+    return r.get_x(), r.get_x() + r.get_width()
+
+
+def texts(ax: Axes) -> list[str]:
+    return [t.get_text() for t in ax.texts]
+
+
+# -- Gantt chart --------------------------------------------------------------------------------
+
+
+def test_gantt_robot_lane_has_kitting_and_delivery_bar_per_kit(inst):
+    ax = plots.plot_gantt(inst, PLAN)
+    tl = evaluate(inst, PLAN)
+    assert isinstance(ax, Axes)
+    kit_bars = bars(ax, "robot:kit:")
+    delivery = bars(ax, "robot:delivery:")
+    assert len(kit_bars) + len(delivery) == 2 * len(PLAN.kits)
+    for k, kt in enumerate(tl.kits):
+        (kb,) = bars(ax, f"robot:kit:{k + 1}")
+        (db,) = bars(ax, f"robot:delivery:{k + 1}")
+        assert span(kb) == pytest.approx((kt.robot_start, kt.robot_end))
+        assert span(db) == pytest.approx((kt.robot_end, kt.arrive))
+        assert kb.get_y() + kb.get_height() / 2 == pytest.approx(plots.ROBOT_Y)
+        assert db.get_hatch() and not kb.get_hatch()
+        assert db.get_facecolor() != kb.get_facecolor()
+        assert f"kit {k + 1}" in texts(ax)
+
+
+def test_gantt_human_lane_tasks_and_pickups(inst):
+    ax = plots.plot_gantt(inst, PLAN)
+    tl = evaluate(inst, PLAN)
+    task_bars = bars(ax, "human:task:")
+    assert len(task_bars) == len(PLAN.task_order)
+    for t in PLAN.task_order:
+        (b,) = bars(ax, f"human:task:{t}")
+        assert span(b) == pytest.approx((tl.task_start[t], tl.task_end[t]))
+        assert b.get_y() + b.get_height() / 2 == pytest.approx(plots.HUMAN_Y)
+        assert t in texts(ax)
+    for k, kt in enumerate(tl.kits):
+        (pb,) = bars(ax, f"human:pickup:{k + 1}")
+        assert span(pb) == pytest.approx((kt.human_start, kt.human_start + inst.kit_overhead_human))
+        assert pb.get_hatch()
+
+
+def test_gantt_idle_gaps_sum_to_timeline_idle(inst):
+    ax = plots.plot_gantt(inst, PLAN)
+    tl = evaluate(inst, PLAN)
+    human_idle = bars(ax, "human:idle")
+    robot_idle = bars(ax, "robot:idle")
+    assert human_idle and robot_idle
+    assert sum(b.get_width() for b in human_idle) == pytest.approx(tl.human_idle)
+    assert sum(b.get_width() for b in robot_idle) == pytest.approx(tl.robot_idle)
+    assert all(b.get_hatch() for b in human_idle + robot_idle)
+    # the human waits for kit 1 from time 0; the robot is idle after its last delivery
+    assert span(human_idle[0]) == pytest.approx((0.0, tl.kits[0].arrive))
+    assert span(robot_idle[-1]) == pytest.approx((tl.kits[-1].arrive, tl.makespan))
+
+
+def test_gantt_makespan_line_limits_title_legend(inst):
+    ax = plots.plot_gantt(inst, PLAN)
+    tl = evaluate(inst, PLAN)
+    (line,) = [ln for ln in ax.lines if ln.get_gid() == "makespan"]
+    assert np.allclose(line.get_xdata(), tl.makespan)
+    lo, hi = ax.get_xlim()
+    assert lo <= 0.0 and hi >= tl.makespan
+    assert ax.get_xlabel() == "time (s)"
+    title = ax.get_title()
+    assert f"{tl.makespan:.1f}" in title
+    assert f"human idle {tl.human_idle:.1f}" in title
+    assert f"robot idle {tl.robot_idle:.1f}" in title
+    legend = ax.get_legend()
+    assert legend is not None
+    labels = {t.get_text() for t in legend.get_texts()}
+    assert {"delivery", "kit pickup", "task", "idle", "makespan"} <= labels
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["human", "robot"]
+
+
+def test_gantt_uses_given_timeline_and_given_axes(inst):
+    slow = {t: 2 * inst.human_time(t) for t in PLAN.task_order}
+    tl = evaluate(inst, PLAN, human_times=slow)
+    fig, ax0 = plt.subplots()
+    ax = plots.plot_gantt(inst, PLAN, timeline=tl, ax=ax0)
+    assert ax is ax0
+    assert len(fig.axes) == 1
+    (b,) = bars(ax, "human:task:T1")
+    assert span(b) == pytest.approx((tl.task_start["T1"], tl.task_end["T1"]))
+    assert ax.get_xlim()[1] >= tl.makespan > evaluate(inst, PLAN).makespan
+
+
+def test_gantt_skips_zero_length_bars():
+    doc = {**DOC, "delivery_time": 0, "kit_overhead": {"robot": 0, "human": 0}}
+    inst = from_dict(doc)
+    ax = plots.plot_gantt(inst, PLAN)
+    assert len(bars(ax, "robot:kit:")) == len(PLAN.kits)
+    assert bars(ax, "robot:delivery:") == []
+    assert bars(ax, "human:pickup:") == []
+    assert len(bars(ax, "human:task:")) == 4
+
+
+def test_gantt_empty_plan(inst):
+    ax = plots.plot_gantt(inst, Plan(()))
+    assert bars(ax, "robot:") == [] and bars(ax, "human:") == []
+    assert ax.get_xlim()[1] > 0
+
+
+# -- trays --------------------------------------------------------------------------------------
+
+
+def polygons(ax: Axes) -> list[Polygon]:
+    return [p for p in ax.patches if isinstance(p, Polygon)]
+
+
+def test_tray_one_polygon_per_placement_with_exact_corners(inst):
+    kit = PLAN.kits[0]
+    ax = plots.plot_tray(inst, kit)
+    assert isinstance(ax, Axes)
+    polys = polygons(ax)
+    assert len(polys) == len(kit.layout)
+    for p in kit.layout:
+        (poly,) = [q for q in polys if q.get_gid() == f"part:{p.part}"]
+        xy = poly.get_xy()[:4]  # matplotlib closes the path by repeating the first vertex
+        assert np.allclose(xy, corners(p.x, p.y, p.w, p.h, p.theta))
+        assert p.part in texts(ax)
+    rotated = next(q for q in polys if q.get_gid() == "part:b1")
+    assert not np.allclose(
+        rotated.get_xy()[:4], corners(160, 50, 20, 60, 0)
+    )  # really rotated (30 degrees)
+
+
+def test_tray_outline_aspect_and_limits(inst):
+    ax = plots.plot_tray(inst, PLAN.kits[1], title="hello")
+    (tray,) = [p for p in ax.patches if p.get_gid() == "tray"]
+    assert isinstance(tray, Rectangle)
+    assert (tray.get_x(), tray.get_y()) == (0.0, 0.0)
+    assert (tray.get_width(), tray.get_height()) == (inst.tray.width, inst.tray.height)
+    assert ax.get_aspect() == 1.0
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    assert x0 < 0 and x1 > inst.tray.width and y0 < 0 and y1 > inst.tray.height
+    assert ax.get_title() == "hello"
+
+
+def test_tray_colours_consistent_per_type_across_calls(inst):
+    colors = plots.type_colors(inst)
+    assert list(colors) == sorted(inst.part_types)
+    assert len(set(colors.values())) == len(colors)
+    seen: dict[str, tuple] = {}
+    for kit in PLAN.kits:
+        ax = plots.plot_tray(inst, kit)
+        by_part = {q.get_gid(): q.get_facecolor()[:3] for q in polygons(ax)}
+        for p in kit.layout:
+            fc = by_part[f"part:{p.part}"]
+            assert np.allclose(fc, colors[p.type][:3])
+            assert np.allclose(seen.setdefault(p.type, fc), fc)
+    assert set(seen) == set(inst.part_types)
+
+
+def test_tray_legend_lists_types_of_the_kit(inst):
+    ax = plots.plot_tray(inst, PLAN.kits[0])
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["bolt", "plate"]
+    ax = plots.plot_tray(inst, PLAN.kits[0], legend=False)
+    assert ax.get_legend() is None
+
+
+def test_tray_empty_layout_and_given_axes(inst):
+    _, ax0 = plt.subplots()
+    ax = plots.plot_tray(inst, Kit(("T1",)), ax=ax0)
+    assert ax is ax0 and polygons(ax) == []
+    assert "no layout" in texts(ax)
+
+
+@pytest.mark.parametrize(("ncols", "shape"), [(3, (1, 3)), (2, (2, 2)), (1, (3, 1)), (9, (1, 3))])
+def test_plot_trays_grid(inst, ncols, shape):
+    fig = plots.plot_trays(inst, PLAN, ncols=ncols)
+    assert isinstance(fig, Figure)
+    assert len(fig.axes) == shape[0] * shape[1]
+    visible = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(visible) == len(PLAN.kits)
+    for k, (ax, kit) in enumerate(zip(visible, PLAN.kits, strict=True)):
+        assert len(polygons(ax)) == len(kit.layout)
+        assert ax.get_title().startswith(f"kit {k + 1}:")
+        assert ax.get_legend() is None
+    (legend,) = fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == ["bolt", "gear", "plate"]
+
+
+def test_plot_trays_empty_plan(inst):
+    fig = plots.plot_trays(inst, Plan(()))
+    assert len(fig.axes) == 1 and "no kits" in texts(fig.axes[0])
+
+
+# -- convergence --------------------------------------------------------------------------------
+
+
+def test_convergence_line_and_overlay():
+    trace = [10.0, 8.0, 7.5, 7.5, 7.0]
+    ax = plots.plot_convergence(trace, label="run 1")
+    assert isinstance(ax, Axes)
+    (line,) = ax.lines
+    assert list(line.get_xdata()) == [1, 2, 3, 4, 5]
+    assert np.allclose(line.get_ydata(), trace)
+    assert ax.get_xlabel() == "iteration"
+    assert "score" in ax.get_ylabel()
+    ax2 = plots.plot_convergence([9.0, float("inf"), 6.0], ax=ax, label="run 2")
+    assert ax2 is ax and len(ax.lines) == 2
+    assert np.isnan(ax.lines[1].get_ydata()[1])
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["run 1", "run 2"]
+
+
+def test_convergence_without_label_has_no_legend():
+    ax = plots.plot_convergence(np.array([3.0, 2.0]))
+    assert ax.get_legend() is None and len(ax.lines) == 1
+
+
+# -- saving -------------------------------------------------------------------------------------
+
+
+def test_save_figure_writes_png_atomically(inst, tmp_path):
+    ax = plots.plot_gantt(inst, PLAN)
+    fig = ax.figure
+    out = plots.save_figure(fig, tmp_path / "gantt.png")
+    assert out == tmp_path / "gantt.png"
+    data = out.read_bytes()
+    assert data.startswith(b"\x89PNG\r\n\x1a\n") and len(data) > 1000
+    assert [p.name for p in tmp_path.iterdir()] == ["gantt.png"]
+    assert not plt.fignum_exists(fig.number)
+
+
+def test_save_figure_replaces_existing_and_creates_dirs(inst, tmp_path):
+    target = tmp_path / "sub" / "trays.png"
+    target.parent.mkdir()
+    target.write_bytes(b"old")
+    plots.save_figure(plots.plot_trays(inst, PLAN), target)
+    assert target.read_bytes().startswith(b"\x89PNG")
+    assert sorted(p.name for p in target.parent.iterdir()) == ["trays.png"]
+    new = plots.save_figure(plots.plot_convergence([1.0]).figure, tmp_path / "a" / "b" / "c.png")
+    assert new.read_bytes().startswith(b"\x89PNG")
+
+
+def test_save_figure_failure_leaves_no_temp_file(inst, tmp_path, monkeypatch):
+    fig = plots.plot_tray(inst, PLAN.kits[0]).figure
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(fig, "savefig", boom)
+    with pytest.raises(RuntimeError, match="disk full"):
+        plots.save_figure(fig, tmp_path / "tray.png")
+    assert list(tmp_path.iterdir()) == []
+    assert not plt.fignum_exists(fig.number)
+
+
+def test_plot_comparison_bars_and_bound():
+    from bilevel_kit.plots import plot_comparison
+
+    recs = [
+        {"instance": "x", "method": "a", "makespan": 100.0, "human_idle": 10.0, "best_bound": 90.0},
+        {"instance": "x", "method": "b", "makespan": 120.0, "human_idle": 30.0, "best_bound": 90.0},
+    ]
+    ax = plot_comparison(recs)
+    heights = sorted(p.get_height() for p in ax.patches)
+    assert heights == [10.0, 30.0, 100.0, 120.0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["a", "b"]
+    (line,) = [ln for ln in ax.get_lines() if ln.get_gid() == "bound"]
+    assert line.get_ydata()[0] == 90.0
