@@ -168,3 +168,8 @@ register(
     "bilevel_kit.heuristics.greedy:greedy_ce",
     "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
 )
+register(
+    "cpsat",
+    "bilevel_kit.models.cpsat_schedule:solve_method",
+    "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
+)

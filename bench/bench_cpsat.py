@@ -1,0 +1,147 @@
+"""Benchmark of the exact CP-SAT schedule (issue 4).
+
+1. Time to proven optimum for the table at d in {0, 10, 30} s (goal: < 2 s each).
+2. 1, 2, 5, 10 units of the table (up to 120 tasks): time to optimum, or the gap at the time
+   limit (default 60 s), for both tray modes (goal: 10 units within 1 % gap in 60 s).
+
+Writes bench/results/cpsat.csv and prints a Markdown table.
+Run: python bench/bench_cpsat.py [--time-limit 60] [--workers 2] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from pathlib import Path
+from typing import Any
+
+from bilevel_kit.instance import Instance, from_dict, load
+from bilevel_kit.models import cpsat_packing
+from bilevel_kit.models.cpsat_schedule import solve
+from bilevel_kit.validate import check
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def table_instance() -> Instance:
+    """instances/hrc_table.json, or the same 12-task table built here when it is missing
+    (4 legs x [foot -> connector -> top], DESIGN.md section 4)."""
+    path = ROOT / "instances/hrc_table.json"
+    if path.exists():
+        return load(path)
+    parts = [
+        ("leg", 152.4, 12.7, 12.0),
+        ("foot", 43.0, 43.0, 10.0),
+        ("connector", 41.0, 41.0, 10.0),
+        ("screw_long", 14.0, 6.0, 5.0),
+        ("screw_short", 8.0, 6.0, 5.0),
+    ]
+    kinds = (
+        ("foot", [("leg", 1), ("foot", 1), ("screw_short", 1)], 33.0),
+        ("conn", [("connector", 1), ("screw_short", 1)], 26.0),
+        ("top", [("screw_long", 2)], 34.695),
+    )
+    tasks, prec = [], []
+    for leg in range(1, 5):
+        for kind, needs, human in kinds:
+            tasks.append(
+                {
+                    "id": f"{kind}{leg}",
+                    "parts": [{"type": t, "count": c} for t, c in needs],
+                    "human_time": {"mean": human},
+                }
+            )
+        prec += [[f"foot{leg}", f"conn{leg}"], [f"conn{leg}", f"top{leg}"]]
+    return from_dict(
+        {
+            "format": "bilevel-kit/1",
+            "name": "hrc_table",
+            "tray": {"width": 300.0, "height": 200.0},
+            "delivery_time": 2.0,
+            "kit_overhead": {"robot": 8.0, "human": 4.0},
+            "part_types": [
+                {"id": i, "width": w, "height": h, "pick_time": p} for i, w, h, p in parts
+            ],
+            "tasks": tasks,
+            "precedence": prec,
+        }
+    )
+
+
+def run(inst: Instance, label: str, mode: str, args: argparse.Namespace) -> dict[str, Any]:
+    cpsat_packing.clear_cache()  # every row pays for its own packing
+    t0 = time.perf_counter()
+    out = solve(inst, tray=mode, time_limit=args.time_limit, workers=args.workers, seed=args.seed)
+    wall = time.perf_counter() - t0
+    valid = out.plan is not None and check(inst, out.plan) == []
+    ex = out.extra
+    return {
+        "case": label,
+        "tasks": inst.n_tasks,
+        "d": inst.delivery_time,
+        "tray_mode": ex.get("tray_mode", mode),
+        "status": out.status,
+        "makespan": round(ex["makespan"], 4) if "makespan" in ex else "",
+        "bound": round(out.bound, 4) if out.bound is not None else "",
+        "gap_pct": round(100 * ex["gap"], 3) if ex.get("gap") is not None else "",
+        "wall_time_s": round(wall, 2),
+        "n_kits": ex.get("n_kits", ""),
+        "benders_iterations": ex.get("benders_iterations", ""),
+        "cuts": ex.get("cuts", ""),
+        "time_resolution": ex.get("time_resolution"),
+        "valid": valid,
+        "time_limit": args.time_limit,
+        "workers": args.workers,
+        "seed": args.seed,
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--time-limit", type=float, default=60.0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", type=Path, default=ROOT / "bench/results/cpsat.csv")
+    args = ap.parse_args()
+    table = table_instance()
+    rows = []
+    for d in (0.0, 10.0, 30.0):
+        for mode in ("auto", "embedded", "benders"):
+            rows.append(run(table.with_overrides(delivery_time=d), f"table d={d:g}", mode, args))
+            print(rows[-1], flush=True)
+    for units in (1, 2, 5, 10):
+        for mode in ("embedded", "benders"):
+            rows.append(run(table.with_overrides(units=units), f"table x{units}", mode, args))
+            print(rows[-1], flush=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    with open(args.out, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    cols = [
+        "case",
+        "tasks",
+        "d",
+        "tray_mode",
+        "status",
+        "makespan",
+        "bound",
+        "gap_pct",
+        "wall_time_s",
+        "n_kits",
+        "benders_iterations",
+        "cuts",
+        "valid",
+    ]
+    print("\n| " + " | ".join(cols) + " |")
+    print("|" + "---|" * len(cols))
+    for r in rows:
+        print("| " + " | ".join(str(r[c]) for c in cols) + " |")
+    print(f"\nwrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

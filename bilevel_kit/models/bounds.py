@@ -1,0 +1,85 @@
+r"""Cheap closed-form lower bounds on the makespan, and Johnson's rule for F2||Cmax.
+
+Notation (DESIGN.md section 2): tasks i with robot time r_i and human time h_i, kit overheads
+o_R (robot) and o_H (human), delivery time d, m kits. Every bound below holds for every plan
+whose kits fit the tray, so ``best_bound`` can be printed next to any result.
+
+* (c) **area**: a kit's parts must fit the tray without overlap, so their total footprint area
+  is at most the tray area and
+
+  .. math:: m \ge m_{\min} = \max\bigl(1, \lceil \textstyle\sum_p w_p h_p / (W H) \rceil\bigr).
+
+* (a) **human**: kit 1 holds a task without predecessors (every task of kit 1 has its
+  ancestors in kit 1), so it cannot arrive before :math:`\min_{i \in \mathrm{src}} r_i + o_R + d`;
+  after that the human still has all of her work, at least :math:`\sum_i h_i + m_{\min} o_H`:
+
+  .. math:: C \ge \min_{i \in \mathrm{src}} r_i + o_R + d + \sum_i h_i + m_{\min}\, o_H.
+
+* (b) **robot**: the robot never idles between kits (it starts kit k+1 when kit k arrives), so
+  the last kit arrives at :math:`\sum_i r_i + m (o_R + d)`; it holds a task without successors,
+  whose human time plus o_H is still to be done:
+
+  .. math:: C \ge \sum_i r_i + m_{\min} (o_R + d) + o_H + \min_{i \in \mathrm{snk}} h_i.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from ..instance import Instance
+
+#: Relative slack when rounding an area ratio up, so that float noise (e.g. 4 * 2500 / 10000
+#: = 1.0000000000000002) does not add a kit.
+_AREA_EPS = 1e-9
+
+
+def min_kits(instance: Instance) -> int:
+    """(c): the area-based minimum number of kits, ``ceil(total part area / tray area)``."""
+    total = sum(instance.part_types[p].area * n for t in instance.tasks for p, n in t.parts)
+    return max(1, math.ceil(total / instance.tray.area - _AREA_EPS))
+
+
+def lower_bounds(instance: Instance) -> dict[str, float]:
+    """All closed-form bounds (seconds), keyed ``human``, ``robot``, ``min_kits`` (a count)."""
+    ids = [t.id for t in instance.tasks]
+    has_pred = {b for _, b in instance.precedence}
+    has_succ = {a for a, _ in instance.precedence}
+    sources = [i for i in ids if i not in has_pred]
+    sinks = [i for i in ids if i not in has_succ]
+    m = min_kits(instance)
+    o_r, o_h, d = instance.kit_overhead_robot, instance.kit_overhead_human, instance.delivery_time
+    total_r = sum(instance.robot_time(i) for i in ids)
+    total_h = sum(instance.human_time(i) for i in ids)
+    human = min(instance.robot_time(i) for i in sources) + o_r + d + total_h + m * o_h
+    robot = total_r + m * (o_r + d) + o_h + min(instance.human_time(i) for i in sinks)
+    return {"human": human, "robot": robot, "min_kits": float(m)}
+
+
+def best_bound(instance: Instance) -> float:
+    """The largest of the closed-form makespan bounds (seconds)."""
+    lb = lower_bounds(instance)
+    return max(lb["human"], lb["robot"])
+
+
+def johnson_order(a: Sequence[float], b: Sequence[float]) -> list[int]:
+    """Johnson's rule for F2||Cmax: jobs with a_j <= b_j by increasing a_j, then the others by
+    decreasing b_j (ties by index). Optimal for two machines in series without precedence."""
+    first = sorted((j for j in range(len(a)) if a[j] <= b[j]), key=lambda j: (a[j], j))
+    last = sorted((j for j in range(len(a)) if a[j] > b[j]), key=lambda j: (-b[j], j))
+    return first + last
+
+
+def flow_shop_makespan(order: Sequence[int], a: Sequence[float], b: Sequence[float]) -> float:
+    r"""Makespan of a permutation schedule on two machines:
+    :math:`F_1 \mathrel{+}= a_j,\ F_2 = \max(F_2, F_1) + b_j`."""
+    f1 = f2 = 0.0
+    for j in order:
+        f1 += a[j]
+        f2 = max(f2, f1) + b[j]
+    return f2
+
+
+def johnson_makespan(a: Sequence[float], b: Sequence[float]) -> float:
+    """Optimal F2||Cmax makespan (Johnson's rule)."""
+    return flow_shop_makespan(johnson_order(a, b), a, b)

@@ -1,0 +1,88 @@
+"""Stand-alone pack files for ``bilevel-kit pack``: a tray and items, no tasks.
+
+Format: ``{"tray": {"width": W, "height": H}, "items": [{"id", "width", "height", "count",
+"rotatable"}]}`` (mm; ``count`` default 1, ``rotatable`` default true). Loading validates with a
+JSON Schema and raises :class:`~bilevel_kit.errors.InstanceError` naming the file and the path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from .errors import InstanceError
+from .instance import Instance, PartType, Tray, read_json, validate_document
+
+_POS = {"type": "number", "exclusiveMinimum": 0}
+
+
+def schema() -> dict[str, Any]:
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "bilevel-kit pack file",
+        "type": "object",
+        "required": ["tray", "items"],
+        "additionalProperties": False,
+        "properties": {
+            "tray": {
+                "type": "object",
+                "required": ["width", "height"],
+                "additionalProperties": False,
+                "properties": {"width": _POS, "height": _POS},
+            },
+            "items": {
+                "type": "array",
+                "minItems": 1,
+                "items": {
+                    "type": "object",
+                    "required": ["id", "width", "height"],
+                    "additionalProperties": False,
+                    "properties": {
+                        "id": {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"},
+                        "width": _POS,
+                        "height": _POS,
+                        "count": {"type": "integer", "minimum": 1, "default": 1},
+                        "rotatable": {"type": "boolean", "default": True},
+                    },
+                },
+            },
+        },
+    }
+
+
+def is_pack_file(doc: Any) -> bool:
+    """A pack file has ``items`` and no ``format`` (instances have ``format``)."""
+    return isinstance(doc, dict) and "items" in doc and "format" not in doc
+
+
+def load(path: str | Path) -> tuple[Instance, dict[str, int]]:
+    """The pack file as a task-less :class:`Instance` (tray + part types) and the counts."""
+    src = str(path)
+    doc = read_json(path, InstanceError)
+    validate_document(doc, src, schema(), InstanceError)
+    types: dict[str, PartType] = {}
+    counts: dict[str, int] = {}
+    for i, item in enumerate(doc["items"]):
+        if item["id"] in types:
+            raise InstanceError(src, f"$.items[{i}].id", f"duplicate item id {item['id']!r}")
+        types[item["id"]] = PartType(
+            item["id"],
+            float(item["width"]),
+            float(item["height"]),
+            0.0,
+            bool(item.get("rotatable", True)),
+        )
+        counts[item["id"]] = int(item.get("count", 1))
+    tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
+    inst = Instance(
+        name=Path(path).stem,
+        tray=tray,
+        delivery_time=0.0,
+        kit_overhead_robot=0.0,
+        kit_overhead_human=0.0,
+        part_types=types,
+        base_tasks=(),
+        base_precedence=(),
+        source=src,
+    )
+    return inst, counts

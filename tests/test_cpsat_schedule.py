@@ -1,0 +1,430 @@
+"""The exact CP-SAT schedule against Johnson's rule and against brute-force enumeration."""
+
+from __future__ import annotations
+
+import itertools
+import random
+import time
+from collections import Counter
+
+import pytest
+
+from bilevel_kit.instance import from_dict
+from bilevel_kit.models import bounds
+from bilevel_kit.models import cpsat_packing as pk
+from bilevel_kit.models import cpsat_schedule as cs
+from bilevel_kit.plan import Kit, Plan, evaluate
+
+pytest.importorskip("ortools")
+
+FAST = {"workers": 2, "time_limit": 20.0}
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+# ---------------------------------------------------------------------------------------------
+
+
+def random_doc(seed: int, n: int | None = None) -> dict:
+    """A small random instance: precedence DAG, d > 0, overheads, a tray that binds
+    geometrically (a 50 x 40 part and a 70 x 15 bar share a 100 x 60 tray only one way)."""
+    rng = random.Random(seed)
+    n = n or rng.randint(4, 6)
+    types = [
+        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
+        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
+        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
+    ]
+    tasks = []
+    for i in range(n):
+        kinds = rng.sample(["big", "bar", "sq"], rng.randint(1, 2))
+        task = {
+            "id": f"t{i}",
+            "parts": [{"type": k, "count": rng.randint(1, 2) if k == "sq" else 1} for k in kinds],
+            "human_time": {"mean": rng.randint(2, 40) / 2},
+        }
+        if rng.random() < 0.4:
+            task["robot_time"] = rng.randint(1, 30) / 2
+        tasks.append(task)
+    prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
+    return {
+        "format": "bilevel-kit/1",
+        "name": f"rand{seed}",
+        "tray": {"width": 100.0, "height": 60.0},
+        "delivery_time": rng.randint(1, 16) / 2,
+        "kit_overhead": {"robot": rng.randint(1, 6) / 2, "human": rng.randint(1, 6) / 2},
+        "part_types": types,
+        "tasks": tasks,
+        "precedence": prec,
+    }
+
+
+_FITS: dict = {}
+
+
+def fits(inst, kit) -> bool:
+    """Does the kit fit? Area first, then the CP-SAT packer (memoised per part multiset)."""
+    counts = inst.kit_parts(kit)
+    key = (
+        inst.tray,
+        frozenset(counts.items()),
+        tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in inst.part_types.values())),
+    )
+    if key not in _FITS:
+        area = sum(inst.part_types[p].area * c for p, c in counts.items())
+        if area > inst.tray.area:
+            _FITS[key] = False
+        else:
+            items = [(f"{p}{j}", inst.part_types[p]) for p, c in counts.items() for j in range(c)]
+            res = pk.pack(inst.tray, items, time_limit=10.0)
+            assert res.status in ("feasible", "infeasible")
+            _FITS[key] = res.status == "feasible"
+    return _FITS[key]
+
+
+def brute_force(inst) -> tuple[float, Plan]:
+    """Enumerate precedence-feasible permutations x all 2^(n-1) cut patterns; evaluate each
+    distinct plan whose kits fit with the one evaluator; return the best."""
+    ids = [t.id for t in inst.tasks]
+    n = len(ids)
+    best = (float("inf"), None)
+    seen = set()
+    for perm in itertools.permutations(ids):
+        pos = {t: k for k, t in enumerate(perm)}
+        if any(pos[a] > pos[b] for a, b in inst.precedence):
+            continue
+        for mask in range(2 ** (n - 1)):
+            kits, cur = [], [perm[0]]
+            for k in range(1, n):
+                if mask >> (k - 1) & 1:
+                    kits.append(tuple(cur))
+                    cur = []
+                cur.append(perm[k])
+            kits.append(tuple(cur))
+            key = tuple(frozenset(k) for k in kits)
+            if key in seen:
+                continue
+            seen.add(key)
+            if not all(fits(inst, k) for k in kits):
+                continue
+            plan = Plan(tuple(Kit(k) for k in kits))
+            ms = evaluate(inst, plan).makespan
+            if ms < best[0]:
+                best = (ms, plan)
+    return best
+
+
+def assert_valid_plan(inst, out) -> None:
+    """Every task once, precedence across and inside kits, honest makespan, checker clean."""
+    plan = out.plan
+    assert plan is not None
+    order = plan.task_order
+    assert Counter(order) == Counter(t.id for t in inst.tasks)
+    pos = {t: k for k, t in enumerate(order)}
+    for a, b in inst.precedence:
+        assert pos[a] < pos[b]
+    for kit in plan.kits:
+        assert Counter(p.type for p in kit.layout) == inst.kit_parts(kit.tasks)
+    assert out.extra["makespan"] == pytest.approx(evaluate(inst, plan).makespan, abs=1e-9)
+    assert out.bound is not None
+    assert out.bound <= out.extra["makespan"] + 1e-9
+    try:
+        from bilevel_kit.validate import check
+    except ImportError:  # pragma: no cover - the checker is written elsewhere
+        return
+    assert check(inst, plan) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# special case: F2||Cmax
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_no_delivery_no_overheads_equals_johnson(seed):
+    """d = 0, no overheads, a roomy tray, no precedence: splitting never hurts, so the
+    optimum is Johnson's makespan on (robot, human) times."""
+    rng = random.Random(seed)
+    n = 5 + seed % 3
+    r = [float(rng.randint(1, 20)) for _ in range(n)]
+    h = [float(rng.randint(1, 20)) for _ in range(n)]
+    doc = {
+        "format": "bilevel-kit/1",
+        "name": f"f2_{seed}",
+        "tray": {"width": 1000.0, "height": 1000.0},
+        "delivery_time": 0.0,
+        "kit_overhead": {"robot": 0.0, "human": 0.0},
+        "part_types": [{"id": "s", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
+        "tasks": [
+            {
+                "id": f"j{i}",
+                "parts": [{"type": "s", "count": 1}],
+                "robot_time": r[i],
+                "human_time": {"mean": h[i]},
+            }
+            for i in range(n)
+        ],
+    }
+    inst = from_dict(doc)
+    out = cs.solve(inst, **FAST)
+    assert out.status == "optimal"
+    assert out.extra["makespan"] == pytest.approx(bounds.johnson_makespan(r, h))
+    assert out.bound == pytest.approx(bounds.johnson_makespan(r, h))
+    assert_valid_plan(inst, out)
+
+
+# ---------------------------------------------------------------------------------------------
+# brute force on small random instances
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_matches_brute_force_in_both_tray_modes(seed):
+    inst = from_dict(random_doc(seed, n=7 if seed in (5, 11) else None))
+    opt, _ = brute_force(inst)
+    for mode in ("embedded", "benders"):
+        out = cs.solve(inst, tray=mode, **FAST)
+        assert out.status == "optimal", (mode, out.extra)
+        assert out.extra["tray_mode"] == mode
+        assert out.extra["makespan"] == pytest.approx(opt, abs=1e-9), mode
+        assert out.bound == pytest.approx(opt, abs=1e-9)
+        assert out.extra["gap"] == 0.0
+        assert_valid_plan(inst, out)
+    lb = bounds.best_bound(inst)
+    assert lb <= opt + 1e-9
+
+
+def test_known_optimum_of_one_random_instance():
+    """Pinned by hand. Tasks (r, h): t0 (2, 20) bar; t1 (4, 16) sq; t2 (3, 18) 2 sq;
+    t3 (5, 8) bar + big; t1 -> t3; d = 1, o_R = 1.5, o_H = 0.5. Kits [t0], [t1], [t2, t3]:
+    arrivals 4.5, 11, 21.5; human ends 25, 41.5, 68 = the human bound with 3 kits
+    (2 + 1.5 + 1 + 62 + 3 x 0.5). Two kits [t0], [t1, t2, t3] would give 67.5, but a 50 x 40,
+    a 70 x 15 and three 30 x 30 parts do not fit the 100 x 60 tray together."""
+    inst = from_dict(random_doc(3))
+    opt, plan = brute_force(inst)
+    assert opt == pytest.approx(68.0)
+    assert len(plan.kits) == 3
+    assert not fits(inst, ["t1", "t2", "t3"])
+    assert evaluate(inst, Plan((Kit(("t0",)), Kit(("t1", "t2", "t3"))))).makespan == 67.5
+    for mode in ("embedded", "benders"):
+        out = cs.solve(inst, tray=mode, **FAST)
+        assert out.status == "optimal"
+        assert out.extra["makespan"] == pytest.approx(68.0)
+        assert out.extra["n_kits"] == 3
+
+
+def test_tray_geometry_forces_cuts_and_both_modes_agree():
+    """Each task carries one 60 x 60 part: two of them pass the area test on a 100 x 100
+    tray but cannot be placed together, so the tray allows one task per kit."""
+    doc = {
+        "format": "bilevel-kit/1",
+        "name": "squares",
+        "tray": {"width": 100.0, "height": 100.0},
+        "delivery_time": 1.0,
+        "kit_overhead": {"robot": 1.0, "human": 1.0},
+        "part_types": [
+            {"id": "s", "width": 60.0, "height": 60.0, "pick_time": 4.0},
+            {"id": "k", "width": 20.0, "height": 20.0, "pick_time": 1.0},
+        ],
+        "tasks": [
+            {"id": "a", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 3.0}},
+            {"id": "b", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 9.0}},
+            {"id": "c", "parts": [{"type": "k", "count": 2}], "human_time": {"mean": 2.0}},
+            {"id": "e", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 1.0}},
+        ],
+        "precedence": [["a", "e"]],
+    }
+    inst = from_dict(doc)
+    opt, _ = brute_force(inst)
+    emb = cs.solve(inst, tray="embedded", **FAST)
+    ben = cs.solve(inst, tray="benders", **FAST)
+    for out in (emb, ben):
+        assert out.status == "optimal"
+        assert out.extra["makespan"] == pytest.approx(opt)
+        assert_valid_plan(inst, out)
+        for kit in out.plan.kits:
+            assert inst.kit_parts(kit.tasks)["s"] <= 1
+    assert ben.extra["cuts"] >= 1
+
+
+def test_interchangeable_chains_keep_the_optimum():
+    """Three identical chains (the legs of a small table) trigger the lexicographic symmetry
+    breaking; two units add cross-unit precedence. Still equal to brute force."""
+    doc = {
+        "format": "bilevel-kit/1",
+        "name": "legs",
+        "tray": {"width": 100.0, "height": 60.0},
+        "delivery_time": 2.0,
+        "kit_overhead": {"robot": 1.5, "human": 1.0},
+        "part_types": [
+            {"id": "leg", "width": 90.0, "height": 10.0, "pick_time": 3.0},
+            {"id": "b", "width": 30.0, "height": 30.0, "pick_time": 2.0},
+        ],
+        "tasks": [
+            {
+                "id": f"{kind}{leg}",
+                "parts": [{"type": part, "count": 1}],
+                "human_time": {"mean": ht},
+            }
+            for leg in range(3)
+            for kind, part, ht in (("f", "leg", 6.0), ("c", "b", 4.5))
+        ],
+        "precedence": [[f"f{leg}", f"c{leg}"] for leg in range(3)],
+    }
+    inst = from_dict(doc)
+    opt, _ = brute_force(inst)
+    for mode in ("embedded", "benders"):
+        out = cs.solve(inst, tray=mode, **FAST)
+        assert out.extra["symmetric_chains"] == 3
+        assert out.status == "optimal"
+        assert out.extra["makespan"] == pytest.approx(opt)
+        assert_valid_plan(inst, out)
+    two = from_dict(
+        {**doc, "tasks": doc["tasks"][:4], "precedence": [["f0", "c0"], ["f1", "c1"]], "units": 2}
+    )
+    opt2, _ = brute_force(two)
+    out = cs.solve(two, tray="benders", **FAST)
+    assert out.status == "optimal"
+    assert out.extra["makespan"] == pytest.approx(opt2)
+    assert_valid_plan(two, out)
+
+
+def test_human_idle_objective():
+    """With o_H = 0 human idle is makespan minus a constant: same optimum. With o_H > 0 the
+    idle-optimal plan never idles more than the makespan-optimal one."""
+    doc = random_doc(7)
+    doc["kit_overhead"]["human"] = 0.0
+    inst = from_dict(doc)
+    ms = cs.solve(inst, **FAST)
+    idle = cs.solve(inst, objective="human_idle", **FAST)
+    assert idle.status == ms.status == "optimal"
+    assert idle.extra["makespan"] == pytest.approx(ms.extra["makespan"])
+    assert idle.extra["idle_bound"] == pytest.approx(idle.extra["human_idle"])
+    inst2 = from_dict(random_doc(8))
+    ms2 = cs.solve(inst2, **FAST)
+    idle2 = cs.solve(inst2, objective="human_idle", **FAST)
+    assert idle2.status == "optimal"
+    assert idle2.extra["human_idle"] <= ms2.extra["human_idle"] + 1e-9
+    assert idle2.bound <= ms2.extra["makespan"] + 1e-9
+
+
+def test_inexact_times_are_floored_and_the_bound_stays_valid():
+    doc = random_doc(2)
+    for t in doc["tasks"]:
+        t["human_time"]["mean"] += 0.037
+    inst = from_dict(doc)
+    opt, _ = brute_force(inst)
+    out = cs.solve(inst, time_resolution=0.1, refine_times=False, **FAST)
+    assert out.extra["times_exact"] is False
+    assert out.bound <= opt + 1e-9 <= out.extra["makespan"] + 2e-9
+    assert_valid_plan(inst, out)
+    # refining the grid to 0.001 s makes the times exact again, hence a proof
+    exact = cs.solve(inst, time_resolution=0.1, **FAST)
+    assert exact.extra["times_exact"] is True
+    assert exact.extra["time_resolution"] == pytest.approx(0.001)
+    assert exact.status == "optimal"
+    assert exact.extra["makespan"] == pytest.approx(opt)
+
+
+# ---------------------------------------------------------------------------------------------
+# the table: hint, time limit, infeasibility
+# ---------------------------------------------------------------------------------------------
+
+
+def test_hint_and_embedded_equals_benders_on_the_table(table):
+    inst = table.with_overrides(delivery_time=10.0)
+    single = Plan(
+        tuple(
+            Kit((t,))
+            for t in [
+                "foot1",
+                "conn1",
+                "top1",
+                "foot2",
+                "conn2",
+                "top2",
+                "foot3",
+                "conn3",
+                "top3",
+                "foot4",
+                "conn4",
+                "top4",
+            ]
+        )
+    )
+    a = cs.solve(inst, tray="embedded", hint=single, **FAST)
+    b = cs.solve(inst, tray="benders", **FAST)
+    assert a.extra["hint_used"] is True
+    assert a.status == b.status == "optimal"
+    assert a.extra["makespan"] == pytest.approx(b.extra["makespan"])
+    assert a.extra["makespan"] <= evaluate(inst, single).makespan
+    assert_valid_plan(inst, a)
+    assert_valid_plan(inst, b)
+
+
+def test_time_limit_is_honoured(table):
+    inst = table.with_overrides(units=10)
+    t0 = time.perf_counter()
+    out = cs.solve(inst, time_limit=3.0, workers=2)
+    wall = time.perf_counter() - t0
+    assert wall < 3.0 + 1.0
+    assert out.status in ("optimal", "feasible")
+    assert_valid_plan(inst, out)
+    assert out.extra["tray_mode"] == "benders"
+
+
+def test_a_task_that_cannot_fit_makes_the_instance_infeasible():
+    doc = random_doc(0)
+    doc["part_types"].append({"id": "huge", "width": 60.0, "height": 60.0, "pick_time": 1.0})
+    doc["tasks"][0]["parts"] = [{"type": "huge", "count": 2}]
+    out = cs.solve(from_dict(doc), **FAST)
+    assert out.status == "infeasible"
+    assert out.plan is None
+
+
+def test_plans_respect_the_reach_map(root):
+    """The table with its tray 900 mm ahead (44 % of the tray reachable): every centre of the
+    exact plan lies in a reachable cell and the checker accepts the plan."""
+    import json
+
+    from bilevel_kit.reachability import reach_grid
+
+    doc = json.loads((root / "instances/hrc_table.json").read_text())
+    doc["station"] = {"tray_pose": {"x": 900, "y": 150, "z": -150, "yaw": -90}}
+    doc["reachability"] = True
+    inst = from_dict(doc)
+    grid = reach_grid(inst)
+    out = cs.solve(inst, **FAST)
+    assert out.extra["tray_mode"] == "benders"  # auto avoids embedding a reach map
+    assert out.status == "optimal"
+    assert_valid_plan(inst, out)
+    assert all(grid.lookup(p.x, p.y) for kit in out.plan.kits for p in kit.layout)
+
+
+def test_embedded_and_benders_agree_under_a_reach_map(monkeypatch):
+    """A synthetic reach map (the tray's right 30 mm and top row out of reach) on a small
+    random instance: both tray modes find the same optimum, every centre is reachable."""
+    import numpy as np
+
+    from bilevel_kit import reachability
+    from bilevel_kit.reachability import ReachGrid
+
+    doc = random_doc(10)
+    doc["reachability"] = True
+    inst = from_dict(doc)
+    cells = np.ones((6, 10), dtype=bool)
+    cells[:, 7:] = False
+    cells[5, :] = False
+    grid = ReachGrid(cells, 100.0, 60.0, None)
+    free = cs.solve(from_dict(random_doc(10)), tray="benders", **FAST)
+    monkeypatch.setattr(reachability, "reach_grid", lambda instance: grid)
+    emb = cs.solve(inst, tray="embedded", **FAST)
+    ben = cs.solve(inst, tray="benders", **FAST)
+    for out in (emb, ben):
+        assert out.status == "optimal"
+        assert_valid_plan(inst, out)
+        assert all(grid.lookup(p.x, p.y) for kit in out.plan.kits for p in kit.layout)
+    # the reach map costs 2 s here: 102 against 100 on the whole tray
+    assert emb.extra["makespan"] == pytest.approx(102.0)
+    assert ben.extra["makespan"] == pytest.approx(102.0)
+    assert free.extra["makespan"] == pytest.approx(100.0)

@@ -1,0 +1,108 @@
+"""`bilevel-kit pack` and the registered exact method `cpsat` through the CLI and `solve`."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from bilevel_kit import check, solve
+from bilevel_kit.cli import main
+from bilevel_kit.geometry import corners, inside_tray, rects_overlap
+
+
+def _pack_file(tmp_path, width, items, name="p.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps({"tray": {"width": width, "height": 100}, "items": items}))
+    return path
+
+
+def test_pack_perfect_packing_and_one_unit_smaller(tmp_path, capsys):
+    items = [{"id": "sq", "width": 50, "height": 50, "count": 4}]
+    out = tmp_path / "layout.json"
+    assert main(["pack", str(_pack_file(tmp_path, 100, items)), "--out", str(out)]) == 0
+    assert ": feasible in" in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    shapes = [corners(p["x"], p["y"], p["w"], p["h"], p["theta"]) for p in doc["layout"]]
+    assert len(shapes) == 4 and all(inside_tray(c, 100, 100) for c in shapes)
+    assert not any(rects_overlap(a, b) for i, a in enumerate(shapes) for b in shapes[i + 1 :])
+    assert main(["pack", str(_pack_file(tmp_path, 99, items, "q.json"))]) == 0
+    assert ": infeasible in" in capsys.readouterr().out
+
+
+def _guillotine(n: int) -> list[dict]:
+    """n rectangles cut from the 100 x 100 tray (a perfect packing the shelf packer misses)."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    rects = [(100, 100)]
+    while len(rects) < n:
+        w, h = rects.pop(int(np.argmax([a * b for a, b in rects])))
+        if w >= h:
+            c = int(rng.integers(1, w))
+            rects += [(c, h), (w - c, h)]
+        else:
+            c = int(rng.integers(1, h))
+            rects += [(w, c), (w, h - c)]
+    return [{"id": f"r{i}", "width": w, "height": h} for i, (w, h) in enumerate(rects)]
+
+
+def test_pack_unknown_within_the_time_limit_exits_3(tmp_path, capsys):
+    path = _pack_file(tmp_path, 100, _guillotine(12))
+    assert main(["pack", str(path), "--time-limit", "0"]) == 3
+    assert ": unknown in" in capsys.readouterr().out
+    assert main(["pack", str(path), "--time-limit", "20"]) == 0
+    assert ": feasible in" in capsys.readouterr().out
+
+
+def test_pack_instance_tasks_and_bad_input(tmp_path, capsys, root):
+    inst = str(root / "instances/hrc_table.json")
+    png = tmp_path / "l.png"
+    assert (
+        main(
+            [
+                "pack",
+                inst,
+                "--tasks",
+                "foot1,conn1",
+                "--objective",
+                "fitness",
+                "--time-limit",
+                "5",
+                "--png",
+                str(png),
+            ]
+        )
+        == 0
+    )
+    assert "true Euclidean fitness" in capsys.readouterr().out and png.exists()
+    assert main(["pack", inst, "--tasks", "foot1,nope"]) == 2
+    assert "unknown task(s) nope" in capsys.readouterr().err
+    bad = _pack_file(tmp_path, 100, [{"id": "a", "width": -1, "height": 3}], "bad.json")
+    assert main(["pack", str(bad)]) == 2
+    assert "$.items[0].width: -1 is less than or equal to the minimum of 0" in (
+        capsys.readouterr().err
+    )
+
+
+def test_cpsat_method_is_exact_and_valid(stool, tiny, table):
+    for inst in (stool, tiny):
+        res = solve(inst, "cpsat", time_limit=20, check=True)
+        assert res.status == "optimal" and res.extra["violations"] == []
+        assert res.gap == 0.0 and res.bound == pytest.approx(res.objective)
+        for heuristic in ("single-task", "greedy-ce"):
+            assert res.objective <= solve(inst, heuristic).objective + 1e-9
+    res = solve(table, "cpsat", time_limit=30)
+    assert res.status == "optimal" and res.objective == pytest.approx(431.78)
+    assert check(table, res.plan) == [] and res.extra["hint_method"] in ("single-task", "greedy-ce")
+
+
+def test_cpsat_options_are_checked(stool):
+    from bilevel_kit import UsageError
+
+    with pytest.raises(UsageError, match="unknown option"):
+        solve(stool, "cpsat", colour=1)
+    with pytest.raises(UsageError, match="tray must be one of"):
+        solve(stool, "cpsat", tray="magic")
+    res = solve(stool, "cpsat", hint="none", tray="benders", time_limit=10)
+    assert res.status == "optimal" and res.extra["hint_method"] is None
