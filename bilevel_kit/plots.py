@@ -469,3 +469,41 @@ def plot_comparison(records: Sequence[dict[str, Any]], ax: Axes | None = None) -
     ax.set_title(f"{records[0].get('instance', '')}: methods compared")
     ax.legend(loc="upper left", fontsize=8)
     return ax
+
+
+def plot_gaps(
+    records: Sequence[dict[str, Any]],
+    ax: Axes | None = None,
+    methods: Sequence[str] | None = None,
+) -> Axes:
+    """Gap (%) of each method's makespan to the instance's best lower bound, grouped by
+    instance (records of ``compare`` with a ``gap`` field). Bars are labelled with their value;
+    a method without a plan on an instance (e.g. a kit that does not fit) is marked "n/a"."""
+    plt = _pyplot()
+    instances = list(dict.fromkeys(str(r["instance"]) for r in records))
+    methods = list(methods or dict.fromkeys(str(r["method"]) for r in records))
+    if ax is None:
+        _, ax = plt.subplots(
+            figsize=(max(6.0, 0.45 * len(instances) * len(methods) + 2), 4), layout="constrained"
+        )
+    width = 0.8 / max(1, len(methods))
+    gap = {(str(r["instance"]), str(r["method"])): r.get("gap") for r in records}
+    for m, method in enumerate(methods):
+        pos = np.arange(len(instances)) + (m - (len(methods) - 1) / 2) * width
+        for x, inst in zip(pos, instances, strict=True):
+            v = gap.get((inst, method))
+            if v is None:
+                ax.annotate("n/a", (x, 0), ha="center", va="bottom", fontsize=7, rotation=90)
+                continue
+            ax.bar(x, 100 * v, width, color=_kit_color(m), gid=f"gap:{method}:{inst}")
+            ax.annotate(f"{100 * v:.1f}", (x, 100 * v), ha="center", va="bottom", fontsize=7)
+    from matplotlib.patches import Patch
+
+    ax.set_xticks(np.arange(len(instances)), instances, rotation=20, ha="right")
+    ax.set_ylabel("gap to best lower bound (%)")
+    ax.set_title("heuristic vs exact: makespan gap")
+    ax.legend(
+        handles=[Patch(color=_kit_color(m), label=name) for m, name in enumerate(methods)],
+        fontsize=8,
+    )
+    return ax

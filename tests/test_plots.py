@@ -343,3 +343,22 @@ def test_plot_comparison_bars_and_bound():
     assert [t.get_text() for t in ax.get_xticklabels()] == ["a", "b"]
     (line,) = [ln for ln in ax.get_lines() if ln.get_gid() == "bound"]
     assert line.get_ydata()[0] == 90.0
+
+
+def test_plot_gaps_bars_labels_and_missing():
+    from bilevel_kit.plots import plot_gaps
+
+    recs = [
+        {"instance": "i1", "method": "a", "gap": 0.10},
+        {"instance": "i1", "method": "b", "gap": 0.0},
+        {"instance": "i2", "method": "a", "gap": 0.05},
+    ]
+    ax = plot_gaps(recs, methods=["a", "b"])
+    bars = {p.get_gid(): p.get_height() for p in ax.patches if p.get_gid()}
+    assert bars == {
+        "gap:a:i1": pytest.approx(10.0),
+        "gap:b:i1": 0.0,
+        "gap:a:i2": pytest.approx(5.0),
+    }
+    texts = [t.get_text() for t in ax.texts]
+    assert texts.count("n/a") == 1 and "10.0" in texts
