@@ -15,8 +15,8 @@ from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from bilevel_kit import check, load  # noqa: E402
-from bilevel_kit.heuristics.greedy import GreedyCEPolicy, plan  # noqa: E402
+from bilevel_kit import check, load
+from bilevel_kit.heuristics.greedy import GreedyCEPolicy, plan
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -48,7 +48,9 @@ def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
     doc["units"] = size
     if delivery_time is not None:
         doc["delivery_time"] = float(delivery_time)
-    doc["description"] = f"{size} units of the paper's table (bilevel-kit generate table --size {size})."
+    doc["description"] = (
+        f"{size} units of the paper's table (bilevel-kit generate table --size {size})."
+    )
     return doc
 
 
@@ -67,10 +69,22 @@ def mixed(size: int, delivery_time: float | None = None) -> dict[str, Any]:
     base = _table_doc()
     part_types = copy.deepcopy(base["part_types"])
     part_types += [
-        {"id": "seat", "name": "stool top", "width": 120.0, "height": 120.0, "pick_time": 10.0,
-         "rotatable": True},
-        {"id": "stool_leg", "name": "stool leg", "width": 150.0, "height": 15.0, "pick_time": 8.0,
-         "rotatable": True},
+        {
+            "id": "seat",
+            "name": "stool top",
+            "width": 120.0,
+            "height": 120.0,
+            "pick_time": 10.0,
+            "rotatable": True,
+        },
+        {
+            "id": "stool_leg",
+            "name": "stool leg",
+            "width": 150.0,
+            "height": 15.0,
+            "pick_time": 8.0,
+            "rotatable": True,
+        },
     ]
     tasks = [dict(t, id=f"T{t['id']}", product="table") for t in copy.deepcopy(base["tasks"])]
     edges = [[f"T{a}", f"T{b}"] for a, b in base["precedence"]]
@@ -83,17 +97,34 @@ def mixed(size: int, delivery_time: float | None = None) -> dict[str, Any]:
     edges += [["Sa1", "Sa2"], ["Sa1", "Sa3"]]
     # a chair: four legs with feet, two back posts with connectors, then the backrest
     for i in range(1, 5):
-        tasks.append(_task(f"Cfoot{i}", f"chair leg {i}: foot bracket", "chair",
-                           {"leg": 1, "foot": 1, "screw_short": 1}, 30.0))
-        tasks.append(_task(f"Cseat{i}", f"chair leg {i}: to the seat", "chair",
-                           {"screw_long": 2}, 32.0))
+        tasks.append(
+            _task(
+                f"Cfoot{i}",
+                f"chair leg {i}: foot bracket",
+                "chair",
+                {"leg": 1, "foot": 1, "screw_short": 1},
+                30.0,
+            )
+        )
+        tasks.append(
+            _task(f"Cseat{i}", f"chair leg {i}: to the seat", "chair", {"screw_long": 2}, 32.0)
+        )
         edges.append([f"Cfoot{i}", f"Cseat{i}"])
     for j in range(1, 3):
-        tasks.append(_task(f"Cpost{j}", f"chair back post {j}", "chair",
-                           {"leg": 1, "connector": 1, "screw_short": 1}, 28.0))
+        tasks.append(
+            _task(
+                f"Cpost{j}",
+                f"chair back post {j}",
+                "chair",
+                {"leg": 1, "connector": 1, "screw_short": 1},
+                28.0,
+            )
+        )
     tasks.append(_task("Cback", "chair: attach the backrest", "chair", {"screw_long": 4}, 40.0))
-    edges += [[f"Cseat{i}", "Cback"] for i in range(1, 5)] + [["Cpost1", "Cback"],
-                                                              ["Cpost2", "Cback"]]
+    edges += [[f"Cseat{i}", "Cback"] for i in range(1, 5)] + [
+        ["Cpost1", "Cback"],
+        ["Cpost2", "Cback"],
+    ]
     doc = {
         "format": "bilevel-kit/1",
         "name": f"mixed_u{size}",
@@ -121,13 +152,21 @@ def _random_parts(rng: np.random.Generator, n_types: int) -> list[dict[str, Any]
     out = []
     for k in range(n_types):
         w, h = sorted(rng.integers(8, 90, size=2).tolist(), reverse=True)
-        out.append({"id": f"p{k}", "width": float(w), "height": float(h),
-                    "pick_time": float(rng.integers(2, 9)), "rotatable": bool(rng.random() < 0.8)})
+        out.append(
+            {
+                "id": f"p{k}",
+                "width": float(w),
+                "height": float(h),
+                "pick_time": float(rng.integers(2, 9)),
+                "rotatable": bool(rng.random() < 0.8),
+            }
+        )
     return out
 
 
-def _series_parallel(rng: np.random.Generator, ids: list[str]) -> tuple[list[list[str]], list[str],
-                                                                        list[str]]:
+def _series_parallel(
+    rng: np.random.Generator, ids: list[str]
+) -> tuple[list[list[str]], list[str], list[str]]:
     """Edges, sources and sinks of a random series-parallel graph over ``ids``."""
     if len(ids) == 1:
         return [], ids[:], ids[:]
@@ -139,8 +178,9 @@ def _series_parallel(rng: np.random.Generator, ids: list[str]) -> tuple[list[lis
     return ea + eb, sa + sb, ta + tb
 
 
-def random_graph(family: str, size: int, seed: int, tightness: float = 0.6,
-                 delivery_time: float = 5.0) -> dict[str, Any]:
+def random_graph(
+    family: str, size: int, seed: int, tightness: float = 0.6, delivery_time: float = 5.0
+) -> dict[str, Any]:
     """A random in-tree or series-parallel product of ``size`` tasks."""
     rng = np.random.default_rng(np.random.SeedSequence([seed, size, FAMILIES.index(family)]))
     types = _random_parts(rng, int(rng.integers(2, 5)))
@@ -155,8 +195,9 @@ def random_graph(family: str, size: int, seed: int, tightness: float = 0.6,
     for tid in ids:
         chosen = rng.choice(len(types), size=int(rng.integers(1, 3)), replace=False)
         parts = {types[k]["id"]: int(rng.integers(1, 3)) for k in sorted(chosen.tolist())}
-        area += sum(types[int(k[1:])]["width"] * types[int(k[1:])]["height"] * n
-                    for k, n in parts.items())
+        area += sum(
+            types[int(k[1:])]["width"] * types[int(k[1:])]["height"] * n for k, n in parts.items()
+        )
         tasks.append(_task(tid, f"task {tid}", "product", parts, float(rng.integers(10, 41))))
     side = math.sqrt(area / tightness / 1.5)  # a 3:2 tray of the requested area
     width = max(math.ceil(side * 1.5), max(t["width"] for t in types))
@@ -166,9 +207,11 @@ def random_graph(family: str, size: int, seed: int, tightness: float = 0.6,
         "name": f"{family}_n{size}_s{seed}",
         "description": f"Random {family} product (bilevel-kit generate {family} --size {size} "
         f"--seed {seed} --tightness {tightness:g} --d {delivery_time:g}).",
-        "assumptions": ["Random: part sizes 8-90 mm, pick times 2-8 s, human times 10-40 s, "
-                        "1-2 part types per task with 1-2 parts each, per-kit overheads 2 s "
-                        "(robot) and 1 s (human)."],
+        "assumptions": [
+            "Random: part sizes 8-90 mm, pick times 2-8 s, human times 10-40 s, "
+            "1-2 part types per task with 1-2 parts each, per-kit overheads 2 s "
+            "(robot) and 1 s (human)."
+        ],
         "tray": {"width": float(width), "height": float(height)},
         "delivery_time": float(delivery_time),
         "kit_overhead": {"robot": 2.0, "human": 1.0},
@@ -179,8 +222,13 @@ def random_graph(family: str, size: int, seed: int, tightness: float = 0.6,
     }
 
 
-def generate(family: str, size: int, seed: int = 0, tightness: float = 0.6,
-             delivery_time: float | None = None) -> dict[str, Any]:
+def generate(
+    family: str,
+    size: int,
+    seed: int = 0,
+    tightness: float = 0.6,
+    delivery_time: float | None = None,
+) -> dict[str, Any]:
     """An instance document of the given family (see the module docstring)."""
     if family not in FAMILIES:
         raise UsageError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
@@ -192,5 +240,6 @@ def generate(family: str, size: int, seed: int = 0, tightness: float = 0.6,
         return table(size, delivery_time)
     if family == "mixed":
         return mixed(size, delivery_time)
-    return random_graph(family, size, seed, tightness,
-                        5.0 if delivery_time is None else delivery_time)
+    return random_graph(
+        family, size, seed, tightness, 5.0 if delivery_time is None else delivery_time
+    )

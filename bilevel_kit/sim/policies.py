@@ -194,6 +194,16 @@ POLICIES: dict[str, type[Policy]] = {
 }
 
 
+def _register_late() -> None:
+    """Policies that live in their own module (imported here, after POLICIES exists)."""
+    from .cpsat_rolling import CPSATRollingPolicy
+
+    POLICIES[CPSATRollingPolicy.name] = CPSATRollingPolicy
+
+
+_register_late()
+
+
 def make_policy(
     name: str, instance: Instance, *, seed: int = 0, params: SimParams | None = None
 ) -> Policy:
