@@ -96,6 +96,12 @@ def _positive_int(text: str) -> int:
     return v
 
 
+def _add_param_option(p: argparse.ArgumentParser, text: str) -> None:
+    p.add_argument(
+        "--param", "-p", type=_param, action="append", default=[], metavar="KEY=VALUE", help=text
+    )
+
+
 def _add_instance_overrides(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("instance overrides")
     g.add_argument(
@@ -178,15 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S",
         help="time limit in seconds for methods that take one",
     )
-    p.add_argument(
-        "--param",
-        "-p",
-        type=_param,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="method-specific option (repeatable)",
-    )
+    _add_param_option(p, "method-specific option (repeatable)")
     p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
     _add_instance_overrides(p)
 
@@ -285,15 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="W7=30",
         help="override some of the weights W1..W7 (optimized policy)",
     )
-    p.add_argument(
-        "--param",
-        "-p",
-        type=_param,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="policy option, e.g. cpsat-rolling: window=12, time_limit=1 (repeatable)",
-    )
+    _add_param_option(p, "policy option, e.g. cpsat-rolling: window=12, time_limit=1 (repeatable)")
 
     p = sub.add_parser(
         "repro",
@@ -828,18 +818,7 @@ def cmd_pack(args: argparse.Namespace) -> int:
             "bound": res.bound,
             "true_fitness": res.true_fitness,
             "tray": {"width": instance.tray.width, "height": instance.tray.height},
-            "layout": [
-                {
-                    "part": p.part,
-                    "type": p.type,
-                    "x": p.x,
-                    "y": p.y,
-                    "theta": p.theta,
-                    "w": p.w,
-                    "h": p.h,
-                }
-                for p in res.layout or ()
-            ],
+            "layout": [p.to_dict() for p in res.layout or ()],
         }
         write_text(args.out, json.dumps(out, indent=2) + "\n")
     if args.png and res.layout is not None:

@@ -33,6 +33,18 @@ class Placement:
     w: float
     h: float
 
+    def to_dict(self) -> dict[str, str | float]:
+        """The JSON form used by solution and layout files."""
+        return {
+            "part": self.part,
+            "type": self.type,
+            "x": self.x,
+            "y": self.y,
+            "theta": self.theta,
+            "w": self.w,
+            "h": self.h,
+        }
+
 
 @dataclass(frozen=True)
 class Kit:

@@ -49,18 +49,7 @@ def result_to_dict(result: Result) -> dict[str, Any]:
                 {
                     "tasks": list(kit.tasks),
                     **{k: getattr(times, k) for k in _TIME_KEYS},
-                    "layout": [
-                        {
-                            "part": p.part,
-                            "type": p.type,
-                            "x": p.x,
-                            "y": p.y,
-                            "theta": p.theta,
-                            "w": p.w,
-                            "h": p.h,
-                        }
-                        for p in kit.layout
-                    ],
+                    "layout": [p.to_dict() for p in kit.layout],
                 }
             )
     return {
