@@ -173,3 +173,13 @@ register(
     "bilevel_kit.models.cpsat_schedule:solve_method",
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
 )
+register(
+    "milp",
+    "bilevel_kit.models.milp_schedule:solve",
+    "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
+)
+register(
+    "bilevel-milp",
+    "bilevel_kit.models.kit_columns:solve",
+    "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
+)

@@ -63,3 +63,10 @@ TINY_DOC = {
 def doc() -> dict:
     """A fresh copy of a small valid instance document to break in tests."""
     return copy.deepcopy(TINY_DOC)
+
+
+def pytest_sessionstart(session):
+    """Load OR-Tools before any test imports cvxpy (see bilevel_kit/_native.py)."""
+    from bilevel_kit._native import ortools_first
+
+    ortools_first()

@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-import itertools
 import random
 import time
 from collections import Counter
 
 import pytest
+from brute import best_makespan, fits
 
 from bilevel_kit.instance import from_dict
 from bilevel_kit.models import bounds
-from bilevel_kit.models import cpsat_packing as pk
 from bilevel_kit.models import cpsat_schedule as cs
 from bilevel_kit.plan import Kit, Plan, evaluate
 
@@ -59,59 +58,8 @@ def random_doc(seed: int, n: int | None = None) -> dict:
     }
 
 
-_FITS: dict = {}
-
-
-def fits(inst, kit) -> bool:
-    """Does the kit fit? Area first, then the CP-SAT packer (memoised per part multiset)."""
-    counts = inst.kit_parts(kit)
-    key = (
-        inst.tray,
-        frozenset(counts.items()),
-        tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in inst.part_types.values())),
-    )
-    if key not in _FITS:
-        area = sum(inst.part_types[p].area * c for p, c in counts.items())
-        if area > inst.tray.area:
-            _FITS[key] = False
-        else:
-            items = [(f"{p}{j}", inst.part_types[p]) for p, c in counts.items() for j in range(c)]
-            res = pk.pack(inst.tray, items, time_limit=10.0)
-            assert res.status in ("feasible", "infeasible")
-            _FITS[key] = res.status == "feasible"
-    return _FITS[key]
-
-
 def brute_force(inst) -> tuple[float, Plan]:
-    """Enumerate precedence-feasible permutations x all 2^(n-1) cut patterns; evaluate each
-    distinct plan whose kits fit with the one evaluator; return the best."""
-    ids = [t.id for t in inst.tasks]
-    n = len(ids)
-    best = (float("inf"), None)
-    seen = set()
-    for perm in itertools.permutations(ids):
-        pos = {t: k for k, t in enumerate(perm)}
-        if any(pos[a] > pos[b] for a, b in inst.precedence):
-            continue
-        for mask in range(2 ** (n - 1)):
-            kits, cur = [], [perm[0]]
-            for k in range(1, n):
-                if mask >> (k - 1) & 1:
-                    kits.append(tuple(cur))
-                    cur = []
-                cur.append(perm[k])
-            kits.append(tuple(cur))
-            key = tuple(frozenset(k) for k in kits)
-            if key in seen:
-                continue
-            seen.add(key)
-            if not all(fits(inst, k) for k in kits):
-                continue
-            plan = Plan(tuple(Kit(k) for k in kits))
-            ms = evaluate(inst, plan).makespan
-            if ms < best[0]:
-                best = (ms, plan)
-    return best
+    return best_makespan(inst)
 
 
 def assert_valid_plan(inst, out) -> None:

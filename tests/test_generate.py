@@ -65,8 +65,9 @@ def test_bad_arguments():
 
 def test_cli_writes_a_loadable_instance(tmp_path, capsys):
     out = tmp_path / "g.json"
-    assert main(["generate", "series-parallel", "--size", "6", "--seed", "2", "--out",
-                 str(out)]) == 0
+    assert (
+        main(["generate", "series-parallel", "--size", "6", "--seed", "2", "--out", str(out)]) == 0
+    )
     assert load(out).n_tasks == 6
     assert json.loads(out.read_text())["description"].startswith("Random series-parallel")
 
@@ -80,7 +81,11 @@ def test_committed_generated_set_is_reproducible(root):
         load(path)
         cmd = doc["description"].split("(bilevel-kit generate ")[1].rstrip(").").split()
         family, opts = cmd[0], dict(zip(cmd[1::2], cmd[2::2], strict=True))
-        again = generate(family, int(opts["--size"]), int(opts.get("--seed", 0)),
-                         float(opts.get("--tightness", 0.6)),
-                         float(opts["--d"]) if "--d" in opts else None)
+        again = generate(
+            family,
+            int(opts["--size"]),
+            int(opts.get("--seed", 0)),
+            float(opts.get("--tightness", 0.6)),
+            float(opts["--d"]) if "--d" in opts else None,
+        )
         assert again == doc, path.name

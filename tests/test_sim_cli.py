@@ -9,9 +9,26 @@ from bilevel_kit.cli import main
 
 def test_simulate_writes_one_row_per_replication(capsys, tmp_path, root):
     out = tmp_path / "sim.csv"
-    code = main(["simulate", str(root / "instances/hrc_table.json"), "--policy", "single-task",
-                 "--units", "2", "--mat", "leg=60,foot=60", "--mttf", "90", "--reps", "4",
-                 "--seed", "7", "--csv", str(out)])
+    code = main(
+        [
+            "simulate",
+            str(root / "instances/hrc_table.json"),
+            "--policy",
+            "single-task",
+            "--units",
+            "2",
+            "--mat",
+            "leg=60,foot=60",
+            "--mttf",
+            "90",
+            "--reps",
+            "4",
+            "--seed",
+            "7",
+            "--csv",
+            str(out),
+        ]
+    )
     text = capsys.readouterr().out
     assert code == 0 and "policy single-task, 2 unit(s), 4 replication(s)" in text
     rows = list(csv.DictReader(out.open()))
@@ -24,8 +41,21 @@ def test_simulate_writes_one_row_per_replication(capsys, tmp_path, root):
 def test_simulate_is_deterministic(capsys, tmp_path, root):
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     for out in (a, b):
-        assert main(["simulate", str(root / "instances/stool.json"), "--policy",
-                     "whole-assembly", "--reps", "3", "--csv", str(out)]) == 0
+        assert (
+            main(
+                [
+                    "simulate",
+                    str(root / "instances/stool.json"),
+                    "--policy",
+                    "whole-assembly",
+                    "--reps",
+                    "3",
+                    "--csv",
+                    str(out),
+                ]
+            )
+            == 0
+        )
     assert a.read_text() == b.read_text()
 
 

@@ -201,6 +201,9 @@ class _RoundProblem:
     """
 
     def __init__(self, parts: _Parts, width: float, height: float, solver: str) -> None:
+        from .._native import ortools_first
+
+        ortools_first()  # before cvxpy loads highspy: the two libhighs builds clash
         import cvxpy as cp
 
         self.cp = cp

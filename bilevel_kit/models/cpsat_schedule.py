@@ -81,10 +81,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..instance import Instance, topological_order
+from ..instance import Instance
 from ..plan import Kit, Placement, Plan, evaluate
 from . import cpsat_packing as packing
 from .bounds import best_bound, min_kits
+from .common import Packer, chain_groups_idx, kit_order, quick_plan, reduced_edges
 
 TRAY_MODES = ("auto", "embedded", "benders")
 OBJECTIVES = ("makespan", "human_idle")
@@ -151,152 +152,6 @@ def _scaled_makespan(sc: _Scaled, kits: Sequence[Sequence[int]]) -> int:
         arrive += sc.o_r + sum(sc.r[i] for i in kit) + sc.d
         end = max(arrive, end) + sc.o_h + sum(sc.h[i] for i in kit)
     return end
-
-
-def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
-    """The transitive reduction of the precedence graph (same order relation, fewer edges)."""
-    anc, pred = instance.ancestors, instance.predecessors
-    out = []
-    for a, b in dict.fromkeys(instance.precedence):
-        if not any(a in anc[c] for c in pred[b] if c != a):
-            out.append((a, b))
-    return out
-
-
-def _chain_groups(
-    n: int, edges: Sequence[tuple[int, int]], sig: Sequence[Any]
-) -> list[list[list[int]]]:
-    """Groups (>= 2) of interchangeable precedence chains in the reduced graph.
-
-    A chain follows links a -> b where a has exactly one successor and b exactly one
-    predecessor. Two chains with equal task signatures, equal predecessors of the head and
-    equal successors of the tail can be swapped: an automorphism of the whole problem.
-    """
-    succ: list[list[int]] = [[] for _ in range(n)]
-    pred: list[list[int]] = [[] for _ in range(n)]
-    for a, b in edges:
-        succ[a].append(b)
-        pred[b].append(a)
-
-    def linked(a: int, b: int) -> bool:
-        return len(succ[a]) == 1 and len(pred[b]) == 1 and succ[a][0] == b
-
-    groups: dict[Any, list[list[int]]] = {}
-    for v in range(n):
-        if len(pred[v]) == 1 and linked(pred[v][0], v):
-            continue  # not a head
-        chain = [v]
-        while len(succ[chain[-1]]) == 1 and linked(chain[-1], succ[chain[-1]][0]):
-            chain.append(succ[chain[-1]][0])
-        key = (frozenset(pred[v]), frozenset(succ[chain[-1]]), tuple(sig[c] for c in chain))
-        groups.setdefault(key, []).append(chain)
-    return [sorted(g) for g in groups.values() if len(g) >= 2]
-
-
-def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
-    """A topological order of a kit's tasks (ties by file order): the human's order."""
-    members = set(tasks)
-    anc = instance.ancestors
-    left = sorted(members, key=instance.index.__getitem__)
-    out: list[str] = []
-    done: set[str] = set()
-    while left:
-        for t in left:
-            if all(a in done for a in anc[t] if a in members):
-                out.append(t)
-                done.add(t)
-                left.remove(t)
-                break
-        else:  # pragma: no cover - impossible for an acyclic graph
-            raise ValueError("cycle inside a kit")
-    return tuple(out)
-
-
-class _Packer:
-    """The packing oracle under the run's deadline: every call gets at most ``pack_tl``
-    seconds and never more than what is left."""
-
-    def __init__(self, instance: Instance, res: float, pack_tl: float, deadline: float) -> None:
-        from ..reachability import reach_grid
-
-        self.instance = instance
-        self.res = res
-        self.pack_tl = pack_tl
-        self.deadline = deadline
-        self.reach = reach_grid(instance)
-
-    def _tl(self, limit: float | None = None) -> float:
-        limit = self.pack_tl if limit is None else limit
-        return max(0.02, min(limit, self.deadline - time.perf_counter()))
-
-    def counts(self, counts: dict[str, int], limit: float | None = None) -> tuple[bool | None, Any]:
-        return packing.fit_counts(
-            self.instance.tray,
-            self.instance.part_types,
-            counts,
-            time_limit=self._tl(limit),
-            resolution=self.res,
-            reach=self.reach,
-        )
-
-    def fits(self, tasks: Sequence[str]) -> bool | None:
-        return self.counts(dict(self.instance.kit_parts(tasks)))[0]
-
-    def split(self, kit: Sequence[str]) -> list[list[str]] | None:
-        """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
-        single task does not fit (or is unknown)."""
-        out: list[list[str]] = []
-        cur: list[str] = []
-        for t in kit:
-            if cur and self.fits([*cur, t]):
-                cur.append(t)
-                continue
-            if cur:
-                out.append(cur)
-            if not self.fits([t]):
-                return None
-            cur = [t]
-        if cur:
-            out.append(cur)
-        return out
-
-    def minimal_nofit(self, counts: dict[str, int], until: float) -> dict[str, int]:
-        """Deletion filter: drop parts (smallest types first) while the rest provably does not
-        fit; stops early at ``until`` (a larger non-fitting multiset is still a valid cut)."""
-        cur = dict(counts)
-        for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
-            while cur.get(t, 0) > 0 and time.perf_counter() < until:
-                trial = dict(cur)
-                trial[t] -= 1
-                if trial[t] == 0:
-                    del trial[t]
-                if not trial or self.counts(trial)[0] is not False:
-                    break
-                cur = trial
-        return cur
-
-
-def quick_plan(
-    instance: Instance, packer: _Packer | None = None, *, max_size: int = 40
-) -> list[list[str]] | None:
-    """A cheap feasible plan (an upper bound and a hint): the topological order cut into
-    segments of a fixed size s (each split further until it fits), best s by the evaluator."""
-    packer = packer or _Packer(instance, 1.0, 0.2, time.perf_counter() + 10.0)
-    order = topological_order(instance)
-    best: tuple[float, list[list[str]]] | None = None
-    for s in range(1, min(len(order), max_size) + 1):
-        if best is not None and time.perf_counter() > packer.deadline:
-            break
-        kits: list[list[str]] = []
-        for a in range(0, len(order), s):
-            parts = packer.split(list(kit_order(instance, order[a : a + s])))
-            if parts is None:
-                return best[1] if best else None
-            kits += parts
-        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
-        if best is None or ms < best[0] - 1e-9:
-            best = (ms, kits)
-    return best[1] if best else None
 
 
 def _canonical(kits: list[list[int]], groups: list[list[list[int]]]) -> list[list[int]]:
@@ -613,7 +468,7 @@ def _hint(
 
 
 def _grid_corners(
-    instance: Instance, kits: Sequence[Sequence[int]], packer: _Packer
+    instance: Instance, kits: Sequence[Sequence[int]], packer: Packer
 ) -> dict[int, dict[tuple[str, int], tuple[int, int, bool]]] | None:
     """Lower-left grid corners of every part of a plan, from the packing oracle's layouts;
     identical copies of one task get their corners in lexicographic order (as the model
@@ -728,7 +583,7 @@ def solve(
     idx = instance.index
     sc = scale_times(instance, time_resolution, refine_times)
     pack_tl = max(0.2, min(2.0, 0.05 * time_limit))
-    packer = _Packer(instance, pack_resolution, pack_tl, deadline - _MARGIN)
+    packer = Packer(instance, pack_tl, deadline - _MARGIN, pack_resolution)
     solves_before = sum(c.solves for c in packing._CACHES.values())
     extra: dict[str, Any] = {
         "time_resolution": sc.res,
@@ -752,7 +607,7 @@ def solve(
 
     edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
     sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
-    groups = _chain_groups(n, edges, sig)
+    groups = chain_groups_idx(n, edges, sig)
     extra["symmetric_chains"] = sum(len(g) for g in groups)
 
     # incumbent and upper bound: the hint (if its kits fit) and a quick plan
@@ -764,7 +619,7 @@ def solve(
             extra["hint_used"] = True
     qp = quick_plan(
         instance,
-        _Packer(instance, pack_resolution, min(0.2, pack_tl), min(deadline, t0 + 0.1 * time_limit)),
+        Packer(instance, min(0.2, pack_tl), min(deadline, t0 + 0.1 * time_limit), pack_resolution),
     )
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])
@@ -882,7 +737,7 @@ def _plan_of(
     instance: Instance,
     kits: Sequence[Sequence[int]],
     layouts: Sequence[tuple[Placement, ...]] | None,
-    packer: _Packer | None = None,
+    packer: Packer | None = None,
 ) -> Plan:
     """Kits of task indices -> a Plan (human order = topological order inside each kit)."""
     out = []
@@ -927,7 +782,7 @@ def _run_embedded(
     solver: Any,
     objective: str,
     incumbent: list[list[int]] | None,
-    packer: _Packer,
+    packer: Packer,
     deadline: float,
 ) -> _State:
     from ortools.sat.python import cp_model
@@ -966,7 +821,7 @@ def _run_benders(
     solver: Any,
     objective: str,
     incumbent: list[list[int]] | None,
-    packer: _Packer,
+    packer: Packer,
     deadline: float,
     groups: list[list[list[int]]],
 ) -> _State:

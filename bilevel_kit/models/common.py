@@ -1,0 +1,203 @@
+"""Pieces both exact schedule models share (CP-SAT and the MILP).
+
+The transitive reduction of the precedence graph, the human's order inside a kit, groups of
+interchangeable precedence chains (for symmetry breaking), the packing oracle under a run's
+deadline, and a cheap feasible plan that gives an upper bound and a warm start.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from ..instance import Instance, topological_order
+from ..plan import Kit, Placement, Plan, evaluate
+from . import cpsat_packing as packing
+
+
+def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
+    """The transitive reduction of the precedence graph (same order relation, fewer edges)."""
+    anc, pred = instance.ancestors, instance.predecessors
+    out = []
+    for a, b in dict.fromkeys(instance.precedence):
+        if not any(a in anc[c] for c in pred[b] if c != a):
+            out.append((a, b))
+    return out
+
+
+def chain_groups_idx(
+    n: int, edges: Sequence[tuple[int, int]], sig: Sequence[Any]
+) -> list[list[list[int]]]:
+    """Groups (>= 2) of interchangeable precedence chains in the reduced graph.
+
+    A chain follows links a -> b where a has exactly one successor and b exactly one
+    predecessor. Two chains with equal task signatures, equal predecessors of the head and
+    equal successors of the tail can be swapped: an automorphism of the whole problem.
+    """
+    succ: list[list[int]] = [[] for _ in range(n)]
+    pred: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges:
+        succ[a].append(b)
+        pred[b].append(a)
+
+    def linked(a: int, b: int) -> bool:
+        return len(succ[a]) == 1 and len(pred[b]) == 1 and succ[a][0] == b
+
+    groups: dict[Any, list[list[int]]] = {}
+    for v in range(n):
+        if len(pred[v]) == 1 and linked(pred[v][0], v):
+            continue  # not a head
+        chain = [v]
+        while len(succ[chain[-1]]) == 1 and linked(chain[-1], succ[chain[-1]][0]):
+            chain.append(succ[chain[-1]][0])
+        key = (frozenset(pred[v]), frozenset(succ[chain[-1]]), tuple(sig[c] for c in chain))
+        groups.setdefault(key, []).append(chain)
+    return [sorted(g) for g in groups.values() if len(g) >= 2]
+
+
+def chain_groups(instance: Instance) -> list[list[list[str]]]:
+    """:func:`chain_groups_idx` on task ids; a task's signature is (robot time, human time,
+    parts), so swapping two chains of a group changes nothing."""
+    ids = [t.id for t in instance.tasks]
+    idx = instance.index
+    edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
+    sig = [
+        (
+            instance.robot_time(t),
+            instance.human_time(t),
+            tuple(sorted(instance.task_by_id[t].parts)),
+        )
+        for t in ids
+    ]
+    return [
+        [[ids[i] for i in chain] for chain in g] for g in chain_groups_idx(len(ids), edges, sig)
+    ]
+
+
+def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
+    """A topological order of a kit's tasks (ties by file order): the human's order."""
+    members = set(tasks)
+    anc = instance.ancestors
+    left = sorted(members, key=instance.index.__getitem__)
+    out: list[str] = []
+    done: set[str] = set()
+    while left:
+        for t in left:
+            if all(a in done for a in anc[t] if a in members):
+                out.append(t)
+                done.add(t)
+                left.remove(t)
+                break
+        else:  # pragma: no cover - impossible for an acyclic graph
+            raise ValueError("cycle inside a kit")
+    return tuple(out)
+
+
+class Packer:
+    """The packing oracle under the run's deadline: every call gets at most ``pack_tl``
+    seconds and never more than what is left."""
+
+    def __init__(
+        self, instance: Instance, pack_tl: float, deadline: float, resolution: float = 1.0
+    ) -> None:
+        from ..reachability import reach_grid
+
+        self.instance = instance
+        self.res = resolution
+        self.pack_tl = pack_tl
+        self.deadline = deadline
+        self.reach = reach_grid(instance)
+
+    def _tl(self, limit: float | None = None) -> float:
+        limit = self.pack_tl if limit is None else limit
+        return max(0.02, min(limit, self.deadline - time.perf_counter()))
+
+    def counts(
+        self, counts: Mapping[str, int], limit: float | None = None
+    ) -> tuple[bool | None, Any]:
+        return packing.fit_counts(
+            self.instance.tray,
+            self.instance.part_types,
+            dict(counts),
+            time_limit=self._tl(limit),
+            resolution=self.res,
+            reach=self.reach,
+        )
+
+    def fits(self, tasks: Sequence[str]) -> bool | None:
+        return self.counts(dict(self.instance.kit_parts(tasks)))[0]
+
+    def split(self, kit: Sequence[str]) -> list[list[str]] | None:
+        """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
+        single task does not fit (or is unknown)."""
+        out: list[list[str]] = []
+        cur: list[str] = []
+        for t in kit:
+            if cur and self.fits([*cur, t]):
+                cur.append(t)
+                continue
+            if cur:
+                out.append(cur)
+            if not self.fits([t]):
+                return None
+            cur = [t]
+        if cur:
+            out.append(cur)
+        return out
+
+    def minimal_nofit(self, counts: Mapping[str, int], until: float) -> dict[str, int]:
+        """Deletion filter: drop parts (smallest types first) while the rest provably does not
+        fit; stops early at ``until`` (a larger non-fitting multiset is still a valid cut)."""
+        cur = {k: n for k, n in counts.items() if n > 0}
+        for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
+            while cur.get(t, 0) > 0 and time.perf_counter() < until:
+                trial = dict(cur)
+                trial[t] -= 1
+                if trial[t] == 0:
+                    del trial[t]
+                if not trial or self.counts(trial)[0] is not False:
+                    break
+                cur = trial
+        return cur
+
+    def layout(self, tasks: Sequence[str]) -> tuple[Placement, ...] | None:
+        """The oracle's layout of a kit, else the shelf packer's (when reachability is not
+        enforced: the shelf packer ignores it), else None."""
+        from ..heuristics.packing import shelf_pack
+
+        ok, typed = self.counts(self.instance.kit_parts(tasks))
+        if ok and typed is not None:
+            return packing.typed_to_placements(self.instance, tasks, typed)
+        if self.reach is not None:
+            return None
+        items = [
+            (f"{t}:{p}:{j}", self.instance.part_types[p])
+            for t in tasks
+            for p, n in self.instance.task_by_id[t].parts
+            for j in range(1, n + 1)
+        ]
+        return shelf_pack(self.instance.tray, items)
+
+
+def quick_plan(
+    instance: Instance, packer: Packer | None = None, *, max_size: int = 40
+) -> list[list[str]] | None:
+    """A cheap feasible plan (an upper bound and a hint): the topological order cut into
+    segments of a fixed size s (each split further until it fits), best s by the evaluator."""
+    packer = packer or Packer(instance, 0.2, time.perf_counter() + 10.0)
+    order = topological_order(instance)
+    best: tuple[float, list[list[str]]] | None = None
+    for s in range(1, min(len(order), max_size) + 1):
+        if best is not None and time.perf_counter() > packer.deadline:
+            break
+        kits: list[list[str]] = []
+        for a in range(0, len(order), s):
+            parts = packer.split(list(kit_order(instance, order[a : a + s])))
+            if parts is None:
+                return best[1] if best else None
+            kits += parts
+        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+        if best is None or ms < best[0] - 1e-9:
+            best = (ms, kits)
+    return best[1] if best else None
