@@ -233,3 +233,23 @@ def test_polish_option_never_lowers_kit_fitness(table):
     res = solve(table, "greedy-ce", polish=True, check=True)
     assert res.extra["violations"] == []
     assert res.params["polish"] is True
+
+
+def test_ce_layouts_pass_the_checker_for_every_kit_of_the_table(table):
+    """CE at the paper's parameters on each single-task kit, every greedy-ce kit and the
+    whole-assembly kit of hrc_table.json: the checker accepts each layout."""
+    from bilevel_kit import Kit, Plan
+    from bilevel_kit.heuristics.cross_entropy import arrange
+
+    greedy = solve(table, "greedy-ce").plan
+    kits = [(t.id,) for t in table.tasks] + [k.tasks for k in greedy.kits]
+    kits.append(tuple(t.id for t in table.tasks))
+    for seed, tasks in enumerate(kits):
+        arr = arrange(table, table.kit_parts(tasks), rng=seed)
+        assert arr.fits and arr.z == 0.0, tasks
+        violations = [
+            v
+            for v in check(table, Plan((Kit(tasks, arr.layout),)))
+            if v.kind not in ("missing_task", "precedence")
+        ]
+        assert violations == [], (tasks, violations)
