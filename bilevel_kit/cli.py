@@ -262,27 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--reps", type=_positive_int, default=30, help="replications (default 30)")
     p.add_argument("--seed", type=int, default=0, help="seed of the first replication")
     p.add_argument("--csv", metavar="FILE", help="one row per replication")
-    p.add_argument(
-        "--d",
-        "--delivery-time",
-        dest="delivery_time",
-        type=_nonneg,
-        metavar="S",
-        help="delivery time d in seconds (overrides the instance)",
-    )
-    p.add_argument(
-        "--units",
-        type=_positive_int,
-        metavar="U",
-        help="tables built in sequence (default: the instance's; the paper: 10)",
-    )
-    p.add_argument("--horizon", type=_positive_int, metavar="N", help="greedy look-ahead N")
-    p.add_argument(
-        "--weights",
-        type=_weights,
-        metavar="W7=30",
-        help="override some of the weights W1..W7 (optimized policy)",
-    )
+    _add_instance_overrides(p)
     _add_param_option(p, "policy option, e.g. cpsat-rolling: window=12, time_limit=1 (repeatable)")
 
     p = sub.add_parser(

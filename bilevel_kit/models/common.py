@@ -128,6 +128,10 @@ class Packer:
     def fits(self, tasks: Sequence[str]) -> bool | None:
         return self.counts(dict(self.instance.kit_parts(tasks)))[0]
 
+    def task_not_fitting(self) -> str | None:
+        """A task whose parts alone provably do not fit the tray (then no plan exists)."""
+        return next((t.id for t in self.instance.tasks if self.fits([t.id]) is False), None)
+
     def split(self, kit: Sequence[str]) -> list[list[str]] | None:
         """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
         single task does not fit (or is unknown)."""

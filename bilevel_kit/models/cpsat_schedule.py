@@ -599,11 +599,10 @@ def solve(
         extra["wall_time_s"] = time.perf_counter() - t0
         return MethodOutput(plan, status, bound, extra)
 
-    # every single task must fit, else no plan exists
-    for t in ids:
-        if packer.fits([t]) is False:
-            extra["reason"] = f"the parts of task {t!r} alone do not fit the tray"
-            return finish(None, "infeasible", None)
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return finish(None, "infeasible", None)
 
     edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
     sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]

@@ -693,10 +693,10 @@ def solve(
         extra["wall_time_s"] = time.perf_counter() - t0
         return MethodOutput(plan, status, bound, extra)
 
-    for t in ids:
-        if packer.fits([t]) is False:
-            extra["reason"] = f"the parts of task {t!r} alone do not fit the tray"
-            return finish(None, "infeasible", None)
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return finish(None, "infeasible", None)
 
     # incumbent, upper bound and the kit cap (only valid for plans at least as good)
     inc = quick_plan(instance, Packer(instance, min(0.2, pack_tl), t0 + 0.1 * time_limit))
