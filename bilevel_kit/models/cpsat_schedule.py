@@ -82,6 +82,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..instance import Instance
+from ..methods import gap as relative_gap
 from ..plan import Kit, Placement, Plan, evaluate
 from . import cpsat_packing as packing
 from .bounds import best_bound, min_kits
@@ -719,9 +720,8 @@ def solve(
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
         return finish(None, "unknown", bound_s)
-    gap = max(0.0, (real.makespan - bound_s) / real.makespan) if real.makespan > 0 else 0.0
     extra.update(
-        gap=gap,
+        gap=relative_gap(real.makespan, bound_s) or 0.0,
         makespan=real.makespan,
         human_idle=real.human_idle,
         n_kits=len(plan.kits),

@@ -85,6 +85,7 @@ from typing import Any
 
 from ..errors import UsageError
 from ..instance import Instance, topological_order
+from ..methods import gap as relative_gap
 from ..plan import Kit, Plan, evaluate
 from . import cpsat_packing as packing
 from .bounds import best_bound, lower_bounds, min_kits
@@ -843,9 +844,8 @@ def solve(
     if bound > real.makespan:  # only float noise of the solver can do this
         bound = real.makespan
     status = "optimal" if proven else "feasible"
-    gap = max(0.0, (real.makespan - bound) / real.makespan) if real.makespan > 0 else 0.0
     extra.update(
-        gap=gap,
+        gap=relative_gap(real.makespan, bound) or 0.0,
         makespan=real.makespan,
         human_idle=real.human_idle,
         n_kits=len(plan.kits),
