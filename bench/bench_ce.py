@@ -6,7 +6,7 @@ at most 100 iterations.
 
 For each seed it times one ``arrange`` call, then the evaluation alone of the same number of
 samples (``iterations`` batches of 200, drawn beforehand) with the vectorised objective:
-rotated box extents plus :class:`bilevel_kit.objective.PairScorer`, in the same precision.
+rotated box extents plus :class:`bilevel_kit.layout.fitness.PairScorer`, in the same precision.
 The ratio of the medians says how much the CE loop (sampling, projection, refit, the exact
 final check) costs on top of scoring.
 
@@ -34,9 +34,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from bilevel_kit.heuristics.cross_entropy import CEParams, arrange  # noqa: E402
 from bilevel_kit.instance import Instance, from_dict  # noqa: E402
-from bilevel_kit.objective import PairScorer, PairTable, half_extents  # noqa: E402
+from bilevel_kit.layout.cross_entropy import CEParams, arrange  # noqa: E402
+from bilevel_kit.layout.fitness import PairScorer, PairTable, half_extents  # noqa: E402
 
 PARTS = {"leg": 4, "foot": 4, "connector": 4, "screw_long": 8, "screw_short": 8}
 SIZES = {

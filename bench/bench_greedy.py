@@ -16,7 +16,7 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from bilevel_kit import check, load
-from bilevel_kit.heuristics.greedy import GreedyCEPolicy, plan
+from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, plan
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -757,8 +757,8 @@ def cmd_pack(args: argparse.Namespace) -> int:
         if unknown:
             raise UsageError(f"--tasks: unknown task(s) {', '.join(unknown)}")
         counts = dict(instance.kit_parts(tasks))
-    from .heuristics.packing import kit_items
-    from .models.cpsat_packing import pack
+    from .layout.cpsat_packing import pack
+    from .layout.shelf import kit_items
     from .reachability import reach_grid
 
     res = pack(

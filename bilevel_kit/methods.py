@@ -40,7 +40,7 @@ class Result:
     """A solve: status, objective (makespan, s), bound, gap, wall time, seed and parameters.
 
     ``gap = (objective - bound) / objective`` with ``bound`` the best lower bound known (the
-    method's own, or the closed-form bounds of :mod:`bilevel_kit.models.bounds`).
+    method's own, or the closed-form bounds of :mod:`bilevel_kit.bounds`).
     """
 
     method: str
@@ -82,12 +82,12 @@ def register(name: str, target: str, summary: str) -> None:
 
 register(
     "single-task",
-    "bilevel_kit.heuristics.baselines:single_task",
+    "bilevel_kit.solvers.baselines:single_task",
     "paper baseline: one kit per task, deterministic topological order",
 )
 register(
     "whole-assembly",
-    "bilevel_kit.heuristics.baselines:whole_assembly",
+    "bilevel_kit.solvers.baselines:whole_assembly",
     "paper baseline: one kit per product unit",
 )
 
@@ -126,7 +126,7 @@ def solve(
     With ``check=True`` the independent checker runs on the plan and its violations are stored
     in ``result.extra["violations"]`` (an empty list means valid).
     """
-    from .models.bounds import best_bound
+    from .bounds import best_bound
     from .reachability import ensure_kit_placeable
 
     fn = get_method(method).load()
@@ -165,21 +165,21 @@ def solve(
 
 register(
     "greedy-ce",
-    "bilevel_kit.heuristics.greedy:greedy_ce",
+    "bilevel_kit.solvers.greedy_ce:greedy_ce",
     "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
 )
 register(
     "cpsat",
-    "bilevel_kit.models.cpsat_schedule:solve_method",
+    "bilevel_kit.solvers.cpsat:solve_method",
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
 )
 register(
     "milp",
-    "bilevel_kit.models.milp_schedule:solve",
+    "bilevel_kit.solvers.milp:solve",
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
 )
 register(
     "bilevel-milp",
-    "bilevel_kit.models.kit_columns:solve",
+    "bilevel_kit.solvers.bilevel_milp:solve",
     "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
 )

@@ -47,8 +47,8 @@ import numpy as np
 
 from . import atomic
 from .errors import UsageError
-from .heuristics.cross_entropy import CEParams
 from .instance import Instance, load
+from .layout.cross_entropy import CEParams
 from .sim import SimParams, TimingModel, replicate
 
 if TYPE_CHECKING:

@@ -7,8 +7,8 @@ import random
 
 import pytest
 
+from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
-from bilevel_kit.models import bounds
 from bilevel_kit.plan import Kit, Plan, evaluate
 
 

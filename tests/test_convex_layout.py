@@ -13,12 +13,12 @@ from hypothesis import strategies as st
 
 from bilevel_kit import geometry
 from bilevel_kit.errors import UsageError
-from bilevel_kit.heuristics.cross_entropy import CEParams, arrange
-from bilevel_kit.heuristics.packing import kit_items, shelf_pack
 from bilevel_kit.instance import Instance, from_dict
-from bilevel_kit.models import convex_layout as cl
-from bilevel_kit.models.convex_layout import polish, polish_arrangement, polish_plan
-from bilevel_kit.objective import layout_fitness, layout_terms
+from bilevel_kit.layout import convex as cl
+from bilevel_kit.layout.convex import polish, polish_arrangement, polish_plan
+from bilevel_kit.layout.cross_entropy import CEParams, arrange
+from bilevel_kit.layout.fitness import layout_fitness, layout_terms
+from bilevel_kit.layout.shelf import kit_items, shelf_pack
 from bilevel_kit.plan import Kit, Placement, Plan
 from bilevel_kit.validate import check
 
@@ -284,7 +284,7 @@ def test_polish_arrangement_recomputes_terms(table):
 
 
 def test_polish_plan_of_greedy_ce(table):
-    from bilevel_kit.heuristics.greedy import GreedyParams, plan
+    from bilevel_kit.solvers.greedy_ce import GreedyParams, plan
 
     params = GreedyParams(ce=FAST_CE)
     original = plan(table, params, seed=0)

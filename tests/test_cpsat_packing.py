@@ -7,7 +7,7 @@ import pytest
 
 from bilevel_kit import geometry
 from bilevel_kit.instance import PartType, Tray
-from bilevel_kit.models import cpsat_packing as pk
+from bilevel_kit.layout import cpsat_packing as pk
 
 pytest.importorskip("ortools")
 

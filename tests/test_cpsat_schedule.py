@@ -9,10 +9,10 @@ from collections import Counter
 import pytest
 from brute import best_makespan, fits
 
+from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
-from bilevel_kit.models import bounds
-from bilevel_kit.models import cpsat_schedule as cs
 from bilevel_kit.plan import Kit, Plan, evaluate
+from bilevel_kit.solvers import cpsat as cs
 
 pytest.importorskip("ortools")
 

@@ -11,10 +11,10 @@ import pytest
 
 from bilevel_kit import geometry
 from bilevel_kit.errors import UsageError
-from bilevel_kit.heuristics import cross_entropy as ce
-from bilevel_kit.heuristics.cross_entropy import Arrangement, CEParams, arrange
 from bilevel_kit.instance import Instance, PartType, from_dict
-from bilevel_kit.objective import layout_terms
+from bilevel_kit.layout import cross_entropy as ce
+from bilevel_kit.layout.cross_entropy import Arrangement, CEParams, arrange
+from bilevel_kit.layout.fitness import layout_terms
 from bilevel_kit.plan import Placement
 
 
@@ -125,8 +125,8 @@ def test_small_kit_converges_before_the_cap() -> None:
 
 
 def test_table_kit_fits_and_beats_the_shelf_packer() -> None:
-    from bilevel_kit.heuristics.packing import shelf_pack
-    from bilevel_kit.objective import layout_fitness
+    from bilevel_kit.layout.fitness import layout_fitness
+    from bilevel_kit.layout.shelf import shelf_pack
 
     res = arrange(TABLE, TABLE_PARTS, rng=0)
     assert_exactly_valid(res, TABLE)
@@ -193,7 +193,7 @@ def test_packer_layout_when_ce_fails() -> None:
 
 
 def test_no_valid_layout_without_packer(monkeypatch: pytest.MonkeyPatch) -> None:
-    from bilevel_kit.heuristics import packing
+    from bilevel_kit.layout import shelf as packing
 
     monkeypatch.setattr(packing, "shelf_pack", lambda tray, items: None)
     inst = make(100, 100, [("sq", 50, 50, True)])
@@ -203,8 +203,8 @@ def test_no_valid_layout_without_packer(monkeypatch: pytest.MonkeyPatch) -> None
 
 
 def test_start_layout_is_never_made_worse() -> None:
-    from bilevel_kit.heuristics.packing import shelf_pack
-    from bilevel_kit.objective import layout_fitness
+    from bilevel_kit.layout.fitness import layout_fitness
+    from bilevel_kit.layout.shelf import shelf_pack
 
     parts = {"a": 3, "b": 3}
     items = [(f"{t}-{k}", TRAY.part_types[t]) for t in "ab" for k in (1, 2, 3)]

@@ -7,9 +7,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bilevel_kit import check, load, solve
-from bilevel_kit.heuristics.cross_entropy import CEParams
-from bilevel_kit.heuristics.greedy import GreedyCEPolicy, GreedyParams, PolicyState, plan
 from bilevel_kit.instance import from_dict
+from bilevel_kit.layout.cross_entropy import CEParams
+from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, GreedyParams, PolicyState, plan
 
 FAST_CE = CEParams(samples=60, elite=10, max_iter=30)
 
@@ -239,7 +239,7 @@ def test_ce_layouts_pass_the_checker_for_every_kit_of_the_table(table):
     """CE at the paper's parameters on each single-task kit, every greedy-ce kit and the
     whole-assembly kit of hrc_table.json: the checker accepts each layout."""
     from bilevel_kit import Kit, Plan
-    from bilevel_kit.heuristics.cross_entropy import arrange
+    from bilevel_kit.layout.cross_entropy import arrange
 
     greedy = solve(table, "greedy-ce").plan
     kits = [(t.id,) for t in table.tasks] + [k.tasks for k in greedy.kits]

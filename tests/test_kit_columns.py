@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
-from bilevel_kit.models import kit_columns as kc
 from bilevel_kit.plan import Kit, Plan
+from bilevel_kit.solvers import bilevel_milp as kc
 from bilevel_kit.validate import check
 
 pytest.importorskip("pyomo")
@@ -170,8 +170,8 @@ def brute_force(inst, lower) -> float:
 )
 @given(small_instances())
 def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
-    from bilevel_kit.heuristics.cross_entropy import CEParams
-    from bilevel_kit.heuristics.greedy import greedy_ce
+    from bilevel_kit.layout.cross_entropy import CEParams
+    from bilevel_kit.solvers.greedy_ce import greedy_ce
 
     ce = CEParams(**FAST_CE)
     t0 = time.perf_counter()
@@ -199,7 +199,7 @@ def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
 def test_stool_optimum_equals_greedy_and_its_number():
     """The 3-task stool (a1 -> a2, a1 -> a3): one kit per task is both optimal and greedy-ce's
     plan, and a2, a3 are interchangeable (symmetry constraint)."""
-    from bilevel_kit.heuristics.greedy import greedy_ce
+    from bilevel_kit.solvers.greedy_ce import greedy_ce
 
     inst = load(TABLE.parent / "stool.json")
     out = kc.solve(inst, time_limit=30.0, lower="ce")
@@ -217,8 +217,8 @@ def test_stool_optimum_equals_greedy_and_its_number():
 def test_warm_start_and_cpsat_lower_level_keep_the_contract():
     """``lower="best"`` adds CP-SAT fitness layouts (never lowers f); a greedy warm start is
     accepted; J* can only improve over the CE-only value."""
-    from bilevel_kit.heuristics.cross_entropy import CEParams
-    from bilevel_kit.heuristics.greedy import greedy_ce
+    from bilevel_kit.layout.cross_entropy import CEParams
+    from bilevel_kit.solvers.greedy_ce import greedy_ce
 
     doc = two_task_doc()
     doc["tasks"].append(
@@ -243,11 +243,11 @@ def test_warm_start_and_cpsat_lower_level_keep_the_contract():
 def test_registered_method_reports_a_makespan_bound(monkeypatch):
     """Through methods.solve: 'optimal' refers to J, so the bound must stay a makespan bound
     (the closed-form one), never the plan's own makespan."""
+    from bilevel_kit.bounds import best_bound
     from bilevel_kit.methods import REGISTRY, MethodSpec, solve
-    from bilevel_kit.models.bounds import best_bound
 
     if "bilevel-milp" not in REGISTRY:  # until methods.py registers it
-        spec = MethodSpec("bilevel-milp", "bilevel_kit.models.kit_columns:solve", "bilevel")
+        spec = MethodSpec("bilevel-milp", "bilevel_kit.solvers.bilevel_milp:solve", "bilevel")
         monkeypatch.setitem(REGISTRY, "bilevel-milp", spec)
     inst = load(TABLE.parent / "stool.json")
     res = solve(inst, "bilevel-milp", time_limit=30.0, check=True, lower="ce")

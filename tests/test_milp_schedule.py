@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
-from bilevel_kit.models import milp_schedule as ms
 from bilevel_kit.plan import evaluate
+from bilevel_kit.solvers import milp as ms
 from bilevel_kit.validate import check
 
 pytest.importorskip("pyomo")
@@ -112,7 +112,7 @@ def assert_contract(inst, out, time_limit=None, wall=None) -> float:
 )
 @given(small_instances())
 def test_milp_equals_brute_force_and_cpsat(inst):
-    from bilevel_kit.models import cpsat_schedule as cs
+    from bilevel_kit.solvers import cpsat as cs
 
     opt = brute_force(inst)
     t0 = time.perf_counter()
@@ -129,7 +129,7 @@ def test_milp_equals_brute_force_and_cpsat(inst):
 
 def test_table_optimum_agrees_with_cpsat():
     """The paper's 12-task table: 431.78 s (5 kits) for both exact models."""
-    from bilevel_kit.models import cpsat_schedule as cs
+    from bilevel_kit.solvers import cpsat as cs
 
     inst = load(TABLE)
     out = ms.solve(inst, time_limit=30.0)
@@ -237,7 +237,7 @@ def test_registered_method_goes_through_methods_solve(monkeypatch):
     from bilevel_kit.methods import REGISTRY, MethodSpec, solve
 
     if "milp" not in REGISTRY:  # until methods.py registers it
-        spec = MethodSpec("milp", "bilevel_kit.models.milp_schedule:solve", "MILP")
+        spec = MethodSpec("milp", "bilevel_kit.solvers.milp:solve", "MILP")
         monkeypatch.setitem(REGISTRY, "milp", spec)
     inst = from_dict(geometry_doc())
     res = solve(inst, "milp", time_limit=20.0, check=True)

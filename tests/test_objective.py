@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from bilevel_kit import geometry
 from bilevel_kit.instance import Tray
-from bilevel_kit.objective import (
+from bilevel_kit.layout.fitness import (
     PairScorer,
     PairTable,
     exact_overlap_area,

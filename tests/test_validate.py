@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 
 from bilevel_kit import Kit, KitTimes, Placement, Plan, check, evaluate
-from bilevel_kit.heuristics.baselines import single_task, whole_assembly
+from bilevel_kit.solvers.baselines import single_task, whole_assembly
 
 
 @pytest.fixture
@@ -52,7 +52,7 @@ def test_precedence_across_kits(tiny, valid):
 
 
 def test_precedence_inside_kit(tiny):
-    from bilevel_kit.heuristics.baselines import packed_kit
+    from bilevel_kit.solvers.baselines import packed_kit
 
     kit = packed_kit(tiny, ["t3", "t1", "t2"], "k")
     v = check(tiny, Plan((kit,)))

@@ -2,7 +2,7 @@
 
 At each decision epoch the robot takes the first ``window`` remaining tasks in the
 deterministic topological order (a set closed under predecessors), solves their segmentation
-and scheduling with the exact CP-SAT model (:func:`bilevel_kit.models.cpsat_schedule.solve`,
+and scheduling with the exact CP-SAT model (:func:`bilevel_kit.solvers.cpsat.solve`,
 short time limit, warm-started from the best heuristic plan) and commits the first kit of the
 optimum (or of the best plan found in time). Online information enters the sub-problem as:
 
@@ -159,7 +159,7 @@ class CPSATRollingPolicy:
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 
     def _solve(self, window: list[str], times: dict[str, float], h0: float) -> Kit:
-        from ..models.cpsat_schedule import best_heuristic_plan, solve
+        from ..solvers.cpsat import best_heuristic_plan, solve
 
         sub = self._sub_instance(window, times, h0)
         back = {t.replace("@", "_u"): t for t in window}

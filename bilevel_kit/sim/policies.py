@@ -18,11 +18,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
 
-from ..heuristics.baselines import packed_kit
-from ..heuristics.cross_entropy import CEParams
-from ..heuristics.greedy import GreedyCEPolicy, GreedyParams, GreedyStats, PolicyState
 from ..instance import Instance, Supply, topological_order
+from ..layout.cross_entropy import CEParams
 from ..plan import Kit
+from ..solvers.baselines import packed_kit
+from ..solvers.greedy_ce import GreedyCEPolicy, GreedyParams, GreedyStats, PolicyState
 
 if TYPE_CHECKING:
     from .shopfloor import SimParams

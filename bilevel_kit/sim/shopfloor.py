@@ -48,8 +48,8 @@ import numpy as np
 import simpy
 
 from ..errors import BilevelKitError, UsageError
-from ..heuristics.cross_entropy import CEParams
 from ..instance import DEFAULT_REPAIR_TIME, Instance, Supply
+from ..layout.cross_entropy import CEParams
 from ..plan import Kit, KitTimes, Plan
 from .feeders import Feeder
 from .policies import UNLIMITED, Policy, SimState, make_policy

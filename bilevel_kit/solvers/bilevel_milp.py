@@ -1,6 +1,6 @@
 r"""Exact optimum of the paper's own objective on small instances (registered ``bilevel-milp``).
 
-The greedy of :mod:`bilevel_kit.heuristics.greedy` scores one kit at a time with the paper's
+The greedy of :mod:`bilevel_kit.solvers.greedy_ce` scores one kit at a time with the paper's
 F (Eqs. 3-7) over a rolling window. This module turns F into a **whole-plan objective** and
 minimises it exactly over all plans, by enumerating the kits (columns) and solving one
 set-partitioning + sequencing MILP, so that the greedy's gap on its own objective (not only on
@@ -53,7 +53,7 @@ any layout); a kit is a column when its multiset fits (oracle "fits" or a valid 
 
 * partition :math:`\sum_k X_{ik} = 1`; :math:`u_k \le 1`, :math:`u_{k+1} \le u_k`;
 * precedence (transitive reduction) :math:`\sum_{q \le k} X_{bq} \le \sum_{q \le k} X_{aq}`;
-* interchangeable chains in lexicographic order (as in :mod:`.milp_schedule`);
+* interchangeable chains in lexicographic order (as in :mod:`bilevel_kit.solvers.milp`);
 * :math:`R_k = \sum_c R_c z_{ck}`, :math:`H_k = \sum_c H_c z_{ck}`; term 5 exactly, with its
   positive and negative parts :math:`g_k = p_k - q_k = d u_k + R_k - B_{k-1}` (relaxed by
   :math:`M(1-u_k)` on unused positions, :math:`p_k + q_k \le M u_k`), complementarity by one
@@ -88,13 +88,13 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from ..bounds import best_bound
 from ..errors import UsageError
 from ..instance import Instance
-from ..objective import layout_fitness as layout_fitness_value
+from ..layout import cpsat_packing as packing
+from ..layout.fitness import layout_fitness as layout_fitness_value
 from ..plan import Kit, Placement, Plan, evaluate, kit_durations
-from . import cpsat_packing as packing
-from .bounds import best_bound
-from .milp_schedule import (
+from .milp import (
     canonical_kits,
     chain_groups,
     ensure_ortools,
@@ -219,8 +219,8 @@ class LowerLevel:
         pack_time_limit: float = 0.5,
         ce_params: Any = None,
     ) -> None:
-        from ..heuristics.greedy import GreedyCEPolicy, GreedyParams
         from ..reachability import reach_grid
+        from .greedy_ce import GreedyCEPolicy, GreedyParams
 
         if lower not in LOWER_MODES:
             raise UsageError(f"lower must be one of {', '.join(LOWER_MODES)}, not {lower!r}")
@@ -582,7 +582,7 @@ def solve(
     ``paper_gap``, ``columns``, ``multisets``, ``lower_level_s``, ``milp_s``. ``warm_plan`` (e.g.
     greedy-ce's plan; ``"greedy"``, the default, runs greedy-ce with this seed and these CE
     parameters) is improved by :func:`local_search` and given as a MIP start; ``ce_params``
-    (a :class:`~bilevel_kit.heuristics.cross_entropy.CEParams`) must match greedy-ce's for the
+    (a :class:`~bilevel_kit.layout.cross_entropy.CEParams`) must match greedy-ce's for the
     comparison of J to hold kit by kit.
     ``values``: a :class:`LowerLevel` to use (and fill), so that the caller can score other
     plans with exactly the same kit values. Module docstring: the objective, columns, limits.
@@ -628,9 +628,9 @@ def solve(
         if isinstance(warm_plan, str):
             if warm_plan != "greedy":
                 raise UsageError(f"warm_plan must be a Plan, 'greedy' or None, not {warm_plan!r}")
-            from ..heuristics.cross_entropy import CEParams
-            from ..heuristics.greedy import GreedyParams
-            from ..heuristics.greedy import plan as greedy_plan
+            from ..layout.cross_entropy import CEParams
+            from .greedy_ce import GreedyParams
+            from .greedy_ce import plan as greedy_plan
 
             gp = GreedyParams(ce=ce_params or CEParams())
             warm_plan = greedy_plan(instance, gp, seed)

@@ -59,7 +59,7 @@ def shelf_pack(tray: Tray, items: Sequence[tuple[str, PartType]]) -> tuple[Place
     """A valid axis-aligned layout of ``items`` on ``tray``, or ``None`` if the packer fails.
 
     ``None`` means this packer found no layout, not a proof that none exists (the CP-SAT
-    packer of :mod:`bilevel_kit.models.cpsat_packing` decides that exactly).
+    packer of :mod:`bilevel_kit.layout.cpsat_packing` decides that exactly).
     """
     if sum(pt.area for _, pt in items) > tray.area:
         return None

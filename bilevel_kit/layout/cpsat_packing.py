@@ -26,7 +26,7 @@ linear objective, so the model maximises the **L1 surrogate**
 (absolute values via ``add_abs_equality``, centres on a half-grid so everything is integer).
 Since :math:`\|v\|_2 \le \|v\|_1 \le \sqrt 2 \|v\|_2` the surrogate ranks layouts like the
 true fitness up to that factor; :class:`PackResult` reports both the surrogate optimum (and its
-bound) and the true Euclidean fitness of the returned layout (:func:`bilevel_kit.objective.
+bound) and the true Euclidean fitness of the returned layout (:func:`bilevel_kit.layout.fitness.
 layout_fitness`, exact Z).
 
 **Reachability.** Given a reach map (:mod:`bilevel_kit.reachability`), every centre must lie in
@@ -234,10 +234,10 @@ def _reachable(
 def _shelf(
     sizes: Sequence[tuple[int, int, bool]], W: int, H: int
 ) -> list[tuple[int, int, bool]] | None:
-    """A fast "yes" from the toolkit's shelf packer (:func:`~bilevel_kit.heuristics.packing.
+    """A fast "yes" from the toolkit's shelf packer (:func:`~bilevel_kit.layout.shelf.
     shelf_pack`) run in grid units, so its answer holds for the rounded-up sizes."""
-    from ..heuristics.packing import shelf_pack
     from ..instance import Tray
+    from .shelf import shelf_pack
 
     items = [
         (str(j), PartType(id=str(j), width=w, height=h, pick_time=0.0, rotatable=r))
@@ -301,7 +301,7 @@ def pack(
     def done(
         status: str, corners_: Sequence[tuple[int, int, bool]] | None, **kw: Any
     ) -> PackResult:
-        from ..objective import layout_fitness
+        from .fitness import layout_fitness
 
         layout = None if corners_ is None else _to_layout(items, sizes, corners_, resolution)
         w6_ = DEFAULT_WEIGHTS["W6"] if w6 is None else w6
@@ -517,7 +517,7 @@ def fit_counts(
     key = frozenset(counts.items())
     if cache.unknown.get(key, -1.0) >= time_limit:
         return None, None
-    from ..heuristics.packing import kit_items
+    from .shelf import kit_items
 
     items = kit_items(part_types, counts)
     cache.solves += 1

@@ -18,10 +18,10 @@ from typing import Any
 
 from ..errors import KitDoesNotFit
 from ..instance import Instance, topological_order
+from ..layout.shelf import kit_items, shelf_pack
 from ..methods import MethodOutput
 from ..plan import Kit, Plan
 from ..reachability import unreachable
-from .packing import kit_items, shelf_pack
 
 
 def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
@@ -30,7 +30,7 @@ def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
     layout = shelf_pack(instance.tray, kit_items(instance.part_types, counts))
     if layout is not None and instance.reachability and unreachable(instance, layout):
         # the shelf packer knows nothing of the arm: let CE (seed 0) respect the reach map
-        from .cross_entropy import arrange
+        from ..layout.cross_entropy import arrange
 
         arr = arrange(instance, counts, rng=0)
         layout = arr.layout if arr.fits else None

@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from ..instance import Instance
+from .instance import Instance
 
 #: Relative slack when rounding an area ratio up, so that float noise (e.g. 4 * 2500 / 10000
 #: = 1.0000000000000002) does not add a kit.

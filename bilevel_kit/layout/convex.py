@@ -49,7 +49,7 @@ increases. Axes and u are re-chosen from each new layout, and rounds repeat unti
 improvement falls below ``tol`` or ``max_rounds`` is reached.
 
 **Exactness guard.** Solvers are accurate to about 1e-8, not exactly, so every round's answer
-is re-checked before it is accepted: the exact fitness (:func:`bilevel_kit.objective
+is re-checked before it is accepted: the exact fitness (:func:`bilevel_kit.layout.fitness
 .layout_fitness`, exact Z) must not decrease, and the checker's geometry
 (:mod:`bilevel_kit.geometry`, separating-axis test and corner containment, tolerance
 ``geometry.TOL``) must find no overlap and every part inside the tray. Otherwise polishing stops
@@ -78,11 +78,11 @@ import scipy.sparse as sp
 from .. import geometry
 from ..errors import UsageError
 from ..instance import Instance, Tray
-from ..objective import layout_fitness, layout_terms, overlapping_box_pairs
 from ..plan import Kit, Placement, Plan
+from .fitness import layout_fitness, layout_terms, overlapping_box_pairs
 
 if TYPE_CHECKING:
-    from ..heuristics.cross_entropy import Arrangement
+    from .cross_entropy import Arrangement
 
 #: Tightening (mm) of the separation and containment constraints where the current layout allows
 #: it; keeps the solver's ~1e-8 feasibility error far from ``geometry.TOL``.

@@ -1,6 +1,6 @@
 r"""The exact whole-horizon schedule as a Pyomo MILP (registered method ``milp``).
 
-The same problem as :mod:`.cpsat_schedule` (DESIGN.md sections 2 and 6), written as a
+The same problem as :mod:`bilevel_kit.solvers.cpsat` (DESIGN.md sections 2 and 6), written as a
 position-based batching MILP so that an LP-based branch and bound (HiGHS by default, any Pyomo
 solver by name) cross-checks the CP-SAT model. It shares only the packing oracle with it.
 
@@ -33,17 +33,18 @@ descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k 
   variable bound :math:`E_k \le M = \sum_i (r_i + h_i) + K (o_R + o_H + d)` (a schedule
   without any overlap) is derived from the data, and ``C <= U`` with U the makespan of a
   quick feasible plan;
-* the closed-form bounds of :mod:`.bounds` on C, also with the model's own kit count
+* the closed-form bounds of :mod:`bilevel_kit.bounds` on C, also with the model's own kit count
   :math:`m = \sum_k u_k` in place of :math:`m_{\min}` (redundant, they lift the LP bound).
 
 The incumbent (the quick plan, then the best packable plan) is passed to the solver as a MIP
 start, after relabelling its chains into the lexicographic order the model requires.
 
 **Tray (logic-based Benders).** The master holds the area relaxation
-:math:`\sum_i a_i x_{ik} \le W H` (areas on the packing grid of :mod:`.cpsat_packing`, sizes
-rounded up, tray down). Each kit of an incumbent is checked with the memoised packing oracle
-:func:`.cpsat_packing.fit_counts`; a part multiset M that provably does not fit is shrunk by a
-deletion filter to a minimal non-fitting one and cut from **every** kit:
+:math:`\sum_i a_i x_{ik} \le W H` (areas on the packing grid of
+:mod:`~bilevel_kit.layout.cpsat_packing`, sizes rounded up, tray down). Each kit of an
+incumbent is checked with the memoised packing oracle :func:`.cpsat_packing.fit_counts`;
+a part multiset M that provably does not fit is shrunk by a deletion filter to a minimal
+non-fitting one and cut from **every** kit:
 :math:`\bigvee_t c_{tk} \le M_t - 1` with :math:`c_{tk} = \sum_i n_{it} x_{ik}` the number of
 parts of type t in kit k, linearised with one binary :math:`\lambda_{tkc}` per (type, kit,
 threshold) as :math:`c_{tk} \le (c - 1) + (N_t - c + 1)(1 - \lambda_{tkc})` (big-M
@@ -83,12 +84,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..bounds import best_bound, lower_bounds, min_kits
 from ..errors import UsageError
 from ..instance import Instance, topological_order
+from ..layout import cpsat_packing as packing
 from ..methods import gap as relative_gap
 from ..plan import Kit, Plan, evaluate
-from . import cpsat_packing as packing
-from .bounds import best_bound, lower_bounds, min_kits
 from .common import Packer, chain_groups, kit_order, quick_plan, reduced_edges
 
 TRAY_MODES = ("auto", "benders")
@@ -522,7 +523,7 @@ def _build(instance: Instance, K: int, upper: float | None, objective: str) -> _
     lb = lower_bounds(instance)
     add(cmax >= max(lb["human"], lb["robot"]))
     # the same bounds with the model's own kit count m = sum_k u_k (valid for integer plans:
-    # the last kit holds a sink, the first a source; see :mod:`.bounds`)
+    # the last kit holds a sink, the first a source; see :mod:`bilevel_kit.bounds`)
     has_pred = {b for _, b in instance.precedence}
     has_succ = {a for a, _ in instance.precedence}
     n_used = sum(m.u[k] for k in range(K))

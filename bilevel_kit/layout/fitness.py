@@ -35,9 +35,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import geometry
-from .instance import Tray
-from .plan import Placement
+from .. import geometry
+from ..instance import Tray
+from ..plan import Placement
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..instance import Instance, topological_order
+from ..layout import cpsat_packing as packing
 from ..plan import Kit, Placement, Plan, evaluate
-from . import cpsat_packing as packing
 
 
 def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
@@ -168,7 +168,7 @@ class Packer:
     def layout(self, tasks: Sequence[str]) -> tuple[Placement, ...] | None:
         """The oracle's layout of a kit, else the shelf packer's (when reachability is not
         enforced: the shelf packer ignores it), else None."""
-        from ..heuristics.packing import shelf_pack
+        from ..layout.shelf import shelf_pack
 
         ok, typed = self.counts(self.instance.kit_parts(tasks))
         if ok and typed is not None:

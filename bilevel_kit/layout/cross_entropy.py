@@ -3,7 +3,7 @@
 The decision vector holds, for the n parts of a kit, the centres x (n), y (n) and the angles
 theta (degrees) of the r rotatable parts; fixed parts keep theta = 0 and are not sampled.
 Each iteration draws ``samples`` vectors from N(mu, Sigma) (Cholesky factor times standard
-normals), scores them all in one numpy pass (:class:`bilevel_kit.objective.PairScorer`),
+normals), scores them all in one numpy pass (:class:`bilevel_kit.layout.fitness.PairScorer`),
 and refits mu and the full Sigma to the ``elite`` best ones. The score to minimise is Eq. 11
 with the erratum's sign (DESIGN.md section 3), ``D_same - D_diff + W6 * Z_box``, plus a
 penalty on tray overhang (below); ``trace`` and fitness values are its negation.
@@ -54,9 +54,9 @@ import scipy.linalg.lapack
 from .. import geometry
 from ..errors import UsageError
 from ..instance import Instance, PartType, Tray
-from ..objective import PairScorer, PairTable, box_overlap_1d, layout_terms
 from ..plan import Placement
 from ..reachability import reach_grid
+from .fitness import PairScorer, PairTable, box_overlap_1d, layout_terms
 
 
 @dataclass(frozen=True)
@@ -690,7 +690,7 @@ def arrange(
     choice = _choose(kit, cands)
 
     if not choice.valid:
-        from .packing import shelf_pack
+        from .shelf import shelf_pack
 
         packed = shelf_pack(tray, list(zip(kit.ids, kit.types, strict=True)))
         if packed is not None:

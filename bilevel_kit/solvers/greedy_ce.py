@@ -45,9 +45,9 @@ import numpy as np
 
 from ..errors import KitDoesNotFit, UsageError
 from ..instance import Instance
+from ..layout.cross_entropy import Arrangement, CEParams, arrange
 from ..methods import MethodOutput
 from ..plan import Kit, Plan, evaluate
-from .cross_entropy import Arrangement, CEParams, arrange
 
 #: Refuse to enumerate more than this many partial sequences at one epoch.
 MAX_SEQUENCES = 2_000_000
@@ -138,7 +138,7 @@ class GreedyCEPolicy:
         if not arr.fits:
             self.stats.kits_not_fitting += 1
         elif self.params.polish:
-            from ..models.convex_layout import polish_arrangement
+            from ..layout.convex import polish_arrangement
 
             arr = polish_arrangement(self.instance, arr, self.instance.weights["W6"])
         self._arrangements[key] = arr

@@ -30,8 +30,8 @@ see below). ``x[i,k]`` = task i is in kit k, ``y[i,k] = [p_i <= k]`` its order e
     two alternatives, 0 and 90 degrees, for rotatable non-square parts) and one
     ``add_no_overlap_2d`` per kit; or
   - ``benders`` (logic-based Benders): the master has the area relaxation only; each kit of an
-    incumbent is packed by :mod:`.cpsat_packing`; a part multiset M that is proven not to fit
-    is shrunk to a minimal non-fitting one and cut from *every* kit as
+    incumbent is packed by :mod:`~bilevel_kit.layout.cpsat_packing`; a part multiset M that is
+    proven not to fit is shrunk to a minimal non-fitting one and cut from *every* kit as
     ``OR_t (c_{t,k} <= M_t - 1)`` with ``c_{t,k}`` the number of parts of type t in kit k
     (every super-multiset fails too, so the cut removes no feasible plan). The master is
     re-solved until its optimum packs (then it is optimal for the full problem) or the time
@@ -48,9 +48,9 @@ see below). ``x[i,k]`` = task i is in kit k, ``y[i,k] = [p_i <= k]`` its order e
   present parts) in the embedded model.
 
   "Fits" means: an axis-aligned (0/90 degree) layout on the packing grid of
-  :mod:`.cpsat_packing` (sizes rounded up). "optimal" and the model's bound are with respect
-  to such plans; the closed-form bounds of :mod:`.bounds`, which the bound never undercuts,
-  hold for every plan. Embedded models run with
+  :mod:`~bilevel_kit.layout.cpsat_packing` (sizes rounded up). "optimal" and the model's bound
+  are with respect to such plans; the closed-form bounds of :mod:`bilevel_kit.bounds`, which
+  the bound never undercuts, hold for every plan. Embedded models run with
   :data:`~.cpsat_packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
 
 **Objective.** ``makespan``: minimise C. ``human_idle``: minimise :math:`C - \sum_k H_k =
@@ -81,11 +81,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..bounds import best_bound, min_kits
 from ..instance import Instance
+from ..layout import cpsat_packing as packing
 from ..methods import gap as relative_gap
 from ..plan import Kit, Placement, Plan, evaluate
-from . import cpsat_packing as packing
-from .bounds import best_bound, min_kits
 from .common import Packer, chain_groups_idx, kit_order, quick_plan, reduced_edges
 
 TRAY_MODES = ("auto", "embedded", "benders")
