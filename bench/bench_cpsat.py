@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def table_instance() -> Instance:
     """instances/hrc_table.json, or the same 12-task table built here when it is missing
-    (4 legs x [foot -> connector -> top], DESIGN.md section 4)."""
+    (4 legs x [foot -> connector -> top], docs/paper-data.md)."""
     path = ROOT / "instances/hrc_table.json"
     if path.exists():
         return load(path)

@@ -1,6 +1,6 @@
 r"""Cheap closed-form lower bounds on the makespan, and Johnson's rule for F2||Cmax.
 
-Notation (DESIGN.md section 2): tasks i with robot time r_i and human time h_i, kit overheads
+Notation (docs/timeline.md): tasks i with robot time r_i and human time h_i, kit overheads
 o_R (robot) and o_H (human), delivery time d, m kits. Every bound below holds for every plan
 whose kits fit the tray, so ``best_bound`` can be printed next to any result.
 

@@ -26,7 +26,7 @@ from .errors import InstanceError
 
 FORMAT = "bilevel-kit/1"
 
-#: Defaults of the paper's weights W1..W7 (the paper publishes none; DESIGN.md section 3).
+#: Defaults of the paper's weights W1..W7 (the paper publishes none; docs/errata.md).
 #: Units: W1 per precedence violation (only used when precedence is a penalty, not a hard
 #: constraint), W2 seconds per task in the next kit, W3/W4 per second of robot/human mismatch,
 #: W5 seconds per millimetre of kit fitness, W6 millimetres of fitness per mm^2 of overlap,

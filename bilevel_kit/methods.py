@@ -1,9 +1,12 @@
 """The method registry and the one result contract every solver returns.
 
-A method is a function ``fn(instance, *, seed=0, time_limit=None, **params) -> MethodOutput``
-registered here by name and import path, so the CLI looks methods up without importing heavy
-back-ends (OR-Tools, Pyomo ...) until one is used, and later issues add methods by adding one
-line to :data:`REGISTRY`.
+A method is a function ``fn(instance, options, *, seed, time_limit) -> MethodOutput`` whose
+``options`` is an instance of the method's own frozen options dataclass. Both are registered
+here by name and import path, so the CLI looks methods up without importing heavy back-ends
+(OR-Tools, Pyomo ...) until one is used, and a new method is one :func:`register` call.
+:func:`solve` validates the loose ``key=value`` options centrally
+(:func:`bilevel_kit.options.parse_options`): an unknown key or a bad value is a
+:class:`~bilevel_kit.errors.UsageError` naming the method and the key.
 
 :func:`solve` wraps a method call: it times it, evaluates the plan with the one timeline
 evaluator, attaches the closed-form lower bound, computes the gap and (optionally) runs the
@@ -12,7 +15,9 @@ independent checker.
 
 from __future__ import annotations
 
+import enum
 import importlib
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,19 +25,40 @@ from typing import Any
 
 from .errors import UsageError
 from .instance import Instance
+from .options import NoOptions, describe, parse_options
 from .plan import Plan, Timeline, evaluate
 
-STATUSES = ("optimal", "feasible", "infeasible", "unknown")
+
+class Status(enum.StrEnum):
+    """What a solve proved about its plan (with respect to the method's objective)."""
+
+    OPTIMAL = "optimal"
+    FEASIBLE = "feasible"
+    INFEASIBLE = "infeasible"
+    UNKNOWN = "unknown"
+
+
+STATUSES = tuple(s.value for s in Status)
 
 
 @dataclass(frozen=True)
 class MethodOutput:
-    """What a method function returns; :func:`solve` turns it into a :class:`Result`."""
+    """What a method function returns; :func:`solve` turns it into a :class:`Result`.
+
+    ``bound`` is a proven lower bound on the makespan in seconds (or ``None``); ``extra`` holds
+    the method's own diagnostics, each key documented in the method's module docstring.
+    """
 
     plan: Plan | None
-    status: str
+    status: Status
     bound: float | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "status", Status(self.status))
+        except ValueError:
+            raise ValueError(f"unknown status {self.status!r}") from None
 
 
 @dataclass
@@ -44,7 +70,7 @@ class Result:
     """
 
     method: str
-    status: str
+    status: Status
     plan: Plan | None
     timeline: Timeline | None
     objective: float | None
@@ -61,35 +87,41 @@ class Result:
         return self.timeline.metrics() if self.timeline is not None else None
 
 
+def _import(target: str) -> Any:
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
 @dataclass(frozen=True)
 class MethodSpec:
+    """A registered method: ``target`` and ``options`` are ``"module:name"`` import paths."""
+
     name: str
-    target: str  # "module:function", imported on first use
+    target: str
     summary: str
+    options: str | None = None  # None: a legacy ``fn(instance, *, seed, time_limit, **params)``
 
     def load(self) -> Callable[..., MethodOutput]:
-        module, func = self.target.split(":")
-        return getattr(importlib.import_module(module), func)
+        return _import(self.target)
+
+    def options_class(self) -> type:
+        return _import(self.options) if self.options else NoOptions
+
+    def describe_options(self) -> list[Any]:
+        """Type, default and meaning of every option (``bilevel-kit methods NAME``)."""
+        return describe(self.options_class())
+
+    def parse(self, params: dict[str, Any]) -> Any:
+        """The method's options dataclass from loose ``key=value`` pairs, validated."""
+        return parse_options(self.options_class(), params, f"method {self.name!r}")
 
 
 REGISTRY: dict[str, MethodSpec] = {}
 
 
-def register(name: str, target: str, summary: str) -> None:
+def register(name: str, target: str, summary: str, options: str | None = None) -> None:
     """Add a method (by import path, so registration costs no import)."""
-    REGISTRY[name] = MethodSpec(name, target, summary)
-
-
-register(
-    "single-task",
-    "bilevel_kit.solvers.baselines:single_task",
-    "paper baseline: one kit per task, deterministic topological order",
-)
-register(
-    "whole-assembly",
-    "bilevel_kit.solvers.baselines:whole_assembly",
-    "paper baseline: one kit per product unit",
-)
+    REGISTRY[name] = MethodSpec(name, target, summary, options)
 
 
 def method_names() -> list[str]:
@@ -103,6 +135,27 @@ def get_method(name: str) -> MethodSpec:
         raise UsageError(
             f"unknown method {name!r}; choose from {', '.join(method_names())}"
         ) from None
+
+
+def check_seed(seed: Any) -> int:
+    """Seeds are integers >= 0 (numpy's ``default_rng`` and CP-SAT refuse the rest)."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise UsageError(f"seed must be an integer >= 0, got {seed!r}")
+    return seed
+
+
+def check_time_limit(time_limit: Any) -> float | None:
+    """A time limit is ``None`` (the method's default) or a finite number of seconds > 0."""
+    if time_limit is None:
+        return None
+    if (
+        isinstance(time_limit, bool)
+        or not isinstance(time_limit, int | float)
+        or not math.isfinite(time_limit)
+        or time_limit <= 0
+    ):
+        raise UsageError(f"time limit must be a finite number of seconds > 0, got {time_limit!r}")
+    return float(time_limit)
 
 
 def gap(objective: float | None, bound: float | None) -> float | None:
@@ -129,18 +182,23 @@ def solve(
     from .bounds import best_bound
     from .reachability import ensure_kit_placeable
 
-    fn = get_method(method).load()
+    spec = get_method(method)
+    check_seed(seed)
+    check_time_limit(time_limit)
+    options = spec.parse(params) if spec.options else None
+    fn = spec.load()
     ensure_kit_placeable(instance)  # an empty reach map is a clear error, not "no kit fits"
     t0 = time.perf_counter()
-    out = fn(instance, seed=seed, time_limit=time_limit, **params)
+    if options is not None:
+        out = fn(instance, options, seed=seed, time_limit=time_limit)
+    else:
+        out = fn(instance, seed=seed, time_limit=time_limit, **params)
     wall = time.perf_counter() - t0
-    if out.status not in STATUSES:
-        raise ValueError(f"method {method!r} returned unknown status {out.status!r}")
     timeline = evaluate(instance, out.plan) if out.plan is not None else None
     objective = timeline.makespan if timeline is not None else None
     bounds = [b for b in (out.bound, best_bound(instance)) if b is not None]
     bound = max(bounds) if bounds else None
-    if out.status == "optimal" and out.bound is None and objective is not None:
+    if out.status == Status.OPTIMAL and out.bound is None and objective is not None:
         bound = objective  # a proof of optimality is a bound equal to the objective
     extra = dict(out.extra)
     if check and out.plan is not None:
@@ -163,6 +221,18 @@ def solve(
     )
 
 
+register(
+    "single-task",
+    "bilevel_kit.solvers.baselines:single_task",
+    "paper baseline: one kit per task, deterministic topological order",
+    "bilevel_kit.options:NoOptions",
+)
+register(
+    "whole-assembly",
+    "bilevel_kit.solvers.baselines:whole_assembly",
+    "paper baseline: one kit per product unit",
+    "bilevel_kit.options:NoOptions",
+)
 register(
     "greedy-ce",
     "bilevel_kit.solvers.greedy_ce:greedy_ce",

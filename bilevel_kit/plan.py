@@ -1,4 +1,4 @@
-"""Plans (ordered kits with tray layouts) and the one timeline evaluator (DESIGN.md section 2).
+"""Plans (ordered kits with tray layouts) and the one timeline evaluator (docs/timeline.md).
 
 For kits k = 1..m in delivery order::
 
@@ -122,7 +122,7 @@ def evaluate(
     robot_times: Mapping[str, float] | None = None,
     human_times: Mapping[str, float] | None = None,
 ) -> Timeline:
-    """The DESIGN.md section-2 timeline of ``plan`` (see the module docstring).
+    """The timeline (docs/timeline.md) of ``plan`` (see the module docstring).
 
     ``robot_times``/``human_times`` replace the instance's expected task times (the simulator
     passes sampled durations); they must cover every task of the plan. The plan is not checked

@@ -91,7 +91,7 @@ def _bar(ax: Axes, y: float, start: float, end: float, gid: str, **style: Any) -
 def plot_gantt(
     instance: Instance, plan: Plan, timeline: Timeline | None = None, ax: Axes | None = None
 ) -> Axes:
-    """Gantt chart of the robot and the human (DESIGN.md section 2).
+    """Gantt chart of the robot and the human (docs/timeline.md).
 
     Robot lane: one kitting bar per kit (``robot_start``..``robot_end``, labelled "kit k", in
     the kit's colour) and one hatched delivery bar (``robot_end``..``arrive``). Human lane: the

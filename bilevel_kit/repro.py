@@ -21,7 +21,7 @@ Choices that apply to both (why, in short):
 * **One tray** (``SimParams(buffer=0)``): the study's protocol, "the robot returned to its
   kitting task once the participant retrieved the parts". The Figure 6 simulation samples the
   study's times, so it keeps the protocol by default (``buffer=None`` lets the robot run
-  ahead and stack kits at the human, DESIGN.md section 2).
+  ahead and stack kits at the human, docs/timeline.md).
 * **Calibration.** The instance's robot pick times and the human's per-kit pickup time are
   guesses. :func:`calibrate` fits ``robot_scale`` and ``kit_overhead_human`` by least squares to
   two of the paper's numbers (Whole Assembly idle 270 s and Single Task idle 99 s); every
@@ -64,7 +64,7 @@ CONDITIONS: tuple[str, ...] = (WHOLE, SINGLE, OPT)
 LABELS = {WHOLE: "Whole Assembly", SINGLE: "Single Task", OPT: "Optimized"}
 SHORT = {WHOLE: "WA", SINGLE: "ST", OPT: "OPT"}
 
-#: The paper's user-study numbers (DESIGN.md section 4; means read off Fig. 5, approximate).
+#: The paper's user-study numbers (docs/paper-data.md; means read off Fig. 5, approximate).
 PAPER_N = 18
 PAPER_MEANS: dict[str, dict[str, float]] = {
     "total": {OPT: 467.0, SINGLE: 492.0, WHOLE: 637.0},

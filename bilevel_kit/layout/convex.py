@@ -7,7 +7,7 @@ finish the job, exactly and cheaply.
 
 **The problem** (paper Section IV-B). Parts k = 1..n with centres :math:`c_k = (x_k, y_k)`,
 fixed angles :math:`\theta_k`, footprints :math:`w_k \times h_k`. Kit fitness (Eq. 11 with the
-erratum's sign, DESIGN.md section 3) is :math:`f = -(D_{same} - D_{diff} + W_6 Z)` with
+erratum's sign, docs/errata.md) is :math:`f = -(D_{same} - D_{diff} + W_6 Z)` with
 
 .. math::
 

@@ -15,7 +15,7 @@ rectangles forbids overlap. Identical parts (same type) are interchangeable, so 
 are ordered lexicographically, :math:`(x_a, y_a) <_{lex} (x_b, y_b)` (two non-overlapping
 rectangles never share a lower-left corner, so the order is strict and loses no layout).
 
-**Fitness.** The paper's kit fitness (eq. 11 with DESIGN.md's sign fix) is
+**Fitness.** The paper's kit fitness (eq. 11 with the sign fix of docs/errata.md) is
 :math:`f = D_{diff} - D_{same} - W_6 Z` with Euclidean centre distances. Overlap is a hard
 constraint here, so Z = 0 and ``w6`` only enters the reported true fitness. CP-SAT needs a
 linear objective, so the model maximises the **L1 surrogate**

@@ -5,7 +5,7 @@ theta (degrees) of the r rotatable parts; fixed parts keep theta = 0 and are not
 Each iteration draws ``samples`` vectors from N(mu, Sigma) (Cholesky factor times standard
 normals), scores them all in one numpy pass (:class:`bilevel_kit.layout.fitness.PairScorer`),
 and refits mu and the full Sigma to the ``elite`` best ones. The score to minimise is Eq. 11
-with the erratum's sign (DESIGN.md section 3), ``D_same - D_diff + W6 * Z_box``, plus a
+with the erratum's sign (docs/errata.md), ``D_same - D_diff + W6 * Z_box``, plus a
 penalty on tray overhang (below); ``trace`` and fitness values are its negation.
 
 Choices the paper leaves open (details in :class:`CEParams`):

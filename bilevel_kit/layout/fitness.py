@@ -7,7 +7,7 @@ For the parts P of one kit, with centres (P_x, P_y) and types Q::
     Z(P)      = sum_{k<j} area(BB(P_k) cap BB(P_j))               (Eq. 10)
     min_P  D_same - D_diff + W6 * Z                               (Eq. 11, corrected)
 
-Erratum (DESIGN.md section 3): Eq. 11 is printed as ``D_same - D_diff - W6*Z``, which would
+Erratum (docs/errata.md): Eq. 11 is printed as ``D_same - D_diff - W6*Z``, which would
 *reward* overlap although the text says overlap is penalised; this module uses ``+ W6*Z``.
 The fitness is reported as ``-(D_same - D_diff + W6*Z)``, so bigger is better.
 

@@ -13,7 +13,7 @@ Processes:
   durations. The run ends when the human finishes the last task.
 
 With no supply process and deterministic times this is exactly the timeline of
-:func:`bilevel_kit.plan.evaluate` (DESIGN.md section 2) on the plan of kits the simulation
+:func:`bilevel_kit.plan.evaluate` (docs/timeline.md) on the plan of kits the simulation
 produced; the tests check it to 1e-9 for every policy. Note that the queue is not limited to
 one kit: the evaluator lets the robot start kit k+1 as soon as kit k has arrived, so a fast
 robot can stack several kits at a slow human (``max_queue`` in the record says how many).

@@ -14,12 +14,12 @@ cannot be laid out raises
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 from ..errors import KitDoesNotFit
 from ..instance import Instance, topological_order
 from ..layout.shelf import kit_items, shelf_pack
-from ..methods import MethodOutput
+from ..methods import MethodOutput, Status
+from ..options import NO_OPTIONS, NoOptions
 from ..plan import Kit, Plan
 from ..reachability import unreachable
 
@@ -54,32 +54,31 @@ def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
 
 
 def single_task(
-    instance: Instance, *, seed: int = 0, time_limit: float | None = None, **params: Any
+    instance: Instance,
+    options: NoOptions = NO_OPTIONS,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
 ) -> MethodOutput:
     """One kit per task, in topological order."""
-    _no_params("single-task", params)
     kits = tuple(
         packed_kit(instance, [t], f"kit for task {t!r}") for t in topological_order(instance)
     )
-    return MethodOutput(Plan(kits), "feasible")
+    return MethodOutput(Plan(kits), Status.FEASIBLE)
 
 
 def whole_assembly(
-    instance: Instance, *, seed: int = 0, time_limit: float | None = None, **params: Any
+    instance: Instance,
+    options: NoOptions = NO_OPTIONS,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
 ) -> MethodOutput:
     """One kit per product unit, its tasks in topological order."""
-    _no_params("whole-assembly", params)
     order = topological_order(instance)
     unit = {t.id: t.unit for t in instance.tasks}
     kits = tuple(
         packed_kit(instance, [t for t in order if unit[t] == u], f"whole-assembly kit of unit {u}")
         for u in range(1, instance.units + 1)
     )
-    return MethodOutput(Plan(kits), "feasible")
-
-
-def _no_params(method: str, params: dict[str, Any]) -> None:
-    if params:
-        from ..errors import UsageError
-
-        raise UsageError(f"method {method!r} takes no option(s) {', '.join(sorted(params))}")
+    return MethodOutput(Plan(kits), Status.FEASIBLE)

@@ -25,7 +25,7 @@ order with the section-2 timeline (R_k, H_k include the per-kit overheads):
 * term (7): :math:`f(S_k)` = the kit's fitness, given by ``fitness_of`` (a function of the kit);
 * term (3) is 0 (precedence is hard) and the W7 term is 0 (offline: every part is available).
 
-Absolute values as in DESIGN.md section 3 (``signed=True``: the printed signed form). Every plan,
+Absolute values as in docs/errata.md (``signed=True``: the printed signed form). Every plan,
 in particular greedy-ce's, has a well-defined J, and :func:`paper_objective` is the one function
 that computes it. (The greedy's own ``extra["paper_objective"]``, the sum of its per-epoch
 window scores, differs in term 6, which there looks at a hypothetical window, not at the kit

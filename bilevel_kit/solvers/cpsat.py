@@ -15,7 +15,7 @@ see below). ``x[i,k]`` = task i is in kit k, ``y[i,k] = [p_i <= k]`` its order e
   precedence chains (same tasks, same predecessors of the head and successors of the tail,
   e.g. the four legs of one table) have their kit vectors ``(p_{c_1}, p_{c_2}, ...)`` in
   lexicographic order (relabelling the chains maps any plan to one that satisfies it);
-* the DESIGN.md timeline, exactly, with scaled integer times (below)::
+* the timeline of docs/timeline.md, exactly, with scaled integer times (below)::
 
       R_k = o_R u_k + sum_i r_i x[i,k]          H_k = o_H u_k + sum_i h_i x[i,k]
       A_k = A_{k-1} + R_k + d u_k               (arrival; the robot is busy during delivery)

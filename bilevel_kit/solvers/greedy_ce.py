@@ -15,7 +15,7 @@ precedence-feasible partial sequences ``K`` of the remaining tasks of length
 
 and commits the minimiser's prefix ``T_{t+1} = K_{1:i}`` as the next kit.
 
-Decisions taken where the paper is silent (DESIGN.md section 3):
+Decisions taken where the paper is silent (docs/errata.md):
 
 * Terms (5) and (6) use absolute differences (``signed=True`` restores the printed form).
 * Precedence is a hard constraint: only feasible ``K`` are enumerated, so term (3) is 0

@@ -1,6 +1,7 @@
 r"""The exact whole-horizon schedule as a Pyomo MILP (registered method ``milp``).
 
-The same problem as :mod:`bilevel_kit.solvers.cpsat` (DESIGN.md sections 2 and 6), written as a
+The same problem as :mod:`bilevel_kit.solvers.cpsat` (docs/timeline.md, docs/formulations.md),
+written as a
 position-based batching MILP so that an LP-based branch and bound (HiGHS by default, any Pyomo
 solver by name) cross-checks the CP-SAT model. It shares only the packing oracle with it.
 
@@ -22,7 +23,7 @@ descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k 
   satisfies it), written as one linear inequality: positions are < K, so lex order is the order
   of :math:`\sum_j K^{L-j} p_{c_j}` (a prefix of the chain when :math:`K^{L-1} > 10^6`); the
   heads' order is also added in the disaggregated form;
-* the timeline of DESIGN.md section 2, exactly::
+* the timeline of docs/timeline.md, exactly::
 
       R_k = o_R u_k + sum_i r_i x[i,k]        H_k = o_H u_k + sum_i h_i x[i,k]
       A_k = sum_{k' <= k} (R_k' + d u_k')     (arrival; the robot is busy while delivering)

@@ -21,7 +21,7 @@ pytest.importorskip("pyomo")
 if importlib.util.find_spec("highspy") is None:  # never import it here: see milp_schedule
     pytest.skip("highspy is not installed", allow_module_level=True)
 
-TABLE = Path(__file__).resolve().parent.parent / "instances" / "hrc_table.json"
+TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
 TYPES = [
     {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
     {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},

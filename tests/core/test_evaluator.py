@@ -1,4 +1,4 @@
-"""The DESIGN.md section-2 timeline on hand-computed cases."""
+"""The timeline (docs/timeline.md) on hand-computed cases."""
 
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ from bilevel_kit.errors import BilevelKitError  # noqa: E402
 from bilevel_kit.sawyer.ik import clik_down, converged, out_of_reach, tool_yaw  # noqa: E402
 from bilevel_kit.sawyer.model import Q_SHIPPING  # noqa: E402
 
-REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "sawyer"
+REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "sawyer"
 if not REFERENCE.exists():
     REFERENCE = Path("/work/shared/reference/sawyer")
 
@@ -344,6 +344,6 @@ def test_importing_the_package_does_not_load_pinocchio_or_matplotlib() -> None:
         "import sys, bilevel_kit.sawyer; "
         "assert 'pinocchio' not in sys.modules and 'matplotlib' not in sys.modules"
     )
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(Path(__file__).resolve().parents[2])
     env = {"PYTHONPATH": root, "PATH": "/usr/bin:/bin"}
     subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=root)

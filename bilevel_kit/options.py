@@ -1,0 +1,204 @@
+"""Typed options for methods and simulation policies, validated in one place.
+
+Every registered method (and every simulation policy) declares its options as a frozen
+dataclass. :func:`parse_options` turns the loose ``key=value`` pairs a user gives (``-p`` on
+the command line, keyword arguments in Python) into an instance of that dataclass, or raises a
+:class:`~bilevel_kit.errors.UsageError` naming the owner and the key. So an unknown key, a
+value of the wrong type or out of range is always a clear exit 2, never a ``TypeError`` deep in
+a solver.
+
+A field's ``metadata`` may hold ``help`` (one line for ``bilevel-kit methods NAME``), ``min``
+and ``max`` (inclusive bounds for numbers), and ``choices`` (allowed strings, when the type is
+a plain ``str``). ``typing.Literal`` types give their choices themselves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Literal, TypeVar, Union, get_args, get_origin
+
+from .errors import UsageError
+
+T = TypeVar("T")
+
+_TRUE = ("true", "yes", "on", "1")
+_FALSE = ("false", "no", "off", "0")
+_NONE = ("none", "null")
+
+
+@dataclass(frozen=True)
+class NoOptions:
+    """The options of a method that takes none."""
+
+
+#: The one value of :class:`NoOptions` (a default argument).
+NO_OPTIONS = NoOptions()
+
+
+@dataclass(frozen=True)
+class OptionInfo:
+    """One option as ``bilevel-kit methods NAME`` lists it."""
+
+    name: str
+    type: str
+    default: Any
+    help: str
+
+
+def _type_name(tp: Any) -> str:
+    origin = get_origin(tp)
+    if origin is Literal:
+        return " | ".join(repr(a) for a in get_args(tp))
+    if origin in (Union, types.UnionType):
+        return " | ".join(_type_name(a) for a in get_args(tp))
+    if tp is type(None):
+        return "none"
+    return getattr(tp, "__name__", str(tp))
+
+
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def describe(cls: type) -> list[OptionInfo]:
+    """The options of ``cls`` with type, default and one-line meaning."""
+    hints = _hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if f.default is not dataclasses.MISSING:
+            default = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            default = None
+        out.append(
+            OptionInfo(f.name, _type_name(hints[f.name]), default, f.metadata.get("help", ""))
+        )
+    return out
+
+
+def _coerce(value: Any, tp: Any, meta: Mapping[str, Any], where: str) -> Any:
+    """``value`` as type ``tp`` or a :class:`UsageError` saying what was expected."""
+    origin = get_origin(tp)
+    if origin in (Union, types.UnionType):
+        args = get_args(tp)
+        if type(None) in args and (
+            value is None or (isinstance(value, str) and value.lower() in _NONE)
+        ):
+            return None
+        errors = []
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _coerce(value, arg, meta, where)
+            except UsageError as exc:
+                errors.append(str(exc))
+        raise UsageError(f"{where}: expected {_type_name(tp)}, got {value!r}")
+    if origin is Literal:
+        choices = get_args(tp)
+        if value in choices:
+            return value
+        raise UsageError(
+            f"{where}: must be one of {', '.join(repr(c) for c in choices)}, got {value!r}"
+        )
+    if tp is bool:
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.lower() in _TRUE + _FALSE:
+            return value.lower() in _TRUE
+        if isinstance(value, int) and value in (0, 1):
+            return bool(value)
+        raise UsageError(f"{where}: expected true or false, got {value!r}")
+    if tp is int:
+        if isinstance(value, bool):
+            raise UsageError(f"{where}: expected an integer, got {value!r}")
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if isinstance(value, str):
+            try:
+                value = int(value)
+            except ValueError:
+                raise UsageError(f"{where}: expected an integer, got {value!r}") from None
+        if not isinstance(value, int):
+            raise UsageError(f"{where}: expected an integer, got {value!r}")
+        _check_range(value, meta, where)
+        return value
+    if tp is float:
+        if isinstance(value, bool):
+            raise UsageError(f"{where}: expected a number, got {value!r}")
+        if isinstance(value, str):
+            try:
+                value = float(value)
+            except ValueError:
+                raise UsageError(f"{where}: expected a number, got {value!r}") from None
+        if not isinstance(value, int | float):
+            raise UsageError(f"{where}: expected a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise UsageError(f"{where}: expected a finite number, got {value!r}")
+        _check_range(value, meta, where)
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            value = str(value)
+        choices = meta.get("choices")
+        if choices is not None and value not in choices:
+            raise UsageError(
+                f"{where}: must be one of {', '.join(map(str, choices))}, got {value!r}"
+            )
+        return value
+    return value  # structured values (Python API only) are passed as given
+
+
+def _check_range(value: float, meta: Mapping[str, Any], where: str) -> None:
+    lo, hi = meta.get("min"), meta.get("max")
+    if lo is not None and value < lo:
+        raise UsageError(f"{where}: must be >= {lo}, got {value!r}")
+    if hi is not None and value > hi:
+        raise UsageError(f"{where}: must be <= {hi}, got {value!r}")
+
+
+def field_names(cls: type) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls)]
+
+
+def parse_options(cls: type[T], params: Mapping[str, Any], owner: str) -> T:
+    """Validate ``params`` against the options dataclass ``cls`` of ``owner``.
+
+    Keys match field names exactly, or case-insensitively when that is unambiguous (so ``w5``
+    and ``W5`` both name the weight ``W5``); dashes count as underscores.
+    """
+    if isinstance(params, cls):
+        return params
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    lower = {name.lower(): name for name in fields}
+    hints = _hints(cls)
+    values: dict[str, Any] = {}
+    for raw_key, value in params.items():
+        key = str(raw_key).replace("-", "_")
+        name = key if key in fields else lower.get(key.lower())
+        if name is None:
+            listing = ", ".join(fields) if fields else "none"
+            raise UsageError(f"{owner}: unknown option {raw_key!r}; its options are {listing}")
+        f = fields[name]
+        values[name] = _coerce(value, hints[name], f.metadata, f"{owner}: option {name!r}")
+    try:
+        return cls(**values)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"{owner}: {exc}") from None
+
+
+def as_params(options: Any) -> dict[str, Any]:
+    """The options that differ from their defaults, as a plain dict (for result files)."""
+    out = {}
+    for info, f in zip(describe(type(options)), dataclasses.fields(options), strict=True):
+        value = getattr(options, f.name)
+        if value != info.default:
+            out[f.name] = value
+    return out
