@@ -123,6 +123,9 @@ class Instance:
     #: ``"pick_time"``: robot times from the parts' pick times; ``"motion"``: each part's pick
     #: time is the Sawyer motion model's mean pick-and-place time over the reachable tray.
     robot_times: str = "pick_time"
+    #: Kit trays in circulation (the study's protocol: 1); ``None``: unlimited, the robot may
+    #: run ahead of the human (docs/timeline.md).
+    trays: int | None = None
     source: str = "<memory>"
 
     # -- the expanded (all-units) view -------------------------------------------------------
@@ -227,9 +230,15 @@ class Instance:
         weights: Mapping[str, float] | None = None,
         horizon: int | None = None,
         units: int | None = None,
+        trays: int | str | None = None,
     ) -> Instance:
-        """A copy with some fields replaced (the CLI's ``--d``, ``--weights`` ...)."""
+        """A copy with some fields replaced (the CLI's ``--d``, ``--weights``, ``--trays`` ...).
+
+        ``trays="unlimited"`` lifts the tray limit; ``None`` leaves every field as it is.
+        """
         changes: dict[str, Any] = {}
+        if trays is not None:
+            changes["trays"] = parse_trays(trays, self.source)
         if delivery_time is not None:
             if not math.isfinite(delivery_time) or delivery_time < 0:
                 raise InstanceError(self.source, "$.delivery_time", "must be finite and >= 0")
@@ -250,6 +259,14 @@ class Instance:
                 raise InstanceError(self.source, "$.units", "must be >= 1")
             changes["units"] = int(units)
         return replace(self, **changes) if changes else self
+
+    @property
+    def tray_limit(self) -> int | None:
+        """The number of trays that binds, ``None`` when the robot is never held back (no
+        limit, or at least as many trays as tasks, hence as kits)."""
+        if self.trays is None or self.trays >= self.n_tasks:
+            return None
+        return self.trays
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of this instance (the base tasks, not the expansion)."""
@@ -286,6 +303,8 @@ class Instance:
         doc["precedence"] = [list(e) for e in self.base_precedence]
         doc["weights"] = dict(self.weights)
         doc["horizon"] = self.horizon
+        if self.trays is not None:
+            doc["trays"] = self.trays
         if self.supply:
             doc["supply"] = {
                 k: {
@@ -479,6 +498,14 @@ def schema() -> dict[str, Any]:
                 "properties": weight_props,
             },
             "horizon": {"type": "integer", "minimum": 1, "default": DEFAULT_HORIZON},
+            "trays": {
+                "type": ["integer", "null"],
+                "minimum": 1,
+                "default": None,
+                "description": "kit trays in circulation: the robot starts kit k only when the "
+                "tray of kit k - trays is back, i.e. once the human has retrieved its parts "
+                "(the paper's study: 1); absent or null: unlimited",
+            },
             "supply": {
                 "type": "object",
                 "description": "per part type: Poisson arrivals (mean inter-arrival MAT), "
@@ -714,8 +741,33 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         reachability=bool(doc.get("reachability", False)),
         reach_resolution=float(doc.get("reach_resolution", 10.0)),
         robot_times=robot_times,
+        trays=parse_trays(doc.get("trays"), source) if doc.get("trays") is not None else None,
         source=source,
     )
+
+
+def parse_trays(value: Any, source: str = "<memory>") -> int | None:
+    """A tray count: an integer >= 1, or ``None``/``"unlimited"``/``"none"`` for no limit."""
+    if value is None or (isinstance(value, str) and value.lower() in ("unlimited", "none")):
+        return None
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise InstanceError(
+                source, "$.trays", f"must be an integer >= 1 or unlimited, got {value!r}"
+            ) from None
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not math.isfinite(value)
+        or value != int(value)
+        or value < 1
+    ):
+        raise InstanceError(
+            source, "$.trays", f"must be an integer >= 1 or unlimited, got {value!r}"
+        )
+    return int(value)
 
 
 def _motion_pick_times(

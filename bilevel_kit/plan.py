@@ -3,12 +3,17 @@
 For kits k = 1..m in delivery order::
 
     R_k = o_R + sum_{i in S_k} r_i            H_k = o_H + sum_{i in S_k} h_i
-    robot_start_1 = 0,  robot_start_{k+1} = arrive_k       (the robot pushes the tray)
+    robot_start_1 = 0
+    robot_start_k = max(arrive_{k-1}, human_start_{k-T} + o_H)     (T = trays; k > T)
+    robot_start_k = arrive_{k-1}                                    (k <= T, or no limit)
     robot_end_k = robot_start_k + R_k,       arrive_k = robot_end_k + d
     human_start_k = max(arrive_k, human_end_{k-1}),  human_end_k = human_start_k + H_k
     C = human_end_m,  human idle = C - sum_k H_k,  robot idle = C - sum_k (R_k + d)
 
-Robot idle counts delivery as robot work, because the robot is busy while it delivers.
+The robot pushes the tray, so it is busy while it delivers. With ``T`` trays in circulation
+(the paper's study: one) the tray of kit k - T comes back once the human has retrieved its
+parts, ``o_H`` after starting it; the robot cannot start kit k before. Robot idle counts
+delivery as robot work.
 Every solver, the checker, the simulator and the plots go through :func:`evaluate`.
 """
 
@@ -130,6 +135,7 @@ def evaluate(
     """
     d = instance.delivery_time
     oh = instance.kit_overhead_human
+    trays = instance.tray_limit
     kits: list[KitTimes] = []
     task_start: dict[str, float] = {}
     task_end: dict[str, float] = {}
@@ -140,6 +146,8 @@ def evaluate(
     for kit in plan.kits:
         r, h = kit_durations(instance, kit.tasks, robot_times, human_times)
         robot_start = robot_free
+        if trays is not None and len(kits) >= trays:
+            robot_start = max(robot_start, kits[-trays].human_start + oh)  # tray returned
         robot_end = robot_start + r
         arrive = robot_end + d
         human_start = max(arrive, human_free)

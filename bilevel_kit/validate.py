@@ -4,7 +4,8 @@ It trusts no solver. It recomputes everything from the instance and the plan alo
 exactly once, precedence across and inside kits, each kit's parts against its tasks' parts,
 every footprint inside the tray and no two footprints overlapping (exact rotated rectangles,
 tolerance :data:`bilevel_kit.geometry.TOL`), and, when a solution reports times, that they
-agree with the timeline evaluator.
+agree with the timeline evaluator and that no kit starts before its tray is back (the tray
+rule of docs/timeline.md, checked on the reported times themselves).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ KINDS = (
     "overlap",
     "unreachable",
     "times_inconsistent",
+    "tray_not_returned",
 )
 
 
@@ -256,6 +258,7 @@ def _check_times(
                             k,
                         )
                     )
+        out += _check_tray_rule(instance, reported_kits)
     if reported_metrics is not None:
         for name, w in tl.metrics().items():
             if name not in reported_metrics:
@@ -267,4 +270,24 @@ def _check_times(
                         "times_inconsistent", f"reported {name} {g:.6g}, evaluator gives {w:.6g}"
                     )
                 )
+    return out
+
+
+def _check_tray_rule(instance: Instance, kits: Sequence[KitTimes]) -> list[Violation]:
+    """``robot_start_k >= human_start_{k-T} + o_H`` on the reported times (T trays)."""
+    trays = instance.tray_limit
+    if trays is None:
+        return []
+    out = []
+    for k in range(trays, len(kits)):
+        back = kits[k - trays].human_start + instance.kit_overhead_human
+        if kits[k].robot_start < back - TIME_TOL:
+            out.append(
+                Violation(
+                    "tray_not_returned",
+                    f"kit {k + 1}: the robot starts at {kits[k].robot_start:.6g} s, before the "
+                    f"tray of kit {k + 1 - trays} is back at {back:.6g} s ({trays} tray(s))",
+                    k + 1,
+                )
+            )
     return out
