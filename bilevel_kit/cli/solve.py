@@ -20,7 +20,7 @@ from .common import (
 )
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure, SubFigure
 
     from ..instance import Instance
     from ..methods import Result
@@ -148,7 +148,7 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
     return "\n".join(lines)
 
 
-def _convergence_figure(result: Result, kit: int | None) -> Figure:
+def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
     """The cross-entropy trace of one kit (``--convergence``)."""
     from .. import plots
     from ..errors import UsageError
