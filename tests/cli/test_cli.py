@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
+from typing import Literal
 
 import pytest
 
@@ -281,3 +283,73 @@ def test_compare_table_files_and_resume(capsys, tmp_path, root, monkeypatch):
     monkeypatch.setattr(methods, "solve", boom)
     code, text2, _ = run(capsys, *argv)
     assert code == 0 and text2 == text
+
+
+def test_methods_lists_every_registered_method(capsys):
+    from bilevel_kit.methods import REGISTRY
+
+    code, text, _ = run(capsys, "methods")
+    assert code == 0
+    assert [line.split()[0] for line in text.splitlines()] == list(REGISTRY)
+    assert "single-task      paper baseline: one kit per task" in text
+
+
+def test_methods_name_without_options(capsys):
+    code, text, _ = run(capsys, "methods", "single-task")
+    assert code == 0
+    assert text.splitlines() == [
+        "single-task: paper baseline: one kit per task, deterministic topological order",
+        "takes no options",
+    ]
+
+
+def test_methods_name_of_a_legacy_method(capsys, monkeypatch):
+    from bilevel_kit.methods import REGISTRY, MethodSpec
+
+    spec = MethodSpec("legacy-demo", "bilevel_kit.solvers.baselines:single_task", "a demo")
+    monkeypatch.setitem(REGISTRY, spec.name, spec)
+    code, text, _ = run(capsys, "methods", "legacy-demo")
+    assert code == 0 and text.startswith("legacy-demo: a demo\n")
+    assert "options: see the method's documentation" in text
+
+
+@dataclass(frozen=True)
+class DemoOptions:
+    """Options of every kind ``bilevel-kit methods NAME`` must show."""
+
+    iterations: int = field(default=50, metadata={"help": "iterations of the demo", "min": 1})
+    time_limit: float | None = field(default=None, metadata={"help": "seconds, none: no limit"})
+    mode: Literal["fast", "exact"] = field(default="fast", metadata={"help": "how to run"})
+    polish: bool = False
+
+
+def test_methods_name_lists_options_with_type_default_and_meaning(capsys, monkeypatch):
+    import sys
+    import types
+
+    from bilevel_kit.methods import REGISTRY, MethodSpec
+
+    module = types.ModuleType("demo_options")
+    module.DemoOptions = DemoOptions
+    monkeypatch.setitem(sys.modules, "demo_options", module)
+    spec = MethodSpec(
+        "demo", "bilevel_kit.solvers.baselines:single_task", "a demo", "demo_options:DemoOptions"
+    )
+    monkeypatch.setitem(REGISTRY, spec.name, spec)
+    code, text, _ = run(capsys, "methods", "demo")
+    assert code == 0
+    lines = text.splitlines()
+    assert lines[:2] == ["demo: a demo", "options (solve --param KEY=VALUE):"]
+    assert [" ".join(line.split()) for line in lines[2:]] == [
+        "iterations int default 50 iterations of the demo",
+        "time_limit float | none default none seconds, none: no limit",
+        "mode 'fast' | 'exact' default fast how to run",
+        "polish bool default false",
+    ]
+    # the columns are aligned
+    assert len({line.index("default") for line in lines[2:]}) == 1
+
+
+def test_methods_unknown_name_exits_2(capsys):
+    code, _, err = run(capsys, "methods", "nope")
+    assert code == 2 and err.count("\n") == 1 and "unknown method 'nope'" in err

@@ -1,0 +1,85 @@
+"""Command-line interface: ``bilevel-kit solve | compare | simulate | ... | methods``.
+
+Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> int`` that reads its
+inputs, calls the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
+invalid, 2 bad input or usage (a one-line message on stderr, no traceback), 3 a definite answer
+could not be reached within the time limit. Heavy back-ends are imported inside the commands,
+so ``bilevel-kit --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from typing import Protocol
+
+from . import check, compare, generate, methods, pack, reach, repro, schema, simulate, solve
+from .common import (
+    EXIT_INVALID,
+    EXIT_OK,
+    EXIT_UNKNOWN,
+    EXIT_USAGE,
+    Parser,
+    Subparsers,
+    run_command,
+)
+
+__all__ = [
+    "COMMANDS",
+    "EXIT_INVALID",
+    "EXIT_OK",
+    "EXIT_UNKNOWN",
+    "EXIT_USAGE",
+    "build_parser",
+    "main",
+]
+
+
+class Command(Protocol):
+    """What a command module provides."""
+
+    def add_parser(self, subparsers: Subparsers) -> None: ...
+
+    def run(self, args: argparse.Namespace) -> int: ...
+
+
+#: Command name -> its module, in the order ``--help`` lists them.
+COMMANDS: dict[str, Command] = {
+    "solve": solve,
+    "compare": compare,
+    "simulate": simulate,
+    "repro": repro,
+    "pack": pack,
+    "reach": reach,
+    "generate": generate,
+    "check": check,
+    "schema": schema,
+    "methods": methods,
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from ..methods import REGISTRY
+
+    listing = "\n".join(f"  {s.name:<16} {s.summary}" for s in REGISTRY.values())
+    parser = Parser(
+        prog="bilevel-kit",
+        description="Just-in-time robotic kitting: solve, compare and check kitting plans.",
+        epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
+        "within the time limit\n\nmethods:\n" + listing,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    sub.required = True
+    for command in COMMANDS.values():
+        command.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, or a usage error already printed on one line
+        return int(exc.code or 0)
+    return run_command(args.command, COMMANDS[args.command].run, args)

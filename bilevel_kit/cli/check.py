@@ -1,0 +1,43 @@
+"""``bilevel-kit check``: the independent checker on a solution file (exit 1 when invalid)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .common import (
+    EXIT_INVALID,
+    EXIT_OK,
+    Subparsers,
+    add_instance_overrides,
+    load_instance,
+    print_violations,
+)
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser(
+        "check",
+        help="check a solution file against an instance",
+        description="Run the independent checker; exit 1 and list the "
+        "violations when the solution is invalid.",
+    )
+    p.add_argument("instance")
+    p.add_argument("solution")
+    add_instance_overrides(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from .. import solution
+    from ..validate import check
+
+    instance = load_instance(args)
+    sol = solution.read(args.solution)
+    violations = check(
+        instance, sol.plan, reported_kits=sol.reported_kits, reported_metrics=sol.reported_metrics
+    )
+    if violations:
+        print_violations([str(v) for v in violations], sys.stdout)
+        return EXIT_INVALID
+    print(f"valid: {len(sol.plan.kits)} kits, {sum(len(k.tasks) for k in sol.plan.kits)} tasks")
+    return EXIT_OK

@@ -1,0 +1,203 @@
+"""What every command shares: exit codes, argument types, shared options and error handling.
+
+Argument types turn one command-line string into a value or raise
+:class:`argparse.ArgumentTypeError`, so a bad value is a one-line usage error (exit 2) naming the
+option. Only the standard library is imported here: ``bilevel-kit --help`` must stay fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from typing import IO, TYPE_CHECKING, Any, NoReturn
+
+if TYPE_CHECKING:
+    from ..instance import Instance
+
+EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
+
+#: The ``subparsers`` object every command module's ``add_parser`` receives.
+Subparsers = argparse._SubParsersAction
+
+#: The instance fields the override options replace (see :func:`instance_overrides`).
+OVERRIDES = ("delivery_time", "weights", "horizon", "units")
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (exit 2) instead of the usage dump."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+# ---------------------------------------------------------------------------------------------
+# Argument types
+# ---------------------------------------------------------------------------------------------
+
+
+def key_values(text: str) -> dict[str, str]:
+    """``"a=1, b=2"`` as ``{"a": "1", "b": "2"}``."""
+    out: dict[str, str] = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {item!r}")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def weights(text: str) -> dict[str, float]:
+    """``--weights W3=1,w4=2``: weight names upper-cased, values numbers."""
+    out = {}
+    for k, v in key_values(text).items():
+        key = k.upper()
+        try:
+            out[key] = float(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
+    return out
+
+
+def scalar(value: str) -> Any:
+    """A loose option value: a boolean word, an int, a float, or else the string itself."""
+    low = value.lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for cast in (int, float):
+        try:
+            return cast(value)
+        except ValueError:
+            pass
+    return value
+
+
+def param(text: str) -> tuple[str, Any]:
+    """``--param KEY=VALUE`` as ``(key, value)``; dashes in the key become underscores."""
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"--param: expected KEY=VALUE, got {text!r}")
+    return key.replace("-", "_"), scalar(value)
+
+
+def float_map(text: str) -> dict[str, float]:
+    """``leg=60,foot=60``: every value a finite number > 0."""
+    out = {}
+    for k, v in key_values(text).items():
+        try:
+            out[k] = float(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
+        if not out[k] > 0 or out[k] == float("inf"):
+            raise argparse.ArgumentTypeError(f"{k} must be a finite number > 0")
+    return out
+
+
+def nonneg(text: str) -> float:
+    """A finite number >= 0 (times in seconds)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v >= 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return v
+
+
+def positive_int(text: str) -> int:
+    """An integer >= 1 (counts)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return v
+
+
+# ---------------------------------------------------------------------------------------------
+# Shared options
+# ---------------------------------------------------------------------------------------------
+
+
+def add_param_option(p: argparse.ArgumentParser, text: str) -> None:
+    """The repeatable ``--param/-p KEY=VALUE`` option (collected as ``(key, value)`` pairs)."""
+    p.add_argument(
+        "--param", "-p", type=param, action="append", default=[], metavar="KEY=VALUE", help=text
+    )
+
+
+def add_delivery_time(p: argparse.ArgumentParser | argparse._ArgumentGroup, text: str) -> None:
+    """``--d/--delivery-time S``."""
+    p.add_argument(
+        "--d", "--delivery-time", dest="delivery_time", type=nonneg, metavar="S", help=text
+    )
+
+
+def add_instance_overrides(p: argparse.ArgumentParser) -> None:
+    """The ``instance overrides`` group; :func:`instance_overrides` reads it back."""
+    g = p.add_argument_group("instance overrides")
+    add_delivery_time(g, "delivery time d in seconds (overrides the instance)")
+    g.add_argument(
+        "--weights",
+        type=weights,
+        metavar="W3=1,W4=1",
+        help="override some of the paper's weights W1..W7",
+    )
+    g.add_argument(
+        "--horizon",
+        type=positive_int,
+        metavar="N",
+        help="look-ahead N of the greedy upper level (default: the instance's, 5)",
+    )
+    g.add_argument(
+        "--units",
+        type=positive_int,
+        metavar="U",
+        help="number of product units built one after another",
+    )
+
+
+def instance_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The overrides given on the command line, as keyword arguments of
+    :meth:`~bilevel_kit.instance.Instance.with_overrides` (options not given are left out)."""
+    return {k: getattr(args, k) for k in OVERRIDES if getattr(args, k) is not None}
+
+
+def load_instance(args: argparse.Namespace) -> Instance:
+    """``args.instance`` loaded, with the command-line overrides applied."""
+    from ..instance import load
+
+    return load(args.instance).with_overrides(**instance_overrides(args))
+
+
+# ---------------------------------------------------------------------------------------------
+# Output and errors
+# ---------------------------------------------------------------------------------------------
+
+
+def print_violations(lines: list[str], stream: IO[str], limit: int = 20) -> None:
+    """``INVALID: n violation(s)`` and the first ``limit`` of them."""
+    print(f"INVALID: {len(lines)} violation(s)", file=stream)
+    for line in lines[:limit]:
+        print(f"  {line}", file=stream)
+    if len(lines) > limit:
+        print(f"  ... and {len(lines) - limit} more", file=stream)
+
+
+def run_command(
+    name: str, run: Callable[[argparse.Namespace], int], args: argparse.Namespace
+) -> int:
+    """Run one command: a library error is one line on stderr and exit 2, no traceback."""
+    from ..errors import BilevelKitError
+
+    try:
+        return run(args)
+    except BilevelKitError as exc:
+        print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("bilevel-kit: interrupted", file=sys.stderr)
+        return 130

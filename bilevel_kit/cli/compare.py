@@ -1,0 +1,156 @@
+"""``bilevel-kit compare``: instances x methods in one table (resumable cell by cell)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from .common import (
+    EXIT_INVALID,
+    EXIT_OK,
+    Subparsers,
+    add_instance_overrides,
+    instance_overrides,
+    nonneg,
+    param,
+)
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser(
+        "compare",
+        help="solve instances with several methods and tabulate",
+        description="One row per instance x method: makespan, human idle, "
+        "kits, status, best lower bound, gap to it, checker verdict, wall time. "
+        "Each cell is saved on its own under --cells, so an interrupted run "
+        "resumes where it stopped.",
+    )
+    p.add_argument("instances", nargs="+", metavar="INSTANCE")
+    p.add_argument(
+        "--methods",
+        default="all",
+        metavar="M1,M2",
+        help="comma-separated method names, or 'all' (default)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed of every cell (default 0)")
+    p.add_argument(
+        "--time-limit",
+        type=nonneg,
+        metavar="S",
+        help="time limit per solve for methods that take one",
+    )
+    p.add_argument(
+        "--param",
+        "-p",
+        action="append",
+        default=[],
+        metavar="METHOD:KEY=VALUE",
+        help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
+    )
+    p.add_argument("--csv", metavar="FILE", help="write all record fields as CSV")
+    p.add_argument("--md", metavar="FILE", help="write the table as Markdown")
+    p.add_argument(
+        "--figures",
+        metavar="DIR",
+        help="write a comparison chart and one Gantt chart per method here",
+    )
+    p.add_argument("--cells", metavar="DIR", help="save/resume per-cell results in DIR")
+    add_instance_overrides(p)
+
+
+def method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, Any]]:
+    """``--param METHOD:KEY=VALUE`` items as one option dict per method."""
+    from ..errors import UsageError
+
+    out: dict[str, dict[str, Any]] = {m: {} for m in methods}
+    for item in items:
+        method, sep, kv = item.partition(":")
+        if not sep or method not in out:
+            raise UsageError(
+                f"--param {item!r}: expected METHOD:KEY=VALUE with METHOD one of "
+                f"{', '.join(methods)}"
+            )
+        try:
+            key, value = param(kv)
+        except argparse.ArgumentTypeError as exc:
+            raise UsageError(f"--param {item!r}: {exc}") from None
+        out[method][key] = value
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..experiments import CompareCell, add_best_bound_gap, compare_cell, run_cells
+    from ..instance import load
+    from ..methods import get_method, method_names
+
+    methods = (
+        method_names()
+        if args.methods == "all"
+        else [m.strip() for m in args.methods.split(",") if m.strip()]
+    )
+    for m in methods:
+        get_method(m)
+    params = method_params(args.param, methods)
+    overrides = instance_overrides(args)
+    for path in args.instances:  # validate every input before any solve or write
+        load(path).with_overrides(**overrides)
+    cells = [
+        CompareCell(str(path), m, args.seed, args.time_limit, params[m], overrides)
+        for path in args.instances
+        for m in methods
+    ]
+    records = add_best_bound_gap(
+        run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
+    )
+    return _report(args, records)
+
+
+def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
+    """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan."""
+    from ..experiments import format_markdown, format_table, write_csv
+
+    print(format_table(records))
+    for r in records:
+        if r["status"] == "error":
+            print(f"{r['instance']} / {r['method']}: {r['error']}", file=sys.stderr)
+    if args.figures:
+        _figures(records, args.figures)
+    if args.csv:
+        write_csv(args.csv, records)
+    if args.md:
+        from ..atomic import write_text
+
+        write_text(args.md, format_markdown(records))
+    if any(
+        r.get("valid") is False and r["status"] != "error" and r["makespan"] is not None
+        for r in records
+    ):
+        print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
+        return EXIT_INVALID
+    return EXIT_OK
+
+
+def _figures(records: list[dict[str, Any]], folder: str) -> None:
+    """A comparison chart per instance and a Gantt chart per instance x method."""
+    from pathlib import Path
+
+    from .. import plots, solution
+    from ..instance import load
+
+    out = Path(folder)
+    by_instance: dict[str, list[dict[str, Any]]] = {}
+    for r in records:
+        by_instance.setdefault(r["instance_file"], []).append(r)
+    for path, rows in by_instance.items():
+        inst = load(path)
+        ok = [r for r in rows if r.get("makespan") is not None]
+        if not ok:
+            continue
+        ax = plots.plot_comparison(ok)
+        plots.save_figure(ax.figure, out / f"{inst.name}_compare.png")
+        for r in ok:
+            sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
+            ax = plots.plot_gantt(inst, sol.plan)
+            ax.set_title(f"{inst.name} / {r['method']}: " + ax.get_title())
+            plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")

@@ -1,0 +1,129 @@
+"""``bilevel-kit pack``: CP-SAT tray packing of an instance's kit or of a pack file."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from .common import EXIT_OK, EXIT_UNKNOWN, Subparsers, nonneg, positive_int
+
+if TYPE_CHECKING:
+    from ..instance import Instance
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser(
+        "pack",
+        help="place parts on the tray with CP-SAT (fits? best layout?)",
+        description="FILE is an instance (with --tasks a,b,c: the parts of those tasks) or a "
+        'stand-alone pack file {"tray": {"width", "height"}, "items": [{"id", "width", '
+        '"height", "count", "rotatable"}]}. Integer grid at --resolution mm, rotation 0/90 '
+        "degrees for rotatable parts, no-overlap-2D. Exit 0 for a definite answer (feasible, "
+        "optimal or infeasible), 3 for unknown within the time limit.",
+    )
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("--tasks", metavar="A,B,C", help="tasks whose parts to pack (instances)")
+    p.add_argument(
+        "--objective",
+        choices=("feasible", "fitness"),
+        default="feasible",
+        help="feasible: decide whether they fit; fitness: maximise the L1 "
+        "surrogate of the paper's kit fitness (default feasible)",
+    )
+    p.add_argument(
+        "--resolution",
+        type=float,
+        default=1.0,
+        metavar="MM",
+        help="grid resolution in mm (default 1)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=nonneg,
+        default=10.0,
+        metavar="S",
+        help="time limit in seconds (default 10)",
+    )
+    p.add_argument("--workers", type=positive_int, default=2, help="CP-SAT workers (2)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", "-o", metavar="FILE", help="write the layout as JSON")
+    p.add_argument("--png", metavar="FILE", help="draw the layout")
+
+
+def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], list[str]]:
+    """The tray and part types, the part counts to pack and the tasks they come from."""
+    from .. import packfile
+    from ..errors import InstanceError, UsageError
+    from ..instance import load, read_json
+
+    doc = read_json(args.file, InstanceError)
+    if packfile.is_pack_file(doc):
+        if args.tasks:
+            raise UsageError("--tasks applies to instance files, not to pack files")
+        instance, counts = packfile.load(args.file)
+        return instance, counts, []
+    instance = load(args.file)
+    if not args.tasks:
+        raise UsageError("an instance needs --tasks a,b,c (the tasks whose parts to pack)")
+    tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
+    unknown = [t for t in tasks if t not in instance.task_by_id]
+    if unknown:
+        raise UsageError(f"--tasks: unknown task(s) {', '.join(unknown)}")
+    return instance, dict(instance.kit_parts(tasks)), tasks
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import UsageError
+
+    if not args.resolution > 0:
+        raise UsageError("--resolution must be > 0")
+    instance, counts, tasks = _read_target(args)
+    from ..layout.cpsat_packing import pack
+    from ..layout.shelf import kit_items
+    from ..reachability import reach_grid
+
+    res = pack(
+        instance.tray,
+        kit_items(instance.part_types, counts),
+        objective=args.objective,
+        resolution=args.resolution,
+        time_limit=args.time_limit,
+        workers=args.workers,
+        seed=args.seed,
+        w6=instance.weights["W6"],
+        reach=reach_grid(instance),
+    )
+    line = (
+        f"{instance.name}: {sum(counts.values())} parts on {instance.tray.width:g} x "
+        f"{instance.tray.height:g} mm: {res.status} in {res.wall_time_s:.3f} s"
+    )
+    if res.layout is not None and args.objective == "fitness":
+        line += (
+            f"; L1 surrogate {res.surrogate_objective:.1f} (bound {res.bound:.1f}), "
+            f"true Euclidean fitness {res.true_fitness:.1f}"
+        )
+    print(line)
+    if args.out:
+        import json
+
+        from ..atomic import write_text
+        from ..packfile import layout_document
+
+        doc = layout_document(
+            res,
+            file=args.file,
+            tasks=tasks,
+            objective=args.objective,
+            resolution=args.resolution,
+            tray=instance.tray,
+        )
+        write_text(args.out, json.dumps(doc, indent=2) + "\n")
+    if args.png and res.layout is not None:
+        from ..plan import Kit
+        from ..plots import plot_tray, save_figure
+
+        ax = plot_tray(
+            instance, Kit(tuple(tasks), res.layout), title=f"{instance.name}: {res.status}"
+        )
+        save_figure(ax.figure, args.png)
+    return EXIT_UNKNOWN if res.status == "unknown" else EXIT_OK

@@ -1,0 +1,80 @@
+"""``bilevel-kit reach``: the Sawyer reachability map of the tray, optionally with a kit on it."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import EXIT_INVALID, EXIT_OK, Subparsers, positive_int
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser(
+        "reach",
+        help="Sawyer reachability map of the tray (Pinocchio)",
+        description="Discretise the tray, solve a top-down grasp (and its approach pose) per "
+        "cell with the project's own Sawyer model, and print/draw the map: reachable cells "
+        "coloured by manipulability. The instance's 'station' section places the tray "
+        "(default station otherwise). With --solution, kit K's layout is drawn on top and "
+        "its unreachable parts are listed.",
+    )
+    p.add_argument("instance")
+    p.add_argument(
+        "--resolution",
+        type=float,
+        metavar="MM",
+        help="cell size in mm (default: the instance's reach_resolution, 10)",
+    )
+    p.add_argument("--png", metavar="FILE", help="draw the map here")
+    p.add_argument("--solution", metavar="FILE", help="solution whose kit to draw on the map")
+    p.add_argument("--kit", type=positive_int, default=1, help="kit of --solution (default 1)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import UsageError
+    from ..instance import load
+
+    instance = load(args.instance)
+    resolution = instance.reach_resolution if args.resolution is None else args.resolution
+    if not resolution > 0:
+        raise UsageError("--resolution must be > 0")
+    layout = None
+    if args.solution:
+        from .. import solution
+
+        sol = solution.read(args.solution)
+        if args.kit > len(sol.plan.kits):
+            raise UsageError(f"--kit {args.kit}: the solution has {len(sol.plan.kits)} kits")
+        layout = sol.plan.kits[args.kit - 1].layout
+    from ..sawyer import DEFAULT_STATION, build_reach_map, ensure_placeable
+
+    station = instance.station or DEFAULT_STATION
+    m = build_reach_map(station, instance.tray.width, instance.tray.height, resolution)
+    ny, nx = m.shape
+    print(
+        f"{instance.name}: tray {instance.tray.width:g} x {instance.tray.height:g} mm at "
+        f"({station.tray_x:g}, {station.tray_y:g}, {station.tray_z:g}) mm, yaw "
+        f"{station.tray_yaw:g} deg; {nx} x {ny} cells of {m.cell_size[0]:.1f} x "
+        f"{m.cell_size[1]:.1f} mm; reachable {100 * m.fraction:.1f}%; built in "
+        f"{m.build_time:.3f} s"
+    )
+    if not m.is_empty:
+        manip = m.manipulability[m.reachable]
+        print(
+            f"manipulability of reachable cells: min {manip.min():.4f}  mean "
+            f"{manip.mean():.4f}  max {manip.max():.4f}"
+        )
+    bad: list[str] = []
+    if layout is not None:
+        ensure_placeable(m, f"kit {args.kit} of {args.solution}")
+        bad = [p.part for p in layout if not m.reachable_at(p.x, p.y)]
+        print(
+            f"kit {args.kit}: {len(layout)} parts, {len(bad)} unreachable"
+            + (f": {', '.join(bad)}" if bad else "")
+        )
+    if args.png:
+        from ..plots import save_figure
+        from ..sawyer import plot_reach_map
+
+        ax = plot_reach_map(m, layout)
+        save_figure(ax.figure, args.png)
+    return EXIT_INVALID if bad else EXIT_OK

@@ -1,0 +1,76 @@
+"""``bilevel-kit repro``: the paper's user study (Fig. 5) or Figure 6 (see paper_repro/)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import EXIT_OK, Subparsers, add_delivery_time, nonneg, positive_int
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser(
+        "repro",
+        help="reproduce the paper's user study (Fig. 5) or Figure 6",
+        description="user-study: 18 simulated participants x {Whole Assembly, Single Task, "
+        "Optimized}, calibrated on two of the paper's numbers, ANOVA + Tukey HSD side by side "
+        "with the paper. fig6: MAT x MTTF grid of the shop-floor simulation, percent "
+        "improvement heatmaps with significance marks; saved per cell (resumable). See "
+        "paper_repro/README.md.",
+    )
+    p.add_argument("experiment", choices=("user-study", "fig6"))
+    p.add_argument("--quick", action="store_true", help="a reduced run (seconds)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default out/repro/EXPERIMENT)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--reps",
+        type=positive_int,
+        metavar="R",
+        help="fig6: replications per cell (default 30; 3 with --quick)",
+    )
+    p.add_argument("--jobs", type=positive_int, default=1, help="fig6: parallel cells")
+    add_delivery_time(p, "fig6: delivery time (default: the instance's)")
+    p.add_argument(
+        "--with-cpsat",
+        action="store_true",
+        help="fig6: add the cpsat-rolling policy and compare it with Optimized",
+    )
+    p.add_argument(
+        "--cpsat-time-limit",
+        type=nonneg,
+        default=1.0,
+        metavar="S",
+        help="fig6 --with-cpsat: CP-SAT time limit per decision (default 1 s)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .. import repro
+
+    if args.experiment == "user-study":
+        out = args.out or "out/repro/user_study"
+        res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
+    else:
+        out = args.out or "out/repro/fig6"
+        policies = tuple(repro.CONDITIONS)
+        options = None
+        if args.with_cpsat:
+            policies += ("cpsat-rolling",)
+            options = {"time_limit": args.cpsat_time_limit}
+        res = repro.run_fig6(
+            out,
+            quick=args.quick,
+            reps=args.reps,
+            jobs=args.jobs,
+            delivery_time=args.delivery_time,
+            seed=args.seed,
+            policies=policies,
+            policy_options=options,
+        )
+    md = res.get("files", {}).get("markdown")
+    if md and Path(md).exists():
+        print(Path(md).read_text().rstrip())
+    for name, path in sorted(res.get("files", {}).items()):
+        print(f"wrote {name}: {path}")
+    return EXIT_OK

@@ -1,0 +1,30 @@
+"""``bilevel-kit schema``: the JSON Schema of instance or solution files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .common import EXIT_OK, Subparsers
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    p = subparsers.add_parser("schema", help="print the JSON Schema of instance or solution files")
+    p.add_argument("--solution", action="store_true", help="the solution schema instead")
+    p.add_argument("--out", "-o", metavar="FILE", help="write it to FILE instead of stdout")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.solution:
+        from ..solution import schema
+    else:
+        from ..instance import schema
+    text = json.dumps(schema(), indent=2) + "\n"
+    if args.out:
+        from ..atomic import write_text
+
+        write_text(args.out, text)
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK

@@ -1,0 +1,170 @@
+"""``bilevel-kit solve``: one instance, one method; a summary, the solution JSON, figures."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING
+
+from .common import (
+    EXIT_INVALID,
+    EXIT_OK,
+    EXIT_UNKNOWN,
+    Subparsers,
+    add_instance_overrides,
+    add_param_option,
+    load_instance,
+    nonneg,
+    positive_int,
+    print_violations,
+)
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure, SubFigure
+
+    from ..instance import Instance
+    from ..methods import Result
+
+
+def add_parser(subparsers: Subparsers) -> None:
+    from ..methods import REGISTRY
+
+    p = subparsers.add_parser(
+        "solve",
+        help="solve an instance with one method",
+        description="Solve an instance file with a registered method and print "
+        "a summary; optionally write the solution JSON and figures.",
+    )
+    p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
+    p.add_argument(
+        "--method",
+        "-m",
+        required=True,
+        metavar="NAME",
+        help="registered method: " + ", ".join(REGISTRY),
+    )
+    p.add_argument("--out", "-o", metavar="FILE", help="write the solution JSON here")
+    p.add_argument("--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
+    p.add_argument("--tray", metavar="PNG", help="draw every kit's tray layout")
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="run the independent checker on the plan (exit 1 when invalid)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--convergence", metavar="PNG", help="plot the cross-entropy trace of one kit (greedy-ce)"
+    )
+    p.add_argument(
+        "--convergence-kit",
+        type=positive_int,
+        metavar="K",
+        help="kit for --convergence (default: the kit with the most parts)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=nonneg,
+        metavar="S",
+        help="time limit in seconds for methods that take one",
+    )
+    add_param_option(p, "method-specific option (repeatable)")
+    p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
+    add_instance_overrides(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..methods import get_method, solve
+
+    get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
+    instance = load_instance(args)
+    result = solve(
+        instance,
+        args.method,
+        seed=args.seed,
+        time_limit=args.time_limit,
+        check=args.check,
+        **dict(args.param),
+    )
+    _write_outputs(args, instance, result)
+    print(summary(instance, result, args.quiet))
+    violations = result.extra.get("violations")
+    if violations:
+        print_violations([f"[{v['kind']}] {v['message']}" for v in violations], sys.stderr)
+        return EXIT_INVALID
+    if args.check and result.plan is not None:
+        print("check: valid")
+    if result.plan is None:
+        return EXIT_UNKNOWN if result.status == "unknown" else EXIT_OK
+    return EXIT_OK
+
+
+def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result) -> None:
+    """The figures and the solution file; every figure is drawn before any file is written."""
+    figures = []
+    if args.convergence:
+        figures.append((_convergence_figure(result, args.convergence_kit), args.convergence))
+    if result.plan is not None and (args.gantt or args.tray):
+        from .. import plots
+
+        if args.gantt:
+            ax = plots.plot_gantt(instance, result.plan, result.timeline)
+            figures.append((ax.figure, args.gantt))
+        if args.tray:
+            figures.append((plots.plot_trays(instance, result.plan), args.tray))
+    if args.out:
+        from ..solution import write
+
+        write(args.out, result)
+    if figures:
+        from ..plots import save_figure
+
+        for fig, path in figures:
+            save_figure(fig, path)
+
+
+def _fmt(v: float | None, unit: str = "") -> str:
+    return "-" if v is None else f"{v:.2f}{unit}"
+
+
+def summary(instance: Instance, result: Result, quiet: bool) -> str:
+    """The summary line and, unless ``quiet``, one line per kit."""
+    lines = []
+    m = result.metrics or {}
+    gap = "-" if result.gap is None else f"{100 * result.gap:.2f}%"
+    lines.append(
+        f"{instance.name}: {result.method} {result.status}  makespan {_fmt(m.get('makespan'))} s"
+        f"  human idle {_fmt(m.get('human_idle'))} s  robot idle {_fmt(m.get('robot_idle'))} s"
+        f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
+        f"  time {result.wall_time_s:.3f} s"
+    )
+    if quiet or result.plan is None or result.timeline is None:
+        return "\n".join(lines)
+    lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
+    for k, (kit, t) in enumerate(zip(result.plan.kits, result.timeline.kits, strict=True), 1):
+        lines.append(
+            f"{k:>3}  {t.robot_start:7.1f}-{t.robot_end:<7.1f}  {t.arrive:8.1f}  "
+            f"{t.human_start:7.1f}-{t.human_end:<7.1f}  {','.join(kit.tasks)}"
+        )
+    return "\n".join(lines)
+
+
+def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
+    """The cross-entropy trace of one kit (``--convergence``)."""
+    from .. import plots
+    from ..errors import UsageError
+
+    terms = result.extra.get("kit_terms")
+    if not terms:
+        raise UsageError(f"--convergence: method {result.method!r} records no CE trace")
+    if kit is None:
+        kit = 1 + max(range(len(terms)), key=lambda k: (terms[k]["n_parts"], -k))
+    if kit > len(terms):
+        raise UsageError(f"--convergence-kit {kit}: the plan has {len(terms)} kits")
+    t = terms[kit - 1]
+    ax = plots.plot_convergence(t["trace"], label=f"kit {kit} ({t['n_parts']} parts)")
+    ax.set_title(
+        f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
+        f"{t['layout_source']}"
+    )
+    ax.legend()
+    return ax.figure
