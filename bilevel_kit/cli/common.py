@@ -21,7 +21,7 @@ EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
 Subparsers = argparse._SubParsersAction
 
 #: The instance fields the override options replace (see :func:`instance_overrides`).
-OVERRIDES = ("delivery_time", "weights", "horizon", "units")
+OVERRIDES = ("delivery_time", "weights", "horizon", "units", "trays")
 
 
 class Parser(argparse.ArgumentParser):
@@ -158,6 +158,27 @@ def add_instance_overrides(p: argparse.ArgumentParser) -> None:
         metavar="U",
         help="number of product units built one after another",
     )
+    g.add_argument(
+        "--trays",
+        type=trays,
+        metavar="T",
+        help="kit trays in circulation (an integer >= 1, or 'unlimited'); the paper's study: 1",
+    )
+
+
+def trays(text: str) -> int | str:
+    """``--trays``: an integer >= 1, or ``unlimited``."""
+    if text.lower() in ("unlimited", "none"):
+        return "unlimited"
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer >= 1 or 'unlimited', got {text!r}"
+        ) from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1 or 'unlimited', got {text!r}")
+    return value
 
 
 def instance_overrides(args: argparse.Namespace) -> dict[str, Any]:

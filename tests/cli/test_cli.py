@@ -353,3 +353,14 @@ def test_methods_name_lists_options_with_type_default_and_meaning(capsys, monkey
 def test_methods_unknown_name_exits_2(capsys):
     code, _, err = run(capsys, "methods", "nope")
     assert code == 2 and err.count("\n") == 1 and "unknown method 'nope'" in err
+
+
+def test_trays_override(capsys, root):
+    table = root / "instances/hrc_table.json"
+    code, text, _ = run(capsys, "solve", table, "-m", "single-task", "--trays", "1", "--check")
+    assert code == 0 and "makespan 466.69 s" in text and "check: valid" in text
+    code, text, _ = run(capsys, "solve", table, "-m", "single-task", "--trays", "unlimited")
+    assert code == 0 and "makespan 459.78 s" in text
+    for bad in ("0", "-1", "1.5", "abc"):
+        code, _, err = run(capsys, "solve", table, "-m", "single-task", "--trays", bad)
+        assert code == 2 and "--trays" in err and err.count("\n") == 1
