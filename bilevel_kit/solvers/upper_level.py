@@ -39,6 +39,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+#: Arrays of seconds, scores or counts (float64).
 FloatArray = np.ndarray
 
 
@@ -46,7 +47,7 @@ def balance_terms(
     prefix_robot: FloatArray,
     prefix_human: FloatArray,
     rest_robot: FloatArray,
-    has_rest: FloatArray,
+    has_rest: np.ndarray,
     *,
     delivery: float,
     human_remaining: float | FloatArray,
