@@ -2,11 +2,18 @@
 
 The checker and every solver's final answer use these functions: a separating-axis test for
 overlap, corner containment for the tray, and exact intersection areas by convex clipping.
+:func:`layout_violations` is the one layout-validity test built on them: the checker
+(:mod:`bilevel_kit.validate`) reports its findings, the layout searches
+(:mod:`bilevel_kit.layout.cross_entropy`, :mod:`bilevel_kit.layout.convex`) accept a layout
+only when :func:`exactly_valid` says so, so no solver can call valid what the checker rejects.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -102,3 +109,81 @@ def intersection_area(a: np.ndarray, b: np.ndarray) -> float:
         if not poly:
             return 0.0
     return polygon_area(poly)
+
+
+class Footprint(Protocol):
+    """A w x h rectangle centred at (x, y), rotated by ``theta`` degrees (mm);
+    :class:`bilevel_kit.plan.Placement` is one."""
+
+    @property
+    def x(self) -> float: ...
+    @property
+    def y(self) -> float: ...
+    @property
+    def w(self) -> float: ...
+    @property
+    def h(self) -> float: ...
+    @property
+    def theta(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class LayoutViolation:
+    """One geometric fault of a layout; indices refer to the footprints given.
+
+    ``outside_tray``: footprint ``index`` has a corner more than ``tol`` outside the tray.
+    ``overlap``: footprints ``index`` < ``other`` penetrate by ``depth`` > ``tol`` mm
+    (separating-axis depth) and intersect in ``area`` mm^2.
+    """
+
+    kind: Literal["outside_tray", "overlap"]
+    index: int
+    other: int | None = None
+    depth: float = 0.0
+    area: float = 0.0
+
+
+def layout_violations(
+    parts: Sequence[Footprint],
+    width: float,
+    height: float,
+    tol: float = TOL,
+    *,
+    first: bool = False,
+) -> list[LayoutViolation]:
+    """Every footprint outside the ``width`` x ``height`` tray (in input order), then every
+    overlapping pair (in lexicographic index order); ``first=True`` stops at the first fault.
+
+    Only pairs whose axis-aligned bounding boxes come within ``tol`` of each other get the
+    separating-axis test: for boxes farther apart, one of the two rectangles' edge normals
+    separates them (separating-axis theorem), so their depth is negative.
+    """
+    out: list[LayoutViolation] = []
+    corner_sets = [corners(p.x, p.y, p.w, p.h, p.theta) for p in parts]
+    for k, c in enumerate(corner_sets):
+        if not inside_tray(c, width, height, tol):
+            out.append(LayoutViolation("outside_tray", k))
+            if first:
+                return out
+    if len(corner_sets) < 2:
+        return out
+    lo = np.array([c.min(axis=0) for c in corner_sets])
+    hi = np.array([c.max(axis=0) for c in corner_sets])
+    i, j = np.triu_indices(len(corner_sets), 1)
+    near = ((np.minimum(hi[i], hi[j]) - np.maximum(lo[i], lo[j])) > -tol).all(axis=1)
+    for a, b in zip(i[near].tolist(), j[near].tolist(), strict=True):
+        depth = penetration(corner_sets[a], corner_sets[b])
+        if depth > tol:
+            area = intersection_area(corner_sets[a], corner_sets[b])
+            out.append(LayoutViolation("overlap", a, b, depth, area))
+            if first:
+                return out
+    return out
+
+
+def exactly_valid(
+    parts: Sequence[Footprint], width: float, height: float, tol: float = TOL
+) -> bool:
+    """True when :func:`layout_violations` finds nothing: every footprint inside the tray and no
+    pair penetrating deeper than ``tol`` mm (the checker's own test)."""
+    return not layout_violations(parts, width, height, tol, first=True)

@@ -237,6 +237,7 @@ register(
     "greedy-ce",
     "bilevel_kit.solvers.greedy_ce:greedy_ce",
     "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
+    "bilevel_kit.solvers.greedy_ce:GreedyCEOptions",
 )
 register(
     "cpsat",

@@ -98,7 +98,10 @@ def _coerce(value: Any, tp: Any, meta: Mapping[str, Any], where: str) -> Any:
             try:
                 return _coerce(value, arg, meta, where)
             except UsageError as exc:
-                errors.append(str(exc))
+                errors.append(exc)
+        ranged = [e for e in errors if "must be" in str(e)]
+        if ranged:  # the right type, out of range: say so rather than "expected ..."
+            raise ranged[0]
         raise UsageError(f"{where}: expected {_type_name(tp)}, got {value!r}")
     if origin is Literal:
         choices = get_args(tp)

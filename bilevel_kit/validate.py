@@ -3,7 +3,8 @@
 It trusts no solver. It recomputes everything from the instance and the plan alone: every task
 exactly once, precedence across and inside kits, each kit's parts against its tasks' parts,
 every footprint inside the tray and no two footprints overlapping (exact rotated rectangles,
-tolerance :data:`bilevel_kit.geometry.TOL`), and, when a solution reports times, that they
+tolerance :data:`bilevel_kit.geometry.TOL`, by :func:`bilevel_kit.geometry.layout_violations`,
+the same test every layout search applies), and, when a solution reports times, that they
 agree with the timeline evaluator and that no kit starts before its tray is back (the tray
 rule of docs/timeline.md, checked on the reported times themselves).
 """
@@ -13,12 +14,11 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from itertools import combinations
+from dataclasses import dataclass, replace
 
 from . import geometry
 from .instance import Instance
-from .plan import KitTimes, Plan, evaluate
+from .plan import Kit, KitTimes, Plan, evaluate
 
 #: Absolute tolerance (s) when comparing reported times with the evaluator's.
 TIME_TOL = 1e-6
@@ -123,18 +123,27 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
     return out
 
 
-def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
+def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
     out: list[Violation] = []
     types = instance.part_types
-    need = Counter()
+    need: Counter[str] = Counter()
     for t in kit.tasks:
         if t in instance.task_by_id:
             for p, n in instance.task_by_id[t].parts:
                 need[p] += n
+    tray = instance.tray
+    # The geometry (one test for the checker and every layout search) runs on the parts it can
+    # place: a known type (its own footprint, not the drawn one) and a finite position.
+    shapes = [
+        replace(pl, w=types[pl.type].width, h=types[pl.type].height)
+        for pl in kit.layout
+        if pl.type in types and all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta))
+    ]
+    faults = geometry.layout_violations(shapes, tray.width, tray.height)
+    outside = {f.index for f in faults if f.kind == "outside_tray"}
     have: Counter[str] = Counter()
     ids: set[str] = set()
-    shapes: list[tuple[str, object]] = []
-    tray = instance.tray
+    n_shapes = 0
     for pl in kit.layout:
         if pl.part in ids:
             out.append(
@@ -178,8 +187,7 @@ def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
                     k,
                 )
             )
-        c = geometry.corners(pl.x, pl.y, pt.width, pt.height, pl.theta)
-        if not geometry.inside_tray(c, tray.width, tray.height):
+        if n_shapes in outside:
             out.append(
                 Violation(
                     "outside_tray",
@@ -188,7 +196,7 @@ def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
                     k,
                 )
             )
-        shapes.append((pl.part, c))
+        n_shapes += 1
     if have != need:
         diff = []
         for p in sorted(set(need) | set(have)):
@@ -213,15 +221,15 @@ def _check_layout(instance: Instance, kit, k: int) -> list[Violation]:
                     k,
                 )
             )
-    for (pa, ca), (pb, cb) in combinations(shapes, 2):
-        depth = geometry.penetration(ca, cb)
-        if depth > geometry.TOL:
-            area = geometry.intersection_area(ca, cb)
+    for f in faults:
+        if f.kind == "overlap":
+            assert f.other is not None
+            pa, pb = shapes[f.index].part, shapes[f.other].part
             out.append(
                 Violation(
                     "overlap",
                     f"kit {k}: parts {pa!r} and {pb!r} overlap "
-                    f"({area:.6g} mm^2, depth {depth:.3g} mm)",
+                    f"({f.area:.6g} mm^2, depth {f.depth:.3g} mm)",
                     k,
                 )
             )

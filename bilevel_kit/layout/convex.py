@@ -79,7 +79,7 @@ from .. import geometry
 from ..errors import UsageError
 from ..instance import Instance, Tray
 from ..plan import Kit, Placement, Plan
-from .fitness import layout_fitness, layout_terms, overlapping_box_pairs
+from .fitness import layout_fitness, layout_terms
 
 if TYPE_CHECKING:
     from .cross_entropy import Arrangement
@@ -291,14 +291,9 @@ def _moved(layout: Sequence[Placement], xy: np.ndarray) -> tuple[Placement, ...]
 
 
 def exactly_valid(layout: Sequence[Placement], width: float, height: float) -> bool:
-    """True when the checker's geometry accepts the layout: every part inside the tray and no
-    pair penetrating by more than ``geometry.TOL`` (only pairs whose boxes overlap can)."""
-    corners = [geometry.corners(p.x, p.y, p.w, p.h, p.theta) for p in layout]
-    if not all(geometry.inside_tray(c, width, height) for c in corners):
-        return False
-    return not any(
-        geometry.rects_overlap(corners[a], corners[b]) for a, b in overlapping_box_pairs(layout)
-    )
+    """True when the checker's geometry accepts the layout (every part inside the tray, no pair
+    penetrating by more than ``geometry.TOL``): :func:`bilevel_kit.geometry.exactly_valid`."""
+    return geometry.exactly_valid(layout, width, height)
 
 
 def _tray_size(instance_or_tray: Instance | Tray | tuple[float, float]) -> tuple[float, float]:

@@ -46,10 +46,13 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from ..instance import DEFAULT_WEIGHTS, Instance, PartType
 from ..plan import Placement
+
+if TYPE_CHECKING:
+    from ..reachability import ReachGrid
 
 _EPS = 1e-9
 
@@ -132,7 +135,7 @@ class ReachTables:
     row_spans: tuple[tuple[int, int], ...] | None = None
 
 
-def reach_tables(reach: Any, W: int, H: int, resolution: float) -> ReachTables:
+def reach_tables(reach: ReachGrid, W: int, H: int, resolution: float) -> ReachTables:
     """Tables of a :class:`bilevel_kit.reachability.ReachGrid` for a W x H grid tray."""
     import numpy as np
 
@@ -272,7 +275,7 @@ def pack(
     seed: int = 0,
     w6: float | None = None,
     log: bool = False,
-    reach: Any = None,
+    reach: ReachGrid | None = None,
 ) -> PackResult:
     """Place ``items`` ((part id, part type) pairs) on ``tray`` without overlap.
 
@@ -471,7 +474,7 @@ _CACHES: dict[tuple[Any, ...], _FitCache] = {}
 
 
 def _cache_for(
-    tray: _Rect, part_types: Mapping[str, PartType], resolution: float, reach: Any
+    tray: _Rect, part_types: Mapping[str, PartType], resolution: float, reach: ReachGrid | None
 ) -> _FitCache:
     key = (
         tray.width,
@@ -498,7 +501,7 @@ def fit_counts(
     resolution: float = 1.0,
     workers: int = 2,
     seed: int = 0,
-    reach: Any = None,
+    reach: ReachGrid | None = None,
 ) -> tuple[bool | None, TypedLayout | None]:
     """Whether a part multiset fits, with a layout by type when it does (memoised).
 

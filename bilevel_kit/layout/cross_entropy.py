@@ -46,7 +46,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import scipy.linalg.lapack
@@ -55,7 +54,7 @@ from .. import geometry
 from ..errors import UsageError
 from ..instance import Instance, PartType, Tray
 from ..plan import Placement
-from ..reachability import reach_grid
+from ..reachability import ReachGrid, reach_grid
 from .fitness import PairScorer, PairTable, box_overlap_1d, layout_terms
 
 
@@ -164,7 +163,7 @@ class _Kit:
     fixed_idx: np.ndarray
     pairs: PairTable
     #: Reach grid when the instance enforces Sawyer reachability (else None).
-    reach: Any = None
+    reach: ReachGrid | None = None
     n: int = field(init=False)
     dim: int = field(init=False)
 
@@ -447,28 +446,15 @@ def _ce_run(
 # ---------------------------------------------------------------------------------------------
 
 
-def _exactly_valid(layout: Sequence[Placement], tray: Tray, reach: Any = None) -> bool:
-    """Every part inside the tray and no pair penetrating deeper than ``geometry.TOL``, both
-    by the exact rotated-rectangle tests of :mod:`bilevel_kit.geometry` (the final gate of
-    every answer). Pairs whose bounding boxes are apart by more than TOL cannot penetrate, so
-    only the others get the separating-axis test."""
-    corners = [geometry.corners(p.x, p.y, p.w, p.h, p.theta) for p in layout]
-    if not all(geometry.inside_tray(cn, tray.width, tray.height) for cn in corners):
+def _exactly_valid(layout: Sequence[Placement], tray: Tray, reach: ReachGrid | None = None) -> bool:
+    """The checker's own geometry test (:func:`bilevel_kit.geometry.exactly_valid`: every part
+    inside the tray, no pair penetrating deeper than ``geometry.TOL``) and, with a reach map,
+    every centre reachable: the final gate of every answer."""
+    if not geometry.exactly_valid(layout, tray.width, tray.height):
         return False
-    if (
-        reach is not None
-        and not reach.lookup(np.array([p.x for p in layout]), np.array([p.y for p in layout])).all()
-    ):
-        return False
-    if len(layout) < 2:
-        return True
-    lo = np.array([cn.min(axis=0) for cn in corners])
-    hi = np.array([cn.max(axis=0) for cn in corners])
-    i, j = np.triu_indices(len(layout), 1)
-    near = ((np.minimum(hi[i], hi[j]) - np.maximum(lo[i], lo[j])) > -geometry.TOL).all(axis=1)
-    return not any(
-        geometry.rects_overlap(corners[a], corners[b])
-        for a, b in zip(i[near], j[near], strict=True)
+    return (
+        reach is None
+        or reach.lookup(np.array([p.x for p in layout]), np.array([p.y for p in layout])).all()
     )
 
 

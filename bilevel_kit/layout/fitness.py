@@ -112,7 +112,7 @@ class PairScorer:
     the scalar form is about 4x slower here.
     """
 
-    def __init__(self, pairs: PairTable, samples: int, dtype: np.dtype | type = np.float64):
+    def __init__(self, pairs: PairTable, samples: int, dtype: np.dtype | type = np.float64) -> None:
         self.pairs = pairs
         self.samples = samples
         self.dtype = np.dtype(dtype)

@@ -13,7 +13,8 @@ precedence-feasible partial sequences ``K`` of the remaining tasks of length
             - W_5\\, \\text{kit\\_fitness}(P(K_{1:i}))                       \\quad (7)
             + W_7 \\sum_{p \\in P(K_{1:i})} U(p)                              \\quad (V\\text{-B})
 
-and commits the minimiser's prefix ``T_{t+1} = K_{1:i}`` as the next kit.
+and commits the minimiser's prefix ``T_{t+1} = K_{1:i}`` as the next kit. The terms are
+computed by :mod:`bilevel_kit.solvers.upper_level` (the one implementation of F).
 
 Decisions taken where the paper is silent (docs/errata.md):
 
@@ -32,6 +33,24 @@ Decisions taken where the paper is silent (docs/errata.md):
 * Ties are broken deterministically: the first minimum in enumeration order (sequences in
   depth-first order of the tasks' file positions, then increasing ``i``), with a tolerance of
   1e-9 on the score.
+
+Options (:class:`GreedyCEOptions`, validated centrally): ``horizon`` (N), ``signed``,
+``precedence``, ``polish`` (convex polish of every CE layout, :mod:`bilevel_kit.layout.convex`),
+the weights ``W1``..``W7`` and every :class:`~bilevel_kit.layout.cross_entropy.CEParams` field.
+``time_limit`` is accepted for the common interface; the heuristic has none.
+
+``extra`` of the registered method ``greedy-ce``:
+
+* ``epochs``: decision epochs (= kits); ``sequences``: partial sequences enumerated, summed
+  over epochs; ``candidates``: (K, i) pairs with a layout, summed over epochs;
+* ``ce_calls``: CE runs (distinct part multisets); ``fitness_cache_hits``: look-ups served
+  from the memo; ``kits_not_fitting``: multisets without a valid layout;
+* ``epoch_F_sum``: the sum over epochs of the chosen pair's F. Not a whole-plan objective:
+  term (6) looks at the hypothetical window rest, not the kit that really came next
+  (bilevel-milp's J, :mod:`bilevel_kit.solvers.bilevel_milp`, is the plan's objective);
+* ``kit_terms``: per kit, ``score`` (its F), ``i``, ``fitness``, ``d_same``, ``d_diff``,
+  ``z`` (mm^2), ``n_parts``, ``ce_iterations``, ``ce_converged``, ``layout_source`` and
+  ``trace`` (best CE fitness per iteration) of its layout.
 """
 
 from __future__ import annotations
@@ -39,15 +58,16 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any
+from typing import Literal
 
 import numpy as np
 
 from ..errors import KitDoesNotFit, UsageError
 from ..instance import Instance
 from ..layout.cross_entropy import Arrangement, CEParams, arrange
-from ..methods import MethodOutput
+from ..methods import MethodOutput, Status
 from ..plan import Kit, Plan, evaluate
+from . import upper_level
 
 #: Refuse to enumerate more than this many partial sequences at one epoch.
 MAX_SEQUENCES = 2_000_000
@@ -64,6 +84,129 @@ class GreedyParams:
     ce: CEParams = field(default_factory=CEParams)
     #: Polish every CE layout with the convex-concave SOCP of models/convex_layout.py.
     polish: bool = False
+
+
+_WEIGHT_NAMES = ("W1", "W2", "W3", "W4", "W5", "W6", "W7")
+
+
+@dataclass(frozen=True)
+class GreedyCEOptions:
+    """The options of ``greedy-ce`` as the command line gives them (flat); ``None`` means the
+    instance's value. The CE fields mirror :class:`CEParams` (same names and defaults)."""
+
+    horizon: int | None = field(
+        default=None, metadata={"help": "rolling horizon N, tasks per window", "min": 1}
+    )
+    signed: bool = field(
+        default=False, metadata={"help": "terms (5)-(6) signed as printed, not absolute"}
+    )
+    precedence: Literal["hard", "penalty"] = field(
+        default="hard",
+        metadata={"help": "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"},
+    )
+    polish: bool = field(
+        default=False, metadata={"help": "polish every CE layout with the convex SOCP"}
+    )
+    W1: float | None = field(
+        default=None,
+        metadata={"help": "weight of term (3), per task whose predecessors are not kitted"},
+    )
+    W2: float | None = field(
+        default=None, metadata={"help": "weight of term (4), reward per task in the kit"}
+    )
+    W3: float | None = field(
+        default=None, metadata={"help": "weight of term (5), |d + R(kit) - H_rem|, per s"}
+    )
+    W4: float | None = field(
+        default=None, metadata={"help": "weight of term (6), |d + R(rest) - H(kit)|, per s"}
+    )
+    W5: float | None = field(
+        default=None, metadata={"help": "weight of term (7), reward per mm of kit fitness"}
+    )
+    W6: float | None = field(
+        default=None,
+        metadata={"help": "weight of the overlap area Z (mm^2) in the kit fitness (Eq. 11)"},
+    )
+    W7: float | None = field(
+        default=None,
+        metadata={"help": "weight of the W7 term (Sec. V-B), per part not yet available"},
+    )
+    samples: int = field(default=200, metadata={"help": "CE samples per iteration", "min": 2})
+    elite: int = field(
+        default=30,
+        metadata={
+            "help": "CE elite samples the mean and covariance are refitted to (<= samples)",
+            "min": 2,
+        },
+    )
+    max_iter: int = field(default=100, metadata={"help": "CE iteration cap", "min": 1})
+    tol: float = field(
+        default=1e-4,
+        metadata={"help": "CE convergence: relative change of the elite threshold (unitless)"},
+    )
+    patience: int = field(
+        default=10, metadata={"help": "CE convergence: iterations within tol", "min": 1}
+    )
+    init_sd_frac: float = field(
+        default=0.25,
+        metadata={"help": "CE initial sd of x, y as a fraction of the tray side (> 0)"},
+    )
+    init_sd_theta: float = field(
+        default=30.0, metadata={"help": "CE initial sd of the angles, degrees", "min": 0.0}
+    )
+    min_sd: float = field(
+        default=0.5,
+        metadata={"help": "CE floor of the sd (> 0): mm for positions, degrees for angles"},
+    )
+    out_weight: float | None = field(
+        default=None, metadata={"help": "CE penalty per mm of tray overhang (none: automatic)"}
+    )
+    precision: Literal["float32", "float64"] = field(
+        default="float32", metadata={"help": "CE precision of sample scoring (results are float64)"}
+    )
+    repair: bool = field(
+        default=True,
+        metadata={"help": "push overlapping CE candidates apart before rejecting them"},
+    )
+    restart_sd_scale: float = field(
+        default=0.1,
+        metadata={"help": "CE sd of a run from a given layout, relative to a random start"},
+    )
+    mirrored: bool = field(
+        default=True, metadata={"help": "CE mirrored (antithetic) sampling: mu + L z and mu - L z"}
+    )
+    smoothing: float = field(
+        default=1.0, metadata={"help": "CE mean update smoothing, in (0, 1]", "max": 1.0}
+    )
+    cov_smoothing: float = field(
+        default=0.3, metadata={"help": "CE covariance update smoothing, in (0, 1]", "max": 1.0}
+    )
+
+    def __post_init__(self) -> None:
+        try:
+            self.ce_params()
+        except UsageError as exc:  # parse_options names the method and turns this into one
+            raise ValueError(str(exc)) from None
+
+    def ce_params(self) -> CEParams:
+        """The cross-entropy fields as :class:`CEParams`."""
+        return CEParams(**{f.name: getattr(self, f.name) for f in fields(CEParams)})
+
+    def to_params(self) -> GreedyParams:
+        """The same options as the policy's :class:`GreedyParams`."""
+        weights = {w: getattr(self, w) for w in _WEIGHT_NAMES if getattr(self, w) is not None}
+        return GreedyParams(
+            horizon=self.horizon,
+            weights=weights or None,
+            signed=self.signed,
+            precedence=self.precedence,
+            ce=self.ce_params(),
+            polish=self.polish,
+        )
+
+
+#: Every option at its default.
+DEFAULT_OPTIONS = GreedyCEOptions()
 
 
 @dataclass(frozen=True)
@@ -186,48 +329,41 @@ class GreedyCEPolicy:
             raise UsageError(f"{len(seqs)} partial sequences at one epoch; lower the horizon")
         self.stats.epochs += 1
         self.stats.sequences += len(seqs)
-        d = inst.delivery_time
-        o_r, o_h = inst.kit_overhead_robot, inst.kit_overhead_human
-        r = self._r[seqs]
-        h = self._h[seqs]
-        r_cum = np.cumsum(r, axis=1)  # R of the prefix K_{1:i} without overhead
-        h_cum = np.cumsum(h, axis=1)
-        r_rest = r_cum[:, -1:] - r_cum  # R of K_{i+1:L}
-        violations = np.zeros(len(seqs))
+        # Terms (3)-(6) of every (K, i), then the lower level: one arrangement per distinct
+        # prefix part multiset (term 7 and the W7 term).
+        violations = None
         if self.params.precedence == "penalty":
-            violations = self._violations(seqs, done)
-        diff5 = d + o_r + r_cum - state.human_remaining
-        has_rest = np.arange(1, length + 1) < length
-        # Eq. 6 as printed: with i = L the next-kit sum is empty (0) but d stays.
-        diff6 = d + np.where(has_rest, o_r + r_rest, 0.0) - (o_h + h_cum)
-        if not self.params.signed:
-            diff5, diff6 = np.abs(diff5), np.abs(diff6)
-        i_vals = np.arange(1, length + 1)
-        base = (
-            w["W1"] * violations[:, None]
-            - w["W2"] * i_vals[None, :]
-            + w["W3"] * diff5
-            + w["W4"] * diff6
+            violations = upper_level.precedence_violations(seqs, done, self._pred)[:, None]
+        diff5, diff6 = upper_level.window_balance(
+            self._r[seqs],
+            self._h[seqs],
+            delivery=inst.delivery_time,
+            human_remaining=state.human_remaining,
+            overhead_robot=inst.kit_overhead_robot,
+            overhead_human=inst.kit_overhead_human,
+            signed=self.params.signed,
         )
-        # Lower level: one arrangement per distinct prefix part multiset (Eq. 7, W7 term).
         counts = np.cumsum(self._part_matrix[seqs], axis=1).reshape(-1, len(self._types))
         keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        inverse = inverse.reshape(len(seqs), length)
         fit = np.empty(len(keys))
         fits = np.empty(len(keys), dtype=bool)
-        unavailable = np.zeros(len(keys))
-        avail = None
-        if state.available is not None:
-            avail = np.array([state.available.get(t, 0) for t in self._types])
         for k, row in enumerate(keys):
             arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
             fit[k], fits[k] = arr.fitness, arr.fits
-            if avail is not None:
-                unavailable[k] = np.maximum(row - avail, 0).sum()
-        score = (
-            base.reshape(-1)
-            - w["W5"] * fit[inverse.reshape(-1)]
-            + w["W7"] * unavailable[inverse.reshape(-1)]
-        )
+        unavailable = None
+        if state.available is not None:
+            avail = np.array([state.available.get(t, 0) for t in self._types])
+            unavailable = upper_level.unavailable_parts(keys, avail)[inverse]
+        score = upper_level.objective(
+            w,
+            n_tasks=np.arange(1, length + 1)[None, :],
+            diff5=diff5,
+            diff6=diff6,
+            fitness=fit[inverse],
+            violations=violations,
+            unavailable=unavailable,
+        ).reshape(-1)
         score[~fits[inverse.reshape(-1)]] = np.inf
         self.stats.candidates += int(np.isfinite(score).sum())
         if not np.isfinite(score).any():
@@ -259,15 +395,6 @@ class GreedyCEPolicy:
         )
         return Kit(tuple(self._ids[j] for j in prefix), arr.layout)
 
-    def _violations(self, seqs: np.ndarray, done: set[int]) -> np.ndarray:
-        out = np.zeros(len(seqs))
-        for s, seq in enumerate(seqs.tolist()):
-            seen = set(done)
-            for j in seq:
-                out[s] += not self._pred[j] <= seen
-                seen.add(j)
-        return out
-
 
 def plan(
     instance: Instance,
@@ -297,40 +424,14 @@ def plan(
 
 def greedy_ce(
     instance: Instance,
+    options: GreedyCEOptions = DEFAULT_OPTIONS,
     *,
     seed: int = 0,
     time_limit: float | None = None,
-    horizon: int | None = None,
-    signed: bool = False,
-    precedence: str = "hard",
-    polish: bool = False,
-    **options: Any,
 ) -> MethodOutput:
-    """Registered method ``greedy-ce``: the paper's bilevel heuristic.
-
-    Options: ``horizon`` (N), ``signed`` (Eqs. 5-6 as printed), ``precedence``
-    ("hard"/"penalty"), ``polish`` (convex polish of every CE layout), the weights
-    ``W1``..``W7``, and every :class:`CEParams` field (``samples``, ``elite``, ``max_iter``,
-    ``tol``, ``patience``, ``cov_smoothing`` ...).
-    ``time_limit`` is accepted for the common interface; the heuristic has no time limit.
-    """
-    ce_fields = {f.name for f in fields(CEParams)}
-    weights = {k.upper(): float(v) for k, v in options.items() if k.upper() in instance.weights}
-    ce_opts = {k: v for k, v in options.items() if k in ce_fields}
-    bad = sorted(set(options) - set(ce_opts) - {k for k in options if k.upper() in weights})
-    if bad:
-        raise UsageError(
-            f"greedy-ce: unknown option(s) {', '.join(bad)}; options are horizon, "
-            f"signed, precedence, polish, W1..W7, {', '.join(sorted(ce_fields))}"
-        )
-    params = GreedyParams(
-        horizon=horizon,
-        weights=weights or None,
-        signed=bool(signed),
-        precedence=precedence,
-        ce=CEParams(**ce_opts),
-        polish=bool(polish),
-    )
+    """Registered method ``greedy-ce``: the paper's bilevel heuristic (options and ``extra``
+    in the module docstring). ``time_limit`` is accepted for the common interface only."""
+    params = options.to_params()
     policy = GreedyCEPolicy(instance, params, seed)
     result = plan(instance, params, seed, policy)
     st = policy.stats
@@ -341,7 +442,7 @@ def greedy_ce(
         "ce_calls": st.ce_calls,
         "fitness_cache_hits": st.fitness_cache_hits,
         "kits_not_fitting": st.kits_not_fitting,
-        "paper_objective": sum(t["score"] for t in st.objective_terms),
+        "epoch_F_sum": sum(t["score"] for t in st.objective_terms),
         "kit_terms": st.objective_terms,
     }
-    return MethodOutput(result, "feasible", None, extra)
+    return MethodOutput(result, Status.FEASIBLE, None, extra)

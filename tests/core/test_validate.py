@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from bilevel_kit import Kit, KitTimes, Placement, Plan, check, evaluate
@@ -145,3 +146,73 @@ def test_baselines_are_valid_on_every_instance(method, root):
         inst = load(path)
         out = method(inst)
         assert check(inst, out.plan) == [], path.name
+
+
+def _all_pairs_reference(parts, width, height):
+    """The checker's former test: every corner inside, every pair by separating axes."""
+    from itertools import combinations
+
+    from bilevel_kit import geometry
+
+    cs = [geometry.corners(p.x, p.y, p.w, p.h, p.theta) for p in parts]
+    outside = [k for k, c in enumerate(cs) if not geometry.inside_tray(c, width, height)]
+    overlaps = [
+        (a, b)
+        for a, b in combinations(range(len(cs)), 2)
+        if geometry.penetration(cs[a], cs[b]) > geometry.TOL
+    ]
+    return outside, overlaps
+
+
+def test_one_layout_test_for_checker_and_layout_searches():
+    """geometry.layout_violations (box pre-filter) finds exactly what testing every pair finds,
+    and cross-entropy's and the convex polish's acceptance gates agree with it."""
+    from bilevel_kit import geometry
+    from bilevel_kit.instance import Tray
+    from bilevel_kit.layout import convex
+    from bilevel_kit.layout.cross_entropy import _exactly_valid
+
+    rng = np.random.default_rng(7)
+    seen = set()
+    for _ in range(400):
+        n = int(rng.integers(1, 7))
+        parts = [
+            Placement(
+                f"p{k}",
+                "x",
+                float(rng.uniform(0, 120)),
+                float(rng.uniform(0, 100)),
+                float(rng.choice([0.0, 90.0, 45.0, rng.uniform(-180, 180)])),
+                float(rng.uniform(5, 40)),
+                float(rng.uniform(5, 40)),
+            )
+            for k in range(n)
+        ]
+        found = geometry.layout_violations(parts, 120.0, 100.0)
+        outside, overlaps = _all_pairs_reference(parts, 120.0, 100.0)
+        assert [f.index for f in found if f.kind == "outside_tray"] == outside
+        assert [(f.index, f.other) for f in found if f.kind == "overlap"] == overlaps
+        valid = not outside and not overlaps
+        seen.add(valid)
+        assert geometry.exactly_valid(parts, 120.0, 100.0) == valid
+        assert convex.exactly_valid(parts, 120.0, 100.0) == valid
+        assert _exactly_valid(parts, Tray(120.0, 100.0)) == valid
+    assert seen == {True, False}
+
+
+def test_layout_violations_reports_depth_area_and_stops_first():
+    from bilevel_kit import geometry
+
+    parts = [
+        Placement("a", "x", 10, 10, 0, 20, 20),
+        Placement("b", "x", 25, 10, 0, 20, 20),  # 5 mm into a: 5 x 20 = 100 mm^2
+        Placement("c", "x", 118, 50, 0, 10, 10),  # 3 mm out of a 120 mm tray
+    ]
+    found = geometry.layout_violations(parts, 120, 100)
+    assert [(f.kind, f.index, f.other) for f in found] == [
+        ("outside_tray", 2, None),
+        ("overlap", 0, 1),
+    ]
+    assert found[1].depth == pytest.approx(5.0) and found[1].area == pytest.approx(100.0)
+    assert len(geometry.layout_violations(parts, 120, 100, first=True)) == 1
+    assert geometry.layout_violations(parts[:1], 120, 100) == []

@@ -171,7 +171,7 @@ def brute_force(inst, lower) -> float:
 @given(small_instances())
 def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
     from bilevel_kit.layout.cross_entropy import CEParams
-    from bilevel_kit.solvers.greedy_ce import greedy_ce
+    from bilevel_kit.solvers.greedy_ce import GreedyCEOptions, greedy_ce
 
     ce = CEParams(**FAST_CE)
     t0 = time.perf_counter()
@@ -188,7 +188,7 @@ def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
     assert value == pytest.approx(brute_force(inst, lower), abs=1e-5)
     assert out.bound is not None and out.bound <= out.extra["makespan"] + 1e-9
 
-    greedy = greedy_ce(inst, seed=0, **FAST_CE)
+    greedy = greedy_ce(inst, GreedyCEOptions(**FAST_CE), seed=0)
     assert check(inst, greedy.plan) == []
     j_greedy = kc.paper_objective(inst, greedy.plan, lower)
     j_greedy_own = kc.paper_objective(inst, greedy.plan, kc.layout_fitness(inst))
@@ -218,7 +218,7 @@ def test_warm_start_and_cpsat_lower_level_keep_the_contract():
     """``lower="best"`` adds CP-SAT fitness layouts (never lowers f); a greedy warm start is
     accepted; J* can only improve over the CE-only value."""
     from bilevel_kit.layout.cross_entropy import CEParams
-    from bilevel_kit.solvers.greedy_ce import greedy_ce
+    from bilevel_kit.solvers.greedy_ce import GreedyCEOptions, greedy_ce
 
     doc = two_task_doc()
     doc["tasks"].append(
@@ -231,7 +231,7 @@ def test_warm_start_and_cpsat_lower_level_keep_the_contract():
     doc["precedence"] = [["t0", "t2"]]
     inst = from_dict(doc)
     ce = CEParams(**FAST_CE)
-    greedy = greedy_ce(inst, seed=0, **FAST_CE)
+    greedy = greedy_ce(inst, GreedyCEOptions(**FAST_CE), seed=0)
     a = kc.solve(inst, time_limit=30.0, lower="ce", ce_params=ce, warm_plan=greedy.plan)
     b = kc.solve(inst, time_limit=30.0, lower="best", ce_params=ce, pack_time_limit=0.5)
     assert a.status == b.status == "optimal"

@@ -75,6 +75,47 @@ def test_unknown_option_is_a_usage_error(stool):
         solve(stool, "greedy-ce", colour="red")
 
 
+@pytest.mark.parametrize(
+    ("params", "match"),
+    [
+        ({"samples": "abc"}, "option 'samples': expected an integer"),
+        ({"W5": "abc"}, "option 'W5': expected"),
+        ({"w5": "abc"}, "option 'W5': expected"),
+        ({"horizon": 0}, "option 'horizon'"),
+        ({"precedence": "soft"}, "option 'precedence': must be one of"),
+        ({"precision": "float16"}, "option 'precision': must be one of"),
+        ({"samples": 20, "elite": 30}, "need samples >= elite"),
+        ({"cov_smoothing": 0}, "smoothing and cov_smoothing must lie in"),
+    ],
+)
+def test_bad_option_values_are_usage_errors(stool, params, match):
+    from bilevel_kit import UsageError
+
+    with pytest.raises(UsageError, match="greedy-ce") as info:
+        solve(stool, "greedy-ce", **params)
+    assert match in str(info.value)
+
+
+def test_options_mirror_ce_params_and_convert():
+    from dataclasses import fields
+
+    from bilevel_kit.methods import get_method
+    from bilevel_kit.solvers.greedy_ce import GreedyCEOptions
+
+    opts = {f.name: f for f in fields(GreedyCEOptions)}
+    for f in fields(CEParams):  # every CE field, same default
+        assert opts[f.name].default == f.default, f.name
+    assert all(f.metadata.get("help") for f in opts.values())
+    assert [o.name for o in get_method("greedy-ce").describe_options()] == list(opts)
+    params = GreedyCEOptions().to_params()
+    assert params == GreedyParams()
+    spec = get_method("greedy-ce")
+    o = spec.parse({"horizon": "3", "w2": "7", "signed": "true", "samples": "80", "elite": 12})
+    assert o.to_params() == GreedyParams(
+        horizon=3, weights={"W2": 7.0}, signed=True, ce=CEParams(samples=80, elite=12)
+    )
+
+
 def test_online_policy_decides_from_state(table):
     policy = GreedyCEPolicy(table, GreedyParams(ce=FAST_CE), seed=0)
     first = policy.decide(PolicyState())
