@@ -105,6 +105,21 @@ class Timeline:
         }
 
 
+def tray_back(instance: Instance, kits: Sequence[KitTimes]) -> float:
+    """When the tray for the kit after ``kits`` is free: 0 while fewer than ``trays`` kits are
+    out, else ``human_start + o_H`` of the kit ``trays`` back (docs/timeline.md)."""
+    trays = instance.tray_limit
+    if trays is None or len(kits) < trays:
+        return 0.0
+    return kits[-trays].human_start + instance.kit_overhead_human
+
+
+def next_robot_start(instance: Instance, kits: Sequence[KitTimes]) -> float:
+    """The earliest start of the robot on the kit after ``kits``: the previous kit has arrived
+    and a tray is back (the one timeline rule, docs/timeline.md)."""
+    return max(kits[-1].arrive if kits else 0.0, tray_back(instance, kits))
+
+
 def kit_durations(
     instance: Instance,
     tasks: Sequence[str],
@@ -135,19 +150,15 @@ def evaluate(
     """
     d = instance.delivery_time
     oh = instance.kit_overhead_human
-    trays = instance.tray_limit
     kits: list[KitTimes] = []
     task_start: dict[str, float] = {}
     task_end: dict[str, float] = {}
-    robot_free = 0.0
     human_free = 0.0
     robot_work = 0.0
     human_work = 0.0
     for kit in plan.kits:
         r, h = kit_durations(instance, kit.tasks, robot_times, human_times)
-        robot_start = robot_free
-        if trays is not None and len(kits) >= trays:
-            robot_start = max(robot_start, kits[-trays].human_start + oh)  # tray returned
+        robot_start = next_robot_start(instance, kits)
         robot_end = robot_start + r
         arrive = robot_end + d
         human_start = max(arrive, human_free)
@@ -158,7 +169,6 @@ def evaluate(
             clock += human_times[t] if human_times is not None else instance.human_time(t)
             task_end[t] = clock
         kits.append(KitTimes(robot_start, robot_end, arrive, human_start, human_end))
-        robot_free = arrive
         human_free = human_end
         robot_work += r + d
         human_work += h
