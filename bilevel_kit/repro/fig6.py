@@ -251,6 +251,28 @@ def format_fig6_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
     return "\n".join(out)
 
 
+def _grid_defaults(
+    quick: bool,
+    reps: int | None,
+    mats: Sequence[float] | None,
+    mttfs: Sequence[float] | None,
+    units: int | None,
+    ce: CEParams | None,
+) -> tuple[int, Sequence[float], Sequence[float], int, CEParams | None]:
+    """The paper's grid, or the reduced one with ``quick``, where not given."""
+    if reps is None:
+        reps = QUICK_REPS if quick else FIG6_REPS
+    if quick:
+        mats = QUICK_MATS if mats is None else mats
+        mttfs = QUICK_MTTFS if mttfs is None else mttfs
+        units = QUICK_UNITS if units is None else units
+        ce = QUICK_CE if ce is None else ce
+    mats = FIG6_GRID if mats is None else mats
+    mttfs = FIG6_GRID if mttfs is None else mttfs
+    units = FIG6_UNITS if units is None else units
+    return reps, mats, mttfs, units, ce
+
+
 def _check_fig6(
     inst: Instance, policies: Sequence[str], jobs: int, policy_options: Mapping[str, Any]
 ) -> None:
@@ -328,16 +350,7 @@ def run_fig6(
     t0 = time.perf_counter()
     inst, path = load_instance(instance)
     out = Path(out_dir)
-    if reps is None:
-        reps = QUICK_REPS if quick else FIG6_REPS
-    if quick:
-        mats = QUICK_MATS if mats is None else mats
-        mttfs = QUICK_MTTFS if mttfs is None else mttfs
-        units = QUICK_UNITS if units is None else units
-        ce = QUICK_CE if ce is None else ce
-    mats = FIG6_GRID if mats is None else mats
-    mttfs = FIG6_GRID if mttfs is None else mttfs
-    units = FIG6_UNITS if units is None else units
+    reps, mats, mttfs, units, ce = _grid_defaults(quick, reps, mats, mttfs, units, ce)
     policies = tuple(dict.fromkeys(policies))
     _check_fig6(inst, policies, jobs, policy_options or {})
     cal: dict[str, Any] | None = None
