@@ -11,7 +11,7 @@ dataclass with :func:`bilevel_kit.options.parse_options`, so an unknown key or a
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -115,4 +115,5 @@ def make_policy(
     policy, an unknown option key or a bad value)."""
     spec = POLICIES.spec(name)
     options = spec.parse(params.policy_options if params is not None else {})
-    return spec.load()(instance, seed=seed, params=params, options=options)
+    factory: Callable[..., Policy] = spec.load()  # cls(instance, *, seed, params, options)
+    return factory(instance, seed=seed, params=params, options=options)
