@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import atomic
 from .geometry import corners
 from .instance import Instance
 from .plan import Kit, Plan, Timeline, evaluate
@@ -410,26 +410,19 @@ def plot_convergence(
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
-    """Write ``fig`` atomically (temp file in the target directory, then ``os.replace``) and
-    close it. The format follows the suffix (PNG when there is none). Returns the path."""
+    """Write ``fig`` atomically (:func:`bilevel_kit.atomic.atomic_path`) with the usual
+    permissions and close it. The format follows the suffix (PNG when there is none). Returns
+    the path."""
     plt = _pyplot()
     out = Path(path)
-    suffix = out.suffix or ".png"
-    fmt = suffix[1:].lower()
-    tmp_name: str | None = None
+    fmt = (out.suffix or ".png")[1:].lower()
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=suffix, dir=out.parent)
-        os.close(fd)
-        fig.savefig(tmp_name, format=fmt, dpi=dpi, bbox_inches="tight")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp_name, 0o666 & ~umask)
-        os.replace(tmp_name, out)
-        tmp_name = None
+        with atomic.atomic_path(out) as tmp:
+            fig.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight")
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
     finally:
-        if tmp_name is not None and os.path.exists(tmp_name):
-            os.unlink(tmp_name)
         plt.close(fig)
     return out
 

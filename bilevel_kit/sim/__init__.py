@@ -7,35 +7,24 @@
 >>> rec["n_kits"]
 24
 
-* :func:`run` / :func:`simulate` / :func:`replicate`: pure functions of
-  (instance, policy, :class:`SimParams`, seed).
-* Policies: :data:`POLICIES` (``single-task``, ``whole-assembly``, ``optimized``), the
-  :class:`Policy` protocol and the :class:`SimState` they decide from.
-* :class:`TimingModel`: sampled participants and robot pick times, with calibration knobs.
-* :class:`Feeder`: the supply process of one part type.
+* :func:`run` / :func:`simulate` / :func:`replicate` (:mod:`.runs`): pure functions of
+  (instance, policy, :class:`SimParams` (:mod:`.params`), seed).
+* Policies: :data:`POLICIES` (:mod:`.registry`: ``single-task``, ``whole-assembly``,
+  ``optimized`` in :mod:`.policies`, ``cpsat-rolling`` in :mod:`.cpsat_rolling`), the
+  :class:`Policy` protocol and the :class:`SimState` they decide from (:mod:`.state`).
+* :class:`TimingModel` (:mod:`.timing`): sampled participants and robot pick times, with
+  calibration knobs.
+* :class:`Feeder` (:mod:`.feeders`): the supply process of one part type; the engine that runs
+  the processes is :mod:`.shopfloor`.
 """
 
 from .feeders import Feeder
-from .policies import (
-    POLICIES,
-    UNLIMITED,
-    OptimizedPolicy,
-    Policy,
-    SimState,
-    SingleTaskPolicy,
-    WholeAssemblyPolicy,
-    make_policy,
-)
-from .shopfloor import (
-    SimParams,
-    SimResult,
-    SimulationError,
-    effective_instance,
-    replicate,
-    resolve_supply,
-    run,
-    simulate,
-)
+from .params import SimParams, effective_instance, resolve_supply
+from .policies import OptimizedPolicy, SingleTaskPolicy, WholeAssemblyPolicy
+from .registry import POLICIES, PolicySpec, make_policy
+from .runs import SimResult, replicate, run, simulate
+from .shopfloor import SimulationError
+from .state import UNLIMITED, Policy, SimState
 from .timing import PAPER_CV, PAPER_TABLE_MEAN, PAPER_TABLE_SD, SampledTimes, TimingModel
 
 __all__ = [
@@ -47,6 +36,7 @@ __all__ = [
     "Feeder",
     "OptimizedPolicy",
     "Policy",
+    "PolicySpec",
     "SampledTimes",
     "SimParams",
     "SimResult",

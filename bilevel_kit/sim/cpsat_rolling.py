@@ -18,8 +18,9 @@ optimum (or of the best plan found in time). Online information enters the sub-p
   the window's tasks in topological order. This is an estimate: waits are added to picking
   time, not overlapped with it.
 
-Options (``SimParams.policy_options``): ``window`` (12 tasks), ``time_limit`` (1.0 s per
-epoch), ``workers`` (1, so that simulation cells can run in parallel), ``tray`` ("benders").
+Options (:class:`CPSATRollingOptions`, given as ``SimParams.policy_options`` or ``-p`` on the
+command line): ``window`` (12 tasks), ``time_limit`` (1.0 s per epoch), ``workers`` (1, so that
+simulation cells can run in parallel), ``tray`` ("benders").
 Decisions are memoised on (window, rounded times, rounded ``h0``), so runs without supply
 delays and with deterministic times re-use them.
 """
@@ -27,17 +28,32 @@ delays and with deterministic times re-use them.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, ClassVar
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 from ..instance import Instance, from_dict, topological_order
 from ..plan import Kit
-from .policies import SimState, _LayoutCache
+from .policies import LayoutCache
+from .state import SimState
 
 if TYPE_CHECKING:
-    from .shopfloor import SimParams
+    from .params import SimParams
 
 _TOKEN = "__human_busy__"
-DEFAULTS: dict[str, Any] = {"window": 12, "time_limit": 1.0, "workers": 1, "tray": "benders"}
+
+
+@dataclass(frozen=True)
+class CPSATRollingOptions:
+    """Options of the ``cpsat-rolling`` policy (see the module docstring)."""
+
+    window: int = field(default=12, metadata={"help": "tasks re-planned per epoch", "min": 1})
+    time_limit: float = field(
+        default=1.0, metadata={"help": "CP-SAT time limit per epoch (s)", "min": 0.0}
+    )
+    workers: int = field(default=1, metadata={"help": "CP-SAT workers", "min": 1})
+    tray: Literal["auto", "embedded", "benders"] = field(
+        default="benders", metadata={"help": "tray feasibility in the CP-SAT model"}
+    )
 
 
 class CPSATRollingPolicy:
@@ -46,24 +62,18 @@ class CPSATRollingPolicy:
     name: ClassVar[str] = "cpsat-rolling"
 
     def __init__(
-        self, instance: Instance, *, seed: int = 0, params: SimParams | None = None
+        self,
+        instance: Instance,
+        *,
+        seed: int = 0,
+        params: SimParams | None = None,
+        options: CPSATRollingOptions | None = None,
     ) -> None:
-        from ..errors import UsageError
-
         self.instance = instance
         self.seed = seed
-        opts = dict(params.policy_options) if params is not None else {}
-        unknown = sorted(set(opts) - set(DEFAULTS))
-        if unknown:
-            raise UsageError(
-                f"cpsat-rolling: unknown option(s) {', '.join(unknown)}; options "
-                f"are {', '.join(DEFAULTS)}"
-            )
-        self.options = {**DEFAULTS, **opts}
-        if int(self.options["window"]) < 1:
-            raise UsageError("cpsat-rolling: window must be >= 1")
+        self.options = options if options is not None else CPSATRollingOptions()
         self._order = topological_order(instance)
-        self._layouts = _LayoutCache(instance)
+        self._layouts = LayoutCache(instance)
         self._memo: dict[tuple[Any, ...], Kit] = {}
         self.solves = 0
 
@@ -74,7 +84,7 @@ class CPSATRollingPolicy:
         remaining = [t for t in self._order if t not in state.done]
         if not remaining:
             return None
-        window = remaining[: int(self.options["window"])]
+        window = remaining[: self.options.window]
         times = self._robot_times(window, state)
         h0 = max(0.0, state.human_remaining)
         key = (tuple(window), tuple(round(times[t], 3) for t in window), round(h0, 3))
@@ -167,9 +177,9 @@ class CPSATRollingPolicy:
         out = solve(
             sub,
             seed=self.seed,
-            time_limit=float(self.options["time_limit"]),
-            workers=int(self.options["workers"]),
-            tray=str(self.options["tray"]),
+            time_limit=self.options.time_limit,
+            workers=self.options.workers,
+            tray=self.options.tray,
             hint=hint,
         )
         self.solves += 1

@@ -20,7 +20,7 @@ human's active time, 374.78 s mean and 61.14 s SD. We therefore draw *participan
   no parts.
 
 Calibration knobs (``human_scale``, ``robot_scale``, ``kit_overhead_*``) are applied to the
-instance itself (:func:`bilevel_kit.sim.shopfloor.effective_instance`), so the policies plan with
+instance itself (:func:`bilevel_kit.sim.params.effective_instance`), so the policies plan with
 the same expected times the simulation samples around.
 
 All times for a run are drawn up front from dedicated random streams, so they do not depend on

@@ -197,7 +197,7 @@ def test_fig6_resumes_only_missing_cells_with_identical_results(fig6, tmp_path, 
         calls.append(cell.key())
         return real(cell)
 
-    monkeypatch.setattr(repro, "fig6_cell", spy)
+    monkeypatch.setattr(repro.fig6, "fig6_cell", spy)
     again = repro.run_fig6(out, quick=True, seed=0, progress=False)
     assert calls == [victim.stem]
     assert (again["computed"], again["reused"]) == (1, first["cells"] - 1)

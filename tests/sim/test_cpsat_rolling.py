@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import pytest
 
 from bilevel_kit import check, evaluate, solve
 from bilevel_kit.sim import POLICIES, SimParams, TimingModel, make_policy, run, simulate
 from bilevel_kit.sim.cpsat_rolling import CPSATRollingPolicy
-from bilevel_kit.sim.policies import SimState
+from bilevel_kit.sim.state import SimState
 
 
 def test_registered_as_one_class():
@@ -39,7 +41,12 @@ def test_under_supply_delays_kits_are_valid_and_waits_happen(table):
 
 def test_expected_waits_and_the_human_token(table):
     policy = make_policy("cpsat-rolling", table, params=SimParams())
-    assert policy.options == {"window": 12, "time_limit": 1.0, "workers": 1, "tray": "benders"}
+    assert asdict(policy.options) == {
+        "window": 12,
+        "time_limit": 1.0,
+        "workers": 1,
+        "tray": "benders",
+    }
     from bilevel_kit.instance import Supply
 
     state = SimState(

@@ -1,0 +1,103 @@
+"""The one writer of result tables: CSV files and Markdown/fixed-width tables.
+
+CSV: every key of every row (in first-seen order) is a column; lists and dicts are written as
+JSON; the file is written atomically (:mod:`bilevel_kit.atomic`). Markdown: a header row, a
+``|---|`` rule and one line per row (:func:`markdown_lines`), used by ``compare`` and the paper
+reproductions alike.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Collection, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from .. import atomic
+
+
+def write_csv(
+    path: str | Path,
+    records: Sequence[Mapping[str, Any]],
+    *,
+    exclude: Collection[str] = ("solution",),
+    line_end: str = "\r\n",
+) -> Path:
+    """All record fields but ``exclude`` as CSV (lists and dicts as JSON), written atomically.
+
+    ``line_end``: the csv module's default ``"\\r\\n"`` (``compare``, ``simulate``) or ``"\\n"``
+    (the reproductions' files).
+    """
+    keys: list[str] = []
+    for r in records:
+        keys += [k for k in r if k not in keys and k not in exclude]
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=keys, extrasaction="ignore", lineterminator=line_end)
+    writer.writeheader()
+    for r in records:
+        writer.writerow(
+            {
+                k: json.dumps(v) if isinstance(v, dict | list) else v
+                for k, v in r.items()
+                if k not in exclude
+            }
+        )
+    atomic.write_text(path, buf.getvalue())
+    return Path(path)
+
+
+def markdown_lines(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """A Markdown table, one string per line."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return lines
+
+
+def text_lines(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """A fixed-width text table (columns separated by two spaces), one string per line."""
+    widths = [max(len(x) for x in col) for col in zip(header, *rows, strict=True)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in rows]
+    return lines
+
+
+COMPARE_COLUMNS = [
+    ("instance", "instance", "{}"),
+    ("method", "method", "{}"),
+    ("makespan", "makespan (s)", "{:.2f}"),
+    ("human_idle", "human idle (s)", "{:.2f}"),
+    ("n_kits", "kits", "{}"),
+    ("status", "status", "{}"),
+    ("best_bound", "bound (s)", "{:.2f}"),
+    ("gap", "gap (%)", "{:.2%}"),
+    ("valid", "valid", "{}"),
+    ("wall_time_s", "time (s)", "{:.3f}"),
+]
+
+
+def _cell_text(value: Any, fmt: str) -> str:
+    if value is None:
+        return "-"
+    if fmt == "{:.2%}":
+        return f"{100 * value:.2f}"
+    return fmt.format(value)
+
+
+def table_rows(records: Sequence[dict[str, Any]]) -> tuple[list[str], list[list[str]]]:
+    """Header and text cells of the ``compare`` table."""
+    header = [h for _, h, _ in COMPARE_COLUMNS]
+    rows = [[_cell_text(r.get(k), f) for k, _, f in COMPARE_COLUMNS] for r in records]
+    return header, rows
+
+
+def format_table(records: Sequence[dict[str, Any]]) -> str:
+    """A fixed-width text table of compare records."""
+    return "\n".join(text_lines(*table_rows(records)))
+
+
+def format_markdown(records: Sequence[dict[str, Any]]) -> str:
+    """A Markdown table of compare records."""
+    return "\n".join(markdown_lines(*table_rows(records))) + "\n"

@@ -1,0 +1,145 @@
+"""Reproduction of the paper's user study (Section V-A, Fig. 5 top) and Figure 6 (Section V-B).
+
+The two entry points the CLI (``bilevel-kit repro user-study|fig6 [--quick]``) calls::
+
+    run_user_study(out_dir="out/repro/user_study", quick=False, seed=0, jobs=1) -> dict
+    run_fig6(out_dir="out/repro/fig6", quick=False, reps=None, jobs=1,
+             delivery_time=None, seed=0) -> dict
+
+Both take further keyword-only options (see their docstrings), write their results atomically
+under ``out_dir`` and return a JSON-serialisable summary with the output paths under
+``"files"``. Modules: :mod:`.user_study`, :mod:`.fig6`, :mod:`.calibration` (the timing fit),
+:mod:`.stats` (ANOVA, Tukey HSD, t-tests), :mod:`.plots` (figures), :mod:`.common` (the paper's
+numbers). ``paper_repro/README.md`` documents the choices and the results
+(docs/reproduction.md).
+
+Choices that apply to both (why, in short):
+
+* **Human idle time.** The paper's idle time is the time the participant was *not actively
+  assembling*, so taking the parts off the tray counts as idle. The simulation's
+  ``human_idle`` counts the per-kit pickup ``o_H`` as work; the paper-comparable value is
+  ``makespan - sum of the sampled task times`` = ``human_idle + n_kits * o_H``
+  (:func:`.common.paper_idle`). Every "idle" below is this one.
+* **One tray** (``SimParams(buffer=0)``): the study's protocol, "the robot returned to its
+  kitting task once the participant retrieved the parts". The Figure 6 simulation samples the
+  study's times, so it keeps the protocol by default (``buffer=None`` lets the robot run
+  ahead and stack kits at the human, docs/timeline.md).
+* **Calibration.** The instance's robot pick times and the human's per-kit pickup time are
+  guesses. :func:`.calibration.calibrate` fits ``robot_scale`` and ``kit_overhead_human`` by
+  least squares to two of the paper's numbers (Whole Assembly idle 270 s and Single Task idle
+  99 s); every other number of the study is a prediction. Figure 6 uses the same calibration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..experiments.cells import run_cells_counted
+from ..sim import TimingModel
+from .calibration import calibrate, condition_means, study_params, study_runs
+from .common import (
+    CONDITIONS,
+    DEFAULT_FREE,
+    DEFAULT_INSTANCE,
+    DEFAULT_TARGETS,
+    FIG6_GRID,
+    FIG6_REPAIR,
+    FIG6_REPS,
+    FIG6_SUPPLIED,
+    FIG6_UNITS,
+    LABELS,
+    METRIC_LABELS,
+    METRICS,
+    OPT,
+    PAPER_ACTIVE,
+    PAPER_CI,
+    PAPER_F,
+    PAPER_MEANS,
+    PAPER_N,
+    QUICK_CE,
+    QUICK_MATS,
+    QUICK_MTTFS,
+    QUICK_REPS,
+    QUICK_UNITS,
+    SHORT,
+    SINGLE,
+    WHOLE,
+    load_instance,
+    paper_idle,
+    participant_seeds,
+)
+from .fig6 import Fig6Cell, comparisons, fig6_cell, format_fig6_markdown, run_fig6, summarize_cell
+from .plots import plot_fig6, plot_fig6_panel, plot_user_study
+from .stats import anova_rm, stars, tukey_pairs
+from .user_study import format_study_markdown, run_user_study, side_by_side, summarize_study
+
+
+def run_cells_parallel(
+    cells: Sequence[Any],
+    fn: Callable[[Any], dict[str, Any]],
+    cell_dir: str | Path,
+    *,
+    jobs: int = 1,
+    progress: bool | None = None,
+    desc: str = "cells",
+) -> tuple[list[dict[str, Any]], int]:
+    """The records of every cell and how many were computed now: the one cell runner
+    (:func:`bilevel_kit.experiments.cells.run_cells_counted`) under its former name."""
+    return run_cells_counted(cells, fn, cell_dir=cell_dir, jobs=jobs, progress=progress, desc=desc)
+
+
+__all__ = [
+    "CONDITIONS",
+    "DEFAULT_FREE",
+    "DEFAULT_INSTANCE",
+    "DEFAULT_TARGETS",
+    "FIG6_GRID",
+    "FIG6_REPAIR",
+    "FIG6_REPS",
+    "FIG6_SUPPLIED",
+    "FIG6_UNITS",
+    "LABELS",
+    "METRICS",
+    "METRIC_LABELS",
+    "OPT",
+    "PAPER_ACTIVE",
+    "PAPER_CI",
+    "PAPER_F",
+    "PAPER_MEANS",
+    "PAPER_N",
+    "QUICK_CE",
+    "QUICK_MATS",
+    "QUICK_MTTFS",
+    "QUICK_REPS",
+    "QUICK_UNITS",
+    "SHORT",
+    "SINGLE",
+    "WHOLE",
+    "Fig6Cell",
+    "TimingModel",
+    "anova_rm",
+    "calibrate",
+    "comparisons",
+    "condition_means",
+    "fig6_cell",
+    "format_fig6_markdown",
+    "format_study_markdown",
+    "load_instance",
+    "paper_idle",
+    "participant_seeds",
+    "plot_fig6",
+    "plot_fig6_panel",
+    "plot_user_study",
+    "run_cells_parallel",
+    "run_fig6",
+    "run_user_study",
+    "side_by_side",
+    "stars",
+    "study_params",
+    "study_runs",
+    "summarize_cell",
+    "summarize_study",
+    "tukey_pairs",
+]

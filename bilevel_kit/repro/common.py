@@ -1,0 +1,91 @@
+"""Constants and small helpers shared by the reproductions: the paper's numbers
+(docs/paper-data.md), the conditions, the instance, participant seeds and the paper's idle time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..errors import UsageError
+from ..instance import Instance, load
+from ..layout.cross_entropy import CEParams
+
+#: The paper's table (the repository's copy; ``paper_repro`` lives next to it).
+DEFAULT_INSTANCE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
+
+WHOLE, SINGLE, OPT = "whole-assembly", "single-task", "optimized"
+#: The study's conditions and the policies of Figure 6, in the paper's order.
+CONDITIONS: tuple[str, ...] = (WHOLE, SINGLE, OPT)
+LABELS = {WHOLE: "Whole Assembly", SINGLE: "Single Task", OPT: "Optimized"}
+SHORT = {WHOLE: "WA", SINGLE: "ST", OPT: "OPT"}
+
+#: The paper's user-study numbers (docs/paper-data.md; means read off Fig. 5, approximate).
+PAPER_N = 18
+PAPER_MEANS: dict[str, dict[str, float]] = {
+    "total": {OPT: 467.0, SINGLE: 492.0, WHOLE: 637.0},
+    "idle": {OPT: 98.0, SINGLE: 99.0, WHOLE: 270.0},
+}
+PAPER_F: dict[str, float] = {"total": 57.60, "idle": 709.87}
+#: Tukey HSD 95% CIs of mean(condition) - mean(Whole Assembly).
+PAPER_CI: dict[str, dict[str, tuple[float, float]]] = {
+    "total": {SINGLE: (-188.211, -103.851), OPT: (-213.213, -128.853)},
+    "idle": {SINGLE: (-184.465, -158.586), OPT: (-186.020, -160.141)},
+}
+PAPER_ACTIVE = (374.78, 61.14)  # mean, SD of the human's active time per table
+
+#: (metric, condition, paper value) the calibration fits; the rest are predictions.
+DEFAULT_TARGETS: tuple[tuple[str, str, float], ...] = (
+    ("idle", WHOLE, PAPER_MEANS["idle"][WHOLE]),
+    ("idle", SINGLE, PAPER_MEANS["idle"][SINGLE]),
+)
+#: Free TimingModel fields and their search boxes.
+DEFAULT_FREE: dict[str, tuple[float, float]] = {
+    "robot_scale": (0.5, 2.0),
+    "kit_overhead_human": (0.0, 40.0),
+}
+
+#: Figure 6: the MAT and MTTF axes (s), the fed part types, the feeders' repair time.
+FIG6_GRID = (30.0, 60.0, 90.0, 120.0)
+FIG6_SUPPLIED = ("leg", "foot")
+FIG6_REPAIR = 30.0
+FIG6_UNITS = 10
+FIG6_REPS = 30
+#: ``quick=True``: a reduced grid, 2 units, 3 replications, a small CE.
+QUICK_MATS = (30.0, 120.0)
+QUICK_MTTFS = (60.0,)
+QUICK_UNITS = 2
+QUICK_REPS = 3
+QUICK_CE = CEParams(samples=40, elite=8, max_iter=15, patience=3)
+
+METRICS = {"total": "total_time", "idle": "human_idle"}
+METRIC_LABELS = {"total": "total task time", "idle": "human idle time"}
+
+
+def load_instance(instance: str | Path | Instance | None) -> tuple[Instance, str]:
+    """The instance and a path to it (cells carry the path, workers load it)."""
+    if isinstance(instance, Instance):
+        if not Path(instance.source).is_file():
+            raise UsageError("pass the instance as a path so that cells can reload it")
+        return instance, str(instance.source)
+    path = Path(instance) if instance is not None else DEFAULT_INSTANCE
+    if not path.exists():
+        raise UsageError(
+            f"instance file {path} not found (the reproductions need the repository's "
+            "instances/hrc_table.json, or pass instance=PATH)"
+        )
+    return load(path), str(path)
+
+
+def participant_seeds(seed: int, n: int) -> list[int]:
+    """Run seeds of ``n`` participants / replications; disjoint blocks per ``seed``."""
+    if seed < 0 or n < 1:
+        raise UsageError(f"need seed >= 0 and n >= 1, got seed={seed}, n={n}")
+    return [seed * 1_000_000 + i for i in range(n)]
+
+
+def paper_idle(record: Mapping[str, Any]) -> float:
+    """The paper's human idle time of a run: makespan minus the sampled task times (the
+    per-kit pickup is not assembling, so it counts as idle)."""
+    return float(record["makespan"]) - float(sum(record["human_times"].values()))

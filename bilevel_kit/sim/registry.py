@@ -1,0 +1,119 @@
+"""The registry of simulation policies: name -> import path, summary and options dataclass.
+
+Like :mod:`bilevel_kit.methods`, entries are strings, so listing or checking a policy name
+imports nothing heavy and no policy module imports the registry back (no import cycle).
+:data:`POLICIES` maps a name to its class, imported on first access; :func:`make_policy`
+validates the policy's ``key=value`` options (``SimParams.policy_options``) against its options
+dataclass with :func:`bilevel_kit.options.parse_options`, so an unknown key or a bad value is a
+:class:`~bilevel_kit.errors.UsageError` naming the policy and the key.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ..errors import UsageError
+from ..options import NoOptions, OptionInfo, describe, parse_options
+
+if TYPE_CHECKING:
+    from ..instance import Instance
+    from .params import SimParams
+    from .state import Policy
+
+
+def _import(target: str) -> Any:
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A registered policy: ``target`` and ``options`` are ``"module:name"`` import paths."""
+
+    name: str
+    target: str
+    summary: str
+    options: str | None = None  # None: the policy takes no options
+
+    def load(self) -> type[Policy]:
+        cls: type[Policy] = _import(self.target)
+        return cls
+
+    def options_class(self) -> type:
+        return _import(self.options) if self.options else NoOptions
+
+    def describe_options(self) -> list[OptionInfo]:
+        return describe(self.options_class())
+
+    def parse(self, params: Mapping[str, Any]) -> Any:
+        """The policy's options dataclass from loose ``key=value`` pairs, validated."""
+        return parse_options(self.options_class(), params, f"policy {self.name!r}")
+
+
+class PolicyRegistry(Mapping[str, "type[Policy]"]):
+    """Policy name -> class (imported lazily); :meth:`spec` gives the registration."""
+
+    def __init__(self) -> None:
+        self._specs: dict[str, PolicySpec] = {}
+
+    def register(self, name: str, target: str, summary: str, options: str | None = None) -> None:
+        self._specs[name] = PolicySpec(name, target, summary, options)
+
+    def spec(self, name: str) -> PolicySpec:
+        try:
+            return self._specs[name]
+        except KeyError:
+            raise UsageError(
+                f"unknown policy {name!r}; policies are {', '.join(sorted(self._specs))}"
+            ) from None
+
+    def __getitem__(self, name: str) -> type[Policy]:
+        return self._specs[name].load()
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._specs
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._specs)
+
+    def __len__(self) -> int:
+        return len(self._specs)
+
+
+#: Every policy of the shop-floor simulation, in the order the CLI lists them.
+POLICIES = PolicyRegistry()
+POLICIES.register(
+    "single-task",
+    "bilevel_kit.sim.policies:SingleTaskPolicy",
+    "the paper's Single Task baseline: one kit per task, topological order",
+)
+POLICIES.register(
+    "whole-assembly",
+    "bilevel_kit.sim.policies:WholeAssemblyPolicy",
+    "the paper's Whole Assembly baseline: one kit per unit",
+)
+POLICIES.register(
+    "optimized",
+    "bilevel_kit.sim.policies:OptimizedPolicy",
+    "the paper's Optimized condition: greedy-ce decided online",
+)
+POLICIES.register(
+    "cpsat-rolling",
+    "bilevel_kit.sim.cpsat_rolling:CPSATRollingPolicy",
+    "exact CP-SAT re-planning of a window of the remaining tasks at each epoch",
+    options="bilevel_kit.sim.cpsat_rolling:CPSATRollingOptions",
+)
+
+
+def make_policy(
+    name: str, instance: Instance, *, seed: int = 0, params: SimParams | None = None
+) -> Policy:
+    """Build a registered policy by name, its options validated (a clear error for an unknown
+    policy, an unknown option key or a bad value)."""
+    spec = POLICIES.spec(name)
+    options = spec.parse(params.policy_options if params is not None else {})
+    factory: Callable[..., Policy] = spec.load()  # cls(instance, *, seed, params, options)
+    return factory(instance, seed=seed, params=params, options=options)
