@@ -575,6 +575,7 @@ def plot_convergence(
     label: str | None = None,
     *,
     converged: bool | None = None,
+    title: str = "cross-entropy convergence",
 ) -> Axes:
     """Best kit fitness (mm, bigger is better; docs/errata.md) per cross-entropy iteration
     (iterations numbered from 1). Call it again on the same Axes to overlay several runs;
@@ -603,7 +604,7 @@ def plot_convergence(
         ax.annotate(
             "iteration cap,\nstill improving",
             (x[-1], y[-1]),
-            xytext=(-6, -8),
+            xytext=(-4, -14),
             textcoords="offset points",
             ha="right",
             va="top",
@@ -612,7 +613,7 @@ def plot_convergence(
         )
     ax.set_xlabel("iteration")
     ax.set_ylabel("kit fitness (mm), best score so far")
-    ax.set_title("cross-entropy convergence")
+    ax.set_title(title)
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
     if label is not None:

@@ -166,10 +166,7 @@ def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
         t["trace"],
         label=f"kit {kit} ({plural(t['n_parts'], 'part')})",
         converged=t.get("ce_converged"),
+        title=f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
+        f"{t['layout_source']}",
     )
-    ax.set_title(
-        f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
-        f"{t['layout_source']}"
-    )
-    ax.legend()
     return ax.figure
