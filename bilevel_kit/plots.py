@@ -25,7 +25,7 @@ import os
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -36,6 +36,7 @@ from .plan import Kit, Plan, Timeline, evaluate
 from .style import plural, styled
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
@@ -93,10 +94,17 @@ def _most(labels: Sequence[tuple[Any, ...]]) -> bool:
     return 2 * sum(1 for lab in labels if lab[-2]) >= len(labels)
 
 
+def _figsize(ax: Axes) -> tuple[float, float]:
+    """(width, height) in inches of the figure holding ``ax``."""
+    fig = cast("Figure", ax.get_figure(root=True))
+    width, height = fig.get_size_inches()
+    return float(width), float(height)
+
+
 def _axes_width_in(ax: Axes) -> float:
     """Width of ``ax`` in inches before layout (a slight under-estimate with constrained
     layout, which is the safe side for deciding whether a label fits)."""
-    return max(ax.get_position().width * ax.figure.get_figwidth(), 0.5)
+    return max(ax.get_position().width * _figsize(ax)[0], 0.5)
 
 
 def _bar(ax: Axes, y: float, start: float, end: float, gid: str, **kw: Any) -> Any:
@@ -152,7 +160,7 @@ def plot_gantt(
 
     # thin edges when bars are narrow, so that 100 kits do not turn into black stripes
     mean_kit_in = inches_per_s * tl.robot_work / max(n_kits, 1)
-    edge = {"edgecolor": "black", "linewidth": 0.5 if mean_kit_in >= 0.15 else 0.15}
+    edge: dict[str, Any] = {"edgecolor": "black", "linewidth": 0.5 if mean_kit_in >= 0.15 else 0.15}
     oh = instance.kit_overhead_human
     robot_labels: list[tuple[float, str, Any]] = []  # (x, text or '', bar colour)
     task_labels: list[tuple[float, float, str, Any]] = []  # (x, y, text or '', bar colour)
@@ -213,7 +221,7 @@ def plot_gantt(
             )
 
     waits = tray_waits(instance, tl)
-    wait_style = {
+    wait_style: dict[str, Any] = {
         "facecolor": style.lighten(style.TRAY_WAIT_COLOR, 0.4),
         "hatch": "..",
         "edgecolor": style.TRAY_WAIT_COLOR,
@@ -221,7 +229,7 @@ def plot_gantt(
     }
     for k, s, e in waits:
         _bar(ax, ROBOT_Y, s, e, f"robot:tray_wait:{k}", **wait_style)
-    idle_style = {
+    idle_style: dict[str, Any] = {
         "facecolor": style.IDLE_COLOR,
         "alpha": 0.35,
         "hatch": "\\\\",
@@ -255,7 +263,7 @@ def plot_gantt(
     ax.set_title(one_line if wide else f"{head}\n{metrics}")
 
     kit_label = "kitting (colour = kit, see bar)" if colorbar else "kitting (colour = kit)"
-    handles = [
+    handles: list[Artist] = [
         Patch(facecolor=colors[0] if colors else style.PALETTE[0], label=kit_label, **edge),
         Patch(facecolor=style.DELIVERY_COLOR, hatch="//", label="delivery", **edge),
     ]
@@ -269,7 +277,7 @@ def plot_gantt(
         Patch(label="idle", **idle_style),
         Line2D([], [], color=style.MAKESPAN_COLOR, linestyle="--", label="makespan"),
     ]
-    ncols = len(handles) if ax.figure.get_figwidth() >= 9.5 else math.ceil(len(handles) / 2)
+    ncols = len(handles) if _figsize(ax)[0] >= 9.5 else math.ceil(len(handles) / 2)
     ax.legend(
         handles=handles,
         loc="upper center",
@@ -289,7 +297,9 @@ def _kit_colorbar(ax: Axes, n: int) -> None:
     from matplotlib.ticker import MaxNLocator
 
     mappable = ScalarMappable(norm=Normalize(1, n), cmap=style.KIT_CMAP)
-    bar = ax.figure.colorbar(mappable, ax=ax, pad=0.01, fraction=0.05, aspect=12)
+    bar = cast("Figure", ax.get_figure(root=True)).colorbar(
+        mappable, ax=ax, pad=0.01, fraction=0.05, aspect=12
+    )
     bar.set_label("kit (delivery order)")
     bar.ax.yaxis.set_major_locator(MaxNLocator(nbins=5, integer=True))
 
@@ -403,7 +413,7 @@ def plot_tray(
     pos = ax.get_position()
     scale = min(
         _axes_width_in(ax) / (x1 - x0),
-        pos.height * ax.figure.get_figheight() / (y1 - y0),
+        pos.height * _figsize(ax)[1] / (y1 - y0),
     )
     size = style.SMALL_SIZE if scale * min(W, H) >= 1.5 else style.SMALL_SIZE - 1
     for p in kit.layout:
@@ -755,10 +765,10 @@ def plot_comparison(records: Sequence[dict[str, Any]], ax: Axes | None = None) -
     )
     ax.set_ylabel("time (s)")
     ax.set_title(f"{records[0].get('instance', '')}: methods compared")
-    handles, _ = ax.get_legend_handles_labels()
+    handles: list[Artist] = list(ax.get_legend_handles_labels()[0])
     if len(records):
-        values = list(makespan) + ([float(bound)] if bound is not None else [])
-        low, high = min(values), max(values)
+        levels = list(makespan) + ([float(bound)] if bound is not None else [])
+        low, high = min(levels), max(levels)
         a = max(float(idle.max()) * 1.3, 0.05 * low)
         b = low - 0.6 * (high - low) - 0.03 * low
         if high > 0 and (high - low) < 0.25 * high and b > 1.5 * a:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ParamSpec, TypeVar
+from typing import Any, ParamSpec, TypeVar, cast
 
 #: Font sizes (points): body text and axis labels, titles, tick labels, labels inside bars.
 FONT_SIZE = 9.0
@@ -29,7 +29,7 @@ SMALL_SIZE = 7.0
 LEGEND_SIZE = 8.0
 
 #: matplotlib settings every figure of the toolkit is drawn with.
-RC: dict[str, object] = {
+RC: dict[str, Any] = {
     "font.family": "sans-serif",
     "font.size": FONT_SIZE,
     "axes.titlesize": TITLE_SIZE,
@@ -94,7 +94,7 @@ def styled(fn: Callable[P, R]) -> Callable[P, R]:
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         import matplotlib
 
-        with matplotlib.rc_context(RC):
+        with matplotlib.rc_context(cast(Any, RC)):  # keys are checked by matplotlib
             return fn(*args, **kwargs)
 
     return wrapper
