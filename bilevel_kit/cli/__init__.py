@@ -59,6 +59,7 @@ COMMANDS: dict[str, Command] = {
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .. import __version__
     from ..methods import REGISTRY
 
     listing = "\n".join(f"  {s.name:<16} {s.summary}" for s in REGISTRY.values())
@@ -68,6 +69,12 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
         "within the time limit\n\nmethods:\n" + listing,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--version",
+        action="version",
+        version=f"bilevel-kit {__version__}",
+        help="print the version",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True

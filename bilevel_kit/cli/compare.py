@@ -115,7 +115,7 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
         if r["status"] == "error":
             print(f"{r['instance']} / {r['method']}: {r['error']}", file=sys.stderr)
     if args.figures:
-        _figures(records, args.figures)
+        _figures(records, args.figures, instance_overrides(args))
     if args.csv:
         write_csv(args.csv, records)
     if args.md:
@@ -131,8 +131,9 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
     return EXIT_OK
 
 
-def _figures(records: list[dict[str, Any]], folder: str) -> None:
-    """A comparison chart per instance and a Gantt chart per instance x method."""
+def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, Any]) -> None:
+    """A comparison chart per instance and a Gantt chart per instance x method (of the
+    instance as solved, with the command's overrides such as ``--trays``)."""
     from pathlib import Path
 
     from .. import plots, solution
@@ -143,7 +144,7 @@ def _figures(records: list[dict[str, Any]], folder: str) -> None:
     for r in records:
         by_instance.setdefault(r["instance_file"], []).append(r)
     for path, rows in by_instance.items():
-        inst = load(path)
+        inst = load(path).with_overrides(**overrides)
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
@@ -151,6 +152,5 @@ def _figures(records: list[dict[str, Any]], folder: str) -> None:
         plots.save_figure(ax.figure, out / f"{inst.name}_compare.png")
         for r in ok:
             sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
-            ax = plots.plot_gantt(inst, sol.plan)
-            ax.set_title(f"{inst.name} / {r['method']}: " + ax.get_title())
+            ax = plots.plot_gantt(inst, sol.plan, method=str(r["method"]))
             plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")

@@ -107,7 +107,7 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
         from .. import plots
 
         if args.gantt:
-            ax = plots.plot_gantt(instance, result.plan, result.timeline)
+            ax = plots.plot_gantt(instance, result.plan, result.timeline, method=result.method)
             figures.append((ax.figure, args.gantt))
         if args.tray:
             figures.append((plots.plot_trays(instance, result.plan), args.tray))
@@ -152,6 +152,7 @@ def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
     """The cross-entropy trace of one kit (``--convergence``)."""
     from .. import plots
     from ..errors import UsageError
+    from ..style import plural
 
     terms = result.extra.get("kit_terms")
     if not terms:
@@ -161,10 +162,11 @@ def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
     if kit > len(terms):
         raise UsageError(f"--convergence-kit {kit}: the plan has {len(terms)} kits")
     t = terms[kit - 1]
-    ax = plots.plot_convergence(t["trace"], label=f"kit {kit} ({t['n_parts']} parts)")
-    ax.set_title(
-        f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
-        f"{t['layout_source']}"
+    ax = plots.plot_convergence(
+        t["trace"],
+        label=f"kit {kit} ({plural(t['n_parts'], 'part')})",
+        converged=t.get("ce_converged"),
+        title=f"cross-entropy, kit {kit}: {t['ce_iterations']} iterations, layout from "
+        f"{t['layout_source']}",
     )
-    ax.legend()
     return ax.figure

@@ -362,3 +362,149 @@ def test_plot_gaps_bars_labels_and_missing():
     }
     texts = [t.get_text() for t in ax.texts]
     assert texts.count("n/a") == 1 and "10.0" in texts
+
+
+# -- issue 17: one style, tray waits, labels that fit, status and broken axis ------------------
+
+
+def test_categorical_swatches_never_repeat():
+    from bilevel_kit import style
+
+    for n in (1, 10, 11, style.MAX_SWATCHES, style.MAX_SWATCHES + 1, 150):
+        sw = style.categorical(n)
+        assert len(sw) == n
+        assert len({(s.color, s.hatch) for s in sw}) == n
+    assert [s.hatch for s in style.categorical(10)] == [""] * 10
+    assert style.categorical(11)[10].hatch and style.categorical(11)[10].color == (
+        style.categorical(1)[0].color
+    )
+
+
+def test_kit_colors_categorical_then_continuous():
+    from bilevel_kit import style
+
+    colors, bar = style.kit_colors(10)
+    assert not bar and len(set(colors)) == 10
+    colors, bar = style.kit_colors(100)
+    assert bar and len(set(colors)) == 100
+
+
+def test_plural():
+    from bilevel_kit.style import plural
+
+    assert plural(1, "kit") == "1 kit" and plural(0, "kit") == "0 kits"
+    assert plural(12, "kit") == "12 kits"
+
+
+def test_gantt_title_names_method_once_and_says_1_kit(inst):
+    ax = plots.plot_gantt(inst, Plan(PLAN.kits[:1]), method="greedy-ce")
+    title = ax.get_title()
+    assert title.count("tiny") == 1 and title.count("greedy-ce") == 1
+    assert "1 kit" in title and "1 kits" not in title
+    assert "3 kits" in plots.plot_gantt(inst, PLAN).get_title()
+
+
+def test_gantt_draws_tray_waits_apart_from_idle(inst):
+    one = inst.with_overrides(trays=1)
+    tl = evaluate(one, PLAN)
+    ax = plots.plot_gantt(one, PLAN)
+    waits = bars(ax, "robot:tray_wait:")
+    expected = plots.tray_waits(one, tl)
+    assert waits and len(waits) == len(expected)
+    for (k, s, e), b in zip(expected, waits, strict=True):
+        assert b.get_gid() == f"robot:tray_wait:{k}"
+        assert span(b) == pytest.approx((tl.kits[k - 2].arrive, tl.kits[k - 1].robot_start))
+        assert (s, e) == pytest.approx(span(b)) and b.get_hatch()
+    idle = bars(ax, "robot:idle")
+    assert sum(b.get_width() for b in idle + waits) == pytest.approx(tl.robot_idle)
+    labels = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert "waiting for tray" in labels
+    # unlimited trays: nothing to wait for, no legend entry
+    ax = plots.plot_gantt(inst, PLAN)
+    assert bars(ax, "robot:tray_wait:") == []
+    assert "waiting for tray" not in {t.get_text() for t in ax.get_legend().get_texts()}
+
+
+def test_gantt_many_kits_colour_bar_and_no_scattered_labels(inst):
+    four = Plan(tuple(Kit((t,)) for t in ("T1", "T2", "T3", "T4")))
+    assert len(plots.plot_gantt(inst, four).figure.axes) == 1  # 4 kits: palette, no bar
+    doc = {**DOC, "tasks": [{**DOC["tasks"][3], "id": f"U{i}"} for i in range(30)]}
+    doc["precedence"] = []
+    big = from_dict(doc)
+    plan = Plan(tuple(Kit((f"U{i}",)) for i in range(30)))
+    ax = plots.plot_gantt(big, plan)
+    (bar_ax,) = [a for a in ax.figure.axes if a is not ax]
+    assert bar_ax.get_ylabel() == "kit (delivery order)"
+    colours = [tuple(b.get_facecolor()) for b in bars(ax, "robot:kit:")]
+    assert len(set(colours)) == 30
+    # 30 kits on a 7-inch chart: the kit numbers fit, the task ids "U0".."U29" too
+    assert "1" in texts(ax) or "kit 1" in texts(ax)
+
+
+def test_tray_labels_skip_or_abbreviate_small_parts(inst):
+    kit = Kit(
+        ("T2",),
+        (P("bolt-12", "bolt", 150, 100, 0, 20, 60), P("tiny-3", "bolt", 20, 20, 0, 2, 2)),
+    )
+    ax = plots.plot_tray(inst, kit)
+    shown = texts(ax)
+    assert "tiny-3" not in shown and "3" not in shown  # 2 x 2 mm: no room at all
+    assert "bolt-12" in shown or "12" in shown
+    assert all(t.get_clip_on() for t in ax.texts if t.get_text() != "no layout")
+
+
+def test_tray_titles_give_kit_fitness(inst):
+    from bilevel_kit.layout.fitness import layout_fitness
+
+    ax = plots.plot_tray(inst, PLAN.kits[0])
+    f = layout_fitness(PLAN.kits[0].layout, inst.weights["W6"])
+    assert f"fitness {round(f):,} mm" in ax.get_title()
+    fig = plots.plot_trays(inst, PLAN)
+    for ax, kit in zip([a for a in fig.axes if a.get_visible()], PLAN.kits, strict=True):
+        assert f"fitness {round(plots.kit_fitness(inst, kit)):,} mm" in ax.get_title()
+    assert plots.kit_fitness(inst, Kit(("T1",))) is None
+
+
+def test_comparison_idle_labels_status_and_broken_axis():
+    recs = [
+        {"instance": "x", "method": m, "makespan": ms, "human_idle": hi, "status": st}
+        for m, ms, hi, st in (("a", 459.8, 37.0, "feasible"), ("b", 432.0, 10.0, "optimal"))
+    ]
+    recs[0]["best_bound"] = recs[1]["best_bound"] = 420.0
+    ax = plots.plot_comparison(recs)
+    shown = texts(ax)
+    assert {"459.8", "432.0", "37.0", "10.0"} <= set(shown)
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["a\n(feasible)", "b\n(optimal)"]
+    assert ax.get_yscale() == "function"  # 6 % apart: the axis is broken ...
+    lo, hi = ax.get_ylim()
+    assert lo == 0.0 and hi > 459.8
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("y axis broken") for t in legend)  # ... and says so
+    tick_values = ax.yaxis.get_major_locator()()
+    assert not any(37.0 * 1.3 < v < 380.0 for v in tick_values)  # no tick inside the break
+
+
+def test_comparison_not_broken_when_differences_are_large():
+    recs = [
+        {"instance": "x", "method": "a", "makespan": 100.0, "human_idle": 10.0},
+        {"instance": "x", "method": "b", "makespan": 220.0, "human_idle": 30.0},
+    ]
+    ax = plots.plot_comparison(recs)
+    assert ax.get_yscale() == "linear" and ax.get_ylim()[0] == 0.0
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["a", "b"]
+
+
+def test_convergence_unit_and_iteration_cap_mark():
+    ax = plots.plot_convergence([1.0, 2.0, 3.0], converged=True)
+    assert ax.get_ylabel().startswith("kit fitness (mm)")
+    assert not [a for a in ax.get_children() if a.get_gid() == "cap"]
+    ax = plots.plot_convergence([1.0, 2.0, 3.0], converged=False)
+    marks = [a for a in ax.get_children() if a.get_gid() == "cap"]
+    assert len(marks) == 2  # the marker on the last point and its note
+    assert any("still improving" in getattr(a, "get_text", str)() for a in marks)
+
+
+def test_plots_do_not_leak_style_into_rcparams(inst):
+    before = dict(plt.rcParams)
+    plots.plot_gantt(inst, PLAN)
+    assert dict(plt.rcParams) == before
