@@ -18,7 +18,7 @@ from bilevel_kit.solvers import bilevel_milp as kc
 from bilevel_kit.validate import check
 
 pytest.importorskip("pyomo")
-if importlib.util.find_spec("highspy") is None:  # never import it here: see milp_schedule
+if importlib.util.find_spec("highspy") is None:  # never import it here: see solvers/milp/solver.py
     pytest.skip("highspy is not installed", allow_module_level=True)
 
 TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
@@ -256,3 +256,14 @@ def test_registered_method_reports_a_makespan_bound(monkeypatch):
     assert res.bound == pytest.approx(best_bound(inst))
     assert res.bound <= res.objective
     assert res.extra["plan_objective_J"] == pytest.approx(54.0480397428, abs=1e-6)
+
+
+def test_options_of_the_registered_method():
+    from bilevel_kit.methods import get_method
+    from bilevel_kit.options import describe
+
+    assert get_method("bilevel-milp").options_class() is kc.BilevelMilpOptions
+    names = [o.name for o in describe(kc.BilevelMilpOptions)]
+    assert "warm_plan" not in names and "ce_params" not in names  # Python-only arguments
+    with pytest.raises(UsageError, match="lower"):
+        kc.solve(load(TABLE.parent / "stool.json"), lower="magic", time_limit=5.0)
