@@ -59,7 +59,3 @@ class Budget:
         """The first ``fraction`` of the time limit (a quick first step), within the deadline."""
         end = min(self.deadline, self.start + fraction * self.time_limit)
         return Budget(self.time_limit, start=self.start, deadline=end)
-
-    def until(self, deadline: float) -> Budget:
-        """The same budget ending at ``deadline`` at the latest."""
-        return Budget(self.time_limit, start=self.start, deadline=min(self.deadline, deadline))
