@@ -241,16 +241,19 @@ register(
 )
 register(
     "cpsat",
-    "bilevel_kit.solvers.cpsat:solve_method",
+    "bilevel_kit.solvers.cpsat.method:cpsat",
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
+    "bilevel_kit.solvers.cpsat.method:CpsatOptions",
 )
 register(
     "milp",
-    "bilevel_kit.solvers.milp:solve",
+    "bilevel_kit.solvers.milp.method:milp",
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
+    "bilevel_kit.solvers.milp.method:MilpOptions",
 )
 register(
     "bilevel-milp",
-    "bilevel_kit.solvers.bilevel_milp:solve",
+    "bilevel_kit.solvers.bilevel_milp:bilevel_milp",
     "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
+    "bilevel_kit.solvers.bilevel_milp:BilevelMilpOptions",
 )

@@ -27,9 +27,9 @@ order with the section-2 timeline (R_k, H_k include the per-kit overheads):
 
 Absolute values as in docs/errata.md (``signed=True``: the printed signed form). Every plan,
 in particular greedy-ce's, has a well-defined J, and :func:`paper_objective` is the one function
-that computes it. (The greedy's own ``extra["paper_objective"]``, the sum of its per-epoch
-window scores, differs in term 6, which there looks at a hypothetical window, not at the kit
-that really came next.)
+that computes it. (The greedy's own objective in its ``extra``, the sum of its per-epoch window
+scores, differs in term 6, which there looks at a hypothetical window, not at the kit that
+really came next.)
 
 **The lower level** (:class:`LowerLevel`). f is a function of the kit's part multiset:
 the best (largest) true Euclidean fitness among the valid layouts found by (i) the
@@ -75,42 +75,52 @@ chain an interval or nothing), all of which fit its tray, 104 distinct multisets
 relaxation is weak: root bound about 132 against J* = 195.6, so branching does the work).
 Random instances of up to 6 tasks solve in well under a second.
 
-**Result.** ``status`` refers to J: optimal (proven) / feasible / unknown. ``bound`` is the
-closed-form *makespan* bound (the method does not minimise makespan); J*, its MILP bound and
-gap are ``extra["paper_objective"]``, ``extra["paper_bound"]``, ``extra["paper_gap"]``.
+**Result.** ``status`` refers to J: optimal (proven) / feasible / infeasible / unknown.
+``bound`` is the closed-form *makespan* bound (the method does not minimise makespan).
+``extra`` keys:
+
+* ``plan_objective_J`` (J of the plan, by :func:`paper_objective`), ``plan_objective_J_milp``
+  (J as the MILP computed it), ``plan_objective_J_bound`` (the MILP's bound on J*),
+  ``plan_objective_J_gap`` (``|J - bound| / max(1, |J|)``), ``makespan`` (of the plan);
+* ``solver``, ``lower``, ``candidates`` (convex kits within the tray area), ``columns`` (those
+  that fit), ``multisets`` (kit values computed), ``binaries``, ``termination``;
+* ``start_objective`` and ``local_search_objective``: J of the warm-start plan before and
+  after :func:`local_search` (only with a warm start);
+* ``lower_level_s``, ``milp_s``, ``wall_time_s``: seconds spent;
+* ``reason`` when the run ends without a plan for a known reason.
+
+**Time.** ``time_limit`` (default 60 s) covers the kit values, the local search (a tenth of
+what is left) and the MILP, with 0.2 s kept back for the final plan.
 """
 
 from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
 from ..bounds import best_bound
 from ..errors import UsageError
 from ..instance import Instance
 from ..layout import cpsat_packing as packing
 from ..layout.fitness import layout_fitness as layout_fitness_value
+from ..methods import MethodOutput, Status
+from ..options import parse_options
 from ..plan import Kit, Placement, Plan, evaluate, kit_durations
-from .milp import (
-    canonical_kits,
-    chain_groups,
-    ensure_ortools,
-    human_order,
-    make_solver,
-    reduced_edges,
-    run_solver,
-)
+from .budget import Budget
+from .common import chain_groups, reduced_edges
+from .milp.model import canonical_kits, human_order
+from .milp.solver import ensure_ortools, make_solver, run_solver
 
-#: Largest number of tasks the column enumeration accepts (a parameter of :func:`solve`).
+#: Largest number of tasks the column enumeration accepts (option ``max_tasks``).
 MAX_TASKS = 16
-#: Largest number of candidate kits (convex, within the tray area) (a parameter of :func:`solve`).
+#: Largest number of candidate kits (convex, within the tray area) (option ``max_columns``).
 MAX_COLUMNS = 5000
 LOWER_MODES = ("ce", "best")
 #: Seconds kept back from the time limit for the final plan.
-_MARGIN = 0.2
+MARGIN = 0.2
 
 FitnessOf = Callable[[Kit], float]
 
@@ -360,9 +370,9 @@ class Column:
 
 
 def build_columns(
-    instance: Instance, kits: Sequence[frozenset[str]], lower: LowerLevel, deadline: float
+    instance: Instance, kits: Sequence[frozenset[str]], lower: LowerLevel, budget: Budget
 ) -> list[Column] | None:
-    """Columns (kits that fit, with their data); None when the deadline passes first."""
+    """Columns (kits that fit, with their data); None when the budget runs out first."""
     ids = [t.id for t in instance.tasks]
     n = len(ids)
     anc = instance.ancestors
@@ -372,7 +382,7 @@ def build_columns(
             desc[a].add(t)
     out = []
     for s in sorted(kits, key=lambda s: (len(s), sorted(instance.index[t] for t in s))):
-        if time.perf_counter() > deadline:
+        if budget.expired():
             return None
         val = lower.value(instance.kit_parts(s))
         if not val.fits:
@@ -419,7 +429,7 @@ def local_search(
         p = Plan(tuple(Kit(human_order(instance, kit)) for kit in plan))
         return paper_objective(instance, p, lower, signed=signed)
 
-    def neighbours(plan: list[frozenset[str]]) -> Any:
+    def neighbours(plan: list[frozenset[str]]) -> Iterator[list[frozenset[str]]]:
         m = len(plan)
         for k in range(m - 1):
             yield [*plan[:k], plan[k] | plan[k + 1], *plan[k + 2 :]]
@@ -456,9 +466,34 @@ def local_search(
 # ---------------------------------------------------------------------------------------------
 
 
+def _order(m: Any, instance: Instance, K: int) -> None:
+    """Precedence on the reduced graph and interchangeable chains in lexicographic order, on
+    the task-position variables X (module docstring)."""
+    add = m.cons.add
+    idx = instance.index
+    for a_id, b_id in reduced_edges(instance):
+        a, b = idx[a_id], idx[b_id]
+        for k in range(K - 1):
+            add(sum(m.X[b, q] for q in range(k + 1)) <= sum(m.X[a, q] for q in range(k + 1)))
+    for group in chain_groups(instance) if K > 1 else []:
+        chains = sorted([idx[t] for t in c] for c in group)
+        length = len(chains[0])
+        while length > 1 and K ** (length - 1) > 1e6:
+            length -= 1
+        for c1, c2 in itertools.pairwise(chains):
+            add(
+                sum(
+                    K ** (length - 1 - j) * k * (m.X[c1[j], k] - m.X[c2[j], k])
+                    for j in range(length)
+                    for k in range(1, K)
+                )
+                <= 0
+            )
+
+
 def _model(
     instance: Instance, cols: Sequence[Column], signed: bool, weights: Mapping[str, float]
-) -> Any:
+) -> tuple[Any, list[tuple[int, int]]]:
     """The set-partitioning + sequencing MILP of the module docstring (used kits first)."""
     import pyomo.environ as pyo
 
@@ -509,24 +544,7 @@ def _model(
             add(used(k) <= 1)
             if k:
                 add(used(k) <= used(k - 1))  # used kits first
-    for a_id, b_id in reduced_edges(instance):
-        a, b = idx[a_id], idx[b_id]
-        for k in range(K - 1):
-            add(sum(m.X[b, q] for q in range(k + 1)) <= sum(m.X[a, q] for q in range(k + 1)))
-    for group in chain_groups(instance) if K > 1 else []:
-        chains = sorted([idx[t] for t in c] for c in group)
-        length = len(chains[0])
-        while length > 1 and K ** (length - 1) > 1e6:
-            length -= 1
-        for c1, c2 in itertools.pairwise(chains):
-            add(
-                sum(
-                    K ** (length - 1 - j) * k * (m.X[c1[j], k] - m.X[c2[j], k])
-                    for j in range(length)
-                    for k in range(1, K)
-                )
-                <= 0
-            )
+    _order(m, instance, K)
 
     def robot(k: int) -> Any:
         return sum(cols[c].robot * m.z[c, k] for c in at_k[k]) if k < K and at_k[k] else 0.0
@@ -558,6 +576,47 @@ def _model(
     return m, keys
 
 
+@dataclass(frozen=True)
+class BilevelMilpOptions:
+    """Options of the registered method ``bilevel-milp`` (the Python :func:`solve` also takes
+    a warm-start plan, CE parameters, shared kit values and solver options)."""
+
+    solver: str = field(
+        default="highs",
+        metadata={"help": "highs (HiGHS in a child process) or any Pyomo solver name"},
+    )
+    lower: Literal["ce", "best"] = field(
+        default="best",
+        metadata={"help": "kit values from CE and the oracle, or also CP-SAT's fitness layout"},
+    )
+    pack_time_limit: float = field(
+        default=0.5,
+        metadata={"help": "seconds per multiset for the CP-SAT fitness layout", "min": 0.0},
+    )
+    max_tasks: int = field(
+        default=MAX_TASKS, metadata={"help": "largest instance accepted (tasks)", "min": 1}
+    )
+    max_columns: int = field(
+        default=MAX_COLUMNS,
+        metadata={"help": "largest number of candidate kits accepted", "min": 1},
+    )
+    signed: bool = field(
+        default=False, metadata={"help": "the printed signed terms 5 and 6 (docs/errata.md)"}
+    )
+    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+
+
+def bilevel_milp(
+    instance: Instance,
+    options: BilevelMilpOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``bilevel-milp``: :func:`run` warm-started from greedy-ce's plan."""
+    return run(instance, options, seed=seed, time_limit=time_limit)
+
+
 def solve(
     instance: Instance,
     *,
@@ -574,94 +633,145 @@ def solve(
     values: LowerLevel | None = None,
     log: bool = False,
     solver_options: Mapping[str, Any] | None = None,
-) -> Any:
-    """Minimise the paper's whole-plan objective J exactly over enumerated kits.
+) -> MethodOutput:
+    """The Python entry: :func:`run` with the options as keywords (validated like the
+    method's) and the Python-only arguments of :func:`run`."""
+    params = {
+        "solver": solver,
+        "lower": lower,
+        "pack_time_limit": pack_time_limit,
+        "max_tasks": max_tasks,
+        "max_columns": max_columns,
+        "signed": signed,
+        "log": log,
+    }
+    options = parse_options(BilevelMilpOptions, params, "bilevel-milp")
+    return run(
+        instance,
+        options,
+        seed=seed,
+        time_limit=time_limit,
+        warm_plan=warm_plan,
+        ce_params=ce_params,
+        values=values,
+        solver_options=solver_options,
+    )
 
-    Returns a :class:`bilevel_kit.methods.MethodOutput` whose plan has each kit's best known
-    layout; ``extra`` holds ``paper_objective`` (J of the plan), ``paper_bound``,
-    ``paper_gap``, ``columns``, ``multisets``, ``lower_level_s``, ``milp_s``. ``warm_plan`` (e.g.
-    greedy-ce's plan; ``"greedy"``, the default, runs greedy-ce with this seed and these CE
-    parameters) is improved by :func:`local_search` and given as a MIP start; ``ce_params``
-    (a :class:`~bilevel_kit.layout.cross_entropy.CEParams`) must match greedy-ce's for the
-    comparison of J to hold kit by kit.
-    ``values``: a :class:`LowerLevel` to use (and fill), so that the caller can score other
-    plans with exactly the same kit values. Module docstring: the objective, columns, limits.
+
+def run(
+    instance: Instance,
+    options: BilevelMilpOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    warm_plan: Plan | str | None = "greedy",
+    ce_params: Any = None,
+    values: LowerLevel | None = None,
+    solver_options: Mapping[str, Any] | None = None,
+) -> MethodOutput:
+    """Minimise the paper's whole-plan objective J exactly over enumerated kits (the result:
+    module docstring; each kit of the plan has its best known layout).
+
+    ``warm_plan``: a plan, or ``"greedy"`` (greedy-ce with this seed and these CE parameters),
+    improved by :func:`local_search`, is the MIP start; ``ce_params`` (a
+    :class:`~bilevel_kit.layout.cross_entropy.CEParams`) must match greedy-ce's for J to
+    compare kit by kit; ``values``: a :class:`LowerLevel` to use (and fill), so that the caller
+    scores other plans with the same kit values; ``solver_options`` go to the MILP solver.
     """
-    from ..methods import MethodOutput
-
-    t0 = time.perf_counter()
-    time_limit = 60.0 if time_limit is None else float(time_limit)
-    deadline = t0 + time_limit
+    budget = Budget(time_limit)
     n = instance.n_tasks
-    if n > max_tasks:
+    if n > options.max_tasks:
         raise UsageError(
             f"bilevel-milp: {instance.name!r} has {n} tasks; the exact column model accepts at "
-            f"most {max_tasks} (parameter max_tasks)"
+            f"most {options.max_tasks} (parameter max_tasks)"
         )
     ensure_ortools()
-    opt = make_solver(str(solver))
+    opt = make_solver(options.solver)
     weights = dict(instance.weights)
-    kits = enumerate_kits(instance, max_columns)
+    kits = enumerate_kits(instance, options.max_columns)
     lower_level = values or LowerLevel(
-        instance, seed=seed, lower=lower, pack_time_limit=pack_time_limit, ce_params=ce_params
+        instance,
+        seed=seed,
+        lower=options.lower,
+        pack_time_limit=options.pack_time_limit,
+        ce_params=ce_params,
     )
     closed = best_bound(instance)
-    extra: dict[str, Any] = {"solver": str(solver), "lower": lower, "candidates": len(kits)}
+    extra: dict[str, Any] = {
+        "solver": options.solver,
+        "lower": options.lower,
+        "candidates": len(kits),
+    }
 
-    def finish(plan: Plan | None, status: str) -> Any:
-        extra["wall_time_s"] = time.perf_counter() - t0
+    def finish(plan: Plan | None, status: Status) -> MethodOutput:
+        extra["wall_time_s"] = budget.elapsed()
         return MethodOutput(plan, status, closed, extra)
 
-    cols = build_columns(instance, kits, lower_level, deadline - _MARGIN)
+    cols = build_columns(instance, kits, lower_level, budget.cut(MARGIN))
     extra.update(multisets=lower_level.n_values, lower_level_s=lower_level.time_s)
     if cols is None:
         extra["reason"] = "time limit reached while computing the kits' lower-level values"
-        return finish(None, "unknown")
+        return finish(None, Status.UNKNOWN)
     extra["columns"] = len(cols)
     covered = set().union(*(c.tasks for c in cols)) if cols else set()
     if len(covered) < n:
         extra["reason"] = "some task fits in no kit"
-        return finish(None, "infeasible")
+        return finish(None, Status.INFEASIBLE)
 
     start = None
     if warm_plan is not None:
-        if isinstance(warm_plan, str):
-            if warm_plan != "greedy":
-                raise UsageError(f"warm_plan must be a Plan, 'greedy' or None, not {warm_plan!r}")
-            from ..layout.cross_entropy import CEParams
-            from .greedy_ce import GreedyParams
-            from .greedy_ce import plan as greedy_plan
-
-            gp = GreedyParams(ce=ce_params or CEParams())
-            warm_plan = greedy_plan(instance, gp, seed)
-        ls_until = time.perf_counter() + 0.1 * max(0.0, deadline - time.perf_counter())
-        kits_ls, j_ls = local_search(
-            instance, [k.tasks for k in warm_plan.kits], lower_level, ls_until, signed=signed
+        start, start_j, ls_j = _warm_start(
+            instance,
+            warm_plan,
+            lower_level,
+            ce_params=ce_params,
+            budget=budget,
+            signed=options.signed,
+            seed=seed,
         )
-        extra.update(
-            start_objective=paper_objective(instance, warm_plan, lower_level, signed=signed),
-            local_search_objective=j_ls,
-        )
-        start = Plan(tuple(Kit(tuple(k)) for k in kits_ls))
+        extra.update(start_objective=start_j, local_search_objective=ls_j)
     t_milp = time.perf_counter()
-    m, keys = _model(instance, cols, signed, weights)
+    m, keys = _model(instance, cols, options.signed, weights)
     extra["binaries"] = len(keys)
     if start is not None:
         _warm(m, instance, cols, keys, start)
     info = run_solver(
         m,
         opt,
-        str(solver),
-        deadline=deadline - _MARGIN,
+        options.solver,
+        budget=budget.cut(MARGIN),
         seed=seed,
-        log=log,
+        log=options.log,
         objective=m.obj,
         options=solver_options,
         warmstart=start is not None,
     )
     extra.update(milp_s=time.perf_counter() - t_milp, termination=info.termination)
     if not info.has_solution:
-        return finish(None, "infeasible" if info.infeasible else "unknown")
+        return finish(None, Status.INFEASIBLE if info.infeasible else Status.UNKNOWN)
+    plan = _solution_plan(instance, m, keys, cols, lower_level)
+    value = paper_objective(instance, plan, lower_level, signed=options.signed)
+    bound = info.bound
+    if bound is not None and bound > value:
+        bound = value  # solver tolerance
+    extra.update(
+        plan_objective_J=value,
+        plan_objective_J_milp=info.objective,
+        plan_objective_J_bound=bound,
+        plan_objective_J_gap=None if bound is None else abs(value - bound) / max(1.0, abs(value)),
+        makespan=evaluate(instance, plan).makespan,
+    )
+    return finish(plan, Status.OPTIMAL if info.optimal else Status.FEASIBLE)
+
+
+def _solution_plan(
+    instance: Instance,
+    m: Any,
+    keys: Sequence[tuple[int, int]],
+    cols: Sequence[Column],
+    lower_level: LowerLevel,
+) -> Plan:
+    """The MILP's chosen columns in kit order, each with its best known layout."""
     chosen = sorted(
         ((k, c) for c, k in keys if m.z[c, k].value is not None and m.z[c, k].value > 0.5)
     )
@@ -669,19 +779,36 @@ def solve(
     for _, c in chosen:
         tasks = human_order(instance, cols[c].tasks)
         plan_kits.append(Kit(tasks, lower_level.value(instance.kit_parts(tasks)).layout))
-    plan = Plan(tuple(plan_kits))
-    value = paper_objective(instance, plan, lower_level, signed=signed)
-    bound = info.bound
-    if bound is not None and bound > value:
-        bound = value  # solver tolerance
-    extra.update(
-        paper_objective=value,
-        paper_objective_milp=info.objective,
-        paper_bound=bound,
-        paper_gap=None if bound is None else abs(value - bound) / max(1.0, abs(value)),
-        makespan=evaluate(instance, plan).makespan,
+    return Plan(tuple(plan_kits))
+
+
+def _warm_start(
+    instance: Instance,
+    warm_plan: Plan | str,
+    lower_level: LowerLevel,
+    *,
+    ce_params: Any,
+    budget: Budget,
+    signed: bool,
+    seed: int,
+) -> tuple[Plan, float, float]:
+    """The MIP start: ``warm_plan`` (``"greedy"``: greedy-ce's plan) improved by
+    :func:`local_search` in a tenth of the time left; with J before and after."""
+    if isinstance(warm_plan, str):
+        if warm_plan != "greedy":
+            raise UsageError(f"warm_plan must be a Plan, 'greedy' or None, not {warm_plan!r}")
+        from ..layout.cross_entropy import CEParams
+        from .greedy_ce import GreedyParams
+        from .greedy_ce import plan as greedy_plan
+
+        gp = GreedyParams(ce=ce_params or CEParams())
+        warm_plan = greedy_plan(instance, gp, seed)
+    ls_until = budget.share(0.1)
+    kits_ls, j_ls = local_search(
+        instance, [k.tasks for k in warm_plan.kits], lower_level, ls_until, signed=signed
     )
-    return finish(plan, "optimal" if info.optimal else "feasible")
+    start_j = paper_objective(instance, warm_plan, lower_level, signed=signed)
+    return Plan(tuple(Kit(tuple(k)) for k in kits_ls)), start_j, j_ls
 
 
 def _warm(

@@ -2,7 +2,8 @@
 
 The transitive reduction of the precedence graph, the human's order inside a kit, groups of
 interchangeable precedence chains (for symmetry breaking), the packing oracle under a run's
-deadline, and a cheap feasible plan that gives an upper bound and a warm start.
+time budget, and a cheap feasible plan that gives an upper bound and a warm start
+(docs/formulations.md).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Any
 from ..instance import Instance, topological_order
 from ..layout import cpsat_packing as packing
 from ..plan import Kit, Placement, Plan, evaluate
+from .budget import Budget
 
 
 def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
@@ -94,24 +96,29 @@ def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+def pack_time_limit(budget: Budget) -> float:
+    """Seconds one packing call may take: 5 % of the time limit, within [0.2, 2] s."""
+    return max(0.2, min(2.0, 0.05 * budget.time_limit))
+
+
 class Packer:
-    """The packing oracle under the run's deadline: every call gets at most ``pack_tl``
+    """The packing oracle under the run's budget: every call gets at most ``pack_tl``
     seconds and never more than what is left."""
 
     def __init__(
-        self, instance: Instance, pack_tl: float, deadline: float, resolution: float = 1.0
+        self, instance: Instance, pack_tl: float, budget: Budget, resolution: float = 1.0
     ) -> None:
         from ..reachability import reach_grid
 
         self.instance = instance
         self.res = resolution
         self.pack_tl = pack_tl
-        self.deadline = deadline
+        self.budget = budget
         self.reach = reach_grid(instance)
 
     def _tl(self, limit: float | None = None) -> float:
         limit = self.pack_tl if limit is None else limit
-        return max(0.02, min(limit, self.deadline - time.perf_counter()))
+        return max(0.02, min(limit, self.budget.remaining()))
 
     def counts(
         self, counts: Mapping[str, int], limit: float | None = None
@@ -189,11 +196,11 @@ def quick_plan(
 ) -> list[list[str]] | None:
     """A cheap feasible plan (an upper bound and a hint): the topological order cut into
     segments of a fixed size s (each split further until it fits), best s by the evaluator."""
-    packer = packer or Packer(instance, 0.2, time.perf_counter() + 10.0)
+    packer = packer or Packer(instance, 0.2, Budget(10.0))
     order = topological_order(instance)
     best: tuple[float, list[list[str]]] | None = None
     for s in range(1, min(len(order), max_size) + 1):
-        if best is not None and time.perf_counter() > packer.deadline:
+        if best is not None and packer.budget.expired():
             break
         kits: list[list[str]] = []
         for a in range(0, len(order), s):

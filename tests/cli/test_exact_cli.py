@@ -102,7 +102,7 @@ def test_cpsat_options_are_checked(stool):
 
     with pytest.raises(UsageError, match="unknown option"):
         solve(stool, "cpsat", colour=1)
-    with pytest.raises(UsageError, match="tray must be one of"):
+    with pytest.raises(UsageError, match="option 'tray': must be one of"):
         solve(stool, "cpsat", tray="magic")
     res = solve(stool, "cpsat", hint="none", tray="benders", time_limit=10)
     assert res.status == "optimal" and res.extra["hint_method"] is None

@@ -18,7 +18,7 @@ from bilevel_kit.solvers import bilevel_milp as kc
 from bilevel_kit.validate import check
 
 pytest.importorskip("pyomo")
-if importlib.util.find_spec("highspy") is None:  # never import it here: see milp_schedule
+if importlib.util.find_spec("highspy") is None:  # never import it here: see solvers/milp/solver.py
     pytest.skip("highspy is not installed", allow_module_level=True)
 
 TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
@@ -181,10 +181,10 @@ def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
     assert out.status == "optimal", out.extra
     assert check(inst, out.plan) == []
     lower = kc.LowerLevel(inst, lower="ce", ce_params=ce)
-    value = out.extra["paper_objective"]
+    value = out.extra["plan_objective_J"]
     assert value == pytest.approx(kc.paper_objective(inst, out.plan, lower), abs=1e-9)
-    assert value == pytest.approx(out.extra["paper_objective_milp"], abs=1e-5)
-    assert out.extra["paper_bound"] <= value + 1e-9
+    assert value == pytest.approx(out.extra["plan_objective_J_milp"], abs=1e-5)
+    assert out.extra["plan_objective_J_bound"] <= value + 1e-9
     assert value == pytest.approx(brute_force(inst, lower), abs=1e-5)
     assert out.bound is not None and out.bound <= out.extra["makespan"] + 1e-9
 
@@ -206,11 +206,11 @@ def test_stool_optimum_equals_greedy_and_its_number():
     assert out.status == "optimal"
     assert out.extra["columns"] == 7  # every subset but {} is convex here, and all fit
     assert [k.tasks for k in out.plan.kits] == [("a1",), ("a2",), ("a3",)]
-    assert out.extra["paper_objective"] == pytest.approx(54.0480397428, abs=1e-6)
+    assert out.extra["plan_objective_J"] == pytest.approx(54.0480397428, abs=1e-6)
     greedy = greedy_ce(inst, seed=0)
     lower = kc.LowerLevel(inst, lower="ce")
     assert kc.paper_objective(inst, greedy.plan, lower) == pytest.approx(
-        out.extra["paper_objective"], abs=1e-6
+        out.extra["plan_objective_J"], abs=1e-6
     )
 
 
@@ -235,7 +235,7 @@ def test_warm_start_and_cpsat_lower_level_keep_the_contract():
     a = kc.solve(inst, time_limit=30.0, lower="ce", ce_params=ce, warm_plan=greedy.plan)
     b = kc.solve(inst, time_limit=30.0, lower="best", ce_params=ce, pack_time_limit=0.5)
     assert a.status == b.status == "optimal"
-    assert b.extra["paper_objective"] <= a.extra["paper_objective"] + 1e-9
+    assert b.extra["plan_objective_J"] <= a.extra["plan_objective_J"] + 1e-9
     for out in (a, b):
         assert check(inst, out.plan) == []
 
@@ -255,4 +255,15 @@ def test_registered_method_reports_a_makespan_bound(monkeypatch):
     assert res.extra["violations"] == []
     assert res.bound == pytest.approx(best_bound(inst))
     assert res.bound <= res.objective
-    assert res.extra["paper_objective"] == pytest.approx(54.0480397428, abs=1e-6)
+    assert res.extra["plan_objective_J"] == pytest.approx(54.0480397428, abs=1e-6)
+
+
+def test_options_of_the_registered_method():
+    from bilevel_kit.methods import get_method
+    from bilevel_kit.options import describe
+
+    assert get_method("bilevel-milp").options_class() is kc.BilevelMilpOptions
+    names = [o.name for o in describe(kc.BilevelMilpOptions)]
+    assert "warm_plan" not in names and "ce_params" not in names  # Python-only arguments
+    with pytest.raises(UsageError, match="lower"):
+        kc.solve(load(TABLE.parent / "stool.json"), lower="magic", time_limit=5.0)

@@ -376,3 +376,33 @@ def test_embedded_and_benders_agree_under_a_reach_map(monkeypatch):
     assert emb.extra["makespan"] == pytest.approx(102.0)
     assert ben.extra["makespan"] == pytest.approx(102.0)
     assert free.extra["makespan"] == pytest.approx(100.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# the method contract
+# ---------------------------------------------------------------------------------------------
+
+
+def test_options_dataclass_and_hint_validation(stool):
+    from bilevel_kit.errors import UsageError
+    from bilevel_kit.methods import Status, get_method, solve
+    from bilevel_kit.options import parse_options
+
+    spec = get_method("cpsat")
+    assert spec.options_class() is cs.CpsatOptions
+    defaults = cs.CpsatOptions()
+    assert (defaults.workers, defaults.tray, defaults.objective, defaults.hint) == (
+        2,
+        "auto",
+        "makespan",
+        "auto",
+    )
+    with pytest.raises(UsageError, match="'no-such-method'"):
+        parse_options(cs.CpsatOptions, {"hint": "no-such-method"}, "method 'cpsat'")
+    with pytest.raises(UsageError, match="time_resolution"):
+        solve(stool, "cpsat", time_resolution=0)
+    with pytest.raises(UsageError, match="workers"):
+        solve(stool, "cpsat", workers=0)
+    out = cs.cpsat(stool, cs.CpsatOptions(hint="single-task"), seed=0, time_limit=10.0)
+    assert out.status is Status.OPTIMAL
+    assert out.extra["hint_method"] == "single-task"

@@ -18,7 +18,7 @@ from bilevel_kit.solvers import milp as ms
 from bilevel_kit.validate import check
 
 pytest.importorskip("pyomo")
-if importlib.util.find_spec("highspy") is None:  # never import it here: see milp_schedule
+if importlib.util.find_spec("highspy") is None:  # never import it here: see solvers/milp/solver.py
     pytest.skip("highspy is not installed", allow_module_level=True)
 
 TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
@@ -244,3 +244,28 @@ def test_registered_method_goes_through_methods_solve(monkeypatch):
     assert res.status == "optimal"
     assert res.extra["violations"] == []
     assert res.objective == pytest.approx(brute_force(inst), abs=1e-6)
+
+
+def test_options_and_python_entry_share_the_validation():
+    from bilevel_kit.methods import Status, get_method
+
+    assert get_method("milp").options_class() is ms.MilpOptions
+    with pytest.raises(UsageError, match="objective"):
+        ms.solve(from_dict(geometry_doc()), objective="idle", time_limit=5.0)
+    out = ms.milp(from_dict(geometry_doc()), ms.MilpOptions(), seed=0, time_limit=20.0)
+    assert out.status is Status.OPTIMAL
+
+
+def test_the_highs_child_module_never_loads_ortools():
+    """The child process must not load OR-Tools (both bundle libhighs.so.1)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, bilevel_kit.solvers.milp.highs_child; "
+        "print(any(m.startswith('ortools') for m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert out.strip() == "False"

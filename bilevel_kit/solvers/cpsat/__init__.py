@@ -1,0 +1,37 @@
+"""The exact whole-horizon schedule as a CP-SAT model (registered method ``cpsat``).
+
+One module per step: :mod:`.scaling` (integer time grid), :mod:`.model` (the schedule model),
+:mod:`.tray` (embedded rectangles, Benders cuts), :mod:`.embedded` and :mod:`.benders` (the two
+ways to solve it), :mod:`.method` (the registered entry, its options and the Python
+:func:`solve`). The formulation is in docs/formulations.md; the result and its ``extra`` keys
+are listed in :mod:`.method`. Importing this package loads no OR-Tools.
+"""
+
+from .method import (
+    AUTO_EMBEDDED_MAX_RECTS,
+    HINT_METHODS,
+    OBJECTIVES,
+    TRAY_MODES,
+    CpsatOptions,
+    ScheduleOptions,
+    best_heuristic_plan,
+    cpsat,
+    run,
+    solve,
+)
+from .scaling import Scaled, scale_times
+
+__all__ = [
+    "AUTO_EMBEDDED_MAX_RECTS",
+    "HINT_METHODS",
+    "OBJECTIVES",
+    "TRAY_MODES",
+    "CpsatOptions",
+    "Scaled",
+    "ScheduleOptions",
+    "best_heuristic_plan",
+    "cpsat",
+    "run",
+    "scale_times",
+    "solve",
+]

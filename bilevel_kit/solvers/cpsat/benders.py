@@ -1,0 +1,153 @@
+"""Logic-based Benders: the master (area relaxation + no-good cuts) <-> packing of each kit.
+
+Each kit of a master solution is packed by :mod:`~bilevel_kit.layout.cpsat_packing`; a part
+multiset that is proven not to fit is shrunk to a minimal non-fitting one and cut from every
+kit (:func:`.tray.add_cut`). The master is re-solved until its optimum packs (then it is
+optimal for the full problem) or the time is up; kits that do not fit are split greedily to
+keep an incumbent. A cut from a packing that timed out ("unproven") is a heuristic: after one,
+the master's bound is no longer a proof.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from typing import Any
+
+from ..common import kit_order
+from .context import MARGIN, Context, State
+from .model import Model, canonical, extract_kits, hint
+from .scaling import scaled_objective
+from .tray import add_cut
+
+
+def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]] | None) -> State:
+    """Iterate master solves and packing checks (module docstring) within the budget."""
+    loop = _Benders(ctx, mdl, incumbent)
+    loop.seed_cuts()
+    it = 0
+    while ctx.left() > 0.01:
+        it += 1
+        if not loop.iterate(solver):
+            break
+    loop.state.info = {"benders_iterations": it, "unproven_cuts": loop.unproven}
+    return loop.state
+
+
+class _Benders:
+    """The loop's state: the incumbent, the cuts seen and how many are unproven."""
+
+    def __init__(self, ctx: Context, mdl: Model, incumbent: list[list[int]] | None) -> None:
+        self.ctx = ctx
+        self.mdl = mdl
+        obj = None if incumbent is None else scaled_objective(ctx.sc, incumbent, ctx.objective)
+        self.state = State(incumbent, obj)
+        self.unproven = 0
+        self.seen: set[frozenset[tuple[str, int]]] = set()
+
+    def counts(self, kit: list[int]) -> dict[str, int]:
+        ids = self.ctx.ids
+        return dict(self.ctx.instance.kit_parts([ids[i] for i in kit]))
+
+    def cut(self, counts: dict[str, int], proven: bool) -> bool:
+        """Cut ``counts`` (shrunk to a minimal non-fitting multiset when ``proven``) unless
+        the same cut was added before."""
+        packer = self.ctx.packer
+        mini = (
+            packer.minimal_nofit(counts, self.ctx.budget.share(1 / 4, MARGIN)) if proven else counts
+        )
+        key = frozenset(mini.items())
+        if key in self.seen:
+            return False
+        self.seen.add(key)
+        add_cut(self.mdl, mini)
+        return True
+
+    def seed_cuts(self) -> None:
+        """Every pair of (distinct part multisets of) tasks that does not fit together."""
+        instance, packer = self.ctx.instance, self.ctx.packer
+        seed_until = self.ctx.budget.share(0.1, MARGIN)
+        reps = list({frozenset(instance.kit_parts([t]).items()): t for t in self.ctx.ids}.values())
+        for a, b in itertools.combinations_with_replacement(range(len(reps)), 2):
+            if time.perf_counter() > seed_until:
+                break
+            counts = dict(instance.kit_parts([reps[a], reps[b]]))
+            if packer.counts(counts)[0] is False:
+                self.cut(counts, True)
+
+    def verdicts(self, kits: list[list[int]]) -> list[bool | None]:
+        """Does each kit fit (None: unknown within the packing time limit)?"""
+        packer = self.ctx.packer
+        out = []
+        for kit in kits:
+            counts = self.counts(kit)
+            ok = packer.counts(counts)[0]
+            if ok is None:  # a hard packing: one more try with a longer limit
+                ok = packer.counts(
+                    counts, max(packer.pack_tl, min(10 * packer.pack_tl, self.ctx.left() / 3))
+                )[0]
+            out.append(ok)
+        return out
+
+    def repair(self, kits: list[list[int]]) -> None:
+        """Split the kits that do not fit; keep the result if it beats the incumbent."""
+        ctx, state = self.ctx, self.state
+        ids = ctx.ids
+        repaired: list[list[int]] = []
+        for kit in kits:
+            parts = ctx.packer.split(list(kit_order(ctx.instance, [ids[i] for i in kit])))
+            if parts is None:
+                repaired = []
+                break
+            repaired += [[ctx.instance.index[t] for t in q] for q in parts]
+        if repaired:
+            repaired = canonical(repaired, ctx.groups)
+            obj = scaled_objective(ctx.sc, repaired, ctx.objective)
+            if state.obj is None or obj < state.obj:
+                state.kits, state.obj = repaired, obj
+
+    def iterate(self, solver: Any) -> bool:
+        """One master solve and its packing checks; False when the loop is done."""
+        from ortools.sat.python import cp_model
+
+        state, mdl = self.state, self.mdl
+        if state.kits is not None:
+            hint(mdl, self.ctx.sc, state.kits)
+        solver.parameters.max_time_in_seconds = self.ctx.left()
+        st = solver.solve(mdl.model)
+        state.status_name = solver.status_name(st)
+        if st == cp_model.INFEASIBLE:
+            # the master holds C <= U, so without an unproven cut the incumbent is optimal
+            state.infeasible = state.kits is None and self.unproven == 0
+            if state.kits is not None and self.unproven == 0:
+                state.proven, state.lower = True, state.obj
+            return False
+        if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+            return False
+        if self.unproven == 0:  # after an unproven cut the master bound is no proof
+            bound = math.ceil(solver.best_objective_bound - 1e-6)
+            state.lower = bound if state.lower is None else max(state.lower, bound)
+        kits = extract_kits(mdl, solver)
+        verdicts = self.verdicts(kits)
+        if all(v is True for v in verdicts):
+            obj = round(solver.objective_value)
+            if state.obj is None or obj <= state.obj:
+                state.kits, state.obj = kits, obj
+            state.proven = (st == cp_model.OPTIMAL and self.unproven == 0) or (
+                state.lower is not None and state.lower >= state.obj
+            )
+            if state.proven:
+                state.lower = state.obj
+            return False  # optimal, or the master ran out of time on a packable incumbent
+        new = 0
+        for kit, ok in zip(kits, verdicts, strict=True):
+            if ok is not True:
+                added = self.cut(self.counts(kit), ok is False)
+                new += added
+                self.unproven += int(added and ok is None)
+        self.repair(kits)
+        if state.obj is not None and state.lower is not None and state.lower >= state.obj:
+            state.proven = True
+            return False
+        return bool(new)  # nothing new to cut: only possible with unknown packings

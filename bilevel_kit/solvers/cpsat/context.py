@@ -1,0 +1,58 @@
+"""What one CP-SAT run carries through its steps, and what a run ends with."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ...instance import Instance
+from ...plan import Placement
+from ..budget import Budget
+from ..common import Packer
+from .scaling import Scaled
+
+#: Seconds kept back from the time limit for extraction and packing the final layouts.
+MARGIN = 0.15
+
+
+@dataclass
+class Context:
+    """Instance data, scaled times and the run's parameters, shared by the model builder and
+    the embedded and Benders loops.
+
+    ``groups``: interchangeable precedence chains as task indices (symmetry breaking);
+    ``objective``: ``makespan`` or ``human_idle``; ``budget``: the whole run's time budget
+    (the loops keep :data:`MARGIN` of it back); ``packer``: the packing oracle on the grid
+    of ``pack_res`` mm.
+    """
+
+    instance: Instance
+    sc: Scaled
+    objective: str
+    groups: list[list[list[int]]]
+    packer: Packer
+    budget: Budget
+    pack_res: float
+
+    @property
+    def ids(self) -> list[str]:
+        return [t.id for t in self.instance.tasks]
+
+    def left(self) -> float:
+        """Seconds the loops may still use (the margin kept back)."""
+        return self.budget.remaining(MARGIN)
+
+
+@dataclass
+class State:
+    """What a run ends with: the best kits (objective ``obj``), the proven lower bound
+    ``lower`` (scaled objective units), whether ``obj`` is proven optimal."""
+
+    kits: list[list[int]] | None
+    obj: int | None
+    lower: int | None = None
+    proven: bool = False
+    infeasible: bool = False
+    layouts: list[tuple[Placement, ...]] | None = None
+    status_name: str = "UNKNOWN"
+    info: dict[str, Any] = field(default_factory=dict)

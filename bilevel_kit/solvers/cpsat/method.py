@@ -1,0 +1,449 @@
+r"""The registered method ``cpsat``: the exact whole-horizon schedule with CP-SAT.
+
+It minimises makespan (or human idle) over all segmentations and orders (the model:
+:mod:`.model`, docs/formulations.md; the timeline: docs/timeline.md), warm-started from the
+best heuristic plan (:func:`best_heuristic_plan`, option ``hint``).
+
+**Tray mode.** ``embedded`` puts the rectangles into the model, ``benders`` checks the kits
+of master solutions with the packing oracle and cuts those that do not fit (:mod:`.tray`,
+:mod:`.benders`). ``auto`` uses ``embedded`` when the number of optional (part, kit)
+rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
+kits; two tables took 9 s embedded against 1.3 s with Benders) and the instance does not
+enforce reachability, else ``benders``. Embedded models run with
+:data:`~bilevel_kit.layout.cpsat_packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
+"optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
+the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
+every plan. Times are scaled to integers (:mod:`.scaling`).
+
+**Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
+checked to fit), every plan at least as good has :math:`m (o_R + d) \le U - \sum r_i - o_H -
+\min_{snk} h_i` and :math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which
+caps K; C <= U is added too.
+
+**Time.** ``time_limit`` (default 60 s) covers everything, packing included; 1 % of it and
+0.15 s are kept back (CP-SAT stops a little after its own limit on large models). With
+``hint="auto"`` the heuristics' time counts in the method's wall time, not in ``time_limit``.
+
+**Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
+never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
+order with a non-overlapping layout. ``extra`` keys:
+
+* ``time_resolution``, ``times_exact``: the time grid (s) and whether it is exact;
+* ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
+  of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
+  chains), ``hint_used`` (the given plan was a valid start);
+* ``benders_iterations``, ``unproven_cuts`` (Benders only), ``cuts``, ``cpsat_status``,
+  ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
+* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
+  ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
+  scaled times); ``idle_bound`` for ``objective="human_idle"``;
+* ``reason`` when the run ends without a plan for a known reason;
+* ``hint_method``: the heuristic whose plan was the hint (registered method only).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ...bounds import best_bound, min_kits
+from ...errors import UsageError
+from ...instance import Instance
+from ...layout import cpsat_packing as packing
+from ...methods import REGISTRY, MethodOutput, Status
+from ...methods import gap as relative_gap
+from ...options import parse_options
+from ...plan import Kit, Placement, Plan, evaluate
+from ..budget import Budget
+from ..common import Packer, chain_groups_idx, kit_order, pack_time_limit, quick_plan, reduced_edges
+from .context import MARGIN, Context, State
+from .model import Model, build, canonical
+from .scaling import scale_times, scaled_makespan, scaled_objective
+
+TrayMode = Literal["auto", "embedded", "benders"]
+Objective = Literal["makespan", "human_idle"]
+TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
+OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
+AUTO_EMBEDDED_MAX_RECTS = 300
+#: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
+KEEP_BACK = 0.01
+#: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
+HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
+
+
+def _positive(owner: object, *names: str) -> None:
+    for name in names:
+        value = getattr(owner, name)
+        if not value > 0:
+            raise ValueError(f"option {name!r}: must be > 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class ScheduleOptions:
+    """The CP-SAT model's options (the Python :func:`solve` takes these as keywords)."""
+
+    workers: int = field(default=2, metadata={"help": "CP-SAT worker threads", "min": 1})
+    tray: TrayMode = field(
+        default="auto",
+        metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
+    )
+    objective: Objective = field(
+        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+    )
+    time_resolution: float = field(
+        default=0.1, metadata={"help": "time grid in s (> 0), refined when times are not exact"}
+    )
+    refine_times: bool = field(
+        default=True, metadata={"help": "refine the time grid until every time is exact"}
+    )
+    pack_resolution: float = field(
+        default=1.0, metadata={"help": "packing grid in mm (> 0); part sizes are rounded up"}
+    )
+    log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
+
+    def __post_init__(self) -> None:
+        _positive(self, "time_resolution", "pack_resolution")
+
+
+@dataclass(frozen=True)
+class CpsatOptions(ScheduleOptions):
+    """Options of the registered method ``cpsat``."""
+
+    hint: str = field(
+        default="auto",
+        metadata={
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), "
+            "a method name, or none"
+        },
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.hint not in ("auto", "none") and self.hint not in REGISTRY:
+            raise ValueError(
+                f"option 'hint': unknown method {self.hint!r}; choose auto, none or one of "
+                f"{', '.join(REGISTRY)}"
+            )
+
+
+# ---------------------------------------------------------------------------------------------
+# The registered method and the warm start
+# ---------------------------------------------------------------------------------------------
+
+
+def cpsat(
+    instance: Instance,
+    options: CpsatOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
+    (module docstring)."""
+    plan: Plan | None = None
+    source = None
+    if options.hint == "auto":
+        plan, source = best_heuristic_plan(instance, seed=seed)
+    elif options.hint != "none":
+        plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed)
+        if source is None:
+            raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
+    out = run(instance, options, seed=seed, time_limit=time_limit, hint=plan)
+    out.extra["hint_method"] = source
+    return out
+
+
+def best_heuristic_plan(
+    instance: Instance, methods: Sequence[str] = HINT_METHODS, seed: int = 0
+) -> tuple[Plan | None, str | None]:
+    """The plan of lowest makespan among heuristic methods (a warm start for exact models);
+    methods that cannot lay out a kit are skipped."""
+    from ...errors import BilevelKitError
+    from ...methods import get_method
+
+    best: tuple[float, Plan, str] | None = None
+    for name in methods:
+        try:
+            spec = get_method(name)
+            fn = spec.load()
+            if spec.options:
+                out = fn(instance, spec.parse({}), seed=seed, time_limit=None)
+            else:
+                out = fn(instance, seed=seed)
+        except BilevelKitError:
+            continue
+        if out.plan is None:
+            continue
+        ms = evaluate(instance, out.plan).makespan
+        if best is None or ms < best[0]:
+            best = (ms, out.plan, name)
+    return (best[1], best[2]) if best else (None, None)
+
+
+def solve(
+    instance: Instance,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    workers: int = 2,
+    tray: str = "auto",
+    objective: str = "makespan",
+    time_resolution: float = 0.1,
+    refine_times: bool = True,
+    pack_resolution: float = 1.0,
+    hint: Plan | None = None,
+    log: bool = False,
+    cpsat_params: dict[str, Any] | None = None,
+) -> MethodOutput:
+    """The Python entry: :func:`run` with the options as keywords (validated like the
+    method's), ``hint`` a plan to start from and ``cpsat_params`` extra CP-SAT parameters."""
+    params = {
+        "workers": workers,
+        "tray": tray,
+        "objective": objective,
+        "time_resolution": time_resolution,
+        "refine_times": refine_times,
+        "pack_resolution": pack_resolution,
+        "log": log,
+    }
+    options = parse_options(ScheduleOptions, params, "cpsat")
+    return run(
+        instance, options, seed=seed, time_limit=time_limit, hint=hint, cpsat_params=cpsat_params
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# One run
+# ---------------------------------------------------------------------------------------------
+
+
+class _Report:
+    """The run's ``extra`` and how the run ends (packing solves and wall time added)."""
+
+    def __init__(self, budget: Budget, extra: dict[str, Any]) -> None:
+        self.budget = budget
+        self.extra = extra
+        self.solves_before = sum(c.solves for c in packing._CACHES.values())
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        extra = self.extra
+        extra["pack_solves"] = sum(c.solves for c in packing._CACHES.values()) - self.solves_before
+        extra["wall_time_s"] = self.budget.elapsed()
+        return MethodOutput(plan, status, bound, extra)
+
+
+def run(
+    instance: Instance,
+    options: ScheduleOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    hint: Plan | None = None,
+    cpsat_params: dict[str, Any] | None = None,
+) -> MethodOutput:
+    """Minimise makespan (or human idle) over all segmentations and orders (module
+    docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
+    budget = Budget(time_limit, keep_back=KEEP_BACK)
+    from ortools.sat.python import cp_model
+
+    sc = scale_times(instance, options.time_resolution, options.refine_times)
+    pack_tl = pack_time_limit(budget)
+    packer = Packer(instance, pack_tl, budget.cut(MARGIN), options.pack_resolution)
+    report = _Report(
+        budget,
+        {
+            "time_resolution": sc.res,
+            "times_exact": sc.exact,
+            "objective": options.objective,
+            "benders_iterations": 0,
+            "cuts": 0,
+            "hint_used": False,
+        },
+    )
+    extra = report.extra
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return report.finish(None, Status.INFEASIBLE, None)
+
+    n = instance.n_tasks
+    sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
+    groups = chain_groups_idx(n, _edges(instance), sig)
+    extra["symmetric_chains"] = sum(len(g) for g in groups)
+    ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+
+    incumbent = _incumbent(ctx, hint, pack_tl, extra)
+    upper = None
+    if incumbent is not None and options.objective == "makespan":
+        upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
+    K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
+    mode = _tray_mode(instance, options.tray, K)
+    extra.update(
+        tray_mode=mode,
+        max_kits=K,
+        upper_start=None
+        if incumbent is None
+        else evaluate(instance, _plan_of(instance, incumbent, None)).makespan,
+    )
+    mdl = build(
+        instance,
+        sc,
+        K=K,
+        upper=upper,
+        embedded=mode == "embedded",
+        objective=options.objective,
+        pack_res=options.pack_resolution,
+        groups=groups,
+    )
+    extra["build_time_s"] = budget.elapsed()
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = max(1, options.workers)
+    solver.parameters.random_seed = seed
+    solver.parameters.log_search_progress = options.log
+    for key, value in (cpsat_params or {}).items():
+        setattr(solver.parameters, key, value)
+    state = _search(ctx, mdl, solver, mode, incumbent)
+    extra.update(state.info)
+    extra["cpsat_status"] = state.status_name
+    extra["cuts"] = mdl.n_cuts
+    if state.kits is None:
+        if state.infeasible:
+            return report.finish(None, Status.INFEASIBLE, None)
+        return report.finish(None, Status.UNKNOWN, best_bound(instance))
+    return _conclude(ctx, mdl, state, report)
+
+
+def _edges(instance: Instance) -> list[tuple[int, int]]:
+    idx = instance.index
+    return [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
+
+
+def _search(
+    ctx: Context, mdl: Model, solver: Any, mode: str, incumbent: list[list[int]] | None
+) -> State:
+    """The embedded solve or the Benders loop."""
+    if mode == "embedded":
+        from .embedded import run_embedded
+
+        for key, value in packing.SAFE_NO_OVERLAP_2D.items():
+            setattr(solver.parameters, key, value)
+        return run_embedded(ctx, mdl, solver, incumbent)
+    from .benders import run_benders
+
+    return run_benders(ctx, mdl, solver, incumbent)
+
+
+def _incumbent(
+    ctx: Context, hint: Plan | None, pack_tl: float, extra: dict[str, Any]
+) -> list[list[int]] | None:
+    """The better of the hint (if its kits fit) and a quick plan, in canonical chain order."""
+    instance, packer = ctx.instance, ctx.packer
+    ids = ctx.ids
+    idx = instance.index
+    candidates: list[list[list[int]]] = []
+    if hint is not None and sorted(hint.task_order) == sorted(ids):
+        hk = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
+        if all(packer.fits([ids[i] for i in k]) for k in hk):
+            candidates.append(hk)
+            extra["hint_used"] = True
+    qp = quick_plan(
+        instance, Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    )
+    if qp is not None:
+        candidates.append([[idx[t] for t in k] for k in qp])
+    if not candidates:
+        return None
+    best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
+    return canonical(best, ctx.groups)
+
+
+def _kit_cap(ctx: Context, upper: int | None) -> int:
+    """The largest kit count of a plan with scaled makespan <= ``upper`` (module docstring)."""
+    sc = ctx.sc
+    n = len(sc.r)
+    K = n
+    if upper is None:
+        return K
+    edges = _edges(ctx.instance)
+    has_pred = {b for _, b in edges}
+    has_succ = {a for a, _ in edges}
+    if sc.o_r + sc.d > 0:
+        slack = upper - sum(sc.r) - sc.o_h - min(sc.h[i] for i in range(n) if i not in has_succ)
+        K = min(K, max(1, slack // (sc.o_r + sc.d)))
+    if sc.o_h > 0:
+        slack = (
+            upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
+        )
+        K = min(K, max(1, slack // sc.o_h))
+    return K
+
+
+def _tray_mode(instance: Instance, tray: str, K: int) -> str:
+    """``tray`` with ``auto`` resolved (module docstring)."""
+    if tray != "auto":
+        return tray
+    n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
+    small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
+    return "embedded" if small else "benders"
+
+
+def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> MethodOutput:
+    """The plan of the run's best kits with its status and makespan bound in seconds."""
+    instance, sc, extra = ctx.instance, ctx.sc, report.extra
+    assert state.kits is not None
+    plan = _plan_of(instance, state.kits, state.layouts, ctx.packer)
+    real = evaluate(instance, plan)
+    closed = best_bound(instance)
+    lower = state.lower
+    lower_s = None if lower is None else round(lower * sc.res, 9)  # a multiple of res >= 1e-4
+    idle_bound = None
+    if ctx.objective == "makespan":
+        bound_s = closed if lower_s is None else max(closed, lower_s)
+        optimal = state.proven and (sc.exact or real.makespan <= bound_s + 1e-6)
+    else:
+        if lower is not None and sc.exact:
+            idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
+        w_min = (
+            sum(instance.human_time(i) for i in ctx.ids)
+            + min_kits(instance) * instance.kit_overhead_human
+        )
+        bound_s = closed if idle_bound is None else max(closed, idle_bound + w_min)
+        optimal = state.proven and sc.exact
+        extra["idle_bound"] = idle_bound
+    missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
+    if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
+        extra["reason"] = "no layout for some kit within the time limit"
+        return report.finish(None, Status.UNKNOWN, bound_s)
+    extra.update(
+        gap=relative_gap(real.makespan, bound_s) or 0.0,
+        makespan=real.makespan,
+        human_idle=real.human_idle,
+        n_kits=len(plan.kits),
+        bound_closed_form=closed,
+        bound_model=lower_s,
+        scaled_optimal=state.proven,
+    )
+    return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
+
+
+def _plan_of(
+    instance: Instance,
+    kits: Sequence[Sequence[int]],
+    layouts: Sequence[tuple[Placement, ...]] | None,
+    packer: Packer | None = None,
+) -> Plan:
+    """Kits of task indices -> a Plan (human order = topological order inside each kit)."""
+    out = []
+    for kk, kit in enumerate(kits):
+        tasks = kit_order(instance, [instance.tasks[i].id for i in kit])
+        layout: tuple[Placement, ...] = ()
+        if layouts is not None:
+            layout = layouts[kk]
+        elif packer is not None:
+            ok, typed = packer.counts(dict(instance.kit_parts(tasks)))
+            if ok and typed is not None:
+                layout = packing.typed_to_placements(instance, tasks, typed)
+        out.append(Kit(tasks, layout))
+    return Plan(tuple(out))

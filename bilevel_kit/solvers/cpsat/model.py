@@ -1,0 +1,325 @@
+r"""The CP-SAT schedule model (docs/formulations.md), on the integer times of :mod:`.scaling`.
+
+**Variables.** Kit positions k = 1..K (K <= n, the number of tasks; trimmed by an upper bound,
+see :mod:`.method`). ``x[i,k]`` = task i is in kit k, ``y[i,k] = [p_i <= k]`` its order
+encoding, ``p_i = sum_k k x[i,k]`` its kit, ``u_k`` = kit k is used. Task i can only be in the
+first ``n - |descendants(i)|`` kits (every earlier kit needs a task that is not a descendant).
+
+**Constraints.**
+
+* every task in exactly one kit; precedence ``p_i <= p_j`` and ``y[j,k] => y[i,k]`` for every
+  edge i -> j of the transitive reduction (inside a kit the human follows a topological order
+  of the kit's tasks, which the returned plan lists);
+* symmetry breaking: ``x[i,k] => u_k``, ``u_k => OR_i x[i,k]``, ``u_k >= u_{k+1}`` (used kits
+  first, no empty kit before a used one), ``sum_k u_k >= m_min`` (area bound); interchangeable
+  precedence chains (same tasks, same predecessors of the head and successors of the tail,
+  e.g. the four legs of one table) have their kit vectors ``(p_{c_1}, p_{c_2}, ...)`` in
+  lexicographic order (relabelling the chains maps any plan to one that satisfies it);
+* the timeline of docs/timeline.md, exactly, with scaled integer times::
+
+      R_k = o_R u_k + sum_i r_i x[i,k]          H_k = o_H u_k + sum_i h_i x[i,k]
+      A_k = A_{k-1} + R_k + d u_k               (arrival; the robot is busy during delivery)
+      E_k >= A_k + H_k,  E_k >= E_{k-1} + H_k   (human end = max(arrival, previous end) + H_k)
+      C = E_K
+
+  Unused kits sit at the end and add nothing; E_k only needs ``>=``, since the objective
+  pushes it down to the max. The closed-form bounds of :mod:`bilevel_kit.bounds` on C are
+  added on the scaled times (redundant, they help the search), and ``C <= U`` for an upper
+  bound U;
+* the tray: ``sum_i a_i x[i,k] <= W H`` (grid areas) always, plus either the embedded
+  rectangles of :mod:`.tray` or, for logic-based Benders, the part counts ``c_{t,k}`` that the
+  no-good cuts of :func:`.tray.add_cut` use.
+
+**Objective.** ``makespan``: minimise C. ``human_idle``: minimise :math:`C - \sum_k H_k =
+C - o_H \sum_k u_k - \sum_i h_i`; with o_H = 0 this is makespan minus a constant (same
+optimum); with o_H > 0 it trades makespan against the number of kits.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from ...bounds import min_kits
+from ...instance import Instance
+from ...layout import cpsat_packing as packing
+from ..common import reduced_edges
+from .scaling import Scaled
+
+#: One embedded rectangle: (part type, copy j, x var, y var, rotation: 0, 1 or the two
+#: orientation literals).
+Rect = tuple[str, int, Any, Any, Any]
+
+
+@dataclass
+class Model:
+    """The CP-SAT model and the variables the loops read, hint and cut."""
+
+    model: Any
+    K: int
+    x: list[dict[int, Any]]
+    used: list[Any]
+    arrive: list[Any]
+    end: list[Any]
+    C: Any
+    obj_const: int = 0
+    rects: dict[tuple[int, int], list[Rect]] = field(default_factory=dict)
+    counts: dict[tuple[str, int], Any] = field(default_factory=dict)
+    cut_lits: dict[tuple[str, int, int], Any] = field(default_factory=dict)
+    n_cuts: int = 0
+
+
+def build(
+    instance: Instance,
+    sc: Scaled,
+    *,
+    K: int,
+    upper: int | None,
+    embedded: bool,
+    objective: str,
+    pack_res: float,
+    groups: list[list[list[int]]],
+) -> Model:
+    """The model of the module docstring with K kit positions (``upper``: C <= U)."""
+    from ortools.sat.python import cp_model
+
+    m = cp_model.CpModel()
+    x, p = _assignment(m, instance, K)
+    used = _used_kits(m, instance, x, K)
+    for group in groups:
+        for c1, c2 in itertools.pairwise(group):
+            add_lex_leq(m, [p[i] for i in c1], [p[i] for i in c2])
+    arrive, end = _timeline(m, sc, x, used, K, upper)
+    C = end[-1]
+    m.add(_closed_form_bound(instance, sc, K) <= C)
+    out = Model(m, K, x, used, arrive, end, C)
+    if objective == "makespan":
+        m.minimize(C)
+    else:
+        m.minimize(C - sc.o_h * sum(used))
+        out.obj_const = -sum(sc.h)
+    _tray(instance, out, embedded, pack_res)
+    return out
+
+
+def _assignment(m: Any, instance: Instance, K: int) -> tuple[list[dict[int, Any]], list[Any]]:
+    """``x[i][k]`` and the kit ``p_i`` of every task, with precedence on the reduced graph."""
+    ids = [t.id for t in instance.tasks]
+    n = len(ids)
+    idx = instance.index
+    # kit positions; p_i <= n - |descendants(i)| since every earlier kit needs a task
+    n_desc = [0] * n
+    for t in ids:
+        for a in instance.ancestors[t]:
+            n_desc[idx[a]] += 1
+    ub = [min(K, n - n_desc[i]) for i in range(n)]
+    # x[i][k] = [p_i == k] and the order encoding y[i][k] = [p_i <= k]; precedence as the
+    # implications y[b][k] => y[a][k] (stronger propagation and LP than p_a <= p_b alone)
+    x = [{k: m.new_bool_var(f"x{i}_{k}") for k in range(ub[i])} for i in range(n)]
+    y = [[m.new_bool_var(f"y{i}_{k}") for k in range(ub[i] - 1)] for i in range(n)]
+    p = []
+    for i in range(n):
+        m.add_exactly_one(x[i].values())
+        for k in range(ub[i]):
+            below = y[i][k - 1] if k else 0
+            at_or_below = y[i][k] if k < ub[i] - 1 else 1
+            m.add(x[i][k] == at_or_below - below)
+            if 0 < k < ub[i] - 1:
+                m.add_implication(y[i][k - 1], y[i][k])
+        pi = m.new_int_var(0, ub[i] - 1, f"p{i}")
+        m.add(pi == sum(k * v for k, v in x[i].items()))
+        p.append(pi)
+    for a, b in [(idx[a], idx[b]) for a, b in reduced_edges(instance)]:
+        m.add(p[a] <= p[b])
+        for k in range(min(ub[a], ub[b]) - 1):
+            m.add_implication(y[b][k], y[a][k])
+    return x, p
+
+
+def _used_kits(m: Any, instance: Instance, x: list[dict[int, Any]], K: int) -> list[Any]:
+    """``u_k``: used kits first, at least ``m_min`` of them (symmetry breaking)."""
+    members: list[list[Any]] = [[] for _ in range(K)]
+    for xs in x:
+        for k, v in xs.items():
+            members[k].append(v)
+    used = [m.new_bool_var(f"u{k}") for k in range(K)]
+    for k in range(K):
+        for v in members[k]:
+            m.add_implication(v, used[k])
+        m.add_bool_or(members[k]).only_enforce_if(used[k])
+        if k:
+            m.add_implication(used[k], used[k - 1])
+    m.add(used[0] == 1)
+    m.add(sum(used) >= min(K, min_kits(instance)))
+    return used
+
+
+def _timeline(
+    m: Any, sc: Scaled, x: list[dict[int, Any]], used: list[Any], K: int, upper: int | None
+) -> tuple[list[Any], list[Any]]:
+    """Arrival ``A_k`` and human end ``E_k`` of every kit position (module docstring)."""
+    n = len(x)
+    hz = sum(sc.r) + sum(sc.h) + K * (sc.o_r + sc.o_h + sc.d)
+    if upper is not None:
+        hz = min(hz, upper)
+    arrive: list[Any] = []
+    end: list[Any] = []
+    for k in range(K):
+        R = sc.o_r * used[k] + sum(sc.r[i] * x[i][k] for i in range(n) if k in x[i])
+        Hk = sc.o_h * used[k] + sum(sc.h[i] * x[i][k] for i in range(n) if k in x[i])
+        a = m.new_int_var(0, hz, f"A{k}")
+        e = m.new_int_var(0, hz, f"E{k}")
+        m.add(a == (arrive[-1] if k else 0) + R + sc.d * used[k])
+        m.add(e >= a + Hk)
+        if k:
+            m.add(e >= end[-1] + Hk)
+        arrive.append(a)
+        end.append(e)
+    return arrive, end
+
+
+def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
+    """The human and robot bounds of :mod:`bilevel_kit.bounds` on scaled times."""
+    idx = instance.index
+    n = len(sc.r)
+    edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
+    has_pred = {b for _, b in edges}
+    has_succ = {a for a, _ in edges}
+    mk = min(K, min_kits(instance))
+    lb_human = (
+        min(sc.r[i] for i in range(n) if i not in has_pred)
+        + sc.o_r
+        + sc.d
+        + sum(sc.h)
+        + mk * sc.o_h
+    )
+    lb_robot = (
+        sum(sc.r)
+        + mk * (sc.o_r + sc.d)
+        + sc.o_h
+        + min(sc.h[i] for i in range(n) if i not in has_succ)
+    )
+    return max(lb_human, lb_robot)
+
+
+def _tray(instance: Instance, mdl: Model, embedded: bool, pack_res: float) -> None:
+    """The area relaxation in grid units (valid for both modes), then the embedded rectangles
+    or the part counts the Benders cuts need."""
+    from .tray import embed_tray
+
+    m, x, K = mdl.model, mdl.x, mdl.K
+    n = len(x)
+    tray = instance.tray
+    W = packing.grid_down(tray.width, pack_res)
+    Hh = packing.grid_down(tray.height, pack_res)
+    gsize = {
+        pt.id: (packing.grid_up(pt.width, pack_res), packing.grid_up(pt.height, pack_res))
+        for pt in instance.part_types.values()
+    }
+    area = [sum(gsize[t][0] * gsize[t][1] * c for t, c in task.parts) for task in instance.tasks]
+    for k in range(K):
+        terms = [area[i] * x[i][k] for i in range(n) if k in x[i] and area[i]]
+        if terms:
+            m.add(sum(terms) <= W * Hh)
+    if embedded:
+        from ...reachability import reach_grid
+
+        reach = reach_grid(instance)
+        tables = None if reach is None else packing.reach_tables(reach, W, Hh, pack_res)
+        embed_tray(instance, mdl, W, Hh, gsize, tables)
+        return
+    total = instance.kit_parts([t.id for t in instance.tasks])
+    for t in instance.part_types:
+        for k in range(K):
+            terms = [
+                c * x[i][k]
+                for i in range(n)
+                if k in x[i]
+                for q, c in instance.tasks[i].parts
+                if q == t
+            ]
+            if terms:
+                cnt = m.new_int_var(0, total[t], f"c_{t}_{k}")
+                m.add(cnt == sum(terms))
+                mdl.counts[(t, k)] = cnt
+
+
+def add_lex_leq(m: Any, u: Sequence[Any], v: Sequence[Any]) -> None:
+    """u <=lex v for equal-length vectors of integer variables."""
+    eq_prev = None
+    for t, (a, b) in enumerate(zip(u, v, strict=True)):
+        cond = [] if eq_prev is None else [eq_prev]
+        if t == len(u) - 1:
+            m.add(a <= b).only_enforce_if(cond)
+            break
+        eq = m.new_bool_var("")
+        m.add(a == b).only_enforce_if(eq)
+        m.add(a < b).only_enforce_if([*cond, eq.Not()])
+        if eq_prev is not None:
+            m.add_implication(eq, eq_prev)
+        eq_prev = eq
+
+
+def canonical(kits: list[list[int]], groups: list[list[list[int]]]) -> list[list[int]]:
+    """Relabel interchangeable chains so that their kit vectors are in lexicographic order
+    (the symmetry-breaking constraints of the model); makespan and kit contents unchanged."""
+    pos = {i: k for k, kit in enumerate(kits) for i in kit}
+    new = dict(pos)
+    for group in groups:
+        vectors = sorted(tuple(pos[i] for i in chain) for chain in group)
+        for chain, vec in zip(group, vectors, strict=True):
+            for i, k in zip(chain, vec, strict=True):
+                new[i] = k
+    out: list[list[int]] = [[] for _ in kits]
+    for i in sorted(new):
+        out[new[i]].append(i)
+    return out
+
+
+def hint(
+    mdl: Model,
+    sc: Scaled,
+    kits: Sequence[Sequence[int]],
+    corners: dict[int, dict[tuple[str, int], tuple[int, int, bool]]] | None = None,
+) -> None:
+    """Hint a complete solution: kits, timeline and (embedded) the rectangles' corners."""
+    m = mdl.model
+    m.clear_hints()
+    if len(kits) > mdl.K:
+        return
+    where = {i: k for k, kit in enumerate(kits) for i in kit}
+    for i, xs in enumerate(mdl.x):
+        for k, v in xs.items():
+            m.add_hint(v, where.get(i) == k)
+    arrive = end = 0
+    for k in range(mdl.K):
+        kit = kits[k] if k < len(kits) else []
+        m.add_hint(mdl.used[k], bool(kit))
+        if kit:
+            arrive += sc.o_r + sum(sc.r[i] for i in kit) + sc.d
+            end = max(arrive, end) + sc.o_h + sum(sc.h[i] for i in kit)
+        m.add_hint(mdl.arrive[k], arrive)
+        m.add_hint(mdl.end[k], end)
+    if not mdl.rects:
+        return
+    for (i, k), rects in mdl.rects.items():
+        here = where.get(i) == k and corners is not None and i in corners
+        for ptype, j, xv, yv, rot in rects:
+            cx, cy, turned = corners[i][(ptype, j)] if here else (0, 0, False)
+            m.add_hint(xv, cx)
+            m.add_hint(yv, cy)
+            if isinstance(rot, tuple):
+                m.add_hint(rot[0], here and not turned)
+                m.add_hint(rot[1], here and turned)
+
+
+def extract_kits(mdl: Model, solver: Any) -> list[list[int]]:
+    """The kits (task indices, in kit order) of the solver's current solution."""
+    kits: dict[int, list[int]] = {}
+    for i, xs in enumerate(mdl.x):
+        for k, v in xs.items():
+            if solver.boolean_value(v):
+                kits.setdefault(k, []).append(i)
+    return [kits[k] for k in sorted(kits)]

@@ -1,0 +1,85 @@
+"""Integer times for the CP-SAT schedule model, and the timeline on them.
+
+CP-SAT works on integers, so times become multiples of ``time_resolution`` s (default 0.1 s).
+When the instance's times are not multiples of it, the grid is refined to the coarsest divisor
+``time_resolution / q`` (q in :data:`REFINE`, down to 1/1000) on which all of them are exact;
+if none exists the times are rounded *down*. Makespan is non-decreasing in every duration (a
+max-plus expression, docs/timeline.md), so with rounded-down times the model's optimum and bound
+are lower bounds for the real instance: the reported bound stays valid. The reported makespan is
+always recomputed by :func:`bilevel_kit.plan.evaluate` on the real times, and ``optimal`` is
+claimed only when the model is exact or that makespan meets the bound.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from ...instance import Instance
+from ...layout import cpsat_packing as packing
+
+#: Divisors tried to make every time an exact multiple of the time grid.
+REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
+
+
+@dataclass
+class Scaled:
+    """Integer times ``value_s = round_or_floor(value / res)`` (``exact``: rounding is exact).
+
+    ``r``, ``h``: robot and human time of each task (file order); ``d`` delivery; ``o_r``,
+    ``o_h`` the per-kit overheads.
+    """
+
+    res: float
+    exact: bool
+    r: list[int]
+    h: list[int]
+    d: int
+    o_r: int
+    o_h: int
+
+
+def scale_times(instance: Instance, resolution: float, refine: bool = True) -> Scaled:
+    """Integer times on the coarsest exact grid ``resolution / q`` (else floored at
+    ``resolution``); see the module docstring."""
+    ids = [t.id for t in instance.tasks]
+    values = (
+        [instance.robot_time(i) for i in ids]
+        + [instance.human_time(i) for i in ids]
+        + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
+    )
+    res, exact = resolution, False
+    for q in REFINE if refine else (1,):
+        cand = resolution / q
+        if packing.is_grid_exact(values, cand):
+            res, exact = cand, True
+            break
+
+    def sc(v: float) -> int:
+        return round(v / res) if exact else math.floor(v / res + 1e-9)
+
+    return Scaled(
+        res=res,
+        exact=exact,
+        r=[sc(instance.robot_time(i)) for i in ids],
+        h=[sc(instance.human_time(i)) for i in ids],
+        d=sc(instance.delivery_time),
+        o_r=sc(instance.kit_overhead_robot),
+        o_h=sc(instance.kit_overhead_human),
+    )
+
+
+def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
+    """The timeline of docs/timeline.md on scaled integer times (kits of task indices)."""
+    arrive = end = 0
+    for kit in kits:
+        arrive += sc.o_r + sum(sc.r[i] for i in kit) + sc.d
+        end = max(arrive, end) + sc.o_h + sum(sc.h[i] for i in kit)
+    return end
+
+
+def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) -> int:
+    """Scaled objective of a plan: makespan, or human idle without its constant -sum h."""
+    c = scaled_makespan(sc, kits)
+    return c if objective == "makespan" else c - sc.o_h * len(kits)

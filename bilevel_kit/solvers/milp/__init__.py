@@ -1,0 +1,30 @@
+"""The exact whole-horizon schedule as a Pyomo MILP (registered method ``milp``).
+
+:mod:`.model` (the Pyomo model and its Benders cuts), :mod:`.solver` (running HiGHS in a child
+process, :mod:`.highs_child`, or any Pyomo solver; shared with ``bilevel-milp``),
+:mod:`.method` (the registered entry, its options, the Python :func:`solve` and the Benders
+loop; the result and its ``extra`` keys are listed there). The formulation is in
+docs/formulations.md. Importing this package loads neither Pyomo nor a solver.
+"""
+
+from .method import MARGIN, OBJECTIVES, TRAY_MODES, MilpOptions, milp, run, solve
+from .model import canonical_kits, human_order, kit_cap
+from .solver import SOLVER_OPTIONS, SolveInfo, ensure_ortools, make_solver, run_solver
+
+__all__ = [
+    "MARGIN",
+    "OBJECTIVES",
+    "SOLVER_OPTIONS",
+    "TRAY_MODES",
+    "MilpOptions",
+    "SolveInfo",
+    "canonical_kits",
+    "ensure_ortools",
+    "human_order",
+    "kit_cap",
+    "make_solver",
+    "milp",
+    "run",
+    "run_solver",
+    "solve",
+]

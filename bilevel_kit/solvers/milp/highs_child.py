@@ -1,0 +1,82 @@
+"""Solve an MPS model with highspy in a child process (``solver="highs"`` of the MILPs).
+
+Run as ``python -m bilevel_kit.solvers.milp.highs_child MODEL OUT TIME_LIMIT SEED LOG OPTIONS
+START``: reads the model (MPS), sets the options (``OPTIONS`` a JSON object of HiGHS options,
+``LOG`` 1 or 0), loads the MIP start (``START`` a JSON file of column name -> value, or an empty
+string), solves with a zero relative gap and writes a JSON result to ``OUT``: ``status``,
+``optimal``, ``infeasible``, ``has_solution``, ``objective``, ``bound`` and, with a solution,
+``values`` (column name -> value).
+
+Why a child process: OR-Tools and highspy each bundle their own ``libhighs.so.1`` (same
+soname, different versions); whichever is loaded first wins and the other's import then fails
+with an undefined symbol (:mod:`bilevel_kit._native`). The packing oracle needs OR-Tools in
+the parent, so this module must never import it (nor anything that does).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from typing import Any
+
+
+def solve_mps(
+    path: str, time_limit: float, seed: int, log: bool, options: dict[str, Any], start: str
+) -> dict[str, Any]:
+    """Solve the MPS model at ``path`` and return the result (module docstring)."""
+    import highspy
+
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", log)
+    h.setOptionValue("time_limit", max(0.01, time_limit))
+    h.setOptionValue("mip_rel_gap", 0.0)
+    h.setOptionValue("random_seed", seed)
+    for key, value in options.items():
+        h.setOptionValue(key, value)
+    h.readModel(path)
+    if start:
+        _set_start(h, start)
+    h.run()
+    st = h.getModelStatus()
+    info = h.getInfo()
+    S = highspy.HighsModelStatus
+    res: dict[str, Any] = {
+        "status": h.modelStatusToString(st),
+        "optimal": st == S.kOptimal,
+        "infeasible": st in (S.kInfeasible, S.kUnboundedOrInfeasible),
+        "has_solution": int(info.primal_solution_status) == 2,
+        "objective": info.objective_function_value,
+        "bound": info.mip_dual_bound,
+    }
+    if res["has_solution"]:
+        res["values"] = dict(
+            zip(h.getLp().col_names_, list(h.getSolution().col_value), strict=True)
+        )
+    return res
+
+
+def _set_start(h: Any, start: str) -> None:
+    """Give HiGHS the (partial) MIP start of the JSON file ``start``."""
+    import numpy as np
+
+    with open(start) as f:
+        given = json.load(f)
+    col = {name: j for j, name in enumerate(h.getLp().col_names_)}
+    pairs = sorted((col[k], v) for k, v in given.items() if k in col)
+    if pairs:
+        h.setSolution(
+            len(pairs),
+            np.array([j for j, _ in pairs], dtype=np.int32),
+            np.array([v for _, v in pairs], dtype=np.float64),
+        )
+
+
+def main(argv: list[str]) -> None:
+    path, out, tl, seed, log, opts, start = argv[:7]
+    res = solve_mps(path, float(tl), int(seed), log == "1", json.loads(opts), start)
+    with open(out, "w") as f:
+        json.dump(res, f)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

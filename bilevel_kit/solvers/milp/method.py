@@ -1,0 +1,381 @@
+r"""The registered method ``milp``: the exact whole-horizon schedule as a Pyomo MILP.
+
+The same problem as :mod:`bilevel_kit.solvers.cpsat` (docs/timeline.md,
+docs/formulations.md), written as a position-based batching MILP (:mod:`.model`) so that an
+LP-based branch and bound (HiGHS by default, any Pyomo solver by name, :mod:`.solver`)
+cross-checks the CP-SAT model. It shares only the packing oracle with it.
+
+**Tray (logic-based Benders).** The master holds the area relaxation. Each kit of an
+incumbent is checked with the memoised packing oracle :func:`.cpsat_packing.fit_counts`; a
+part multiset M that provably does not fit is shrunk by a deletion filter to a minimal
+non-fitting one and cut from **every** kit (:func:`.model.add_cut`). The master is re-solved
+until its optimum packs (then it is optimal for the full problem) or the time is up; kits that
+do not fit are split greedily to keep an incumbent. ``tray="auto"`` first seeds cuts for every
+pair of tasks that does not fit; ``"benders"`` starts from the area relaxation alone. "Fits"
+means what the oracle means: an axis-aligned layout on its grid, the same notion as the CP-SAT
+model. The incumbent (the quick plan, then the best packable plan) is the MIP start.
+
+**Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
+master solves), up to a small margin (0.2 s kept back).
+
+**Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
+bound on the makespan in seconds (the master's best bound when every cut is proven, never below
+the closed-form bounds). ``extra`` keys:
+
+* ``solver``, ``objective``, ``tray_mode``, ``time_limit_enforced`` (the solver's time limit is
+  known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
+  ``build_time_s``, ``wall_time_s``;
+* ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``termination`` (the last
+  master solve's), ``master_time_s`` (its wall time);
+* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
+  ``bound_model`` (the master's bound, or None); ``idle_bound`` for
+  ``objective="human_idle"``;
+* ``reason`` when the run ends without a plan for a known reason.
+
+On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
+needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ...bounds import best_bound, min_kits
+from ...instance import Instance
+from ...methods import MethodOutput, Status
+from ...methods import gap as relative_gap
+from ...options import parse_options
+from ...plan import Kit, Plan, evaluate
+from ..budget import Budget
+from ..common import Packer, pack_time_limit, quick_plan
+from .model import (
+    Master,
+    add_cut,
+    build,
+    extract,
+    human_order,
+    kit_cap,
+    objective_value,
+    set_start,
+)
+from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
+
+TRAY_MODES: tuple[str, ...] = ("auto", "benders")
+OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+#: Seconds kept back from the time limit for extraction and the final layouts.
+MARGIN = 0.2
+
+
+@dataclass(frozen=True)
+class MilpOptions:
+    """Options of the registered method ``milp``."""
+
+    solver: str = field(
+        default="highs",
+        metadata={
+            "help": "highs (HiGHS in a child process) or any Pyomo solver name "
+            "(cbc, glpk, gurobi, scip ...)"
+        },
+    )
+    objective: Literal["makespan", "human_idle"] = field(
+        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+    )
+    tray: Literal["auto", "benders"] = field(
+        default="auto",
+        metadata={"help": "auto: seed cuts for task pairs that do not fit; benders: area only"},
+    )
+    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+
+
+def milp(
+    instance: Instance,
+    options: MilpOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``milp`` (module docstring)."""
+    return run(instance, options, seed=seed, time_limit=time_limit)
+
+
+def solve(
+    instance: Instance,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    solver: str = "highs",
+    objective: str = "makespan",
+    tray: str = "auto",
+    log: bool = False,
+    solver_options: Mapping[str, Any] | None = None,
+) -> MethodOutput:
+    """The Python entry: :func:`run` with the options as keywords (validated like the
+    method's); ``solver_options`` are passed to the solver."""
+    params = {"solver": solver, "objective": objective, "tray": tray, "log": log}
+    options = parse_options(MilpOptions, params, "milp")
+    return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
+
+
+def run(
+    instance: Instance,
+    options: MilpOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    solver_options: Mapping[str, Any] | None = None,
+) -> MethodOutput:
+    """Minimise makespan (or human idle) over all segmentations and orders with a MILP.
+
+    Returns the result of the module docstring: ``bound`` is a proven lower bound on the
+    makespan in seconds, every kit has a topological human order and a non-overlapping layout
+    from the packing oracle.
+    """
+    budget = Budget(time_limit)
+    ensure_ortools()
+    opt = make_solver(options.solver)
+    closed = best_bound(instance)
+    pack_tl = pack_time_limit(budget)
+    packer = Packer(instance, pack_tl, budget.cut(MARGIN))
+    extra: dict[str, Any] = {
+        "solver": options.solver,
+        "objective": options.objective,
+        "tray_mode": options.tray,
+        "iterations": 0,
+        "cuts": 0,
+        "unproven_cuts": 0,
+        "time_limit_enforced": options.solver == "highs" or options.solver in SOLVER_OPTIONS,
+    }
+
+    def finish(plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        extra["wall_time_s"] = budget.elapsed()
+        return MethodOutput(plan, status, bound, extra)
+
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return finish(None, Status.INFEASIBLE, None)
+
+    # incumbent, upper bound and the kit cap (only valid for plans at least as good)
+    inc = quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
+    inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
+    upper = None
+    K = instance.n_tasks
+    if inc is not None and inc_obj is not None and options.objective == "makespan":
+        upper = inc_obj
+        K = min(K, kit_cap(instance, upper))
+        K = max(K, len(inc))
+    extra["max_kits"] = K
+    extra["upper_start"] = inc_obj
+
+    master = build(instance, K, upper, options.objective)
+    extra["build_time_s"] = budget.elapsed()
+    loop = _Benders(instance, master, packer, budget, options, inc, inc_obj)
+    if options.tray == "auto":
+        loop.seed_cuts()
+    info = loop.run(opt, seed, solver_options)
+    extra.update(
+        iterations=loop.iterations,
+        cuts=master.n_cuts,
+        unproven_cuts=loop.unproven,
+        termination=None if info is None else info.termination,
+        master_time_s=None if info is None else info.wall_time_s,
+    )
+    if loop.inc is None:
+        if loop.infeasible:
+            return finish(None, Status.INFEASIBLE, None)
+        return finish(None, Status.UNKNOWN, closed)
+    kits_out = []
+    for kit in loop.inc:
+        tasks = human_order(instance, kit)
+        layout = packer.layout(tasks)
+        if layout is None and instance.kit_parts(tasks):
+            extra["reason"] = "no layout for some kit within the time limit"
+            return finish(None, Status.UNKNOWN, closed)
+        kits_out.append(Kit(tasks, layout or ()))
+    plan = Plan(tuple(kits_out))
+    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
+    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+
+
+def _makespan_bound(
+    instance: Instance,
+    plan: Plan,
+    closed: float,
+    lower: float | None,
+    objective: str,
+    extra: dict[str, Any],
+) -> float:
+    """The proven makespan bound in seconds from the closed-form bound and the master's bound
+    ``lower`` on its own objective; fills the plan's entries of ``extra``."""
+    real = evaluate(instance, plan)
+    if objective == "makespan":
+        bound = closed if lower is None else max(closed, lower)
+    else:
+        w_min = sum(instance.human_time(t.id) for t in instance.tasks)
+        idle_lb = None if lower is None else lower - w_min
+        extra["idle_bound"] = idle_lb
+        bound = closed
+        if lower is not None:  # C = idle + sum h + o_H m >= idle_lb + sum h + o_H m_min
+            bound = max(closed, lower + instance.kit_overhead_human * min_kits(instance))
+    if bound > real.makespan:  # only float noise of the solver can do this
+        bound = real.makespan
+    extra.update(
+        gap=relative_gap(real.makespan, bound) or 0.0,
+        makespan=real.makespan,
+        human_idle=real.human_idle,
+        n_kits=len(plan.kits),
+        bound_closed_form=closed,
+        bound_model=lower,
+    )
+    return bound
+
+
+class _Benders:
+    """The master <-> packing loop (module docstring): the incumbent ``inc`` (objective
+    ``inc_obj``), the master's proven bound ``lower`` and the cuts seen so far."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        master: Master,
+        packer: Packer,
+        budget: Budget,
+        options: MilpOptions,
+        inc: list[list[str]] | None,
+        inc_obj: float | None,
+    ) -> None:
+        self.instance = instance
+        self.master = master
+        self.packer = packer
+        self.budget = budget
+        self.options = options
+        self.inc = inc
+        self.inc_obj = inc_obj
+        self.seen: set[frozenset[tuple[str, int]]] = set()
+        self.unproven = 0
+        self.lower: float | None = None
+        self.proven = False
+        self.infeasible = False
+        self.iterations = 0
+
+    def left(self) -> float:
+        return self.budget.remaining(MARGIN)
+
+    def cut(self, counts: Mapping[str, int], proven: bool) -> bool:
+        """Cut ``counts`` (shrunk to a minimal non-fitting multiset when ``proven``) unless
+        the same cut was added before."""
+        mini = (
+            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, MARGIN))
+            if proven
+            else dict(counts)
+        )
+        key = frozenset(mini.items())
+        if key in self.seen:
+            return False
+        self.seen.add(key)
+        add_cut(self.master, mini)
+        return True
+
+    def seed_cuts(self) -> None:
+        """Every pair of tasks (distinct part multisets) that does not fit together."""
+        instance = self.instance
+        seed_until = self.budget.share(0.1, MARGIN)
+        ids = [t.id for t in instance.tasks]
+        reps = list({frozenset(instance.kit_parts([t]).items()): t for t in ids}.values())
+        for a, b in itertools.combinations_with_replacement(reps, 2):
+            if time.perf_counter() > seed_until:
+                break
+            counts = instance.kit_parts([a, b])
+            if self.packer.counts(counts)[0] is False:
+                self.cut(counts, True)
+
+    def run(
+        self, opt: Any, seed: int, solver_options: Mapping[str, Any] | None
+    ) -> SolveInfo | None:
+        """Solve the master until its solution packs, it is proven or the time is up; the
+        last solve's info."""
+        info: SolveInfo | None = None
+        while self.left() > 0.05:
+            self.iterations += 1
+            if self.inc is not None:
+                set_start(self.master, self.instance, self.inc)
+            info = run_solver(
+                self.master.model,
+                opt,
+                self.options.solver,
+                budget=self.budget.cut(MARGIN),
+                seed=seed,
+                log=self.options.log,
+                objective=self.master.model.obj,
+                options=solver_options,
+                warmstart=self.inc is not None,
+            )
+            if not self.step(info):
+                break
+        return info
+
+    def step(self, info: SolveInfo) -> bool:
+        """Use one master solution; False when the loop is done."""
+        instance, objective = self.instance, self.options.objective
+        if info.infeasible:
+            # the master holds C <= U: without unproven cuts the incumbent is optimal
+            if self.unproven == 0:
+                if self.inc is not None:
+                    self.proven, self.lower = True, self.inc_obj
+                else:
+                    self.infeasible = True
+            return False
+        if self.unproven == 0 and info.bound is not None:
+            self.lower = info.bound if self.lower is None else max(self.lower, info.bound)
+        if not info.has_solution:
+            return False
+        kits = extract(self.master)
+        verdicts = self.verdicts(kits)
+        if all(v is True for v in verdicts):
+            obj = objective_value(instance, kits, objective)
+            if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
+                self.inc, self.inc_obj = kits, obj
+            self.proven = info.optimal and self.unproven == 0
+            return False  # optimal, or the master ran out of time on a packable incumbent
+        new = 0
+        for kit, ok in zip(kits, verdicts, strict=True):
+            if ok is not True:
+                added = self.cut(instance.kit_parts(kit), ok is False)
+                new += added
+                self.unproven += int(added and ok is None)
+        self.repair(kits)
+        inc_obj, lower = self.inc_obj, self.lower
+        if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
+            self.proven = True
+            return False
+        return bool(new)  # nothing new to cut: only possible with unknown packings
+
+    def verdicts(self, kits: list[list[str]]) -> list[bool | None]:
+        """Does each kit fit (None: unknown within the packing time limit)?"""
+        out = []
+        pack_tl = self.packer.pack_tl
+        for kit in kits:
+            counts = self.instance.kit_parts(kit)
+            ok = self.packer.counts(counts)[0]
+            if ok is None:  # a hard packing: one more try with a longer limit
+                ok = self.packer.counts(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))[0]
+            out.append(ok)
+        return out
+
+    def repair(self, kits: list[list[str]]) -> None:
+        """Split the kits that do not fit; keep the result if it beats the incumbent."""
+        repaired: list[list[str]] = []
+        for kit in kits:
+            parts = self.packer.split(human_order(self.instance, kit))
+            if parts is None:
+                repaired = []
+                break
+            repaired += parts
+        if repaired:
+            obj = objective_value(self.instance, repaired, self.options.objective)
+            if self.inc_obj is None or obj < self.inc_obj - TOL * max(1.0, abs(obj)):
+                self.inc, self.inc_obj = repaired, obj
