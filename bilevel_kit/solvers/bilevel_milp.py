@@ -101,6 +101,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+import numpy as np
+
 from ..bounds import best_bound
 from ..errors import UsageError
 from ..instance import Instance
@@ -109,6 +111,7 @@ from ..layout.fitness import layout_fitness as layout_fitness_value
 from ..methods import MethodOutput, Status
 from ..options import parse_options
 from ..plan import Kit, Placement, Plan, evaluate, kit_durations
+from . import upper_level
 from .budget import Budget
 from .common import chain_groups, reduced_edges
 from .milp.model import canonical_kits, human_order
@@ -141,31 +144,28 @@ def paper_terms(
     """Per kit: the raw terms ``n_tasks``, ``diff5``, ``diff6``, ``fitness`` and the weighted
     ``score`` of :func:`paper_objective` (module docstring)."""
     w = {**instance.weights, **(weights or {})}
-    d = instance.delivery_time
     tl = evaluate(instance, plan)
-    durations = [kit_durations(instance, k.tasks) for k in plan.kits]
-    out = []
-    backlog = 0.0
-    for k, kit in enumerate(plan.kits):
-        r_k, h_k = durations[k]
-        r_next = durations[k + 1][0] if k + 1 < len(plan.kits) else 0.0
-        diff5 = d + r_k - backlog
-        diff6 = d + r_next - h_k
-        if not signed:
-            diff5, diff6 = abs(diff5), abs(diff6)
-        fit = float(fitness_of(kit))
-        score = -w["W2"] * len(kit.tasks) + w["W3"] * diff5 + w["W4"] * diff6 - w["W5"] * fit
-        out.append(
-            {
-                "n_tasks": float(len(kit.tasks)),
-                "diff5": diff5,
-                "diff6": diff6,
-                "fitness": fit,
-                "score": score,
-            }
-        )
-        backlog = tl.kits[k].human_end - tl.kits[k].arrive
-    return out
+    r, h = np.array([kit_durations(instance, k.tasks) for k in plan.kits], dtype=float).T
+    # H_rem when the robot starts kit k: the human's work left on kit k-1 (tray rule included)
+    backlog = [0.0] + [
+        prev.human_end - nxt.robot_start for prev, nxt in zip(tl.kits, tl.kits[1:], strict=False)
+    ]
+    diff5, diff6 = upper_level.plan_balance(
+        r, h, np.array(backlog), delivery=instance.delivery_time, signed=signed
+    )
+    fit = np.array([float(fitness_of(k)) for k in plan.kits])
+    n_tasks = np.array([len(k.tasks) for k in plan.kits], dtype=float)
+    score = upper_level.objective(w, n_tasks=n_tasks, diff5=diff5, diff6=diff6, fitness=fit)
+    return [
+        {
+            "n_tasks": float(n_tasks[k]),
+            "diff5": float(diff5[k]),
+            "diff6": float(diff6[k]),
+            "fitness": float(fit[k]),
+            "score": float(score[k]),
+        }
+        for k in range(len(plan.kits))
+    ]
 
 
 def paper_objective(
