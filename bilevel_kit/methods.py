@@ -25,7 +25,7 @@ from typing import Any
 
 from .errors import UsageError
 from .instance import Instance
-from .options import NoOptions, describe, parse_options
+from .options import describe, parse_options
 from .plan import Plan, Timeline, evaluate
 
 
@@ -99,13 +99,13 @@ class MethodSpec:
     name: str
     target: str
     summary: str
-    options: str | None = None  # None: a legacy ``fn(instance, *, seed, time_limit, **params)``
+    options: str
 
     def load(self) -> Callable[..., MethodOutput]:
         return _import(self.target)
 
     def options_class(self) -> type:
-        return _import(self.options) if self.options else NoOptions
+        return _import(self.options)
 
     def describe_options(self) -> list[Any]:
         """Type, default and meaning of every option (``bilevel-kit methods NAME``)."""
@@ -119,7 +119,7 @@ class MethodSpec:
 REGISTRY: dict[str, MethodSpec] = {}
 
 
-def register(name: str, target: str, summary: str, options: str | None = None) -> None:
+def register(name: str, target: str, summary: str, options: str) -> None:
     """Add a method (by import path, so registration costs no import)."""
     REGISTRY[name] = MethodSpec(name, target, summary, options)
 
@@ -185,14 +185,11 @@ def solve(
     spec = get_method(method)
     check_seed(seed)
     check_time_limit(time_limit)
-    options = spec.parse(params) if spec.options else None
+    options = spec.parse(params)
     fn = spec.load()
     ensure_kit_placeable(instance)  # an empty reach map is a clear error, not "no kit fits"
     t0 = time.perf_counter()
-    if options is not None:
-        out = fn(instance, options, seed=seed, time_limit=time_limit)
-    else:
-        out = fn(instance, seed=seed, time_limit=time_limit, **params)
+    out = fn(instance, options, seed=seed, time_limit=time_limit)
     wall = time.perf_counter() - t0
     timeline = evaluate(instance, out.plan) if out.plan is not None else None
     objective = timeline.makespan if timeline is not None else None

@@ -35,10 +35,6 @@ def run(args: argparse.Namespace) -> int:
 def describe_method(spec: MethodSpec) -> str:
     """The name and summary of a method, then one line per option: name, type, default, help."""
     lines = [f"{spec.name}: {spec.summary}"]
-    if spec.options is None:  # a legacy method: its keyword arguments are not declared
-        module = spec.target.partition(":")[0]
-        lines.append(f"options: see the method's documentation ({module})")
-        return "\n".join(lines)
     infos = spec.describe_options()
     if not infos:
         lines.append("takes no options")

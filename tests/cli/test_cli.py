@@ -303,16 +303,6 @@ def test_methods_name_without_options(capsys):
     ]
 
 
-def test_methods_name_of_a_legacy_method(capsys, monkeypatch):
-    from bilevel_kit.methods import REGISTRY, MethodSpec
-
-    spec = MethodSpec("legacy-demo", "bilevel_kit.solvers.baselines:single_task", "a demo")
-    monkeypatch.setitem(REGISTRY, spec.name, spec)
-    code, text, _ = run(capsys, "methods", "legacy-demo")
-    assert code == 0 and text.startswith("legacy-demo: a demo\n")
-    assert "options: see the method's documentation" in text
-
-
 @dataclass(frozen=True)
 class DemoOptions:
     """Options of every kind ``bilevel-kit methods NAME`` must show."""

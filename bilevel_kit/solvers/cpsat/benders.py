@@ -16,8 +16,8 @@ import time
 from typing import Any
 
 from ..common import kit_order
-from .context import MARGIN, Context, State
-from .model import Model, canonical, extract_kits, hint
+from .context import MARGIN, Context, Model, State
+from .model import canonical, extract_kits, hint
 from .scaling import scaled_objective
 from .tray import add_cut
 

@@ -11,6 +11,29 @@ from ..budget import Budget
 from ..common import Packer
 from .scaling import Scaled
 
+#: One embedded rectangle: (part type, copy j, x var, y var, rotation: 0, 1 or the two
+#: orientation literals).
+Rect = tuple[str, int, Any, Any, Any]
+
+
+@dataclass
+class Model:
+    """The CP-SAT model and the variables the loops read, hint and cut."""
+
+    model: Any
+    K: int
+    x: list[dict[int, Any]]
+    used: list[Any]
+    arrive: list[Any]
+    end: list[Any]
+    C: Any
+    obj_const: int = 0
+    rects: dict[tuple[int, int], list[Rect]] = field(default_factory=dict)
+    counts: dict[tuple[str, int], Any] = field(default_factory=dict)
+    cut_lits: dict[tuple[str, int, int], Any] = field(default_factory=dict)
+    n_cuts: int = 0
+
+
 #: Seconds kept back from the time limit for extraction and packing the final layouts.
 MARGIN = 0.15
 

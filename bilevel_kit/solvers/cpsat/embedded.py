@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .context import Context, State
-from .model import Model, extract_kits, hint
+from .context import Context, Model, State
+from .model import extract_kits, hint
 from .scaling import scaled_objective
 from .tray import embedded_layouts, grid_corners
 

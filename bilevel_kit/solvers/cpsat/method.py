@@ -57,8 +57,8 @@ from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, chain_groups_idx, kit_order, pack_time_limit, quick_plan, reduced_edges
-from .context import MARGIN, Context, State
-from .model import Model, build, canonical
+from .context import MARGIN, Context, Model, State
+from .model import build, canonical
 from .scaling import scale_times, scaled_makespan, scaled_objective
 
 TrayMode = Literal["auto", "embedded", "benders"]

@@ -39,36 +39,14 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 from ...bounds import min_kits
 from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ..common import reduced_edges
+from .context import Model
 from .scaling import Scaled
-
-#: One embedded rectangle: (part type, copy j, x var, y var, rotation: 0, 1 or the two
-#: orientation literals).
-Rect = tuple[str, int, Any, Any, Any]
-
-
-@dataclass
-class Model:
-    """The CP-SAT model and the variables the loops read, hint and cut."""
-
-    model: Any
-    K: int
-    x: list[dict[int, Any]]
-    used: list[Any]
-    arrive: list[Any]
-    end: list[Any]
-    C: Any
-    obj_const: int = 0
-    rects: dict[tuple[int, int], list[Rect]] = field(default_factory=dict)
-    counts: dict[tuple[str, int], Any] = field(default_factory=dict)
-    cut_lits: dict[tuple[str, int, int], Any] = field(default_factory=dict)
-    n_cuts: int = 0
 
 
 def build(

@@ -23,7 +23,7 @@ from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ...plan import Placement
 from ..common import Packer
-from .model import Model
+from .context import Model
 
 #: Lower-left grid corner and rotation of every part of a plan: task index -> (type, copy j)
 #: -> (x, y, turned).
