@@ -47,12 +47,16 @@ class MethodOutput:
 
     ``bound`` is a proven lower bound on the makespan in seconds (or ``None``); ``extra`` holds
     the method's own diagnostics, each key documented in the method's module docstring.
+    ``status_objective`` names the objective ``status`` speaks of: ``makespan`` unless the
+    method optimised another one (``human_idle``, or bilevel-milp's paper objective ``J``), in
+    which case "optimal" does not mean a zero makespan gap.
     """
 
     plan: Plan | None
     status: Status
     bound: float | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    status_objective: str = "makespan"
 
     def __post_init__(self) -> None:
         try:
@@ -81,6 +85,15 @@ class Result:
     params: dict[str, Any]
     instance: str
     extra: dict[str, Any] = field(default_factory=dict)
+    #: The objective ``status`` refers to (see :class:`MethodOutput`).
+    status_objective: str = "makespan"
+
+    @property
+    def status_text(self) -> str:
+        """``status``, with the objective it refers to when that is not the makespan."""
+        if self.status_objective == "makespan":
+            return str(self.status)
+        return f"{self.status} (for {self.status_objective})"
 
     @property
     def metrics(self) -> dict[str, float | int] | None:
@@ -195,7 +208,12 @@ def solve(
     objective = timeline.makespan if timeline is not None else None
     bounds = [b for b in (out.bound, best_bound(instance)) if b is not None]
     bound = max(bounds) if bounds else None
-    if out.status == Status.OPTIMAL and out.bound is None and objective is not None:
+    if (
+        out.status == Status.OPTIMAL
+        and out.status_objective == "makespan"
+        and out.bound is None
+        and objective is not None
+    ):
         bound = objective  # a proof of optimality is a bound equal to the objective
     extra = dict(out.extra)
     if check and out.plan is not None:
@@ -215,6 +233,7 @@ def solve(
         params={"time_limit": time_limit, **params},
         instance=instance.name,
         extra=extra,
+        status_objective=out.status_objective,
     )
 
 

@@ -57,6 +57,7 @@ def result_to_dict(result: Result) -> dict[str, Any]:
         "instance": result.instance,
         "method": result.method,
         "status": result.status,
+        "status_objective": result.status_objective,
         "objective": result.objective,
         "bound": result.bound,
         "gap": result.gap,
@@ -106,6 +107,10 @@ def schema() -> dict[str, Any]:
             "format": {"const": FORMAT},
             "method": {"type": "string"},
             "status": {"enum": ["optimal", "feasible", "infeasible", "unknown"]},
+            "status_objective": {
+                "type": "string",
+                "description": "the objective the status refers to (makespan, human_idle, J)",
+            },
             "objective": {"type": ["number", "null"]},
             "bound": {"type": ["number", "null"]},
             "metrics": {"type": ["object", "null"]},

@@ -132,7 +132,8 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
     m = result.metrics or {}
     gap = "-" if result.gap is None else f"{100 * result.gap:.2f}%"
     lines.append(
-        f"{instance.name}: {result.method} {result.status}  makespan {_fmt(m.get('makespan'))} s"
+        f"{instance.name}: {result.method} {result.status_text}"
+        f"  makespan {_fmt(m.get('makespan'))} s"
         f"  human idle {_fmt(m.get('human_idle'))} s  robot idle {_fmt(m.get('robot_idle'))} s"
         f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
         f"  time {result.wall_time_s:.3f} s"

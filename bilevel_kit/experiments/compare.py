@@ -57,7 +57,7 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     violations = res.extra.get("violations", [])
     return {
         **record,
-        "status": res.status,
+        "status": res.status_text,
         "makespan": m.get("makespan"),
         "human_idle": m.get("human_idle"),
         "robot_idle": m.get("robot_idle"),

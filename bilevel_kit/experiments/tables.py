@@ -71,8 +71,10 @@ COMPARE_COLUMNS = [
     ("human_idle", "human idle (s)", "{:.2f}"),
     ("n_kits", "kits", "{}"),
     ("status", "status", "{}"),
-    ("best_bound", "bound (s)", "{:.2f}"),
-    ("gap", "gap (%)", "{:.2%}"),
+    ("bound", "own bound (s)", "{:.2f}"),
+    ("gap_own", "own gap (%)", "{:.2%}"),
+    ("best_bound", "best bound (s)", "{:.2f}"),
+    ("gap", "gap to best (%)", "{:.2%}"),
     ("valid", "valid", "{}"),
     ("wall_time_s", "time (s)", "{:.3f}"),
 ]

@@ -705,7 +705,7 @@ def run(
 
     def finish(plan: Plan | None, status: Status) -> MethodOutput:
         extra["wall_time_s"] = budget.elapsed()
-        return MethodOutput(plan, status, closed, extra)
+        return MethodOutput(plan, status, closed, extra, status_objective="J")
 
     cols = build_columns(instance, kits, lower_level, budget.cut(MARGIN))
     extra.update(multisets=lower_level.n_values, lower_level_s=lower_level.time_s)

@@ -231,7 +231,7 @@ class _Report:
         extra = self.extra
         extra["pack_solves"] = sum(c.solves for c in packing._CACHES.values()) - self.solves_before
         extra["wall_time_s"] = self.budget.elapsed()
-        return MethodOutput(plan, status, bound, extra)
+        return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
 
 
 def run(

@@ -152,7 +152,7 @@ def run(
 
     def finish(plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         extra["wall_time_s"] = budget.elapsed()
-        return MethodOutput(plan, status, bound, extra)
+        return MethodOutput(plan, status, bound, extra, status_objective=options.objective)
 
     unfit = packer.task_not_fitting()  # then no plan exists
     if unfit is not None:
