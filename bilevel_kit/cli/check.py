@@ -34,7 +34,11 @@ def run(args: argparse.Namespace) -> int:
     instance = load_instance(args)
     sol = solution.read(args.solution)
     violations = check(
-        instance, sol.plan, reported_kits=sol.reported_kits, reported_metrics=sol.reported_metrics
+        instance,
+        sol.plan,
+        reported_kits=sol.reported_kits,
+        reported_metrics=sol.reported_metrics,
+        claims=sol.claims,
     )
     if violations:
         print_violations([str(v) for v in violations], sys.stdout)
