@@ -584,6 +584,7 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
 
     tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
     check_lengths(doc["tray"], "$.tray", source)
+    check_lengths(doc, "$", source, ("reach_resolution",))
 
     part_types: dict[str, PartType] = {}
     for i, p in enumerate(doc["part_types"]):
@@ -706,11 +707,15 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
 
 
 def check_lengths(
-    obj: Mapping[str, Any], where: str, source: str, error: ErrorType = InstanceError
+    obj: Mapping[str, Any],
+    where: str,
+    source: str,
+    keys: tuple[str, ...] = ("width", "height"),
+    error: ErrorType = InstanceError,
 ) -> None:
-    """``width``/``height`` of ``obj`` at least :data:`MIN_LENGTH` mm: far below it, a part is
+    """The lengths ``keys`` of ``obj`` at least :data:`MIN_LENGTH` mm: far below it, a part is
     smaller than the geometry's tolerance and overlaps are measured in rounding noise."""
-    for key in ("width", "height"):
+    for key in keys:
         if key in obj and obj[key] < MIN_LENGTH:
             raise error(
                 source,

@@ -10,6 +10,7 @@ error names the JSON path. Both keep large files linear and cheap (docs/formats.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import re
@@ -76,15 +77,32 @@ def read_json(path: str | Path, error: ErrorType) -> Any:
         raise error(src, "$", "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise error(src, "$", f"cannot read file ({exc.__class__.__name__}: {exc})") from None
+    suspect = [False]  # a duplicate key or a NaN/Infinity literal was seen
+
+    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
+        obj = _pairs(items)
+        suspect[0] = suspect[0] or isinstance(obj, _Duplicated)
+        return obj
+
+    def constant(name: str) -> float:
+        suspect[0] = True
+        return float(name)
+
+    def number(literal: str) -> float:
+        value = float(literal)  # 1e999 overflows to inf without being a constant
+        if not math.isfinite(value):
+            suspect[0] = True
+        return value
+
     try:
-        doc = json.loads(text, object_pairs_hook=_pairs)
+        doc = json.loads(text, object_pairs_hook=pairs, parse_constant=constant, parse_float=number)
     except json.JSONDecodeError as exc:
         raise error(
             src, "$", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
         ) from None
     except RecursionError:
         raise error(src, "$", "JSON nested too deeply") from None
-    problem = _first_problem(doc)
+    problem = _first_problem(doc) if suspect[0] else None  # the walk finds its path
     if problem is not None:
         raise error(src, json_path(problem[0]), problem[1])
     return doc
@@ -101,108 +119,159 @@ class _Unsupported(Exception):
     """The fast path met a keyword it does not implement: use jsonschema."""
 
 
-def _is_type(value: Any, name: str) -> bool:
-    """JSON Schema's types, as :mod:`jsonschema` defines them (bool is not a number; an
-    integral float is an integer)."""
-    if name == "object":
-        return isinstance(value, dict)
-    if name == "array":
-        return isinstance(value, list)
-    if name == "string":
-        return isinstance(value, str)
-    if name == "boolean":
-        return isinstance(value, bool)
-    if name == "null":
-        return value is None
-    if isinstance(value, bool):
-        return False
-    if name == "number":
-        return isinstance(value, int | float)
-    if name == "integer":
-        return isinstance(value, int) or (isinstance(value, float) and value.is_integer())
-    raise _Unsupported(name)
+Check = Callable[[Any], bool]
+
+#: JSON Schema's types as :mod:`jsonschema` defines them: bool is not a number, an integral
+#: float is an integer.
+_TYPES: dict[str, Check] = {
+    "object": lambda v: isinstance(v, dict),
+    "array": lambda v: isinstance(v, list),
+    "string": lambda v: isinstance(v, str),
+    "boolean": lambda v: isinstance(v, bool),
+    "null": lambda v: v is None,
+    "number": lambda v: type(v) in (int, float),
+    "integer": lambda v: type(v) is int or (type(v) is float and v.is_integer()),
+}
+_KNOWN = _ANNOTATIONS | {
+    "type",
+    "const",
+    "enum",
+    "minimum",
+    "maximum",
+    "exclusiveMinimum",
+    "exclusiveMaximum",
+    "minLength",
+    "pattern",
+    "minItems",
+    "maxItems",
+    "items",
+    "prefixItems",
+    "required",
+    "properties",
+    "additionalProperties",
+}
 
 
-def _valid(doc: Any, schema: Mapping[str, Any]) -> bool:
-    """Whether ``doc`` satisfies ``schema`` (raises :class:`_Unsupported` when unsure)."""
-    for key, want in schema.items():
-        if key in _ANNOTATIONS:
-            continue
-        if key == "type":
-            names = [want] if isinstance(want, str) else want
-            if not any(_is_type(doc, n) for n in names):
+def _all_of(tests: list[Check]) -> Check:
+    if len(tests) == 1:
+        return tests[0]
+
+    def check(v: Any) -> bool:
+        return all(t(v) for t in tests)
+
+    return check
+
+
+def _compile(schema: Mapping[str, Any]) -> Check:
+    """One predicate for ``schema`` (raises :class:`_Unsupported` for unknown keywords)."""
+    unknown = set(schema) - _KNOWN
+    if unknown:
+        raise _Unsupported(sorted(unknown)[0])
+    tests: list[Check] = []
+    if "type" in schema:
+        names = [schema["type"]] if isinstance(schema["type"], str) else schema["type"]
+        if any(n not in _TYPES for n in names):
+            raise _Unsupported("type")
+        preds = [_TYPES[n] for n in names]
+        tests.append(preds[0] if len(preds) == 1 else lambda v: any(p(v) for p in preds))
+    for key in ("const", "enum"):
+        if key in schema:
+            allowed = [schema[key]] if key == "const" else list(schema[key])
+            tests.append(lambda v, a=allowed: any(v == w and type(v) is type(w) for w in a))
+    tests += _number_tests(schema) + _string_tests(schema)
+    if {"items", "prefixItems", "minItems", "maxItems"} & set(schema):
+        tests.append(_array_test(schema))
+    if {"properties", "required", "additionalProperties"} & set(schema):
+        tests.append(_object_test(schema))
+    return _all_of(tests) if tests else lambda v: True
+
+
+def _number_tests(schema: Mapping[str, Any]) -> list[Check]:
+    out: list[Check] = []
+    lo, hi = schema.get("minimum"), schema.get("maximum")
+    xlo, xhi = schema.get("exclusiveMinimum"), schema.get("exclusiveMaximum")
+    if lo is not None or hi is not None or xlo is not None or xhi is not None:
+
+        def in_range(v: Any) -> bool:
+            if type(v) not in (int, float):
+                return True
+            return not (
+                (lo is not None and v < lo)
+                or (hi is not None and v > hi)
+                or (xlo is not None and v <= xlo)
+                or (xhi is not None and v >= xhi)
+            )
+
+        out.append(in_range)
+    return out
+
+
+def _string_tests(schema: Mapping[str, Any]) -> list[Check]:
+    out: list[Check] = []
+    if "minLength" in schema:
+        n = schema["minLength"]
+        out.append(lambda v: not isinstance(v, str) or len(v) >= n)
+    if "pattern" in schema:
+        rx = re.compile(schema["pattern"])
+        out.append(lambda v: not isinstance(v, str) or rx.search(v) is not None)
+    return out
+
+
+def _array_test(schema: Mapping[str, Any]) -> Check:
+    item = _compile(schema["items"]) if "items" in schema else None
+    prefix = [_compile(s) for s in schema.get("prefixItems", [])]
+    lo, hi = schema.get("minItems", 0), schema.get("maxItems")
+
+    def check(v: Any) -> bool:
+        if not isinstance(v, list):
+            return True
+        if len(v) < lo or (hi is not None and len(v) > hi):
+            return False
+        if not all(p(x) for p, x in zip(prefix, v, strict=False)):
+            return False
+        return item is None or all(item(x) for x in v[len(prefix) :])
+
+    return check
+
+
+def _object_test(schema: Mapping[str, Any]) -> Check:
+    props = {k: _compile(s) for k, s in schema.get("properties", {}).items()}
+    required = list(schema.get("required", []))
+    extra = schema.get("additionalProperties", True)
+    extra_test = _compile(extra) if isinstance(extra, dict) else None
+
+    def check(v: Any) -> bool:
+        if not isinstance(v, dict):
+            return True
+        if any(k not in v for k in required):
+            return False
+        for k, x in v.items():
+            test = props.get(k)
+            if test is not None:
+                if not test(x):
+                    return False
+            elif extra is False or (extra_test is not None and not extra_test(x)):
                 return False
-        elif key == "const":
-            if not (doc == want and type(doc) is type(want)):
-                return False
-        elif key == "enum":
-            if not any(doc == w and type(doc) is type(w) for w in want):
-                return False
-        elif key in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
-            if _is_type(doc, "number") and not _in_range(key, doc, want):
-                return False
-        elif key in ("minLength", "pattern"):
-            if isinstance(doc, str) and not _string_ok(key, doc, want):
-                return False
-        elif key in ("minItems", "maxItems", "items", "prefixItems"):
-            if isinstance(doc, list) and not _array_ok(key, doc, want):
-                return False
-        elif key in ("required", "properties", "additionalProperties"):
-            if isinstance(doc, dict) and not _object_ok(key, doc, want, schema):
-                return False
-        else:
-            raise _Unsupported(key)
-    return True
-
-
-def _in_range(key: str, v: float, bound: float) -> bool:
-    if key == "minimum":
-        return v >= bound
-    if key == "maximum":
-        return v <= bound
-    if key == "exclusiveMinimum":
-        return v > bound
-    return v < bound
-
-
-def _string_ok(key: str, s: str, want: Any) -> bool:
-    if key == "minLength":
-        return len(s) >= want
-    return re.search(want, s) is not None
-
-
-def _array_ok(key: str, a: list[Any], want: Any) -> bool:
-    if key == "minItems":
-        return len(a) >= want
-    if key == "maxItems":
-        return len(a) <= want
-    if key == "prefixItems":
-        return all(_valid(v, s) for v, s in zip(a, want, strict=False))
-    return all(_valid(v, want) for v in a)
-
-
-def _object_ok(key: str, o: dict[str, Any], want: Any, schema: Mapping[str, Any]) -> bool:
-    if key == "required":
-        return all(k in o for k in want)
-    if key == "properties":
-        return all(_valid(o[k], s) for k, s in want.items() if k in o)
-    known = schema.get("properties", {})
-    if want is False:
-        return all(k in known for k in o)
-    if want is True:
         return True
-    return all(_valid(v, want) for k, v in o.items() if k not in known)
+
+    return check
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled(schema_text: str) -> Check | None:
+    try:
+        return _compile(json.loads(schema_text))
+    except _Unsupported:
+        return None
 
 
 def validate_document(
     doc: Any, source: str, doc_schema: Mapping[str, Any], error: ErrorType
 ) -> None:
     """Structural validation; the most relevant error raises ``error`` naming its JSON path."""
-    try:
-        if _valid(doc, doc_schema):
-            return
-    except _Unsupported:
-        pass
+    fast = _compiled(json.dumps(doc_schema, sort_keys=True))
+    if fast is not None and fast(doc):
+        return
     import jsonschema
 
     validator = jsonschema.Draft202012Validator(doc_schema)
