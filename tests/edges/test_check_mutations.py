@@ -143,3 +143,42 @@ def test_check_rejects_or_every_claim_holds(case: tuple[str, dict[str, Any]]) ->
     if doc["status"] == "optimal":
         assert bound is not None and _agrees(bound, tl.makespan)
     assert doc["status"] != "infeasible"
+
+
+@st.composite
+def tampered_instance(draw: st.DrawFn) -> dict[str, Any]:
+    """The stool or tiny instance document with 1-3 random edits (same edits as above)."""
+    name = draw(st.sampled_from(sorted(INSTANCES)))
+    doc = INSTANCES[name].to_dict()
+    for _ in range(draw(st.integers(1, 3))):
+        where = _at(doc, draw(st.sampled_from(_containers(doc))))
+        if isinstance(where, dict) and where:
+            k = draw(st.sampled_from(sorted(where)))
+            if draw(st.booleans()):
+                del where[k]
+            else:
+                where[k] = draw(_values)
+        elif isinstance(where, list) and where:
+            where[draw(st.integers(0, len(where) - 1))] = draw(_values)
+    return doc
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.one_of(
+        tampered().map(lambda c: ("solution", c[1])),
+        tampered_instance().map(lambda d: ("instance", d)),
+    )
+)
+def test_fast_schema_path_agrees_with_jsonschema(case: tuple[str, dict[str, Any]]) -> None:
+    """The compiled fast path accepts exactly what jsonschema accepts."""
+    import jsonschema
+
+    from bilevel_kit import instance, solution
+    from bilevel_kit.jsonio import _compiled
+
+    kind, doc = case
+    schema = (solution if kind == "solution" else instance).schema()
+    fast = _compiled(json.dumps(schema, sort_keys=True))
+    assert fast is not None, "the fast path must cover the toolkit's own schemas"
+    assert fast(doc) == jsonschema.Draft202012Validator(schema).is_valid(doc)

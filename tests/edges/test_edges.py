@@ -580,3 +580,19 @@ def test_safe_name() -> None:
     assert safe_name("..") == "unnamed"
     assert safe_name("table_u2") == "table_u2"
     assert "/" not in safe_name("a/" * 200) and len(safe_name("a" * 500)) == 100
+
+
+def test_coarse_grid_layout_file_says_no_grid_layout(tmp_path, capsys) -> None:
+    pack = tmp_path / "p.json"
+    pack.write_text(json.dumps(PACK_DOC))
+    out = tmp_path / "l.json"
+    assert main(["pack", str(pack), "--resolution", "30", "--out", str(out)]) == 4
+    assert json.loads(out.read_text())["status"] == "no_grid_layout"
+    # the same parts on the exact 1 mm grid: they fit
+    assert main(["pack", str(pack), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["status"] == "feasible"
+    # more part area than tray area is a proof at any grid
+    too_many = PACK_DOC | {"items": [{"id": "sq", "width": 50, "height": 50, "count": 5}]}
+    pack.write_text(json.dumps(too_many))
+    assert main(["pack", str(pack), "--resolution", "30"]) == 0
+    assert ": infeasible in" in capsys.readouterr().out
