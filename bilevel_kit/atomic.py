@@ -1,7 +1,7 @@
 """Atomic file output: write to a temporary file in the same folder, then rename.
 
 A reader (or a crash) never sees a half-written result file, and a failed command leaves
-no partial output behind.
+no partial output behind. The file gets the mode a plain write would give (umask honoured).
 """
 
 from __future__ import annotations
@@ -27,12 +27,24 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     )
     os.close(fd)
     try:
+        os.chmod(tmp, _mode_for(target))
         yield Path(tmp)
         os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _mode_for(target: Path) -> int:
+    """The mode a plain ``open(target, "w")`` would give: the existing file's, else 0o666
+    less the umask (``mkstemp`` creates 0o600, which would hide results from other users)."""
+    try:
+        return target.stat().st_mode & 0o777
+    except OSError:
+        mask = os.umask(0o022)  # reading the umask means setting it; restore it at once
+        os.umask(mask)
+        return 0o666 & ~mask
 
 
 def write_text(path: str | Path, text: str) -> None:

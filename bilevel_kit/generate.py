@@ -14,7 +14,10 @@ Families:
 * ``series-parallel``: a random series-parallel graph of ``size`` tasks.
 
 ``tightness`` sets the tray for the random families: tray area = total part area / tightness
-(1.0: the whole product exactly fills the tray by area; larger values force more kits).
+(1.0: the whole product exactly fills the tray by area; larger values force more kits). It and
+``seed`` apply to the random families only (``bilevel-kit generate`` refuses them for ``table``
+and ``mixed``). A tightness so high that some task's parts do not fit the tray on their own is
+an error: no method could solve that instance.
 """
 
 from __future__ import annotations
@@ -229,17 +232,43 @@ def generate(
     tightness: float = 0.6,
     delivery_time: float | None = None,
 ) -> dict[str, Any]:
-    """An instance document of the given family (see the module docstring)."""
+    """An instance document of the given family (see the module docstring); ``seed`` and
+    ``tightness`` only shape the random families."""
     if family not in FAMILIES:
         raise UsageError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
     if size < 1:
         raise UsageError("--size must be >= 1")
-    if not tightness > 0:
-        raise UsageError("--tightness must be > 0")
+    if not (tightness > 0 and math.isfinite(tightness)):
+        raise UsageError(f"--tightness must be a finite number > 0, got {tightness!r}")
     if family == "table":
         return table(size, delivery_time)
     if family == "mixed":
         return mixed(size, delivery_time)
-    return random_graph(
+    doc = random_graph(
         family, size, seed, tightness, 5.0 if delivery_time is None else delivery_time
     )
+    _check_solvable(doc, tightness)
+    return doc
+
+
+def _check_solvable(doc: dict[str, Any], tightness: float) -> None:
+    """Every task's parts fit the tray on their own, else no plan exists (a kit holds at least
+    one task): the area bound first, then the packing oracle for the few that pass it."""
+    from .instance import from_dict
+    from .layout.cpsat_packing import kit_fits
+
+    inst = from_dict(doc, "<generated>")
+    tried: set[frozenset[tuple[str, int]]] = set()
+    for task in inst.tasks:
+        counts = dict(task.parts)
+        key = frozenset(counts.items())
+        if key in tried:
+            continue
+        tried.add(key)
+        area = sum(inst.part_types[p].area * n for p, n in counts.items())
+        if area > inst.tray.area or kit_fits(inst, counts) is False:
+            raise UsageError(
+                f"--tightness {tightness:g}: the parts of task {task.id} do not fit the "
+                f"{inst.tray.width:g} x {inst.tray.height:g} mm tray on their own, so no "
+                "method can solve this instance; use a lower --tightness"
+            )

@@ -13,7 +13,6 @@ Loading validates the structure with a JSON Schema (:func:`schema`) and then the
 
 from __future__ import annotations
 
-import json
 import math
 from collections import Counter
 from collections.abc import Iterable, Mapping
@@ -22,7 +21,9 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+from . import jsonio
 from .errors import InstanceError
+from .jsonio import ErrorType, validate_document
 
 FORMAT = "bilevel-kit/1"
 
@@ -41,6 +42,14 @@ DEFAULT_WEIGHTS: dict[str, float] = {
     "W7": 30.0,
 }
 DEFAULT_HORIZON = 5
+
+#: Sane ranges of an instance's numbers (docs/formats.md#ranges): lengths in
+#: [MIN_LENGTH, MAX_LENGTH] mm, times in [0, MAX_TIME] s, weights in [0, MAX_WEIGHT]. Outside
+#: them the geometry's 1e-6 mm tolerance and the checker's time tolerance lose their meaning.
+MIN_LENGTH = 0.01
+MAX_LENGTH = 1e5
+MAX_TIME = 1e7
+MAX_WEIGHT = 1e6
 DEFAULT_REPAIR_TIME = 30.0
 
 
@@ -240,8 +249,10 @@ class Instance:
         if trays is not None:
             changes["trays"] = parse_trays(trays, self.source)
         if delivery_time is not None:
-            if not math.isfinite(delivery_time) or delivery_time < 0:
-                raise InstanceError(self.source, "$.delivery_time", "must be finite and >= 0")
+            if not math.isfinite(delivery_time) or not 0 <= delivery_time <= MAX_TIME:
+                raise InstanceError(
+                    self.source, "$.delivery_time", f"must be a number in [0, {MAX_TIME:g}] s"
+                )
             changes["delivery_time"] = float(delivery_time)
         if weights:
             unknown = set(weights) - set(DEFAULT_WEIGHTS)
@@ -249,6 +260,11 @@ class Instance:
                 raise InstanceError(
                     self.source, "$.weights", f"unknown weight(s) {', '.join(sorted(unknown))}"
                 )
+            for k, v in weights.items():
+                if not (math.isfinite(v) and 0 <= v <= MAX_WEIGHT):
+                    raise InstanceError(
+                        self.source, f"$.weights.{k}", f"must be a number in [0, {MAX_WEIGHT:g}]"
+                    )
             changes["weights"] = {**self.weights, **{k: float(v) for k, v in weights.items()}}
         if horizon is not None:
             if horizon < 1:
@@ -387,15 +403,18 @@ def _find_cycle(nodes: list[str], edges: Iterable[tuple[str, str]]) -> list[str]
 # JSON Schema and loading
 # ---------------------------------------------------------------------------------------------
 
-_NONNEG = {"type": "number", "minimum": 0}
-_POS = {"type": "number", "exclusiveMinimum": 0}
+_NONNEG = {"type": "number", "minimum": 0, "maximum": MAX_TIME}  # times (s)
+_POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_TIME}  # times > 0 (s)
+#: lengths (mm); the lower limit MIN_LENGTH is checked after the schema, with its reason
+_LENGTH = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
 _ID = {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"}
 
 
 def schema() -> dict[str, Any]:
     """JSON Schema (draft 2020-12) of the instance format ``bilevel-kit/1``."""
     weight_props = {
-        k: {"type": "number", "description": f"default {v}"} for k, v in DEFAULT_WEIGHTS.items()
+        k: {"type": "number", "minimum": 0, "maximum": MAX_WEIGHT, "description": f"default {v}"}
+        for k, v in DEFAULT_WEIGHTS.items()
     }
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -418,7 +437,7 @@ def schema() -> dict[str, Any]:
                 "type": "object",
                 "required": ["width", "height"],
                 "additionalProperties": False,
-                "properties": {"width": _POS, "height": _POS},
+                "properties": {"width": _LENGTH, "height": _LENGTH},
             },
             "delivery_time": {**_NONNEG, "default": 0.0, "description": "d in the paper (s)"},
             "kit_overhead": {
@@ -439,8 +458,8 @@ def schema() -> dict[str, Any]:
                     "properties": {
                         "id": _ID,
                         "name": {"type": "string"},
-                        "width": _POS,
-                        "height": _POS,
+                        "width": _LENGTH,
+                        "height": _LENGTH,
                         "pick_time": _NONNEG,
                         "rotatable": {"type": "boolean", "default": True},
                     },
@@ -529,7 +548,7 @@ def schema() -> dict[str, Any]:
                 "description": "enforce Sawyer reachability of every placement (uses 'station', "
                 "or the default station)",
             },
-            "reach_resolution": {**_POS, "default": 10.0, "description": "reach map cell (mm)"},
+            "reach_resolution": {**_LENGTH, "default": 10.0, "description": "reach map cell (mm)"},
             "robot_times": {
                 "enum": ["pick_time", "motion"],
                 "default": "pick_time",
@@ -545,71 +564,9 @@ def _station_schema() -> dict[str, Any]:
     return station_schema()
 
 
-def _json_path(parts: Iterable[Any]) -> str:
-    out = "$"
-    for p in parts:
-        out += f"[{p}]" if isinstance(p, int) else f".{p}"
-    return out
-
-
-def _non_finite(obj: Any, path: tuple[Any, ...] = ()) -> tuple[Any, ...] | None:
-    """Path of the first NaN or infinite number in a parsed JSON document."""
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return path
-    if isinstance(obj, dict):
-        for k, v in obj.items():
-            found = _non_finite(v, (*path, k))
-            if found is not None:
-                return found
-    elif isinstance(obj, list):
-        for i, v in enumerate(obj):
-            found = _non_finite(v, (*path, i))
-            if found is not None:
-                return found
-    return None
-
-
-def read_json(path: str | Path, error: type = InstanceError) -> Any:
-    """Parse a JSON file; a missing file or malformed JSON raises ``error`` with a location."""
-    src = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise error(src, "$", "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise error(src, "$", f"cannot read file ({exc.__class__.__name__}: {exc})") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise error(
-            src, "$", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
-        ) from None
-    bad = _non_finite(doc)
-    if bad is not None:
-        raise error(src, _json_path(bad), "must be a finite number (NaN/Infinity not allowed)")
-    return doc
-
-
-def validate_document(doc: Any, source: str, doc_schema: Mapping[str, Any], error: type) -> None:
-    """Structural validation with jsonschema; the most relevant error names its JSON path."""
-    import jsonschema
-
-    validator = jsonschema.Draft202012Validator(doc_schema)
-    err = jsonschema.exceptions.best_match(validator.iter_errors(doc))
-    if err is None:
-        return
-    where = _json_path(err.absolute_path)
-    if err.validator == "required":
-        missing = [r for r in err.validator_value if r not in err.instance]
-        raise error(source, where, f"missing required field {missing[0]!r}")
-    if err.validator == "additionalProperties":
-        raise error(source, where, err.message.replace("Additional properties", "unknown field"))
-    if err.validator == "const":
-        raise error(source, where, f"expected {err.validator_value!r}, got {err.instance!r}")
-    msg = err.message
-    if len(msg) > 160:
-        msg = msg[:157] + "..."
-    raise error(source, where, msg)
+def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
+    """Parse a JSON file strictly (see :func:`bilevel_kit.jsonio.read_json`)."""
+    return jsonio.read_json(path, error)
 
 
 def from_dict(doc: Any, source: str = "<memory>") -> Instance:
@@ -626,11 +583,14 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         return InstanceError(source, path, msg)
 
     tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
+    check_lengths(doc["tray"], "$.tray", source)
+    check_lengths(doc, "$", source, ("reach_resolution",))
 
     part_types: dict[str, PartType] = {}
     for i, p in enumerate(doc["part_types"]):
         if p["id"] in part_types:
             raise fail(f"$.part_types[{i}].id", f"duplicate part type id {p['id']!r}")
+        check_lengths(p, f"$.part_types[{i}]", source)
         pt = PartType(
             id=p["id"],
             width=float(p["width"]),
@@ -744,6 +704,24 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         trays=parse_trays(doc.get("trays"), source) if doc.get("trays") is not None else None,
         source=source,
     )
+
+
+def check_lengths(
+    obj: Mapping[str, Any],
+    where: str,
+    source: str,
+    keys: tuple[str, ...] = ("width", "height"),
+    error: ErrorType = InstanceError,
+) -> None:
+    """The lengths ``keys`` of ``obj`` at least :data:`MIN_LENGTH` mm: far below it, a part is
+    smaller than the geometry's tolerance and overlaps are measured in rounding noise."""
+    for key in keys:
+        if key in obj and obj[key] < MIN_LENGTH:
+            raise error(
+                source,
+                f"{where}.{key}",
+                f"{obj[key]:g} mm is below the smallest length {MIN_LENGTH:g} mm (docs/formats.md)",
+            )
 
 
 def parse_trays(value: Any, source: str = "<memory>") -> int | None:

@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import InstanceError
-from .instance import Instance, PartType, Tray, read_json, validate_document
+from .instance import MAX_LENGTH, Instance, PartType, Tray, check_lengths
+from .jsonio import read_json, validate_document
 
 if TYPE_CHECKING:
     from .layout.cpsat_packing import PackResult
@@ -21,7 +22,8 @@ if TYPE_CHECKING:
 #: The ``format`` tag of layout files.
 LAYOUT_FORMAT = "bilevel-kit-layout/1"
 
-_POS = {"type": "number", "exclusiveMinimum": 0}
+#: Lengths in mm, in the instances' range (docs/formats.md#ranges).
+_POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
 
 
 def schema() -> dict[str, Any]:
@@ -59,8 +61,9 @@ def schema() -> dict[str, Any]:
 
 
 def is_pack_file(doc: Any) -> bool:
-    """A pack file has ``items`` and no ``format`` (instances have ``format``)."""
-    return isinstance(doc, dict) and "items" in doc and "format" not in doc
+    """A JSON object without ``format`` is read as a pack file (instances have ``format``), so
+    a pack file that lacks ``items`` is reported as such."""
+    return isinstance(doc, dict) and "format" not in doc
 
 
 def load(path: str | Path) -> tuple[Instance, dict[str, int]]:
@@ -68,11 +71,13 @@ def load(path: str | Path) -> tuple[Instance, dict[str, int]]:
     src = str(path)
     doc = read_json(path, InstanceError)
     validate_document(doc, src, schema(), InstanceError)
+    check_lengths(doc["tray"], "$.tray", src)
     types: dict[str, PartType] = {}
     counts: dict[str, int] = {}
     for i, item in enumerate(doc["items"]):
         if item["id"] in types:
             raise InstanceError(src, f"$.items[{i}].id", f"duplicate item id {item['id']!r}")
+        check_lengths(item, f"$.items[{i}]", src)
         types[item["id"]] = PartType(
             item["id"],
             float(item["width"]),

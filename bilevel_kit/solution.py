@@ -11,18 +11,20 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from . import atomic
 from .errors import SolutionError
-from .instance import read_json, validate_document
+from .jsonio import read_json, validate_document
 from .methods import Result
 from .plan import Kit, KitTimes, Placement, Plan
+from .validate import Claims
 
 FORMAT = "bilevel-kit-solution/1"
 _TIME_KEYS = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
+_METRIC_KEYS = ("makespan", "human_idle", "robot_idle", "n_kits")
 
 
 def _jsonable(value: Any) -> Any:
@@ -71,18 +73,28 @@ def result_to_dict(result: Result) -> dict[str, Any]:
 
 
 def write(path: str | Path, result: Result) -> None:
-    """Write a solution file atomically."""
-    atomic.write_text(path, json.dumps(result_to_dict(result), indent=2) + "\n")
+    """Write a solution file atomically; a non-finite number is refused (it is not JSON)."""
+    try:
+        text = json.dumps(result_to_dict(result), indent=2, allow_nan=False)
+    except ValueError:
+        raise SolutionError(
+            str(path), "$", "non-finite number in the result; not written"
+        ) from None
+    atomic.write_text(path, text + "\n")
 
 
 _NUM = {"type": "number"}
+_OPT_NUM = {"type": ["number", "null"]}
 
 
 def schema() -> dict[str, Any]:
-    """JSON Schema of a solution file (what :func:`read` requires)."""
+    """JSON Schema of a solution file (what :func:`read` requires). Every key the writer
+    stores is typed, and no other key is allowed: the checker recomputes each number it is
+    given, so a misspelt or foreign key cannot pass unnoticed."""
     placement = {
         "type": "object",
         "required": ["part", "type", "x", "y", "theta", "w", "h"],
+        "additionalProperties": False,
         "properties": {
             "part": {"type": "string"},
             "type": {"type": "string"},
@@ -92,10 +104,20 @@ def schema() -> dict[str, Any]:
     kit = {
         "type": "object",
         "required": ["tasks", "layout"],
+        "additionalProperties": False,
         "properties": {
             "tasks": {"type": "array", "items": {"type": "string"}},
             "layout": {"type": "array", "items": placement},
             **{k: _NUM for k in _TIME_KEYS},
+        },
+    }
+    metrics = {
+        "type": ["object", "null"],
+        "required": list(_METRIC_KEYS),
+        "additionalProperties": False,
+        "properties": {
+            **{k: _NUM for k in _METRIC_KEYS[:-1]},
+            "n_kits": {"type": "integer", "minimum": 0},
         },
     }
     return {
@@ -103,37 +125,49 @@ def schema() -> dict[str, Any]:
         "title": "bilevel-kit solution",
         "type": "object",
         "required": ["format", "method", "status", "kits"],
+        "additionalProperties": False,
         "properties": {
             "format": {"const": FORMAT},
+            "instance": {"type": "string"},
             "method": {"type": "string"},
             "status": {"enum": ["optimal", "feasible", "infeasible", "unknown"]},
             "status_objective": {
                 "type": "string",
                 "description": "the objective the status refers to (makespan, human_idle, J)",
             },
-            "objective": {"type": ["number", "null"]},
-            "bound": {"type": ["number", "null"]},
-            "metrics": {"type": ["object", "null"]},
+            "objective": _OPT_NUM,
+            "bound": _OPT_NUM,
+            "gap": {"type": ["number", "null"], "minimum": 0},
+            "seed": {"type": "integer", "minimum": 0},
+            "params": {"type": "object"},
+            "wall_time_s": {"type": "number", "minimum": 0},
+            "metrics": metrics,
             "kits": {"type": "array", "items": kit},
+            "extra": {"type": "object"},
         },
     }
 
 
 @dataclass(frozen=True)
 class LoadedSolution:
-    """A solution file: its plan, and the times and metrics it reports (for the checker)."""
+    """A solution file: its plan, and what it claims (times, metrics, objective, bound, gap,
+    status), all of which the checker recomputes."""
 
     document: dict[str, Any]
     plan: Plan
     reported_kits: tuple[KitTimes, ...] | None
     reported_metrics: dict[str, float] | None
+    claims: Claims = field(default_factory=Claims)
 
 
 def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
+    """Validate a parsed solution document; a kit with some but not all of the five times, or
+    times on some kits only, raises :class:`SolutionError` naming the missing field."""
     validate_document(doc, source, schema(), SolutionError)
     kits = []
     times = []
-    for kd in doc["kits"]:
+    timed = [any(k in kd for k in _TIME_KEYS) for kd in doc["kits"]]
+    for i, kd in enumerate(doc["kits"]):
         layout = tuple(
             Placement(
                 p["part"],
@@ -147,10 +181,26 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
             for p in kd["layout"]
         )
         kits.append(Kit(tuple(kd["tasks"]), layout))
-        if all(k in kd for k in _TIME_KEYS):
+        if any(timed):
+            missing = [k for k in _TIME_KEYS if k not in kd]
+            if missing:
+                raise SolutionError(
+                    source,
+                    f"$.kits[{i}]",
+                    f"missing time field {missing[0]!r} (a solution gives all five times of "
+                    "every kit, or none)",
+                )
             times.append(KitTimes(*(float(kd[k]) for k in _TIME_KEYS)))
-    reported = tuple(times) if len(times) == len(kits) and kits else None
-    return LoadedSolution(doc, Plan(tuple(kits)), reported, doc.get("metrics"))
+    claims = Claims(
+        status=doc["status"],
+        objective=doc.get("objective"),
+        bound=doc.get("bound"),
+        gap=doc.get("gap"),
+        has_gap="gap" in doc,
+    )
+    return LoadedSolution(
+        doc, Plan(tuple(kits)), tuple(times) if times else None, doc.get("metrics"), claims
+    )
 
 
 def read(path: str | Path) -> LoadedSolution:

@@ -6,7 +6,12 @@ every footprint inside the tray and no two footprints overlapping (exact rotated
 tolerance :data:`bilevel_kit.geometry.TOL`, by :func:`bilevel_kit.geometry.layout_violations`,
 the same test every layout search applies), and, when a solution reports times, that they
 agree with the timeline evaluator and that no kit starts before its tray is back (the tray
-rule of docs/timeline.md, checked on the reported times themselves).
+rule of docs/timeline.md, checked on the reported times themselves). What a solution file
+claims besides (objective, bound, gap, status: :class:`Claims`) is recomputed too: a file
+is never believed, only checked (docs/formats.md).
+
+Every pass is linear in the plan's size except the overlap test, which only compares parts
+whose bounding boxes meet (a sweep along x), so a long plan checks in linear time.
 """
 
 from __future__ import annotations
@@ -39,7 +44,29 @@ KINDS = (
     "unreachable",
     "times_inconsistent",
     "tray_not_returned",
+    "objective_mismatch",
+    "bound_above_makespan",
+    "gap_mismatch",
+    "status_mismatch",
 )
+
+#: Overlapping pairs listed per kit; more are summarised in one violation (a tampered file with
+#: thousands of stacked parts would otherwise list every pair).
+MAX_OVERLAPS_LISTED = 100
+
+
+@dataclass(frozen=True)
+class Claims:
+    """What a solution file states about its plan besides the times: ``status``, ``objective``
+    (the makespan, s), ``bound`` (a lower bound on the optimum, s) and ``gap`` (``(objective -
+    bound) / objective``). ``None``: not stated. ``has_gap``: the file has a ``gap`` key (its
+    null then claims that there is no gap to state)."""
+
+    status: str | None = None
+    objective: float | None = None
+    bound: float | None = None
+    gap: float | None = None
+    has_gap: bool = False
 
 
 @dataclass(frozen=True)
@@ -63,11 +90,13 @@ def check(
     *,
     reported_kits: Sequence[KitTimes] | None = None,
     reported_metrics: Mapping[str, float] | None = None,
+    claims: Claims | None = None,
 ) -> list[Violation]:
     """All violations of ``plan`` on ``instance`` (empty list: the plan is valid).
 
     ``reported_kits``/``reported_metrics`` are the times a solution file claims; they are
-    compared with :func:`bilevel_kit.plan.evaluate` within :data:`TIME_TOL`.
+    compared with :func:`bilevel_kit.plan.evaluate` within :data:`TIME_TOL`. ``claims`` are
+    its headline numbers, recomputed likewise (see :func:`_check_claims`).
     """
     out: list[Violation] = []
     out += _check_tasks(instance, plan)
@@ -75,6 +104,68 @@ def check(
         out += _check_layout(instance, kit, k)
     if reported_kits is not None or reported_metrics is not None:
         out += _check_times(instance, plan, reported_kits, reported_metrics)
+    if claims is not None:
+        out += _check_claims(instance, plan, claims, plan_valid=not out)
+    return out
+
+
+def _close(got: float, want: float) -> bool:
+    return math.isclose(got, want, abs_tol=TIME_TOL, rel_tol=1e-9)
+
+
+def _gap(objective: float, bound: float | None) -> float | None:
+    """``(objective - bound) / objective``, clipped at 0, as solutions store it."""
+    if bound is None or objective <= 0:
+        return None
+    return max(0.0, (objective - bound) / objective)
+
+
+def _check_claims(
+    instance: Instance, plan: Plan, claims: Claims, *, plan_valid: bool
+) -> list[Violation]:
+    """The objective is the evaluator's makespan; the bound is no larger than the makespan of
+    a valid plan; the gap is recomputed from the makespan and the bound; ``optimal`` needs a
+    bound equal to the makespan; ``infeasible`` cannot come with a valid plan."""
+    out: list[Violation] = []
+    if any(t not in instance.task_by_id for kit in plan.kits for t in kit.tasks):
+        return out  # already reported; the makespan of unknown tasks is undefined
+    if not plan.kits:
+        if claims.objective is not None:
+            msg = f"objective {claims.objective:.6g} s claimed for a solution without kits"
+            out.append(Violation("objective_mismatch", msg))
+        if claims.status == "optimal" and instance.n_tasks:
+            out.append(Violation("status_mismatch", "status 'optimal' without a plan"))
+        return out
+    makespan = evaluate(instance, plan).makespan
+    if claims.objective is not None and not _close(claims.objective, makespan):
+        msg = f"objective {claims.objective:.6g} s, the plan's makespan is {makespan:.6g} s"
+        out.append(Violation("objective_mismatch", msg))
+    bound = claims.bound
+    if plan_valid and bound is not None and bound > makespan and not _close(bound, makespan):
+        msg = f"bound {bound:.6g} s is above the makespan {makespan:.6g} s of a valid plan"
+        out.append(Violation("bound_above_makespan", msg))
+    want = _gap(makespan, bound)
+    if claims.has_gap and (
+        (want is None) != (claims.gap is None)
+        or (want is not None and claims.gap is not None and abs(claims.gap - want) > 1e-9)
+    ):
+        shown = "null" if claims.gap is None else f"{claims.gap:.6g}"
+        msg = f"gap {shown}, recomputed from the makespan and the bound: " + (
+            "null" if want is None else f"{want:.6g}"
+        )
+        out.append(Violation("gap_mismatch", msg))
+    if claims.status == "optimal":
+        if bound is None:
+            msg = "status 'optimal' without a bound"
+            out.append(Violation("status_mismatch", msg))
+        elif makespan - bound > TIME_TOL and not _close(bound, makespan):
+            msg = (
+                f"status 'optimal' but the makespan {makespan:.6g} s is above the bound "
+                f"{bound:.6g} s (gap {makespan - bound:.6g} s)"
+            )
+            out.append(Violation("status_mismatch", msg))
+    elif claims.status == "infeasible" and plan_valid:
+        out.append(Violation("status_mismatch", "status 'infeasible' but the plan is valid"))
     return out
 
 
@@ -221,9 +312,14 @@ def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
                     k,
                 )
             )
+    listed = 0
     for f in faults:
         if f.kind == "overlap":
             assert f.other is not None
+            if listed == MAX_OVERLAPS_LISTED:
+                out.append(Violation("overlap", f"kit {k}: more overlapping parts, not listed", k))
+                break
+            listed += 1
             pa, pb = shapes[f.index].part, shapes[f.other].part
             out.append(
                 Violation(

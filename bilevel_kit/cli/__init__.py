@@ -3,7 +3,9 @@
 Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> int`` that reads its
 inputs, calls the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
 invalid, 2 bad input or usage (a one-line message on stderr, no traceback), 3 a definite answer
-could not be reached within the time limit. Heavy back-ends are imported inside the commands,
+could not be reached within the time limit, 4 ``pack`` found no layout on a grid that is not
+exact (not a proof). Every output path is checked before any work (:mod:`bilevel_kit.paths`).
+Heavy back-ends are imported inside the commands,
 so ``bilevel-kit --help`` stays fast.
 """
 
@@ -67,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="bilevel-kit",
         description="Just-in-time robotic kitting: solve, compare and check kitting plans.",
         epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
-        "within the time limit\n\nmethods:\n" + listing,
+        "within the time limit, 4 no layout on this grid (pack)\n\nmethods:\n" + listing,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(

@@ -1,4 +1,5 @@
-"""``bilevel-kit check``: the independent checker on a solution file (exit 1 when invalid)."""
+"""``bilevel-kit check``: the independent checker on a solution file (exit 1 when invalid);
+it believes nothing the file states (docs/formats.md)."""
 
 from __future__ import annotations
 
@@ -19,8 +20,10 @@ def add_parser(subparsers: Subparsers) -> None:
     p = subparsers.add_parser(
         "check",
         help="check a solution file against an instance",
-        description="Run the independent checker; exit 1 and list the "
-        "violations when the solution is invalid.",
+        description="Run the independent checker on the plan and on every number the file "
+        "states (kit times, metrics, objective, bound, gap, status), all recomputed from the "
+        "instance; exit 1 and list the violations when anything is wrong, 2 when the file is "
+        "malformed.",
     )
     p.add_argument("instance")
     p.add_argument("solution")
@@ -34,7 +37,11 @@ def run(args: argparse.Namespace) -> int:
     instance = load_instance(args)
     sol = solution.read(args.solution)
     violations = check(
-        instance, sol.plan, reported_kits=sol.reported_kits, reported_metrics=sol.reported_metrics
+        instance,
+        sol.plan,
+        reported_kits=sol.reported_kits,
+        reported_metrics=sol.reported_metrics,
+        claims=sol.claims,
     )
     if violations:
         print_violations([str(v) for v in violations], sys.stdout)

@@ -8,6 +8,7 @@ option. Only the standard library is imported here: ``bilevel-kit --help`` must 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable
 from typing import IO, TYPE_CHECKING, Any, NoReturn
@@ -16,6 +17,11 @@ if TYPE_CHECKING:
     from ..instance import Instance
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
+#: ``pack``: no layout on the chosen grid, which is not a proof that none exists.
+EXIT_NO_GRID_LAYOUT = 4
+
+#: The largest seed: CP-SAT takes 32-bit seeds, and every command's seed reaches one solver.
+MAX_SEED = 2**31 - 1
 
 #: The ``subparsers`` object every command module's ``add_parser`` receives.
 Subparsers = argparse._SubParsersAction
@@ -48,7 +54,7 @@ def key_values(text: str) -> dict[str, str]:
 
 
 def weights(text: str) -> dict[str, float]:
-    """``--weights W3=1,w4=2``: weight names upper-cased, values numbers."""
+    """``--weights W3=1,w4=2``: weight names upper-cased, values finite numbers >= 0."""
     out = {}
     for k, v in key_values(text).items():
         key = k.upper()
@@ -56,7 +62,46 @@ def weights(text: str) -> dict[str, float]:
             out[key] = float(v)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
+        if not (out[key] >= 0 and math.isfinite(out[key])):
+            raise argparse.ArgumentTypeError(f"{k} must be a finite number >= 0, got {v!r}")
     return out
+
+
+def seed(text: str) -> int:
+    """A random seed: an integer in [0, 2^31 - 1] (the range every back-end accepts)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 0 <= v <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"expected an integer in [0, {MAX_SEED}], got {text!r}")
+    return v
+
+
+def length(text: str) -> float:
+    """A length in mm in the instances' range [0.01, 1e5] (docs/formats.md#ranges)."""
+    from ..instance import MAX_LENGTH, MIN_LENGTH
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not MIN_LENGTH <= v <= MAX_LENGTH:
+        raise argparse.ArgumentTypeError(
+            f"expected a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}] mm, got {text!r}"
+        )
+    return v
+
+
+def positive(text: str) -> float:
+    """A finite number > 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return v
 
 
 def scalar(value: str) -> Any:
@@ -120,6 +165,33 @@ def positive_int(text: str) -> int:
 # ---------------------------------------------------------------------------------------------
 # Shared options
 # ---------------------------------------------------------------------------------------------
+
+
+def add_seed(p: argparse.ArgumentParser, text: str = "random seed (default 0)") -> None:
+    """``--seed N``, an integer >= 0 (:func:`seed`)."""
+    p.add_argument("--seed", type=seed, default=0, metavar="N", help=text)
+
+
+def add_output(
+    p: argparse.ArgumentParser, *flags: str, folder: bool = False, **kwargs: Any
+) -> None:
+    """An output option. :func:`run_command` checks its path (:mod:`bilevel_kit.paths`)
+    before the command does any work, so a bad path costs nothing and writes nothing."""
+    action = p.add_argument(*flags, **kwargs)
+    key = "output_folders" if folder else "output_files"
+    known = dict(p.get_default(key) or {})
+    known[flags[0]] = action.dest
+    p.set_defaults(**{key: known})
+
+
+def check_output_options(args: argparse.Namespace) -> None:
+    """Every output option given (see :func:`add_output`), checked in one go."""
+    from ..paths import check_outputs
+
+    def given(key: str) -> dict[str, Any]:
+        return {opt: getattr(args, dest) for opt, dest in (getattr(args, key, None) or {}).items()}
+
+    check_outputs(given("output_files"), given("output_folders"))
 
 
 def add_param_option(p: argparse.ArgumentParser, text: str) -> None:
@@ -215,6 +287,7 @@ def run_command(
     from ..errors import BilevelKitError
 
     try:
+        check_output_options(args)
         return run(args)
     except BilevelKitError as exc:
         print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)

@@ -11,6 +11,8 @@ from .common import (
     EXIT_OK,
     Subparsers,
     add_instance_overrides,
+    add_output,
+    add_seed,
     instance_overrides,
     nonneg,
     param,
@@ -33,7 +35,7 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="M1,M2",
         help="comma-separated method names, or 'all' (default)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed of every cell (default 0)")
+    add_seed(p, "random seed of every cell (default 0)")
     p.add_argument(
         "--time-limit",
         type=nonneg,
@@ -48,14 +50,16 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="METHOD:KEY=VALUE",
         help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
     )
-    p.add_argument("--csv", metavar="FILE", help="write all record fields as CSV")
-    p.add_argument("--md", metavar="FILE", help="write the table as Markdown")
-    p.add_argument(
+    add_output(p, "--csv", metavar="FILE", help="write all record fields as CSV")
+    add_output(p, "--md", metavar="FILE", help="write the table as Markdown")
+    add_output(
+        p,
         "--figures",
+        folder=True,
         metavar="DIR",
         help="write a comparison chart and one Gantt chart per method here",
     )
-    p.add_argument("--cells", metavar="DIR", help="save/resume per-cell results in DIR")
+    add_output(p, "--cells", folder=True, metavar="DIR", help="save/resume per-cell results in DIR")
     add_instance_overrides(p)
 
 
@@ -138,6 +142,7 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
 
     from .. import plots, solution
     from ..instance import load
+    from ..paths import safe_name
 
     out = Path(folder)
     by_instance: dict[str, list[dict[str, Any]]] = {}
@@ -145,12 +150,13 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
         by_instance.setdefault(r["instance_file"], []).append(r)
     for path, rows in by_instance.items():
         inst = load(path).with_overrides(**overrides)
+        name = safe_name(inst.name)  # a name is data, never a path
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
         ax = plots.plot_comparison(ok)
-        plots.save_figure(ax.figure, out / f"{inst.name}_compare.png")
+        plots.save_figure(ax.figure, out / f"{name}_compare.png")
         for r in ok:
             sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
             ax = plots.plot_gantt(inst, sol.plan, method=str(r["method"]))
-            plots.save_figure(ax.figure, out / f"{inst.name}_{r['method']}_gantt.png")
+            plots.save_figure(ax.figure, out / f"{name}_{safe_name(r['method'])}_gantt.png")

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from .common import EXIT_OK, Subparsers, add_delivery_time, positive_int
+from .common import EXIT_OK, Subparsers, add_delivery_time, add_output, positive, positive_int, seed
 
 
 def add_parser(subparsers: Subparsers) -> None:
@@ -19,19 +19,40 @@ def add_parser(subparsers: Subparsers) -> None:
     )
     p.add_argument("family", help="table | mixed | intree | series-parallel")
     p.add_argument("--size", type=positive_int, required=True, help="units or tasks")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tightness", type=float, default=0.6, help="part area / tray area (0.6)")
+    p.add_argument(
+        "--seed", type=seed, metavar="N", help="random seed (random families; default 0)"
+    )
+    p.add_argument(
+        "--tightness",
+        type=positive,
+        metavar="T",
+        help="part area / tray area (random families; default 0.6)",
+    )
     add_delivery_time(p, "delivery time d (default: the family's)")
-    p.add_argument("--out", "-o", metavar="FILE", help="write here instead of stdout")
+    add_output(p, "--out", "-o", metavar="FILE", help="write here instead of stdout")
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..errors import UsageError
     from ..generate import generate
     from ..instance import from_dict
 
-    doc = generate(args.family, args.size, args.seed, args.tightness, args.delivery_time)
+    if args.family in ("table", "mixed"):  # deterministic families: nothing to seed or size
+        for option, value in (("--tightness", args.tightness), ("--seed", args.seed)):
+            if value is not None:
+                raise UsageError(
+                    f"{option} applies to the random families (intree, series-parallel), "
+                    f"not to {args.family!r}"
+                )
+    doc = generate(
+        args.family,
+        args.size,
+        0 if args.seed is None else args.seed,
+        0.6 if args.tightness is None else args.tightness,
+        args.delivery_time,
+    )
     from_dict(doc, f"<generated {args.family}>")  # never write an instance that doesn't load
-    text = json.dumps(doc, indent=2) + "\n"
+    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
     if args.out:
         from ..atomic import write_text
 

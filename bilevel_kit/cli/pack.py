@@ -5,7 +5,20 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from .common import EXIT_OK, EXIT_UNKNOWN, Subparsers, nonneg, positive_int
+from .common import (
+    EXIT_NO_GRID_LAYOUT,
+    EXIT_OK,
+    EXIT_UNKNOWN,
+    Subparsers,
+    add_output,
+    add_seed,
+    length,
+    nonneg,
+    positive_int,
+)
+
+#: The layout file's status when CP-SAT finds no layout on a grid that is not exact.
+NO_GRID_LAYOUT = "no_grid_layout"
 
 if TYPE_CHECKING:
     from ..instance import Instance
@@ -19,7 +32,9 @@ def add_parser(subparsers: Subparsers) -> None:
         'stand-alone pack file {"tray": {"width", "height"}, "items": [{"id", "width", '
         '"height", "count", "rotatable"}]}. Integer grid at --resolution mm, rotation 0/90 '
         "degrees for rotatable parts, no-overlap-2D. Exit 0 for a definite answer (feasible, "
-        "optimal or infeasible), 3 for unknown within the time limit.",
+        "optimal or infeasible), 3 for unknown within the time limit, 4 for no layout on "
+        "this grid when the grid is not exact (some size is not a multiple of --resolution): "
+        "that is not a proof that the parts do not fit; try a finer --resolution.",
     )
     p.add_argument("file", metavar="FILE")
     p.add_argument("--tasks", metavar="A,B,C", help="tasks whose parts to pack (instances)")
@@ -32,7 +47,7 @@ def add_parser(subparsers: Subparsers) -> None:
     )
     p.add_argument(
         "--resolution",
-        type=float,
+        type=length,
         default=1.0,
         metavar="MM",
         help="grid resolution in mm (default 1)",
@@ -45,9 +60,9 @@ def add_parser(subparsers: Subparsers) -> None:
         help="time limit in seconds (default 10)",
     )
     p.add_argument("--workers", type=positive_int, default=2, help="CP-SAT workers (2)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", "-o", metavar="FILE", help="write the layout as JSON")
-    p.add_argument("--png", metavar="FILE", help="draw the layout")
+    add_seed(p)
+    add_output(p, "--out", "-o", metavar="FILE", help="write the layout as JSON")
+    add_output(p, "--png", metavar="FILE", help="draw the layout")
 
 
 def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], list[str]]:
@@ -66,6 +81,11 @@ def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], li
     if not args.tasks:
         raise UsageError("an instance needs --tasks a,b,c (the tasks whose parts to pack)")
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
+    if not tasks:
+        raise UsageError(f"--tasks {args.tasks!r}: no task given")
+    repeated = sorted({t for t in tasks if tasks.count(t) > 1})
+    if repeated:
+        raise UsageError(f"--tasks: task(s) given twice: {', '.join(repeated)}")
     unknown = [t for t in tasks if t not in instance.task_by_id]
     if unknown:
         raise UsageError(f"--tasks: unknown task(s) {', '.join(unknown)}")
@@ -73,10 +93,6 @@ def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], li
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import UsageError
-
-    if not args.resolution > 0:
-        raise UsageError("--resolution must be > 0")
     instance, counts, tasks = _read_target(args)
     from ..layout.cpsat_packing import pack
     from ..layout.shelf import kit_items
@@ -93,9 +109,17 @@ def run(args: argparse.Namespace) -> int:
         w6=instance.weights["W6"],
         reach=reach_grid(instance),
     )
+    status = res.status
+    if status == "infeasible" and not res.extra.get("proof", True):
+        status = NO_GRID_LAYOUT
+    shown = (
+        f"no layout on the {args.resolution:g} mm grid (not a proof; try a finer --resolution)"
+        if status == NO_GRID_LAYOUT
+        else status
+    )
     line = (
         f"{instance.name}: {sum(counts.values())} parts on {instance.tray.width:g} x "
-        f"{instance.tray.height:g} mm: {res.status} in {res.wall_time_s:.3f} s"
+        f"{instance.tray.height:g} mm: {shown} in {res.wall_time_s:.3f} s"
     )
     if res.layout is not None and args.objective == "fitness":
         line += (
@@ -117,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
             resolution=args.resolution,
             tray=instance.tray,
         )
+        doc["status"] = status
         write_text(args.out, json.dumps(doc, indent=2) + "\n")
     if args.png and res.layout is not None:
         from ..plan import Kit
@@ -126,4 +151,6 @@ def run(args: argparse.Namespace) -> int:
             instance, Kit(tuple(tasks), res.layout), title=f"{instance.name}: {res.status}"
         )
         save_figure(ax.figure, args.png)
-    return EXIT_UNKNOWN if res.status == "unknown" else EXIT_OK
+    if status == NO_GRID_LAYOUT:
+        return EXIT_NO_GRID_LAYOUT
+    return EXIT_UNKNOWN if status == "unknown" else EXIT_OK

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import EXIT_INVALID, EXIT_OK, Subparsers, positive_int
+from .common import EXIT_INVALID, EXIT_OK, Subparsers, add_output, length, positive_int
 
 
 def add_parser(subparsers: Subparsers) -> None:
@@ -20,23 +20,24 @@ def add_parser(subparsers: Subparsers) -> None:
     p.add_argument("instance")
     p.add_argument(
         "--resolution",
-        type=float,
+        type=length,
         metavar="MM",
         help="cell size in mm (default: the instance's reach_resolution, 10)",
     )
-    p.add_argument("--png", metavar="FILE", help="draw the map here")
+    add_output(p, "--png", metavar="FILE", help="draw the map here")
     p.add_argument("--solution", metavar="FILE", help="solution whose kit to draw on the map")
-    p.add_argument("--kit", type=positive_int, default=1, help="kit of --solution (default 1)")
+    p.add_argument("--kit", type=positive_int, help="kit of --solution (default 1)")
 
 
 def run(args: argparse.Namespace) -> int:
     from ..errors import UsageError
     from ..instance import load
 
+    if args.kit is not None and not args.solution:
+        raise UsageError("--kit needs --solution (the solution whose kit to draw)")
+    args.kit = args.kit or 1
     instance = load(args.instance)
     resolution = instance.reach_resolution if args.resolution is None else args.resolution
-    if not resolution > 0:
-        raise UsageError("--resolution must be > 0")
     layout = None
     if args.solution:
         from .. import solution

@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import argparse
 
-from .common import EXIT_OK, Subparsers, add_delivery_time, nonneg, positive_int
+from .common import (
+    EXIT_OK,
+    Subparsers,
+    add_delivery_time,
+    add_output,
+    add_seed,
+    nonneg,
+    positive_int,
+)
 
 
 def add_parser(subparsers: Subparsers) -> None:
@@ -19,8 +27,10 @@ def add_parser(subparsers: Subparsers) -> None:
     )
     p.add_argument("experiment", choices=("user-study", "fig6"))
     p.add_argument("--quick", action="store_true", help="a reduced run (seconds)")
-    p.add_argument("--out", metavar="DIR", help="output folder (default out/repro/EXPERIMENT)")
-    p.add_argument("--seed", type=int, default=0)
+    add_output(
+        p, "--out", folder=True, metavar="DIR", help="output folder (default out/repro/EXPERIMENT)"
+    )
+    add_seed(p)
     p.add_argument(
         "--reps",
         type=positive_int,
@@ -47,12 +57,15 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from .. import repro
+    from ..paths import check_outputs
 
+    default = "out/repro/user_study" if args.experiment == "user-study" else "out/repro/fig6"
+    check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
     if args.experiment == "user-study":
-        out = args.out or "out/repro/user_study"
+        out = args.out or default
         res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
     else:
-        out = args.out or "out/repro/fig6"
+        out = args.out or default
         policies = tuple(repro.CONDITIONS)
         options = None
         if args.with_cpsat:

@@ -6,13 +6,13 @@ import argparse
 import json
 import sys
 
-from .common import EXIT_OK, Subparsers
+from .common import EXIT_OK, Subparsers, add_output
 
 
 def add_parser(subparsers: Subparsers) -> None:
     p = subparsers.add_parser("schema", help="print the JSON Schema of instance or solution files")
     p.add_argument("--solution", action="store_true", help="the solution schema instead")
-    p.add_argument("--out", "-o", metavar="FILE", help="write it to FILE instead of stdout")
+    add_output(p, "--out", "-o", metavar="FILE", help="write it to FILE instead of stdout")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -14,7 +14,9 @@ from .common import (
     EXIT_OK,
     Subparsers,
     add_instance_overrides,
+    add_output,
     add_param_option,
+    add_seed,
     float_map,
     instance_overrides,
     nonneg,
@@ -68,8 +70,8 @@ def add_parser(subparsers: Subparsers) -> None:
         "(default unlimited, the evaluator's semantics; 0 = the user study)",
     )
     p.add_argument("--reps", type=positive_int, default=30, help="replications (default 30)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the first replication")
-    p.add_argument("--csv", metavar="FILE", help="one row per replication")
+    add_seed(p, "seed of the first replication (default 0)")
+    add_output(p, "--csv", metavar="FILE", help="one row per replication")
     add_instance_overrides(p)
     add_param_option(p, "policy option, e.g. cpsat-rolling: window=12, time_limit=1 (repeatable)")
 

@@ -12,7 +12,9 @@ from .common import (
     EXIT_UNKNOWN,
     Subparsers,
     add_instance_overrides,
+    add_output,
     add_param_option,
+    add_seed,
     load_instance,
     nonneg,
     positive_int,
@@ -43,17 +45,20 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="NAME",
         help="registered method: " + ", ".join(REGISTRY),
     )
-    p.add_argument("--out", "-o", metavar="FILE", help="write the solution JSON here")
-    p.add_argument("--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
-    p.add_argument("--tray", metavar="PNG", help="draw every kit's tray layout")
+    add_output(p, "--out", "-o", metavar="FILE", help="write the solution JSON here")
+    add_output(p, "--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
+    add_output(p, "--tray", metavar="PNG", help="draw every kit's tray layout")
     p.add_argument(
         "--check",
         action="store_true",
         help="run the independent checker on the plan (exit 1 when invalid)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument(
-        "--convergence", metavar="PNG", help="plot the cross-entropy trace of one kit (greedy-ce)"
+    add_seed(p)
+    add_output(
+        p,
+        "--convergence",
+        metavar="PNG",
+        help="plot the cross-entropy trace of one kit (greedy-ce)",
     )
     p.add_argument(
         "--convergence-kit",

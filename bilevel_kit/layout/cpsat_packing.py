@@ -5,7 +5,10 @@ rounded *up* and the tray *down*, so a grid-feasible layout is truly non-overlap
 the tray: each part is drawn centred in its (possibly slightly larger) grid cell. When every
 size is a multiple of the resolution the grid is exact: integer sizes admit an integer-position
 packing whenever any packing exists (bottom-left compaction), so "infeasible" is then a proof
-for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution".
+for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution": every
+infeasible answer records in ``extra["proof"]`` whether it is a proof (an exact grid without
+reachability, or a reason that holds at true sizes: a part larger than the tray, or more part
+area than tray area). ``bilevel-kit pack`` reports the others as "no layout on this grid".
 
 **Model.** Every part has a lower-left corner (x, y). A rotatable, non-square part has two
 optional rectangles, one per orientation (0 and 90 degrees), whose presence literals are
@@ -288,6 +291,8 @@ def pack(
 
     if objective not in ("feasible", "fitness"):
         raise ValueError(f"objective must be 'feasible' or 'fitness', not {objective!r}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ValueError(f"resolution must be a finite number of mm > 0, not {resolution!r}")
     t0 = time.perf_counter()
     W, H = grid_down(tray.width, resolution), grid_down(tray.height, resolution)
     sizes = [
@@ -323,6 +328,7 @@ def pack(
     fits_alone = all((w <= W and h <= H) or (r and h <= W and w <= H) for w, h, r in sizes)
     if not fits_alone or sum(w * h for w, h, _ in sizes) > W * H:
         extra["reason"] = "area" if fits_alone else "part larger than tray"
+        extra["proof"] = (exact and reach is None) or _infeasible_at_true_sizes(tray, items)
         return done("infeasible", None)
     if objective == "feasible":
         shelf = _shelf(sizes, W, H)
@@ -392,6 +398,7 @@ def pack(
     st = solver.solve(model)
     extra["cpsat_status"] = solver.status_name(st)
     if st == cp_model.INFEASIBLE:
+        extra["proof"] = (exact and reach is None) or _infeasible_at_true_sizes(tray, items)
         return done("infeasible", None)
     if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return done("unknown", None)
@@ -414,6 +421,18 @@ def pack(
         bound=solver.best_objective_bound * half,
     )
     return res
+
+
+def _infeasible_at_true_sizes(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> bool:
+    """A reason no layout exists at all, grid or not: a part that fits the tray in neither
+    0/90-degree orientation, or more part area than tray area."""
+    for _, pt in items:
+        fits = pt.width <= tray.width and pt.height <= tray.height
+        if pt.rotatable:
+            fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
+        if not fits:
+            return True
+    return sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS)
 
 
 def add_lex_less(
