@@ -45,15 +45,19 @@ The bounds assume ``W4, W5, W6 >= 0``; otherwise every prefix is evaluated.
 from __future__ import annotations
 
 import bisect
+import heapq
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
 from .. import geometry
 from ..instance import Instance
 from . import upper_level
+
+FloatOrArray = TypeVar("FloatOrArray", float, np.ndarray)
 
 #: Score tolerance of the tie rule (the enumeration's).
 TIE_TOL = 1e-9
@@ -68,7 +72,7 @@ class SearchLimits:
 
     max_prefix_sets: int = 5000
     beam_width: int = 64
-    max_rest_nodes: int = 5000
+    max_rest_nodes: int = 2000
 
 
 @dataclass
@@ -278,15 +282,17 @@ class PrefixSearch:
         done: np.ndarray,
         avail: list[int],
         m: int,
-        score: Callable[[float], float],
-        bound: Callable[[float], float],
+        score: Callable[[np.ndarray], np.ndarray],
+        bound: Callable[[float, float], float],
         threshold: float | None,
+        cutoff: float = math.inf,
     ) -> tuple[float, tuple[int, ...], bool]:
         """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
         topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
-        a lower bound of R(Q) to a lower bound of F (robot times are >= 0, so a partial sum
-        plus the smallest times left bounds R(Q) from below). With ``threshold``, the first
-        rest (lexicographic) whose F is at most the threshold."""
+        bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
+        largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
+        rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
+        are not looked for (the result is then ``(inf, ())``)."""
         base = set(prefix)
         seen = _DoneView(done, base)
         base_avail = {y for y in avail if y not in base}
@@ -297,6 +303,7 @@ class PrefixSearch:
         ordered = sorted(base_avail)
         left = [float(self.r[y]) for y in range(len(self.r)) if not seen[y]]
         rmin = min(left, default=0.0)
+        rmax = max(left, default=0.0)
         best_f = math.inf
         best_q: tuple[int, ...] = ()
         nodes = 0
@@ -308,25 +315,33 @@ class PrefixSearch:
             """Depth-first in lexicographic order of canonical sequences; True stops."""
             nonlocal best_f, best_q, nodes, capped
             k = len(seq)
-            if k == m:
-                f = score(total)
-                if threshold is not None:
-                    if f <= threshold:
-                        best_f, best_q = f, tuple(seq)
-                        return True
-                elif f < best_f:
-                    best_f, best_q = f, tuple(seq)
-                return False
             nodes += 1
             if nodes > cap:
                 capped = True
                 return True
             if self._prune and k:
-                lower = bound(total + (m - k) * rmin)
+                lower = bound(total + (m - k) * rmin, total + (m - k) * rmax)
                 if (lower > threshold) if threshold is not None else (lower >= best_f):
                     return False
+                if lower > cutoff:
+                    return False
             s = tuple(seq)
-            for y in self._children(s, set(s), seen, ordered):
+            kids = self._children(s, set(s), seen, ordered)
+            if not kids:
+                return False
+            if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
+                vals = score(total + self.r[kids])
+                if threshold is not None:
+                    hit = np.flatnonzero(vals <= threshold)
+                    if hit.size:
+                        best_f, best_q = float(vals[hit[0]]), (*s, kids[int(hit[0])])
+                        return True
+                    return False
+                a = int(np.argmin(vals))
+                if vals[a] < best_f and vals[a] <= cutoff:
+                    best_f, best_q = float(vals[a]), (*s, kids[a])
+                return False
+            for y in kids:
                 seq.append(y)
                 stop = rec(total + float(self.r[y]))
                 seq.pop()
@@ -338,7 +353,9 @@ class PrefixSearch:
         return best_f, best_q, capped
 
     # -- the decision ----------------------------------------------------------------------------
-    def _score(self, i: int, diff5: float, diff6: float, fit: float, unav: float | None) -> float:
+    def _score(
+        self, i: int, diff5: float, diff6: FloatOrArray, fit: float, unav: float | None
+    ) -> FloatOrArray:
         """F of one pair in the same floating-point order as :func:`upper_level.objective`."""
         w = self.instance.weights
         f = -w["W2"] * float(i)
@@ -367,18 +384,21 @@ class PrefixSearch:
         avail = [
             j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
         ]
-        cands: list[tuple[float, int, int]] = []  # (optimistic, level, row)
+        # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
+        # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
+        queue: list[tuple[float, int, int, int]] = []
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
             opt = self._optimistic(li + 1, length, lv.robot, lv.human, lv.counts, ctx)
-            cands.extend((o, li, k) for k, o in enumerate(opt.tolist()))
-        cands.sort()
+            queue.extend((o, 0, li, k) for k, o in enumerate(opt.tolist()))
+        heapq.heapify(queue)
 
         def scorer(
             li: int, k: int, fit: float
-        ) -> tuple[Callable[[float], float], Callable[[float], float]]:
-            """F of prefix (li, k) as a function of the rest's robot sum, and a lower bound of
-            F given a lower bound of that sum (term 6 is |x| or x, x growing with the sum)."""
+        ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[[float, float], float]]:
+            """F of prefix (li, k) as a function of the rest's robot sums (vectorised), and a
+            lower bound of F given a lower bound of the sum (term 6 is |x| or x, x growing with
+            the sum)."""
             lv, i = levels[li], li + 1
             diff5 = d + o_r + float(lv.robot[k]) - human_remaining
             diff5 = diff5 if signed else abs(diff5)
@@ -386,36 +406,47 @@ class PrefixSearch:
             u = None if unav is None else float(unav[0])
             human = o_h + float(lv.human[k])
 
-            def f(rest: float) -> float:
-                diff6 = d + (o_r + rest if i < length else 0.0) - human
-                return self._score(i, diff5, diff6 if signed else abs(diff6), fit, u)
+            def f(rest: np.ndarray) -> np.ndarray:
+                diff6 = d + (o_r + rest) - human if i < length else d + 0.0 - human
+                return self._score(i, diff5, diff6 if signed else np.abs(diff6), fit, u)
 
-            def lower(rest: float) -> float:
-                diff6 = d + (o_r + rest) - human
-                return self._score(i, diff5, diff6 if signed else max(diff6, 0.0), fit, u)
+            def lower(lo: float, hi: float = math.inf) -> float:
+                diff6 = d + (o_r + lo) - human
+                if not signed:
+                    diff6 = max(diff6, -(d + (o_r + hi) - human), 0.0)
+                return float(self._score(i, diff5, diff6, fit, u))
 
             return f, lower
 
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
+        fits_of: dict[tuple[int, int], float] = {}
         incumbent = math.inf
-        for o, li, k in cands:
-            if o > incumbent + TIE_TOL:
-                break
-            fit, fits = fitness(levels[li].counts[k])
-            if not fits:
-                continue
-            self.stats.evaluated += 1
+        while queue and queue[0][0] <= incumbent + TIE_TOL:
+            _, stage, li, k = heapq.heappop(queue)
             i = li + 1
+            if stage == 0:
+                fit, fits = fitness(levels[li].counts[k])
+                if not fits:
+                    continue
+                self.stats.evaluated += 1
+                fits_of[li, k] = fit
+                f, lower = scorer(li, k, fit)
+                if i == length:
+                    score = float(f(0.0))
+                    found.append((score, li, k, (), fit))
+                    incumbent = min(incumbent, score)
+                else:
+                    heapq.heappush(queue, (lower(float(min_rest[length - i])), 1, li, k))
+                continue
+            fit = fits_of[li, k]
             f, lower = scorer(li, k, fit)
-            if i < length:
-                score, rest, capped = self._rest(
-                    levels[li].seqs[k], done, avail, length - i, f, lower, None
-                )
-                self.stats.rest_capped += capped
-            else:
-                score, rest = f(0.0), ()
-            found.append((score, li, k, rest, fit))
-            incumbent = min(incumbent, score)
+            score, rest, capped = self._rest(
+                levels[li].seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
+            )
+            self.stats.rest_capped += capped
+            if rest:
+                found.append((score, li, k, rest, fit))
+                incumbent = min(incumbent, score)
         if not found:
             return None
         fmin = min(x[0] for x in found)
