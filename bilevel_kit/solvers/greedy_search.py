@@ -174,6 +174,7 @@ class PrefixSearch:
         self.stats = SearchStats()
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
+        self._r_range = (0.0, 0.0)
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _children(
@@ -301,9 +302,7 @@ class PrefixSearch:
                 if not seen[y] and all(seen[p] for p in self.pred[y]):
                     base_avail.add(y)
         ordered = sorted(base_avail)
-        left = [float(self.r[y]) for y in range(len(self.r)) if not seen[y]]
-        rmin = min(left, default=0.0)
-        rmax = max(left, default=0.0)
+        rmin, rmax = self._r_range  # over the tasks not done (a superset of those left)
         best_f = math.inf
         best_q: tuple[int, ...] = ()
         nodes = 0
@@ -377,6 +376,7 @@ class PrefixSearch:
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
         remaining_r = np.sort(self.r[~done])
+        self._r_range = (float(remaining_r[0]), float(remaining_r[-1]))
         min_rest = np.concatenate([[0.0], np.cumsum(remaining_r)])[: length + 1]
         ctx = _Epoch(human_remaining, available, signed, min_rest)
         levels, beam = self._levels(done, length, ctx)
