@@ -56,6 +56,7 @@ the weights ``W1``..``W7`` and every :class:`~bilevel_kit.layout.cross_entropy.C
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Literal
@@ -66,8 +67,9 @@ from ..errors import KitDoesNotFit, UsageError
 from ..instance import Instance
 from ..layout.cross_entropy import Arrangement, CEParams, arrange
 from ..methods import MethodOutput, Status
-from ..plan import Kit, Plan, evaluate
+from ..plan import Kit, Plan, evaluate, next_robot_start
 from . import upper_level
+from .greedy_search import PrefixSearch, SearchLimits, available_vector
 
 #: Refuse to enumerate more than this many partial sequences at one epoch.
 MAX_SEQUENCES = 2_000_000
@@ -81,6 +83,12 @@ class GreedyParams:
     weights: Mapping[str, float] | None = None
     signed: bool = False
     precedence: str = "hard"  # "hard" | "penalty"
+    #: "exact": the search over prefix sets (:mod:`.greedy_search`); "enumerate": every
+    #: sequence (the penalty form always enumerates).
+    decision: str = "exact"
+    max_prefix_sets: int = SearchLimits.max_prefix_sets
+    beam_width: int = SearchLimits.beam_width
+    max_rest_nodes: int = SearchLimits.max_rest_nodes
     ce: CEParams = field(default_factory=CEParams)
     #: Polish every CE layout with the convex-concave SOCP of models/convex_layout.py.
     polish: bool = False
@@ -103,6 +111,24 @@ class GreedyCEOptions:
     precedence: Literal["hard", "penalty"] = field(
         default="hard",
         metadata={"help": "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"},
+    )
+    decision: Literal["exact", "enumerate"] = field(
+        default="exact",
+        metadata={
+            "help": "hard precedence: exact search over prefix sets, or enumerate every sequence"
+        },
+    )
+    max_prefix_sets: int = field(
+        default=SearchLimits.max_prefix_sets,
+        metadata={"help": "prefix sets per epoch beyond which the search is a beam", "min": 1},
+    )
+    beam_width: int = field(
+        default=SearchLimits.beam_width,
+        metadata={"help": "prefix sets kept per size once the search is a beam", "min": 1},
+    )
+    max_rest_nodes: int = field(
+        default=SearchLimits.max_rest_nodes,
+        metadata={"help": "search nodes per window-rest search (then the best so far)", "min": 1},
     )
     polish: bool = field(
         default=False, metadata={"help": "polish every CE layout with the convex SOCP"}
@@ -200,6 +226,10 @@ class GreedyCEOptions:
             weights=weights or None,
             signed=self.signed,
             precedence=self.precedence,
+            decision=self.decision,
+            max_prefix_sets=self.max_prefix_sets,
+            beam_width=self.beam_width,
+            max_rest_nodes=self.max_rest_nodes,
             ce=self.ce_params(),
             polish=self.polish,
         )
@@ -231,7 +261,15 @@ class GreedyStats:
     ce_calls: int = 0
     fitness_cache_hits: int = 0
     kits_not_fitting: int = 0
-    objective_terms: list[dict[str, float]] = field(default_factory=list)
+    #: closed prefix sets scored (exact decision), prefixes evaluated with their layout
+    prefix_sets: int = 0
+    evaluated: int = 0
+    #: epochs whose prefix search became a beam; window-rest searches stopped at their cap
+    beam_epochs: int = 0
+    rest_capped: int = 0
+    #: True once ``time_limit`` ran out (the remaining kits are single tasks)
+    time_limit_hit: bool = False
+    objective_terms: list[dict[str, object]] = field(default_factory=list)
 
 
 class GreedyCEPolicy:
@@ -248,6 +286,10 @@ class GreedyCEPolicy:
             raise UsageError(
                 f"precedence must be 'hard' or 'penalty', got {self.params.precedence!r}"
             )
+        if self.params.decision not in ("exact", "enumerate"):
+            raise UsageError(
+                f"decision must be 'exact' or 'enumerate', got {self.params.decision!r}"
+            )
         self.seed = int(seed)
         self.stats = GreedyStats()
         self._arrangements: dict[tuple[tuple[str, int], ...], Arrangement] = {}
@@ -263,6 +305,14 @@ class GreedyCEPolicy:
         for j, tid in enumerate(self._ids):
             for t, n in inst.task_by_id[tid].parts:
                 self._part_matrix[j, col[t]] += n
+        limits = SearchLimits(
+            self.params.max_prefix_sets, self.params.beam_width, self.params.max_rest_nodes
+        )
+        self._search = PrefixSearch(
+            inst, self._r, self._h, self._pred, self._part_matrix, self._types, limits
+        )
+        #: ``time.perf_counter()`` after which decisions are single tasks (None: no limit)
+        self.deadline: float | None = None
 
     # -- lower level, memoised ---------------------------------------------------------------
     def arrangement(self, counts: Mapping[str, int]) -> Arrangement:
@@ -310,15 +360,16 @@ class GreedyCEPolicy:
 
         return rec()
 
-    def decide(self, state: PolicyState) -> Kit | None:
-        """The next kit (tasks in the human's order, with its CE layout); None when all done."""
+    def _fitness(self, row: np.ndarray) -> tuple[float, bool]:
+        arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
+        return arr.fitness, arr.fits
+
+    def _enumerate(
+        self, state: PolicyState, done: set[int], length: int
+    ) -> tuple[list[int], float]:
+        """Every (K, i) scored at once (the penalty form, and ``decision="enumerate"``)."""
         inst = self.instance
-        w = inst.weights
-        done = {inst.index[t] for t in state.done}
         remaining = len(self._ids) - len(done)
-        if remaining == 0:
-            return None
-        length = min(inst.horizon, remaining)
         if math.perm(remaining, length) > MAX_SEQUENCES and self.params.precedence != "hard":
             raise UsageError(
                 f"{math.perm(remaining, length)} sequences to enumerate in the "
@@ -327,7 +378,6 @@ class GreedyCEPolicy:
         seqs = np.array(list(self._sequences(done, length)), dtype=np.int64)
         if len(seqs) > MAX_SEQUENCES:
             raise UsageError(f"{len(seqs)} partial sequences at one epoch; lower the horizon")
-        self.stats.epochs += 1
         self.stats.sequences += len(seqs)
         # Terms (3)-(6) of every (K, i), then the lower level: one arrangement per distinct
         # prefix part multiset (term 7 and the W7 term).
@@ -349,14 +399,13 @@ class GreedyCEPolicy:
         fit = np.empty(len(keys))
         fits = np.empty(len(keys), dtype=bool)
         for k, row in enumerate(keys):
-            arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
-            fit[k], fits[k] = arr.fitness, arr.fits
+            fit[k], fits[k] = self._fitness(row)
         unavailable = None
-        if state.available is not None:
-            avail = np.array([state.available.get(t, 0) for t in self._types])
+        avail = available_vector(state.available, self._types)
+        if avail is not None:
             unavailable = upper_level.unavailable_parts(keys, avail)[inverse]
         score = upper_level.objective(
-            w,
+            inst.weights,
             n_tasks=np.arange(1, length + 1)[None, :],
             diff5=diff5,
             diff6=diff6,
@@ -367,21 +416,72 @@ class GreedyCEPolicy:
         score[~fits[inverse.reshape(-1)]] = np.inf
         self.stats.candidates += int(np.isfinite(score).sum())
         if not np.isfinite(score).any():
+            return [], math.inf
+        # first minimum in enumeration order (row-major: sequence, then split), tolerance 1e-9
+        flat = int(np.flatnonzero(score <= score.min() + 1e-9)[0])
+        s, col = divmod(flat, length)
+        return seqs[s, : col + 1].tolist(), float(score[flat])
+
+    def _exact(self, state: PolicyState, done: set[int], length: int) -> tuple[list[int], float]:
+        """The search over closed prefix sets (:mod:`.greedy_search`): same minimum, same kit."""
+        mask = np.zeros(len(self._ids), dtype=bool)
+        mask[list(done)] = True
+        search = self._search
+        before = (search.stats.evaluated, search.stats.prefix_sets)
+        choice = search.decide(
+            mask,
+            length,
+            state.human_remaining,
+            available_vector(state.available, self._types),
+            self._fitness,
+            self.params.signed,
+        )
+        st = search.stats
+        self.stats.candidates += st.evaluated - before[0]
+        self.stats.prefix_sets, self.stats.evaluated = st.prefix_sets, st.evaluated
+        self.stats.beam_epochs, self.stats.rest_capped = st.beam_epochs, st.rest_capped
+        if choice is None:
+            return [], math.inf
+        return list(choice.prefix), choice.score
+
+    def _cheap(self, done: set[int]) -> tuple[list[int], float | None]:
+        """After the time limit: the first available task (file order) alone, if it fits."""
+        for j in range(len(self._ids)):
+            if j not in done and self._pred[j] <= done:
+                if self._fitness(self._part_matrix[j])[1]:
+                    return [j], None
+                break
+        return [], math.inf
+
+    def decide(self, state: PolicyState) -> Kit | None:
+        """The next kit (tasks in the human's order, with its CE layout); None when all done."""
+        inst = self.instance
+        done = {inst.index[t] for t in state.done}
+        remaining = len(self._ids) - len(done)
+        if remaining == 0:
+            return None
+        length = min(inst.horizon, remaining)
+        self.stats.epochs += 1
+        best_score: float | None
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            self.stats.time_limit_hit = True
+            prefix, best_score = self._cheap(done)
+        elif self.params.precedence == "penalty" or self.params.decision == "enumerate":
+            prefix, best_score = self._enumerate(state, done, length)
+        else:
+            prefix, best_score = self._exact(state, done, length)
+        if not prefix:
             raise KitDoesNotFit(
                 f"{inst.source}: no next kit fits the tray: every candidate "
                 f"prefix of the remaining {remaining} tasks failed to lay out"
             )
-        # first minimum in enumeration order (row-major: sequence, then split), tolerance 1e-9
-        flat = int(np.flatnonzero(score <= score.min() + 1e-9)[0])
-        s, col = divmod(flat, length)
-        best_score = float(score[flat])
-        prefix = seqs[s, : col + 1].tolist()
         row = self._part_matrix[prefix].sum(axis=0)
         arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
         self.stats.objective_terms.append(
             {
                 "score": best_score,
-                "i": col + 1,
+                "i": len(prefix),
+                "h_rem": state.human_remaining,
                 "fitness": arr.fitness,
                 "d_same": arr.d_same,
                 "d_diff": arr.d_diff,
@@ -404,7 +504,10 @@ def plan(
 ) -> Plan:
     """Offline plan with expected times: call the policy at each epoch until all tasks are kitted.
 
-    ``H_rem`` at each epoch comes from the one timeline evaluator on the kits so far.
+    An epoch is the moment the robot can start the next kit: the last kit has arrived and a
+    tray is back (:func:`bilevel_kit.plan.next_robot_start`, the tray rule of
+    docs/timeline.md). ``H_rem`` is the human's work left then, ``human_end - now >= 0``
+    (with unlimited trays ``now`` is the last arrival), from the one timeline evaluator.
     """
     policy = policy or GreedyCEPolicy(instance, params, seed)
     kits: list[Kit] = []
@@ -413,7 +516,7 @@ def plan(
         remaining = 0.0
         if kits:
             tl = evaluate(policy.instance, Plan(tuple(kits)))
-            now = tl.kits[-1].arrive  # the robot is free once it has delivered
+            now = next_robot_start(policy.instance, tl.kits)
             remaining = max(0.0, tl.kits[-1].human_end - now)
         kit = policy.decide(PolicyState(frozenset(done), remaining))
         assert kit is not None
@@ -430,19 +533,30 @@ def greedy_ce(
     time_limit: float | None = None,
 ) -> MethodOutput:
     """Registered method ``greedy-ce``: the paper's bilevel heuristic (options and ``extra``
-    in the module docstring). ``time_limit`` is accepted for the common interface only."""
+    in the module docstring). Past ``time_limit`` seconds the remaining kits are single tasks
+    (``extra["time_limit_hit"]``)."""
     params = options.to_params()
     policy = GreedyCEPolicy(instance, params, seed)
+    if time_limit is not None:
+        policy.deadline = time.perf_counter() + time_limit
     result = plan(instance, params, seed, policy)
     st = policy.stats
     extra = {
         "epochs": st.epochs,
+        "decision": "enumerate"
+        if params.precedence == "penalty" or params.decision == "enumerate"
+        else "exact",
         "sequences": st.sequences,
+        "prefix_sets": st.prefix_sets,
+        "evaluated": st.evaluated,
+        "beam_epochs": st.beam_epochs,
+        "rest_capped": st.rest_capped,
+        "time_limit_hit": st.time_limit_hit,
         "candidates": st.candidates,
         "ce_calls": st.ce_calls,
         "fitness_cache_hits": st.fitness_cache_hits,
         "kits_not_fitting": st.kits_not_fitting,
-        "epoch_F_sum": sum(t["score"] for t in st.objective_terms),
+        "epoch_F_sum": sum(float(t["score"]) for t in st.objective_terms if t["score"] is not None),
         "kit_terms": st.objective_terms,
     }
     return MethodOutput(result, Status.FEASIBLE, None, extra)

@@ -1,0 +1,168 @@
+"""Benchmark of greedy-ce at scale: wall time and peak memory by family and size.
+
+Families: ``table``, ``mixed``, ``intree``, ``series-parallel`` (``bilevel-kit generate``) and
+``wide``: tasks without precedence, one part type, robot times given per task (built here,
+since ``generate`` has no such family). Sizes are tasks (units for ``table``/``mixed``:
+12 tasks per table unit, the size is divided accordingly). Each case runs in a fresh
+subprocess; peak memory is that child's ``ru_maxrss``. The growth exponent of each family is
+the least-squares slope of log(time) on log(tasks).
+
+Writes bench/results/greedy_scale.csv. Usage:
+python bench/bench_greedy_scale.py [--sizes 12 60 120 500 1000] [--families ...]
+[--timeout 600]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+FAMILIES = ("table", "mixed", "intree", "series-parallel", "wide")
+
+CHILD = r"""
+import json, sys, time, resource
+sys.path.insert(0, sys.argv[1])
+from bilevel_kit import load, solve
+inst = load(sys.argv[2])
+t0 = time.perf_counter()
+res = solve(inst, "greedy-ce", seed=0, check=True)
+wall = time.perf_counter() - t0
+e = res.extra
+print(json.dumps({
+    "tasks": inst.n_tasks, "wall_s": round(wall, 3), "makespan": res.objective,
+    "kits": len(res.plan.kits), "valid": e["violations"] == [],
+    **{k: e[k] for k in ("prefix_sets", "evaluated", "beam_epochs", "rest_capped",
+                         "ce_calls", "time_limit_hit")},
+}))
+"""
+
+
+def wide_instance(n: int, seed: int) -> dict[str, object]:
+    """n tasks without precedence, one part type, robot times given per task."""
+    import random
+
+    rng = random.Random(seed)
+    return {
+        "format": "bilevel-kit/1",
+        "name": f"wide_n{n}_s{seed}",
+        "tray": {"width": 300.0, "height": 200.0},
+        "delivery_time": 2.0,
+        "part_types": [{"id": "part", "width": 40.0, "height": 30.0, "pick_time": 3.0}],
+        "tasks": [
+            {
+                "id": f"t{j}",
+                "parts": [{"type": "part", "count": rng.randint(1, 3)}],
+                "robot_time": float(rng.randint(3, 30)),
+                "human_time": {"mean": float(rng.randint(5, 40))},
+            }
+            for j in range(n)
+        ],
+    }
+
+
+def make_instance(family: str, size: int, path: Path) -> None:
+    if family == "wide":
+        path.write_text(json.dumps(wide_instance(size, 1)))
+        return
+    arg = size
+    if family in ("table", "mixed"):
+        arg = max(1, size // (12 if family == "table" else 30))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "bilevel_kit.cli",
+            "generate",
+            family,
+            "--size",
+            str(arg),
+            "--seed",
+            "1",
+            "--out",
+            str(path),
+        ],
+        check=True,
+        env=env,
+        capture_output=True,
+    )
+
+
+def run_case(family: str, size: int, timeout: float) -> dict[str, object]:
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "inst.json"
+        make_instance(family, size, path)
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+        before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        try:
+            out = subprocess.run(
+                [sys.executable, "-c", CHILD, str(ROOT), str(path)],
+                check=True,
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+            )
+            row = json.loads(out.stdout.strip().splitlines()[-1])
+        except subprocess.TimeoutExpired:
+            row = {"wall_s": math.inf, "error": f"timeout {timeout} s"}
+        except subprocess.CalledProcessError as exc:
+            row = {"wall_s": math.nan, "error": exc.stderr.strip().splitlines()[-1][:200]}
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        # ru_maxrss of children is the max over all children so far: exact when it grew
+        row["peak_rss_mb"] = round(peak / 1024, 1) if peak > before else f"<={peak / 1024:.1f}"
+    return {"family": family, "size": size, **row}
+
+
+def slope(rows: list[dict[str, object]]) -> float:
+    pts = [
+        (math.log(float(r["tasks"])), math.log(float(r["wall_s"])))
+        for r in rows
+        if "tasks" in r and math.isfinite(float(r["wall_s"])) and float(r["wall_s"]) > 0
+    ]
+    if len(pts) < 2:
+        return math.nan
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    den = sum((p[0] - mx) ** 2 for p in pts)
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / den if den else math.nan
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[12, 60, 120, 500, 1000])
+    ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
+    ap.add_argument("--timeout", type=float, default=600.0)
+    ap.add_argument("--out", type=Path, default=ROOT / "bench/results/greedy_scale.csv")
+    args = ap.parse_args()
+    rows: list[dict[str, object]] = []
+    for fam in args.families:
+        fam_rows = []
+        for size in sorted(args.sizes):  # increasing sizes: ru_maxrss grows with them
+            row = run_case(fam, size, args.timeout)
+            print(row, flush=True)
+            fam_rows.append(row)
+        k = slope(fam_rows)
+        for row in fam_rows:
+            row["time_exponent"] = round(k, 2) if math.isfinite(k) else ""
+        rows.extend(fam_rows)
+    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    with args.out.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,507 @@
+r"""greedy-ce's decision without enumerating permutations (paper Section IV-A, Eqs. 3-7).
+
+The enumeration scores every precedence-feasible sequence :math:`K` of
+:math:`L = \min(N, \text{remaining})` tasks and every split :math:`i`. With precedence hard,
+:math:`F(K, i)` (:mod:`bilevel_kit.solvers.upper_level`) depends on the order of :math:`K`
+only through
+
+* the prefix *set* :math:`P = K_{1:i}`: its robot and human sums (terms 5 and 6), its part
+  multiset (term 7, the kit fitness, and the W7 term) and its size (term 4);
+* the robot-time sum of the rest :math:`Q = K_{i+1:L}`, a set of :math:`L - i` further
+  tasks with :math:`P \cup Q` precedence-closed given the tasks already done (term 6).
+
+So this module minimises over the precedence-closed prefix sets :math:`P` (|P| = 1..L), each
+with the best rest :math:`Q` found by a depth-first search over closed extensions, and calls
+the lower level (a CE run, memoised per multiset) only for prefixes whose optimistic score can
+still reach the incumbent. The optimistic score of :math:`P` is :math:`F` with term (6) at its
+lower bound (its exact value when :math:`i = L`; 0, or the signed form's value with the
+:math:`L - i` smallest robot times, otherwise) and with :math:`W_5 f` replaced by
+:math:`W_5 \bar f(P)`, where :func:`fitness_upper_bounds` gives :math:`\bar f \ge f` for any
+valid layout. Prefixes are taken in increasing optimistic score; the search stops at the
+first one whose optimistic score exceeds the incumbent by more than the tie tolerance.
+
+Ties (the enumeration's rule, reproduced): the enumeration returns the first pair within
+``TIE_TOL`` of the minimum in its order (sequences lexicographic in task file positions,
+then increasing ``i``). Any sequence with a minimising split ``i`` realises a pair
+:math:`(P, Q)`, and the lexicographically smallest sequence realising :math:`(P, Q)` is
+``topo(P) + topo(Q)``, each part in its smallest topological order (always the smallest
+available task next). So among the pairs within ``TIE_TOL`` of the minimum this module
+picks the smallest ``(topo(P) + topo(Q), i)``; both searches enumerate canonical orders in
+lexicographic order, so the first rest found under a threshold is the smallest.
+
+Bounds on work (never silent, counted in :class:`SearchStats`):
+
+* ``max_prefix_sets``: if the closed prefix sets of a level would take the total beyond this
+  cap, that level and the deeper ones keep only the ``beam_width`` sets of best optimistic
+  score (a beam over prefix sets; the epoch counts in ``beam_epochs``);
+* ``max_rest_nodes``: the rest search stops after this many search nodes with the best rest
+  found so far (counted in ``rest_capped``).
+
+Within both caps the decision is exact: the same minimum F as the enumeration and the same
+chosen kit (property-tested against the enumeration in tests/solvers/test_greedy_search.py).
+The bounds assume ``W4, W5, W6 >= 0``; otherwise every prefix is evaluated.
+"""
+
+from __future__ import annotations
+
+import bisect
+import heapq
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TypeVar
+
+import numpy as np
+
+from .. import geometry
+from ..instance import Instance
+from . import upper_level
+
+FloatOrArray = TypeVar("FloatOrArray", float, np.ndarray)
+
+#: Score tolerance of the tie rule (the enumeration's).
+TIE_TOL = 1e-9
+
+#: Fitness of a part multiset (count vector over the sorted part types): (fitness, fits).
+FitnessFn = Callable[[np.ndarray], tuple[float, bool]]
+
+
+@dataclass(frozen=True)
+class SearchLimits:
+    """Caps of one decision (module docstring)."""
+
+    max_prefix_sets: int = 5000
+    beam_width: int = 64
+    max_rest_nodes: int = 2000
+
+
+@dataclass
+class SearchStats:
+    """Counters summed over decisions."""
+
+    prefix_sets: int = 0
+    evaluated: int = 0
+    beam_epochs: int = 0
+    rest_capped: int = 0
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The chosen pair: ``prefix`` (the next kit, in its smallest topological order),
+    ``rest`` (the window's rest) and its score F."""
+
+    prefix: tuple[int, ...]
+    rest: tuple[int, ...]
+    score: float
+
+
+def fitness_upper_bounds(
+    instance: Instance, types: Sequence[str], counts: np.ndarray
+) -> np.ndarray:
+    r"""An upper bound of the kit fitness :math:`f = D_{diff} - D_{same} - W_6 Z` of any valid
+    layout of each multiset (``counts``: shape (K, T) over ``types``), for ``W6 >= 0``.
+
+    * :math:`Z \ge 0`.
+    * :math:`D_{diff}`: a part's centre keeps a half-extent from each tray side, and a rotated
+      ``w x h`` box has half-extents of at least ``min(w, h) / 2`` (``w/2``, ``h/2`` if fixed),
+      so a pair (t, u) is at most :math:`\delta_{tu}` apart (the diagonal of the region both
+      centres can reach), giving :math:`\sum_{t<u} c_t c_u \delta_{tu}`. Also, with
+      :math:`|p - q| \le |dx| + |dy|`, the cross-type distances along x sum to the integral
+      over cut lines of the cross pairs they separate, at most :math:`\min(N^2/4, \text{pairs})`
+      per line over a length :math:`\ell_x = W - 2 e_x^{min}`; the smaller bound is used.
+    * :math:`D_{same}`: two valid parts penetrate by at most ``geometry.TOL``, and each holds a
+      disc of diameter ``min(w, h)`` about its centre, so two parts of type t are at least
+      ``min(w, h) - 2 TOL`` apart.
+    """
+    counts = np.asarray(counts, dtype=np.float64)
+    pts = [instance.part_types[t] for t in types]
+    short = np.array([min(p.width, p.height) for p in pts])
+    ex = np.array([short[k] / 2 if p.rotatable else p.width / 2 for k, p in enumerate(pts)])
+    ey = np.array([short[k] / 2 if p.rotatable else p.height / 2 for k, p in enumerate(pts)])
+    tray = instance.tray
+    slack = 1e-6
+    dx = np.maximum(tray.width - ex[:, None] - ex[None, :], 0.0) + slack
+    dy = np.maximum(tray.height - ey[:, None] - ey[None, :], 0.0) + slack
+    delta = np.hypot(dx, dy)
+    np.fill_diagonal(delta, 0.0)
+    pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, delta, counts)
+    n = counts.sum(axis=1)
+    same_pairs = (counts * (counts - 1) / 2).sum(axis=1)
+    diff_pairs = n * (n - 1) / 2 - same_pairs
+    lx = max(tray.width - 2 * float(ex.min()), 0.0) + slack if len(pts) else 0.0
+    ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
+    cut_bound = (lx + ly) * np.minimum(np.floor(n * n / 4), diff_pairs)
+    same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
+    d_same_lb = (counts * (counts - 1) / 2) @ same_gap
+    return np.minimum(pair_bound, cut_bound) - d_same_lb
+
+
+@dataclass
+class _Level:
+    """The prefix sets of one size: canonical sequences and their sums."""
+
+    seqs: list[tuple[int, ...]]
+    robot: np.ndarray
+    human: np.ndarray
+    counts: np.ndarray
+
+
+class PrefixSearch:
+    """The decision over closed prefix sets for one instance (static data built once)."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        robot: np.ndarray,
+        human: np.ndarray,
+        pred: Sequence[frozenset[int]],
+        part_matrix: np.ndarray,
+        types: Sequence[str],
+        limits: SearchLimits,
+    ) -> None:
+        self.instance = instance
+        self.r = robot
+        self.h = human
+        self.pred = [tuple(sorted(p)) for p in pred]
+        succ: list[list[int]] = [[] for _ in pred]
+        for j, ps in enumerate(self.pred):
+            for p in ps:
+                succ[p].append(j)
+        self.succ = [tuple(s) for s in succ]
+        self.part_matrix = part_matrix
+        self.types = list(types)
+        self.limits = limits
+        self.stats = SearchStats()
+        w = instance.weights
+        self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
+        self._r_range = (0.0, 0.0)
+
+    # -- prefix sets ---------------------------------------------------------------------------
+    def _children(
+        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView, avail: list[int]
+    ) -> list[int]:
+        """Tasks y such that ``s + (y,)`` is the smallest topological order of its set, in
+        increasing order. ``avail``: tasks available given ``done`` alone (sorted)."""
+        out = avail[bisect.bisect_right(avail, max(s) if s else -1) :]
+        unlocked: set[int] = set()
+        if s:
+            pos = {x: k for k, x in enumerate(s)}
+            suffix_max = list(s)
+            for k in range(len(s) - 2, -1, -1):
+                suffix_max[k] = max(suffix_max[k], suffix_max[k + 1])
+            for x in s:
+                for y in self.succ[x]:
+                    if y in inset or y in unlocked or done[y]:
+                        continue
+                    ps = self.pred[y]
+                    if not all(done[p] or p in inset for p in ps):
+                        continue
+                    start = 1 + max(pos[p] for p in ps if p in inset)
+                    if start == len(s) or y > suffix_max[start]:
+                        unlocked.add(y)
+        if unlocked:
+            return sorted([*out, *unlocked])
+        return out
+
+    def _optimistic(
+        self,
+        i: int,
+        length: int,
+        robot: np.ndarray,
+        human: np.ndarray,
+        counts: np.ndarray,
+        ctx: _Epoch,
+    ) -> np.ndarray:
+        """Lower bounds of F over the rests of prefixes of size ``i`` (module docstring)."""
+        if not self._prune:
+            return np.full(len(robot), -math.inf)
+        inst = self.instance
+        diff5, diff6 = upper_level.balance_terms(
+            robot,
+            human,
+            np.full(len(robot), ctx.min_rest[length - i]),
+            np.full(len(robot), i < length),
+            delivery=inst.delivery_time,
+            human_remaining=ctx.human_remaining,
+            overhead_robot=inst.kit_overhead_robot,
+            overhead_human=inst.kit_overhead_human,
+            signed=True,
+        )
+        if not ctx.signed:
+            diff5 = np.abs(diff5)
+            diff6 = np.abs(diff6) if i == length else np.zeros_like(diff6)
+        return upper_level.objective(
+            inst.weights,
+            n_tasks=float(i),
+            diff5=diff5,
+            diff6=diff6,
+            fitness=fitness_upper_bounds(inst, self.types, counts),
+            unavailable=ctx.unavailable(counts),
+        )
+
+    def _levels(self, done: np.ndarray, length: int, ctx: _Epoch) -> tuple[list[_Level], bool]:
+        avail = [
+            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
+        ]
+        lim = self.limits
+        parents = [()]
+        p_robot = np.zeros(1)
+        p_human = np.zeros(1)
+        p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
+        levels: list[_Level] = []
+        total = 0
+        beam = False
+        for i in range(1, length + 1):
+            kids: list[list[int]] = []
+            for s in parents:
+                inset = set(s)
+                kids.append(self._children(s, inset, done, avail))
+            n_kids = sum(len(k) for k in kids)
+            if n_kids == 0:
+                break
+            par = np.repeat(np.arange(len(parents)), [len(k) for k in kids])
+            child = np.fromiter((y for k in kids for y in k), dtype=np.int64, count=n_kids)
+            robot = p_robot[par] + self.r[child]
+            human = p_human[par] + self.h[child]
+            counts = p_counts[par] + self.part_matrix[child]
+            if beam or total + n_kids > lim.max_prefix_sets:
+                beam = True
+                opt = self._optimistic(i, length, robot, human, counts, ctx)
+                keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
+                par, child = par[keep], child[keep]
+                robot, human, counts = robot[keep], human[keep], counts[keep]
+            seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
+            levels.append(_Level(seqs, robot, human, counts))
+            total += len(seqs)
+            parents, p_robot, p_human, p_counts = seqs, robot, human, counts
+        return levels, beam
+
+    # -- the rest of the window ------------------------------------------------------------------
+    def _rest(
+        self,
+        prefix: tuple[int, ...],
+        done: np.ndarray,
+        avail: list[int],
+        m: int,
+        score: Callable[[np.ndarray], np.ndarray],
+        bound: Callable[[float, float], float],
+        threshold: float | None,
+        cutoff: float = math.inf,
+    ) -> tuple[float, tuple[int, ...], bool]:
+        """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
+        topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
+        bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
+        largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
+        rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
+        are not looked for (the result is then ``(inf, ())``)."""
+        base = set(prefix)
+        seen = _DoneView(done, base)
+        base_avail = {y for y in avail if y not in base}
+        for x in prefix:
+            for y in self.succ[x]:
+                if not seen[y] and all(seen[p] for p in self.pred[y]):
+                    base_avail.add(y)
+        ordered = sorted(base_avail)
+        rmin, rmax = self._r_range  # over the tasks not done (a superset of those left)
+        best_f = math.inf
+        best_q: tuple[int, ...] = ()
+        nodes = 0
+        cap = self.limits.max_rest_nodes
+        capped = False
+        seq: list[int] = []
+
+        def rec(total: float) -> bool:
+            """Depth-first in lexicographic order of canonical sequences; True stops."""
+            nonlocal best_f, best_q, nodes, capped
+            k = len(seq)
+            nodes += 1
+            if nodes > cap:
+                capped = True
+                return True
+            if self._prune and k:
+                lower = bound(total + (m - k) * rmin, total + (m - k) * rmax)
+                if (lower > threshold) if threshold is not None else (lower >= best_f):
+                    return False
+                if lower > cutoff:
+                    return False
+            s = tuple(seq)
+            kids = self._children(s, set(s), seen, ordered)
+            if not kids:
+                return False
+            if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
+                vals = score(total + self.r[kids])
+                if threshold is not None:
+                    hit = np.flatnonzero(vals <= threshold)
+                    if hit.size:
+                        best_f, best_q = float(vals[hit[0]]), (*s, kids[int(hit[0])])
+                        return True
+                    return False
+                a = int(np.argmin(vals))
+                if vals[a] < best_f and vals[a] <= cutoff:
+                    best_f, best_q = float(vals[a]), (*s, kids[a])
+                return False
+            for y in kids:
+                seq.append(y)
+                stop = rec(total + float(self.r[y]))
+                seq.pop()
+                if stop:
+                    return True
+            return False
+
+        rec(0.0)
+        return best_f, best_q, capped
+
+    # -- the decision ----------------------------------------------------------------------------
+    def _score(
+        self, i: int, diff5: float, diff6: FloatOrArray, fit: float, unav: float | None
+    ) -> FloatOrArray:
+        """F of one pair in the same floating-point order as :func:`upper_level.objective`."""
+        w = self.instance.weights
+        f = -w["W2"] * float(i)
+        f = f + w["W3"] * diff5 + w["W4"] * diff6 - w["W5"] * fit
+        if unav is not None:
+            f = f + w["W7"] * unav
+        return f
+
+    def decide(
+        self,
+        done: np.ndarray,
+        length: int,
+        human_remaining: float,
+        available: np.ndarray | None,
+        fitness: FitnessFn,
+        signed: bool,
+    ) -> Choice | None:
+        """The minimising (P, Q) of F (module docstring); None if no prefix fits the tray."""
+        inst = self.instance
+        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        remaining_r = np.sort(self.r[~done])
+        self._r_range = (float(remaining_r[0]), float(remaining_r[-1]))
+        min_rest = np.concatenate([[0.0], np.cumsum(remaining_r)])[: length + 1]
+        ctx = _Epoch(human_remaining, available, signed, min_rest)
+        levels, beam = self._levels(done, length, ctx)
+        self.stats.beam_epochs += beam
+        avail = [
+            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
+        ]
+        # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
+        # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
+        queue: list[tuple[float, int, int, int]] = []
+        for li, lv in enumerate(levels):
+            self.stats.prefix_sets += len(lv.seqs)
+            opt = self._optimistic(li + 1, length, lv.robot, lv.human, lv.counts, ctx)
+            queue.extend((o, 0, li, k) for k, o in enumerate(opt.tolist()))
+        heapq.heapify(queue)
+
+        def scorer(
+            li: int, k: int, fit: float
+        ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[[float, float], float]]:
+            """F of prefix (li, k) as a function of the rest's robot sums (vectorised), and a
+            lower bound of F given a lower bound of the sum (term 6 is |x| or x, x growing with
+            the sum)."""
+            lv, i = levels[li], li + 1
+            diff5 = d + o_r + float(lv.robot[k]) - human_remaining
+            diff5 = diff5 if signed else abs(diff5)
+            unav = ctx.unavailable(lv.counts[k][None, :])
+            u = None if unav is None else float(unav[0])
+            human = o_h + float(lv.human[k])
+
+            def f(rest: np.ndarray) -> np.ndarray:
+                diff6 = d + (o_r + rest) - human if i < length else d + 0.0 - human
+                return self._score(i, diff5, diff6 if signed else np.abs(diff6), fit, u)
+
+            def lower(lo: float, hi: float = math.inf) -> float:
+                diff6 = d + (o_r + lo) - human
+                if not signed:
+                    diff6 = max(diff6, -(d + (o_r + hi) - human), 0.0)
+                return float(self._score(i, diff5, diff6, fit, u))
+
+            return f, lower
+
+        found: list[tuple[float, int, int, tuple[int, ...], float]] = []
+        fits_of: dict[tuple[int, int], float] = {}
+        incumbent = math.inf
+        while queue and queue[0][0] <= incumbent + TIE_TOL:
+            _, stage, li, k = heapq.heappop(queue)
+            i = li + 1
+            if stage == 0:
+                fit, fits = fitness(levels[li].counts[k])
+                if not fits:
+                    continue
+                self.stats.evaluated += 1
+                fits_of[li, k] = fit
+                f, lower = scorer(li, k, fit)
+                if i == length:
+                    score = float(f(0.0))
+                    found.append((score, li, k, (), fit))
+                    incumbent = min(incumbent, score)
+                else:
+                    heapq.heappush(queue, (lower(float(min_rest[length - i])), 1, li, k))
+                continue
+            fit = fits_of[li, k]
+            f, lower = scorer(li, k, fit)
+            score, rest, capped = self._rest(
+                levels[li].seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
+            )
+            self.stats.rest_capped += capped
+            if rest:
+                found.append((score, li, k, rest, fit))
+                incumbent = min(incumbent, score)
+        if not found:
+            return None
+        fmin = min(x[0] for x in found)
+        best_key: tuple[tuple[int, ...], int] | None = None
+        best: Choice | None = None
+        for score, li, k, rest, fit in found:
+            if score > fmin + TIE_TOL:
+                continue
+            i = li + 1
+            prefix = levels[li].seqs[k]
+            if i < length:  # the smallest rest still within the tolerance of the minimum
+                f2, first, _ = self._rest(
+                    prefix, done, avail, length - i, *scorer(li, k, fit), fmin + TIE_TOL
+                )
+                if first:
+                    rest, score = first, f2
+            key = (prefix + rest, i)
+            if best_key is None or key < best_key:
+                best_key, best = key, Choice(prefix, rest, score)
+        return best
+
+
+class _DoneView:
+    """``done`` plus the prefix, as seen by the rest search (indexable like ``done``)."""
+
+    __slots__ = ("base", "done")
+
+    def __init__(self, done: np.ndarray, base: set[int]) -> None:
+        self.done = done
+        self.base = base
+
+    def __getitem__(self, j: int) -> bool:
+        return bool(self.done[j]) or j in self.base
+
+
+@dataclass
+class _Epoch:
+    """What one decision knows: H_rem, the parts at hand, the signed flag and the smallest
+    possible robot sums of the rest by size."""
+
+    human_remaining: float
+    available: np.ndarray | None
+    signed: bool
+    min_rest: np.ndarray
+
+    def unavailable(self, counts: np.ndarray) -> np.ndarray | None:
+        if self.available is None:
+            return None
+        return upper_level.unavailable_parts(counts, self.available)
+
+
+def available_vector(
+    available: Mapping[str, int] | None, types: Sequence[str]
+) -> np.ndarray | None:
+    """The parts at hand as a count vector over ``types`` (None: everything available)."""
+    if available is None:
+        return None
+    return np.array([available.get(t, 0) for t in types])

@@ -1,0 +1,154 @@
+"""The exact greedy decision (prefix sets, bilevel_kit.solvers.greedy_search) against the
+enumeration of every sequence: same minimum F at every epoch, same kits, same plans."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bilevel_kit import check, solve
+from bilevel_kit.instance import Instance, from_dict
+from bilevel_kit.layout.cross_entropy import CEParams
+from bilevel_kit.plan import evaluate
+from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, GreedyParams, plan
+from bilevel_kit.solvers.greedy_search import fitness_upper_bounds
+
+TINY_CE = CEParams(samples=20, elite=5, max_iter=5)
+
+
+@st.composite
+def enumerable_instances(draw: st.DrawFn) -> Instance:
+    """Up to 10 tasks, random precedence, d, overheads, N in 1..5, trays None/1/2."""
+    n_types = draw(st.integers(1, 3))
+    types = [
+        {
+            "id": f"p{k}",
+            "width": draw(st.integers(5, 50)) * 1.0,
+            "height": draw(st.integers(5, 50)) * 1.0,
+            "pick_time": draw(st.integers(0, 9)) * 1.0,
+            "rotatable": draw(st.booleans()),
+        }
+        for k in range(n_types)
+    ]
+    n = draw(st.integers(1, 10))
+    tasks = []
+    for j in range(n):
+        parts = [
+            {"type": f"p{k}", "count": draw(st.integers(1, 2))}
+            for k in range(n_types)
+            if draw(st.booleans())
+        ]
+        tasks.append(
+            {"id": f"t{j}", "parts": parts, "human_time": {"mean": draw(st.integers(1, 30)) * 1.0}}
+        )
+    density = draw(st.integers(0, 6))
+    edges = [
+        [f"t{a}", f"t{b}"]
+        for a in range(n)
+        for b in range(a + 1, n)
+        if draw(st.integers(0, 9)) < density
+    ]
+    return from_dict(
+        {
+            "format": "bilevel-kit/1",
+            "name": "h",
+            "tray": {"width": 200.0, "height": 150.0},
+            "delivery_time": draw(st.integers(0, 10)) * 1.0,
+            "kit_overhead": {
+                "robot": draw(st.integers(0, 5)) * 1.0,
+                "human": draw(st.integers(0, 3)) * 1.0,
+            },
+            "part_types": types,
+            "tasks": tasks,
+            "precedence": edges,
+            "horizon": draw(st.integers(1, 5)),
+            "trays": draw(st.sampled_from([None, 1, 2])),
+        }
+    )
+
+
+def _run(inst: Instance, decision: str, seed: int, signed: bool) -> GreedyCEPolicy:
+    params = GreedyParams(ce=TINY_CE, decision=decision, signed=signed)
+    policy = GreedyCEPolicy(inst, params, seed)
+    policy.plan_ = plan(inst, policy=policy)  # type: ignore[attr-defined]
+    return policy
+
+
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(0, 3), st.booleans())
+def test_exact_decision_equals_the_enumeration(inst, seed, signed):
+    exact = _run(inst, "exact", seed, signed)
+    enum = _run(inst, "enumerate", seed, signed)
+    assert exact.stats.beam_epochs == 0 and exact.stats.rest_capped == 0
+    ex_terms, en_terms = exact.stats.objective_terms, enum.stats.objective_terms
+    # same kits in the same order (the tie rule), hence the same F at every epoch
+    assert exact.plan_.kits == enum.plan_.kits
+    for a, b in zip(ex_terms, en_terms, strict=True):
+        assert a["score"] == pytest.approx(b["score"], abs=1e-7)
+    assert evaluate(inst, exact.plan_).makespan == evaluate(inst, enum.plan_).makespan
+    assert check(inst, exact.plan_) == []
+    # the search scored fewer candidates than the enumeration
+    assert exact.stats.evaluated <= enum.stats.candidates
+
+
+def test_table_plan_is_the_enumerations(table):
+    a = solve(table, "greedy-ce", seed=0)
+    b = solve(table, "greedy-ce", seed=0, decision="enumerate")
+    assert a.plan == b.plan and a.objective == pytest.approx(459.78)
+    assert a.extra["decision"] == "exact" and a.extra["beam_epochs"] == 0
+    assert b.extra["sequences"] > 0 and a.extra["sequences"] == 0
+    for x, y in zip(a.extra["kit_terms"], b.extra["kit_terms"], strict=True):
+        assert x["score"] == pytest.approx(y["score"], abs=1e-9)
+
+
+def test_fitness_bound_holds_for_ce_layouts(table):
+    policy = GreedyCEPolicy(table, GreedyParams(ce=CEParams(samples=60, elite=10, max_iter=30)))
+    types = policy._types
+    for tasks in (["foot1"], ["foot1", "conn1"], ["top1", "conn2", "foot3"], ["top1", "top2"]):
+        counts = table.kit_parts(tasks)
+        row = np.array([[counts.get(t, 0) for t in types]])
+        arr = policy.arrangement(counts)
+        assert arr.fits
+        assert arr.fitness <= fitness_upper_bounds(table, types, row)[0] + 1e-9
+
+
+def test_beam_is_reported_and_plans_stay_valid(table):
+    inst = table.with_overrides(units=3)
+    res = solve(
+        inst,
+        "greedy-ce",
+        check=True,
+        max_prefix_sets=5,
+        beam_width=3,
+        samples=20,
+        elite=5,
+        max_iter=5,
+    )
+    assert res.extra["violations"] == []
+    assert res.extra["beam_epochs"] > 0
+
+
+def test_time_limit_finishes_with_single_tasks(table):
+    inst = table.with_overrides(units=2)
+    res = solve(inst, "greedy-ce", check=True, time_limit=1e-9, samples=20, elite=5, max_iter=5)
+    assert res.extra["violations"] == [] and res.extra["time_limit_hit"] is True
+    assert res.status == "feasible"
+    assert all(len(k.tasks) == 1 for k in res.plan.kits)
+
+
+def test_one_tray_h_rem_matches_the_timeline(table, stool):
+    from bilevel_kit.plan import Plan, next_robot_start
+
+    for base in (table, stool, table.with_overrides(units=2)):
+        inst = base.with_overrides(trays=1)
+        res = solve(inst, "greedy-ce", check=True, samples=20, elite=5, max_iter=5)
+        assert res.extra["violations"] == []
+        kits = res.plan.kits
+        for k, terms in enumerate(res.extra["kit_terms"]):
+            expected = 0.0
+            if k:
+                tl = evaluate(inst, Plan(kits[:k]))
+                expected = max(0.0, tl.kits[-1].human_end - next_robot_start(inst, tl.kits))
+            assert terms["h_rem"] == pytest.approx(expected, abs=1e-9)
