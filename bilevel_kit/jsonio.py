@@ -162,6 +162,11 @@ def _all_of(tests: list[Check]) -> Check:
     return check
 
 
+def _one_of(allowed: list[Any], v: Any) -> bool:
+    """``const``/``enum``: equal and of the same JSON type (``True`` is not ``1``)."""
+    return any(v == w and type(v) is type(w) for w in allowed)
+
+
 def _compile(schema: Mapping[str, Any]) -> Check:
     """One predicate for ``schema`` (raises :class:`_Unsupported` for unknown keywords)."""
     unknown = set(schema) - _KNOWN
@@ -177,7 +182,7 @@ def _compile(schema: Mapping[str, Any]) -> Check:
     for key in ("const", "enum"):
         if key in schema:
             allowed = [schema[key]] if key == "const" else list(schema[key])
-            tests.append(lambda v, a=allowed: any(v == w and type(v) is type(w) for w in a))
+            tests.append(functools.partial(_one_of, allowed))
     tests += _number_tests(schema) + _string_tests(schema)
     if {"items", "prefixItems", "minItems", "maxItems"} & set(schema):
         tests.append(_array_test(schema))

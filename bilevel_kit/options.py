@@ -150,10 +150,10 @@ def _coerce(value: Any, tp: Any, meta: Mapping[str, Any], where: str) -> Any:
     if tp is str:
         if not isinstance(value, str):
             value = str(value)
-        choices = meta.get("choices")
-        if choices is not None and value not in choices:
+        allowed: Any = meta.get("choices")
+        if allowed is not None and value not in allowed:
             raise UsageError(
-                f"{where}: must be one of {', '.join(map(str, choices))}, got {value!r}"
+                f"{where}: must be one of {', '.join(map(str, allowed))}, got {value!r}"
             )
         return value
     return value  # structured values (Python API only) are passed as given

@@ -37,7 +37,7 @@ from .style import plural, styled
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure, SubFigure
 
 #: Lane positions (y) and bar height of the Gantt chart.
 ROBOT_Y = 1.0
@@ -630,10 +630,11 @@ def plot_convergence(
     return ax
 
 
-def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
-    """Write ``fig`` atomically (:func:`bilevel_kit.atomic.atomic_path`) with the usual
-    permissions and close it. The format follows the suffix (PNG when there is none). Returns
-    the path."""
+def save_figure(figure: Figure | SubFigure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
+    """Write the figure that holds ``figure`` (``ax.figure`` may be a sub-figure) atomically
+    (:func:`bilevel_kit.atomic.atomic_path`) with the usual permissions and close it. The
+    format follows the suffix (PNG when there is none). Returns the path."""
+    fig: Figure = figure.figure  # the root figure (a figure is its own root)
     plt = _pyplot()
     out = Path(path)
     fmt = (out.suffix or ".png")[1:].lower()

@@ -68,8 +68,11 @@ SAFE_NO_OVERLAP_2D = {"no_overlap_2d_boolean_relations_limit": 0}
 
 
 class _Rect(Protocol):
-    width: float
-    height: float
+    @property
+    def width(self) -> float: ...
+
+    @property
+    def height(self) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -155,15 +158,16 @@ def reach_tables(reach: ReachGrid, W: int, H: int, resolution: float) -> ReachTa
         k = np.arange(len(index) - 1)
         return q if q >= 1 and bool((index[:-1] == k // q).all()) else None
 
-    spans: list[tuple[int, int]] | None = []
+    rows_spans: list[tuple[int, int]] = []
+    spans: list[tuple[int, int]] | None = rows_spans
     for r in range(ny):
         cs = np.nonzero(reach.reachable[r])[0]
         if len(cs) == 0:
-            spans.append((nx, -1))
+            rows_spans.append((nx, -1))
         elif cs[-1] - cs[0] + 1 == len(cs):
-            spans.append((int(cs[0]), int(cs[-1])))
+            rows_spans.append((int(cs[0]), int(cs[-1])))
         else:
-            spans = None
+            spans = None  # a row with a hole: no span encoding
             break
     return ReachTables(
         tuple(map(int, cols)),
@@ -337,7 +341,9 @@ def pack(
             return done("feasible", shelf)
 
     model = cp_model.CpModel()
-    xs, ys, rots = [], [], []
+    xs: list[Any] = []
+    ys: list[Any] = []
+    rots: list[Any] = []  # 0/1 constants or rotation literals
     x_iv, y_iv = [], []
     for j, (w, h, r) in enumerate(sizes):
         can_turn = r and w != h and h <= W and w <= H

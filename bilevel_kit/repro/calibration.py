@@ -106,7 +106,8 @@ def calibrate(
         key = tuple(round(float(v), 12) for v in x)
         hit = cache.get(key)
         if hit is None:
-            tm = replace(base, **dict(zip(names, key, strict=True)))
+            changes: dict[str, Any] = dict(zip(names, key, strict=True))
+            tm = replace(base, **changes)
             means = condition_means(
                 study_runs(instance, study_params(tm, buffer, None), seeds, conds)
             )

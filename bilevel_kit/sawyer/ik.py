@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -110,7 +111,7 @@ def out_of_reach(point: np.ndarray, tool_offset: float, tool_down: bool = True) 
 
 def clik(
     arm: Arm,
-    target: object,
+    target: Any,
     q0: np.ndarray,
     max_iter: int = MAX_ITER,
     damping: float = DAMPING,
@@ -230,7 +231,7 @@ def seeds(
 
 def solve_pose(
     arm: Arm,
-    target: object,
+    target: Any,
     q_init: np.ndarray | None = None,
     n_seeds: int = N_SEEDS,
     seed: int = 0,

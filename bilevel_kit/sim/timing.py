@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -93,7 +94,7 @@ class TimingModel:
                 raise UsageError(f"{name} must be finite and >= 0, got {v!r}")
 
     @classmethod
-    def deterministic(cls, **changes: float | None) -> TimingModel:
+    def deterministic(cls, **changes: Any) -> TimingModel:
         """No randomness at all: humans take the mean times, picks the instance's times."""
         return cls(**{"participant_cv": 0.0, "task_cv": 0.0, "robot_cv": 0.0, **changes})
 

@@ -40,7 +40,9 @@ def packed_kit(instance: Instance, tasks: Sequence[str], label: str) -> Kit:
         if instance.reachability:
             from ..reachability import reach_grid
 
-            share = reach_grid(instance).reachable.mean()
+            grid = reach_grid(instance)
+            assert grid is not None  # reachability is on
+            share = grid.reachable.mean()
             how = (
                 f"with every centre in the robot's reach ({100 * share:.0f}% of the tray) by the "
                 "shelf packer or cross-entropy"
