@@ -1,7 +1,9 @@
 """``bilevel-kit simulate``: replications of the shop-floor simulation of one policy.
 
 Values are checked where they are used: the policy name by the simulation's policy registry,
-``--buffer`` by :class:`~bilevel_kit.sim.SimParams`; both are one-line usage errors (exit 2).
+``--trays`` (an instance override, docs/timeline.md) by its argument type; both are one-line
+usage errors (exit 2). The removed ``--buffer K`` is an error that names its replacement,
+``--trays K+1``.
 """
 
 from __future__ import annotations
@@ -62,13 +64,8 @@ def add_parser(subparsers: Subparsers) -> None:
     )
     p.add_argument("--mttf", type=nonneg, metavar="S", help="mean time to failure of feeders")
     p.add_argument("--repair", type=nonneg, metavar="S", help="repair time (default 30 s)")
-    p.add_argument(
-        "--buffer",
-        type=int,
-        metavar="K",
-        help="kits allowed to wait at the human before the robot stops "
-        "(default unlimited, the evaluator's semantics; 0 = the user study)",
-    )
+    # removed: the tray limit is the instance's ``trays`` (--trays); kept only to say so
+    p.add_argument("--buffer", help=argparse.SUPPRESS)
     p.add_argument("--reps", type=positive_int, default=30, help="replications (default 30)")
     add_seed(p, "seed of the first replication (default 0)")
     add_output(p, "--csv", metavar="FILE", help="one row per replication")
@@ -81,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
     from ..instance import load
     from ..sim import SimParams, replicate
 
+    if args.buffer is not None:
+        raise UsageError("--buffer was removed: use --trays (trays = buffer + 1)")
     instance = load(args.instance)
     # the simulation rejects unknown part types too, but without naming --mat; an MTTF with
     # no feeder to fail it would silently do nothing
@@ -94,7 +93,6 @@ def run(args: argparse.Namespace) -> int:
         mat=args.mat,
         mttf=args.mttf,
         repair_time=args.repair,
-        buffer=args.buffer,
         policy_options=dict(args.param),
     )
     records = replicate(

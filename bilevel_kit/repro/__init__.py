@@ -20,10 +20,11 @@ Choices that apply to both (why, in short):
   ``human_idle`` counts the per-kit pickup ``o_H`` as work; the paper-comparable value is
   ``makespan - sum of the sampled task times`` = ``human_idle + n_kits * o_H``
   (:func:`.common.paper_idle`). Every "idle" below is this one.
-* **One tray** (``SimParams(buffer=0)``): the study's protocol, "the robot returned to its
-  kitting task once the participant retrieved the parts". The Figure 6 simulation samples the
-  study's times, so it keeps the protocol by default (``buffer=None`` lets the robot run
-  ahead and stack kits at the human, docs/timeline.md).
+* **One tray** (``instances/hrc_table.json`` has ``trays: 1``): the study's protocol, "the
+  robot returned to its kitting task once the participant retrieved the parts". The Figure 6
+  simulation samples the study's times, so it keeps the protocol by default (the keyword
+  ``trays="unlimited"`` lets the robot run ahead and stack kits at the human,
+  docs/timeline.md).
 * **Calibration.** The instance's robot pick times and the human's per-kit pickup time are
   guesses. :func:`.calibration.calibrate` fits ``robot_scale`` and ``kit_overhead_human`` by
   least squares to two of the paper's numbers (Whole Assembly idle 270 s and Single Task idle

@@ -22,8 +22,9 @@ from ..sim import SimParams, TimingModel, replicate
 from .common import CONDITIONS, DEFAULT_FREE, DEFAULT_TARGETS, METRICS, paper_idle
 
 
-def study_params(timing: TimingModel, buffer: int | None, ce: CEParams | None) -> SimParams:
-    return SimParams(units=1, buffer=buffer, timing=timing, ce=ce)
+def study_params(timing: TimingModel, trays: int | str | None, ce: CEParams | None) -> SimParams:
+    """One table; ``trays`` overrides the instance's (None: keep it, the study's table has 1)."""
+    return SimParams(units=1, trays=trays, timing=timing, ce=ce)
 
 
 def study_runs(
@@ -72,7 +73,7 @@ def calibrate(
     seeds: Sequence[int],
     *,
     base: TimingModel | None = None,
-    buffer: int | None = 0,
+    trays: int | str | None = None,
     targets: Sequence[tuple[str, str, float]] = DEFAULT_TARGETS,
     free: Mapping[str, tuple[float, float]] = DEFAULT_FREE,
     grid: int = 11,
@@ -109,7 +110,7 @@ def calibrate(
             changes: dict[str, Any] = dict(zip(names, key, strict=True))
             tm = replace(base, **changes)
             means = condition_means(
-                study_runs(instance, study_params(tm, buffer, None), seeds, conds)
+                study_runs(instance, study_params(tm, trays, None), seeds, conds)
             )
             hit = np.array([means[m][c] for m, c, _ in targets])
             cache[key] = hit

@@ -74,7 +74,7 @@ class Fig6Cell:
     delivery_time: float | None = None
     supplied: tuple[str, ...] = FIG6_SUPPLIED
     repair_time: float = FIG6_REPAIR
-    buffer: int | None = 0
+    trays: int | str | None = None
     timing: dict[str, Any] = field(default_factory=dict)
     ce: dict[str, Any] | None = None
     policy_seed: int = 0
@@ -110,7 +110,7 @@ class Fig6Cell:
             timing=TimingModel(**self.timing),
             ce=CEParams(**self.ce) if self.ce is not None else None,
             policy_seed=self.policy_seed,
-            buffer=self.buffer,
+            trays=self.trays,
             policy_options=options,
         )
 
@@ -324,7 +324,7 @@ def run_fig6(
     mats: Sequence[float] | None = None,
     mttfs: Sequence[float] | None = None,
     units: int | None = None,
-    buffer: int | None = 0,
+    trays: int | str | None = None,
     timing: TimingModel | None = None,
     calibration_seed: int = 0,
     ce: CEParams | None = None,
@@ -335,8 +335,9 @@ def run_fig6(
 
     Defaults: MAT, MTTF in {30, 60, 90, 120} s, 10 tables per run, ``reps`` = 30 replications
     (``None``: 30, or 3 when ``quick``), the instance's delivery time (``delivery_time``
-    overrides it), one tray (``buffer=0``), and the timing calibrated on the user study
-    (:func:`calibrate` with participants of ``calibration_seed``; pass ``timing`` to skip).
+    overrides it), the instance's trays (the study's table: one; ``trays`` overrides it, e.g.
+    ``"unlimited"``), and the timing calibrated on the user study (:func:`calibrate` with
+    participants of ``calibration_seed``; pass ``timing`` to skip).
     ``quick``: MAT {30, 120} x MTTF {60}, 2 tables, 3 replications, a small CE.
     ``policies``: the paper's three by default; an extra registered policy (e.g.
     ``"cpsat-rolling"``) adds "X over optimized" comparisons and a figure.
@@ -359,7 +360,7 @@ def run_fig6(
         cal = calibrate(
             inst,
             participant_seeds(calibration_seed, PAPER_N),
-            buffer=buffer,
+            trays=trays,
             grid=grid,
             refine=refine,
         )
@@ -370,7 +371,7 @@ def run_fig6(
         "policies": policies,
         "units": int(units),
         "delivery_time": delivery_time,
-        "buffer": buffer,
+        "trays": trays,
         "timing": asdict(timing),
         "ce": asdict(ce) if ce is not None else None,
         "policy_options": dict(policy_options or {}),
@@ -390,7 +391,7 @@ def run_fig6(
         "mats": list(mats),
         "mttfs": list(mttfs),
         "delivery_time": delivery_time if delivery_time is not None else inst.delivery_time,
-        "buffer": buffer,
+        "trays": inst.with_overrides(trays=trays).trays,
         "policies": list(policies),
         "timing": asdict(timing),
         "calibration": cal,

@@ -1,7 +1,7 @@
 """The simulated user study (paper Section V-A, Fig. 5 top) side by side with the paper.
 
 18 simulated participants x {Whole Assembly, Single Task, Optimized}, one table, one tray
-(``SimParams(buffer=0)``: "the robot returned to its kitting task once the participant
+(the instance's ``trays: 1``: "the robot returned to its kitting task once the participant
 retrieved the parts"); the timing calibrated on two of the paper's numbers
 (:mod:`.calibration`); means, the repeated-measures ANOVA F and Tukey HSD CIs compared with the
 paper's (docs/reproduction.md, docs/paper-data.md).
@@ -226,7 +226,7 @@ def format_study_markdown(result: Mapping[str, Any]) -> str:
         header.append(f"{k} studies: median [5%, 95%] or CI overlap rate")
     lines = [
         f"Simulated user study: {result['n_participants']} participants x 3 conditions, "
-        f"1 table, d = {result['delivery_time']:g} s, buffer = {result['buffer']}, "
+        f"1 table, d = {result['delivery_time']:g} s, trays = {result['trays'] or 'unlimited'}, "
         f"seed {result['seed']}.",
         "",
         f"Calibrated: {vals} (fitted to: {fit}; {cal['evaluations']} evaluations).",
@@ -249,13 +249,13 @@ def _given_calibration(
     inst: Instance,
     seeds: Sequence[int],
     timing: TimingModel,
-    buffer: int | None,
+    trays: int | str | None,
     targets: Sequence[tuple[str, str, float]],
     free: Mapping[str, tuple[float, float]],
 ) -> dict[str, Any]:
     """The calibration record of a given timing: the model's value of each target."""
     conds = list(dict.fromkeys(c for _, c, _ in targets))
-    means = condition_means(study_runs(inst, study_params(timing, buffer, None), seeds, conds))
+    means = condition_means(study_runs(inst, study_params(timing, trays, None), seeds, conds))
     return {
         "free": {},
         "values": {n: getattr(timing, n) for n in free},
@@ -278,18 +278,16 @@ def _study_calibration(
     inst: Instance,
     seeds: Sequence[int],
     timing: TimingModel | None,
-    buffer: int | None,
+    trays: int | str | None,
     targets: Sequence[tuple[str, str, float]],
     free: Mapping[str, tuple[float, float]],
     quick: bool,
 ) -> tuple[TimingModel, dict[str, Any]]:
     """Fit the timing on the study's participants, or report how a given one fits."""
     if timing is not None:
-        return timing, _given_calibration(inst, seeds, timing, buffer, targets, free)
+        return timing, _given_calibration(inst, seeds, timing, trays, targets, free)
     grid, refine = (5, ()) if quick else (11, (7,))
-    cal = calibrate(
-        inst, seeds, buffer=buffer, targets=targets, free=free, grid=grid, refine=refine
-    )
+    cal = calibrate(inst, seeds, trays=trays, targets=targets, free=free, grid=grid, refine=refine)
     return replace(TimingModel(), **cal["values"]), cal
 
 
@@ -324,7 +322,7 @@ def run_user_study(
     instance: str | Path | None = None,
     n_participants: int = PAPER_N,
     n_studies: int | None = None,
-    buffer: int | None = 0,
+    trays: int | str | None = None,
     targets: Sequence[tuple[str, str, float]] = DEFAULT_TARGETS,
     free: Mapping[str, tuple[float, float]] = DEFAULT_FREE,
     timing: TimingModel | None = None,
@@ -339,7 +337,9 @@ def run_user_study(
     calibration) to show the sampling spread of every predicted number; the first study is
     the reported one.
 
-    ``quick``: a coarse 5 x 5 calibration grid (plus the polish), 2 studies and a small CE.
+    ``trays`` overrides the instance's (the study's table: one tray; ``"unlimited"`` lets the
+    robot run ahead). ``quick``: a coarse 5 x 5 calibration grid (plus the polish), 2 studies
+    and a small CE.
     ``jobs`` is accepted for symmetry with :func:`run_fig6`; the study runs in one process
     (it takes seconds).
 
@@ -355,10 +355,10 @@ def run_user_study(
         raise UsageError("need n_studies >= 1 and n_participants >= 2")
     all_seeds = participant_seeds(seed, n_participants * n_studies)
     seeds = all_seeds[:n_participants]
-    timing, cal = _study_calibration(inst, seeds, timing, buffer, targets, free, quick)
+    timing, cal = _study_calibration(inst, seeds, timing, trays, targets, free, quick)
     if ce is None and quick:
         ce = QUICK_CE
-    params = study_params(timing, buffer, ce)
+    params = study_params(timing, trays, ce)
     rows = study_runs(inst, params, all_seeds)  # one policy object per condition: shared cache
     for r in rows:
         r["study"], r["participant"] = divmod(r["participant"] - 1, n_participants)
@@ -374,7 +374,7 @@ def run_user_study(
         "n_participants": n_participants,
         "n_studies": n_studies,
         "delivery_time": d,
-        "buffer": buffer,
+        "trays": inst.with_overrides(trays=trays).trays,
         "timing": asdict(timing),
         "ce": asdict(ce) if ce is not None else None,
         "calibration": cal,

@@ -12,8 +12,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from ..errors import UsageError
-from ..instance import DEFAULT_REPAIR_TIME, Instance, Supply
+from ..errors import InstanceError, UsageError
+from ..instance import DEFAULT_REPAIR_TIME, Instance, Supply, parse_trays
 from ..layout.cross_entropy import CEParams
 from .timing import TimingModel
 
@@ -28,6 +28,10 @@ class SimParams:
     Fields:
         units: units built in sequence (None: the instance's ``units``; the paper uses 10).
         delivery_time: overrides the instance's ``d`` (s) when not None.
+        trays: overrides the instance's ``trays`` (kit trays in circulation, docs/timeline.md)
+            when not None: an integer >= 1, or ``"unlimited"``. The robot starts kit k only
+            once the tray of kit k - trays is back (``robot_blocked`` counts the wait); the
+            user study's protocol is 1 tray (``instances/hrc_table.json`` sets it).
         mat: part type -> mean inter-arrival time (s) of its feeder; adds or replaces supply
             processes on top of the instance's own ``supply`` (if ``use_instance_supply``).
         mttf: mean time to failure (s) of the feeders: one number for every supplied type, or
@@ -44,11 +48,6 @@ class SimParams:
             fixed value lets replications share the policy's layout cache.
         pick_order: ``"kit"`` or ``"available-first"`` (see :mod:`.shopfloor`).
         human_estimate: ``"expected"`` or ``"oracle"`` (see :mod:`.shopfloor`).
-        buffer: kits that may wait at the assembly station before the robot stops starting new
-            ones: at a decision epoch the robot first waits (``robot_blocked``) until at most
-            ``buffer`` delivered kits are still untaken. None (default): unlimited, the
-            evaluator's semantics; 0: the user study's protocol ("the robot returned to its
-            kitting task once the participant retrieved the parts").
         policy_options: ``key=value`` options of the policy, validated against its options
             dataclass when the policy is built (:func:`.registry.make_policy`).
         max_time: simulated-time guard (s); a run that has not ended by then is an error.
@@ -56,6 +55,7 @@ class SimParams:
 
     units: int | None = None
     delivery_time: float | None = None
+    trays: int | str | None = None
     mat: Mapping[str, float] = field(default_factory=dict)
     mttf: float | Mapping[str, float] | None = None
     repair_time: float | None = None
@@ -69,7 +69,6 @@ class SimParams:
     policy_seed: int | None = 0
     pick_order: str = "kit"
     human_estimate: str = "expected"
-    buffer: int | None = None
     policy_options: Mapping[str, Any] = field(default_factory=dict)
     max_time: float = 1e8
 
@@ -80,8 +79,13 @@ class SimParams:
             raise UsageError(
                 f"human_estimate must be one of {ESTIMATES}, got {self.human_estimate!r}"
             )
-        if self.buffer is not None and self.buffer < 0:
-            raise UsageError(f"buffer must be >= 0 or None, got {self.buffer!r}")
+        if self.trays is not None:
+            try:
+                parse_trays(self.trays)
+            except InstanceError:
+                raise UsageError(
+                    f"trays must be an integer >= 1 or 'unlimited', got {self.trays!r}"
+                ) from None
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-serialisable view (for run records)."""
@@ -141,10 +145,11 @@ def resolve_supply(instance: Instance, params: SimParams) -> dict[str, Supply]:
 
 
 def effective_instance(instance: Instance, params: SimParams) -> Instance:
-    """The instance a run simulates and its policy plans with: units, ``d``, weights, horizon,
-    the timing model's overheads and scales, and the resolved supply applied."""
+    """The instance a run simulates and its policy plans with: units, ``d``, trays, weights,
+    horizon, the timing model's overheads and scales, and the resolved supply applied."""
     inst = instance.with_overrides(
         delivery_time=params.delivery_time,
+        trays=params.trays,
         weights=params.weights,
         horizon=params.horizon,
         units=params.units,

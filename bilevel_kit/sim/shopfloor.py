@@ -3,22 +3,27 @@
 Processes:
 
 * **Feeders** (:mod:`.feeders`): one per part type with a supply process.
-* **Robot**: at each decision epoch (t = 0, then each time it is back from a delivery) it asks
-  its policy for the next kit with a :class:`~.state.SimState`; spends the kit overhead
-  ``o_R``; picks the kit's parts one by one (each part's pick time, :mod:`.timing`), and when a
-  part is out of stock waits until its feeder delivers one (recorded as a wait); then delivers
-  in ``d`` (busy while delivering) and is free again.
+* **Robot**: at each decision epoch (t = 0, then each time it is back from a delivery) it
+  first waits for a free tray (below), then asks its policy for the next kit with a
+  :class:`~.state.SimState`; spends the kit overhead ``o_R``; picks the kit's parts one by one
+  (each part's pick time, :mod:`.timing`), and when a part is out of stock waits until its
+  feeder delivers one (recorded as a wait); then delivers in ``d`` (busy while delivering) and
+  is free again.
 * **Human**: takes a kit when it arrives if idle, otherwise the kit waits in a FIFO queue at the
-  assembly station; spends ``o_H`` and assembles the kit's tasks in order with the sampled
-  durations. The run ends when the human finishes the last task.
+  assembly station; spends ``o_H`` retrieving its parts, which frees the tray, and assembles the
+  kit's tasks in order with the sampled durations. The run ends when the human finishes the
+  last task.
+* **Trays**: the instance's ``trays`` (docs/timeline.md): the robot starts kit k only once the
+  tray of kit k - trays is back, ``o_H`` after the human started that kit, the evaluator's
+  ``robot_start_k >= human_start_{k-trays} + o_H``. The wait is ``robot_blocked`` in the
+  record. With unlimited trays a fast robot can stack several kits at a slow human
+  (``max_queue`` in the record says how many).
 
 With no supply process and deterministic times this is exactly the timeline of
 :func:`bilevel_kit.plan.evaluate` (docs/timeline.md) on the plan of kits the simulation
-produced; the tests check it to 1e-9 for every policy. This module is the engine;
-:mod:`.runs` builds a run's policy and sampled times and turns the engine's log into a
-:class:`~.runs.SimResult`. Note that the queue is not limited to
-one kit: the evaluator lets the robot start kit k+1 as soon as kit k has arrived, so a fast
-robot can stack several kits at a slow human (``max_queue`` in the record says how many).
+produced, for any number of trays; the tests check it to 1e-9 for every policy. This module is
+the engine; :mod:`.runs` builds a run's policy and sampled times and turns the engine's log
+into a :class:`~.runs.SimResult`.
 
 Choices (also in :class:`.params.SimParams`):
 
@@ -97,7 +102,8 @@ class ShopFloor:
         self.queue: deque[int] = deque()
         self.max_queue = 0
         self._kit_ready: simpy.Event | None = None
-        self._kit_taken: simpy.Event | None = None
+        self._tray_back: simpy.Event | None = None
+        self.trays_back = 0  # kits whose parts the human has retrieved (their tray is free)
         self.robot_blocked = 0.0
         self.in_hand: int | None = None
         self.phase = -1
@@ -165,13 +171,18 @@ class ShopFloor:
     def _robot(self) -> Generator[simpy.Event, Any, None]:
         env, inst = self.env, self.inst
         o_r, d = inst.kit_overhead_robot, inst.delivery_time
-        buffer = self.params.buffer
+        trays = inst.tray_limit
         while True:
-            if buffer is not None and len(self.queue) > buffer and len(self.done) < inst.n_tasks:
+            # kit k = len(self.kits) needs the tray of kit k - trays back (docs/timeline.md)
+            if (
+                trays is not None
+                and len(self.kits) - self.trays_back >= trays
+                and len(self.done) < inst.n_tasks
+            ):
                 t0 = env.now
-                while len(self.queue) > buffer:
-                    self._kit_taken = env.event()
-                    yield self._kit_taken
+                while len(self.kits) - self.trays_back >= trays:
+                    self._tray_back = env.event()
+                    yield self._tray_back
                 self.robot_blocked += env.now - t0
             kit = self.policy.decide(self.state())
             if kit is None:
@@ -267,16 +278,18 @@ class ShopFloor:
                 self._kit_ready = env.event()
                 yield self._kit_ready
             k = self.queue.popleft()
-            taken = self._kit_taken
-            if taken is not None:
-                self._kit_taken = None
-                taken.succeed()
             tasks = self.kits[k].tasks
             self.in_hand, self.phase, self.phase_start = k, -1, env.now
             self.kit_times[k]["human_start"] = env.now
             work = oh
             if oh:
                 yield env.timeout(oh)
+            # the parts are off the tray: it goes back to the robot
+            self.trays_back += 1
+            back = self._tray_back
+            if back is not None:
+                self._tray_back = None
+                back.succeed()
             for j, t in enumerate(tasks):
                 self.phase, self.phase_start = j, env.now
                 self.task_start[t] = env.now

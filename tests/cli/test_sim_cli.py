@@ -66,7 +66,30 @@ def test_simulate_bad_input(capsys, root):
         (["--mat", "gear=3"], "unknown part type(s) gear"),
         (["--mttf", "90"], "--mttf needs feeders"),
         (["--mat", "leg=-1"], "must be a finite number > 0"),
+        (["--trays", "0"], "--trays"),
+        (["--trays", "1.5"], "--trays"),
+        (["--trays", "two"], "--trays"),
+        (["--buffer", "0"], "use --trays (trays = buffer + 1)"),
     ):
         code = main(["simulate", inst, *argv])
         err = capsys.readouterr().err
         assert code == 2 and msg in err and err.count("\n") == 1, argv
+
+
+def test_simulate_trays_override(capsys, tmp_path, root):
+    """``--trays`` overrides the instance's (the table has one tray): 1 is the file's value,
+    unlimited lets the robot stack kits at the human (``max_queue`` > 1)."""
+    inst = str(root / "instances/hrc_table.json")
+    rows = {}
+    for trays in (None, "1", "unlimited"):
+        out = tmp_path / f"{trays}.csv"
+        extra = [] if trays is None else ["--trays", trays]
+        argv = ["simulate", inst, "--policy", "single-task", "--reps", "2", "--csv", str(out)]
+        assert main([*argv, *extra]) == 0
+        capsys.readouterr()
+        rows[trays] = list(csv.DictReader(out.open()))
+    assert rows[None] == rows["1"]
+    assert all(int(r["max_queue"]) == 1 for r in rows["1"])
+    assert all(float(r["robot_blocked"]) > 0 for r in rows["1"])
+    assert any(int(r["max_queue"]) > 1 for r in rows["unlimited"])
+    assert all(float(r["robot_blocked"]) == 0 for r in rows["unlimited"])

@@ -32,7 +32,7 @@ def _strip_wall(obj):
 
 
 def test_paper_idle_counts_the_pickup_as_idle(table):
-    params = SimParams(units=1, buffer=0, timing=TimingModel(kit_overhead_human=3.0))
+    params = SimParams(units=1, trays=1, timing=TimingModel(kit_overhead_human=3.0))
     rec = run(table, "single-task", params=params, seed=4)
     expected = rec["human_idle"] + rec["n_kits"] * 3.0
     assert repro.paper_idle(rec) == pytest.approx(expected, abs=1e-9)

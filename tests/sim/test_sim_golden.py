@@ -1,5 +1,6 @@
 """Golden backtests of ``bilevel-kit simulate``: per-replication CSVs of several policies on
-the paper's table with supply delays must not change (tests/golden.py)."""
+the paper's table with supply delays must not change (tests/golden.py). The table has one tray
+(the study's protocol); ``sim_optimized_trays_unlimited.csv`` keeps the unlimited-tray run."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ CASES = {
     ]
     for p in ("single-task", "whole-assembly", "optimized")
 }
-CASES["sim_optimized_units2_buffer1.csv"] = [
+CASES["sim_optimized_units2_trays2.csv"] = [
     "--policy",
     "optimized",
     "--reps",
@@ -38,11 +39,14 @@ CASES["sim_optimized_units2_buffer1.csv"] = [
     "3",
     "--units",
     "2",
-    "--buffer",
-    "1",
+    "--trays",
+    "2",
     "--mat",
     "leg=50",
 ]
+
+
+CASES["sim_optimized_trays_unlimited.csv"] = [*CASES["sim_optimized.csv"], "--trays", "unlimited"]
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
