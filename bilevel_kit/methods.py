@@ -27,6 +27,7 @@ from .errors import UsageError
 from .instance import Instance
 from .options import describe, parse_options
 from .plan import Plan, Timeline, evaluate
+from .validate import timeline_params
 
 
 class Status(enum.StrEnum):
@@ -87,6 +88,8 @@ class Result:
     extra: dict[str, Any] = field(default_factory=dict)
     #: The objective ``status`` refers to (see :class:`MethodOutput`).
     status_objective: str = "makespan"
+    #: Delivery time, kit overheads and trays the timeline was computed with.
+    timeline_params: dict[str, Any] = field(default_factory=dict)
 
     @property
     def status_text(self) -> str:
@@ -234,6 +237,7 @@ def solve(
         instance=instance.name,
         extra=extra,
         status_objective=out.status_objective,
+        timeline_params=timeline_params(instance),
     )
 
 

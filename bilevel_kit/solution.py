@@ -60,6 +60,7 @@ def result_to_dict(result: Result) -> dict[str, Any]:
         "method": result.method,
         "status": result.status,
         "status_objective": result.status_objective,
+        "timeline_params": result.timeline_params,
         "objective": result.objective,
         "bound": result.bound,
         "gap": result.gap,
@@ -135,6 +136,25 @@ def schema() -> dict[str, Any]:
                 "type": "string",
                 "description": "the objective the status refers to (makespan, human_idle, J)",
             },
+            "timeline_params": {
+                "type": "object",
+                "description": "delivery_time, kit_overhead and trays the times were computed for",
+                "required": ["delivery_time", "kit_overhead", "trays"],
+                "additionalProperties": False,
+                "properties": {
+                    "delivery_time": {"type": "number", "minimum": 0},
+                    "kit_overhead": {
+                        "type": "object",
+                        "required": ["robot", "human"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "robot": {"type": "number", "minimum": 0},
+                            "human": {"type": "number", "minimum": 0},
+                        },
+                    },
+                    "trays": {"type": ["integer", "null"], "minimum": 1},
+                },
+            },
             "objective": _OPT_NUM,
             "bound": _OPT_NUM,
             "gap": {"type": ["number", "null"], "minimum": 0},
@@ -197,6 +217,8 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         bound=doc.get("bound"),
         gap=doc.get("gap"),
         has_gap="gap" in doc,
+        status_objective=doc.get("status_objective", "makespan"),
+        timeline=doc.get("timeline_params"),
     )
     return LoadedSolution(
         doc, Plan(tuple(kits)), tuple(times) if times else None, doc.get("metrics"), claims

@@ -20,6 +20,7 @@ import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 from . import geometry
 from .instance import Instance
@@ -48,6 +49,7 @@ KINDS = (
     "bound_above_makespan",
     "gap_mismatch",
     "status_mismatch",
+    "instance_mismatch",
 )
 
 #: Overlapping pairs listed per kit; more are summarised in one violation (a tampered file with
@@ -67,6 +69,24 @@ class Claims:
     bound: float | None = None
     gap: float | None = None
     has_gap: bool = False
+    #: The objective ``status`` refers to; "optimal" only promises a zero makespan gap when it
+    #: is ``makespan``.
+    status_objective: str = "makespan"
+    #: The instance parameters the times were computed for (:func:`timeline_params`).
+    timeline: Mapping[str, Any] | None = None
+
+
+def timeline_params(instance: Instance) -> dict[str, Any]:
+    """The instance parameters that shape the timeline beside the tasks (docs/timeline.md): a
+    solution records them so that checking it against other parameters is named as such."""
+    return {
+        "delivery_time": instance.delivery_time,
+        "kit_overhead": {
+            "robot": instance.kit_overhead_robot,
+            "human": instance.kit_overhead_human,
+        },
+        "trays": instance.trays,
+    }
 
 
 @dataclass(frozen=True)
@@ -99,6 +119,8 @@ def check(
     its headline numbers, recomputed likewise (see :func:`_check_claims`).
     """
     out: list[Violation] = []
+    if claims is not None:  # first: it explains every time that follows
+        out += _check_instance(instance, claims)
     out += _check_tasks(instance, plan)
     for k, kit in enumerate(plan.kits, start=1):
         out += _check_layout(instance, kit, k)
@@ -107,6 +129,30 @@ def check(
     if claims is not None:
         out += _check_claims(instance, plan, claims, plan_valid=not out)
     return out
+
+
+def _check_instance(instance: Instance, claims: Claims) -> list[Violation]:
+    """The solution's times were computed for this instance's timeline parameters."""
+    if claims.timeline is None:
+        return []
+    want = timeline_params(instance)
+    out = []
+    for key, value in want.items():
+        got = claims.timeline.get(key, "absent")
+        if got != value:
+            hint = " (pass --trays to check it as solved)" if key == "trays" else ""
+            out.append(
+                Violation(
+                    "instance_mismatch",
+                    f"the solution was computed with {key} = {_show(got)}, the instance has "
+                    f"{_show(value)}{hint}",
+                )
+            )
+    return out
+
+
+def _show(value: Any) -> str:
+    return "unlimited" if value is None else str(value)
 
 
 def _close(got: float, want: float) -> bool:
@@ -154,7 +200,7 @@ def _check_claims(
             "null" if want is None else f"{want:.6g}"
         )
         out.append(Violation("gap_mismatch", msg))
-    if claims.status == "optimal":
+    if claims.status == "optimal" and claims.status_objective == "makespan":
         if bound is None:
             msg = "status 'optimal' without a bound"
             out.append(Violation("status_mismatch", msg))

@@ -30,6 +30,8 @@ def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
         "--out",
         out,
         "--check",
+        "--trays",
+        "unlimited",
     )
     assert code == 0
     assert "makespan 459.78 s" in text and "check: valid" in text
@@ -62,8 +64,12 @@ def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
         "layout",
     }
     assert set(doc["kits"][0]["layout"][0]) == {"part", "type", "x", "y", "theta", "w", "h"}
-    code, text, _ = run(capsys, "check", root / "instances/hrc_table.json", out)
+    table = root / "instances/hrc_table.json"
+    code, text, _ = run(capsys, "check", table, out, "--trays", "unlimited")
     assert code == 0 and text.startswith("valid: 12 kits, 12 tasks")
+    code, text, _ = run(capsys, "check", table, out)  # the file's own one-tray protocol
+    assert code == 1
+    assert "[instance_mismatch] the solution was computed with trays = unlimited" in text
 
 
 def test_solution_json_round_trip_is_lossless(capsys, tmp_path, root, table):

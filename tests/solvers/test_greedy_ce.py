@@ -22,15 +22,21 @@ def test_plans_pass_the_checker_on_every_instance(root):
         assert res.status == "feasible" and res.objective >= res.bound - 1e-9
 
 
-def test_table_plan_numbers(table):
-    res = solve(table, "greedy-ce", seed=0)
+@pytest.mark.parametrize(
+    ("trays", "makespan", "idle", "single_task"),
+    [(1, 463.78, 57.0, 466.695), ("unlimited", 459.78, 53.0, 459.78)],
+)
+def test_table_plan_numbers(table, trays, makespan, idle, single_task):
+    inst = table.with_overrides(trays=trays)  # the study's one tray, and no limit
+    res = solve(inst, "greedy-ce", seed=0)
     sizes = [len(k.tasks) for k in res.plan.kits]
     # Eq. 6 pairs the first tasks of each leg (foot+conn), the tops follow one by one
     assert sizes == [2, 2, 2, 2, 1, 1, 1, 1]
-    assert res.objective == pytest.approx(459.78)
-    assert res.metrics["human_idle"] == pytest.approx(53.0)
-    st_ = solve(table, "single-task")
-    wa = solve(table, "whole-assembly")
+    assert res.objective == pytest.approx(makespan)
+    assert res.metrics["human_idle"] == pytest.approx(idle)
+    st_ = solve(inst, "single-task")
+    wa = solve(inst, "whole-assembly")
+    assert st_.objective == pytest.approx(single_task)
     assert res.objective <= st_.objective + 1e-9 < wa.objective
 
 
