@@ -55,6 +55,7 @@ from ..errors import UsageError
 from ..instance import Instance, PartType, Tray
 from ..plan import Placement
 from ..reachability import ReachGrid, reach_grid
+from . import _kernels
 from .fitness import PairScorer, PairTable, box_overlap_1d, layout_terms
 
 
@@ -343,6 +344,15 @@ def _ce_run(
     floor = p.min_sd**2
     w6f, w_outf = dt(w6), dt(w_out)
     deg = dt(math.pi / 180.0)
+    kernel = _kernels.score_kernel()
+    if kernel is not None:
+        consts = np.array([math.pi / 180.0, W, H, w6, 0.0, 2.0], dtype=dt)
+        k_half_w, k_half_h = half_w[:, 0].copy(), half_h[:, 0].copy()
+        k_i, k_j = kit.pairs.i.astype(np.int64), kit.pairs.j.astype(np.int64)
+        k_sign = kit.pairs.sign.astype(dt)
+        k_rot = rot.astype(np.int64)
+        cost = np.empty(S, dtype=dt)
+        z = np.empty(S, dtype=dt)
     # Mirrored sampling: m normal columns give samples mu + LZ and mu - LZ.
     m = S - S // 2 if p.mirrored else S
     LZ = np.empty((dim, m), dtype=dt)
@@ -374,27 +384,30 @@ def _ce_run(
         np.add(LZ, mu_col, out=X[:, :m])
         if m < S:
             np.subtract(mu_col, LZ[:, : S - m], out=X[:, m:])
-        if r:
-            np.multiply(th, deg, out=tmp)
-            np.cos(tmp, out=cs)
-            np.abs(cs, out=cs)
-            np.sin(tmp, out=sn)
-            np.abs(sn, out=sn)
-            np.multiply(cs, half_w, out=exr)
-            exr += np.multiply(sn, half_h, out=tmp)
-            np.multiply(sn, half_w, out=eyr)
-            eyr += np.multiply(cs, half_h, out=tmp)
-            if r < n:
-                exT[rot] = exr
-                eyT[rot] = eyr
-        # Project into the tray, in place: the refit sees the projected samples.
-        np.maximum(x, exT, out=x)
-        np.minimum(x, np.subtract(dt(W), exT, out=hi), out=x)
-        np.maximum(y, eyT, out=y)
-        np.minimum(y, np.subtract(dt(H), eyT, out=hi), out=y)
-        # Score all samples in one pass: D_same - D_diff + W6 * Z_box (+ overhang penalty).
-        cost, z = scorer.signed(x, y, exT, eyT)
-        cost += w6f * z
+        if kernel is not None:  # extents, projection and score in one compiled pass
+            kernel(X, n, k_rot, k_half_w, k_half_h, exT, eyT, consts, k_i, k_j, k_sign, cost, z)
+        else:
+            if r:
+                np.multiply(th, deg, out=tmp)
+                np.cos(tmp, out=cs)
+                np.abs(cs, out=cs)
+                np.sin(tmp, out=sn)
+                np.abs(sn, out=sn)
+                np.multiply(cs, half_w, out=exr)
+                exr += np.multiply(sn, half_h, out=tmp)
+                np.multiply(sn, half_w, out=eyr)
+                eyr += np.multiply(cs, half_h, out=tmp)
+                if r < n:
+                    exT[rot] = exr
+                    eyT[rot] = eyr
+            # Project into the tray, in place: the refit sees the projected samples.
+            np.maximum(x, exT, out=x)
+            np.minimum(x, np.subtract(dt(W), exT, out=hi), out=x)
+            np.maximum(y, eyT, out=y)
+            np.minimum(y, np.subtract(dt(H), eyT, out=hi), out=y)
+            # Score all samples in one pass: D_same - D_diff + W6 * Z_box (+ overhang penalty).
+            cost, z = scorer.signed(x, y, exT, eyT)
+            cost += w6f * z
         feasible = z == 0
         if may_stick_out:
             over = np.maximum(2 * exT - dt(W), dt(0)).sum(axis=0)
