@@ -136,7 +136,6 @@ def run(repeats: int, precision: str, scoring: str) -> dict[str, object]:
         os.environ[_kernels.ENV_DISABLE] = "1"
     else:
         os.environ.pop(_kernels.ENV_DISABLE, None)
-    _kernels.score_kernel.cache_clear()
     compiled = _kernels.available()
     if scoring == "numba" and not compiled:
         raise SystemExit("numba is not installed")

@@ -44,7 +44,7 @@ this size were 10-100x slower on a busy 2-core machine).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -358,6 +358,10 @@ def _ce_run(
     LZ = np.empty((dim, m), dtype=dt)
     step = max(1, _GEMM_SINGLE_THREAD // (dim * dim))
 
+    block = _kernels.ce_block_kernel()
+    if block is not None and not may_stick_out and kit.reach is None:
+        return _ce_run_compiled(kit, gen, p, block, (half_w, half_h, exT, eyT, consts), m, mu0, sd0)
+
     pool = np.empty((0, m), dtype=dt)
     mu = np.asarray(mu0, dtype=np.float64).copy()
     cov = np.diag(np.asarray(sd0, dtype=np.float64) ** 2)
@@ -452,6 +456,56 @@ def _ce_run(
                 converged = True
                 break
     return _Run(best, best_feasible, mu, trace, it, converged)
+
+
+def _ce_run_compiled(
+    kit: _Kit,
+    gen: np.random.Generator,
+    p: CEParams,
+    block: Callable[..., int],
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    m: int,
+    mu0: np.ndarray,
+    sd0: np.ndarray,
+) -> _Run:
+    """:func:`_ce_run` with the iterations compiled (:func:`bilevel_kit.layout._kernels.
+    _ce_block`), one call per pool of standard normals drawn exactly as the numpy loop draws
+    them (the same random stream). Used without overhang penalty and reach map."""
+    half_w, half_h, exT, eyT, consts = arrays
+    dt = exT.dtype.type
+    n, dim, S = kit.n, kit.dim, p.samples
+    mu = np.asarray(mu0, dtype=np.float64).copy()
+    cov = np.diag(np.asarray(sd0, dtype=np.float64) ** 2)
+    L = np.ascontiguousarray(np.diag(np.asarray(sd0, dtype=np.float64)).astype(dt))
+    X = np.empty((dim, S), dtype=dt)
+    best = mu.copy()
+    best_feasible = np.zeros(dim)
+    state = np.array([math.inf, math.inf, 0.0, 0.0])
+    trace = np.zeros(p.max_iter)
+    gammas = np.zeros(p.max_iter)
+    fparams = np.array([p.smoothing, p.cov_smoothing, p.min_sd**2, p.tol])
+    statics = (
+        n,
+        kit.rot_idx.astype(np.int64),
+        np.ascontiguousarray(half_w[:, 0]),
+        np.ascontiguousarray(half_h[:, 0]),
+        consts,
+        kit.pairs.i.astype(np.int64),
+        kit.pairs.j.astype(np.int64),
+        kit.pairs.sign.astype(dt),
+    )
+    cost = np.empty(S, dtype=dt)
+    z = np.empty(S, dtype=dt)
+    it = 0
+    while it < p.max_iter and state[2] == 0.0:
+        pool = _standard_normal(gen, (_POOL * dim, m), dt)
+        n_it = min(_POOL, p.max_iter - it)
+        args = (mu, cov, L, X, exT, eyT, cost, z, *statics, p.elite, fparams, p.patience)
+        it += block(pool, it + 1, n_it, *args, best, best_feasible, state, trace, gammas)
+        if state[2] < 0:
+            raise np.linalg.LinAlgError("covariance is not positive definite")
+    feasible = best_feasible.copy() if math.isfinite(state[1]) else None
+    return _Run(best, feasible, mu, trace[:it].tolist(), it, bool(state[2] > 0))
 
 
 # ---------------------------------------------------------------------------------------------
