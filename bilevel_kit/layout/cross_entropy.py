@@ -36,9 +36,16 @@ with small overlaps is first *repaired* by pushing overlapping bounding boxes ap
 candidate is valid, CE is re-run from the shelf packer's layout, and the packer's layout
 itself competes too. Overlapping layouts are never reported as ``fits=True``.
 
-Performance: all (n, S)- and (P, S)-sized arrays are allocated once per run; matrix products
-inside the loop are cut into blocks that OpenBLAS runs single-threaded (threaded products of
-this size were 10-100x slower on a busy 2-core machine).
+Performance: with numba installed the iterations run compiled
+(:mod:`bilevel_kit.layout._kernels`: sampling, extents, projection, the fused pair loop of
+the scores, elite refit and Cholesky factor in one call per pool of standard normals, which
+are still drawn here, so the random stream is the numpy loop's). Scores then differ from the
+numpy loop only by float32 rounding (summation order, ``cos``/``sin`` in the last bit), which
+can reorder near-tied samples; ``BILEVEL_KIT_NO_NUMBA=1`` forces the numpy loop. Runs with a
+reach map or with parts that can stick out of the tray use the numpy loop (with the compiled
+scorer). In the numpy loop all (n, S)- and (P, S)-sized arrays are allocated once per run;
+matrix products inside the loop are cut into blocks that OpenBLAS runs single-threaded
+(threaded products of this size were 10-100x slower on a busy 2-core machine).
 """
 
 from __future__ import annotations
