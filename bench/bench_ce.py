@@ -5,15 +5,19 @@ Kit: every part of the 28-part table kit (4 legs 152.4 x 12.7 mm, 4 feet 43 x 43
 at most 100 iterations.
 
 For each seed it times one ``arrange`` call, then the evaluation alone of the same number of
-samples (``iterations`` batches of 200, drawn beforehand) with the vectorised objective:
-rotated box extents plus :class:`bilevel_kit.layout.fitness.PairScorer`, in the same precision.
-The ratio of the medians says how much the CE loop (sampling, projection, refit, the exact
-final check) costs on top of scoring.
+samples (``iterations`` batches of 200, drawn beforehand) with the scorer ``arrange`` uses:
+the compiled kernel of :mod:`bilevel_kit.layout._kernels` (rotated box extents, projection,
+score in one pass) or, with ``scoring=numpy`` (``BILEVEL_KIT_NO_NUMBA=1``), rotated box
+extents plus :class:`bilevel_kit.layout.fitness.PairScorer`, in the same precision. The ratio
+of the medians says how much the CE loop (sampling, refit, the exact final check) costs on
+top of scoring; ``ratio_solve_to_numpy_eval`` compares with the numpy scoring of the same
+samples. ``*_cpu_ms`` columns are process CPU time (less sensitive to a busy machine than the
+wall-clock ``*_ms`` columns).
 
 OpenBLAS threads are capped at 1 unless OPENBLAS_NUM_THREADS is set: on a busy 2-core machine
 threaded BLAS calls measure the neighbours, not the algorithm. The setting is in the CSV.
 
-Usage: python bench/bench_ce.py [--repeats 21] [--out bench/results/ce.csv]
+Usage: python bench/bench_ce.py [--repeats 21] [--scoring both] [--out bench/results/ce.csv]
 """
 
 from __future__ import annotations
@@ -34,7 +38,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import math  # noqa: E402
+
 from bilevel_kit.instance import Instance, from_dict  # noqa: E402
+from bilevel_kit.layout import _kernels  # noqa: E402
 from bilevel_kit.layout.cross_entropy import CEParams, arrange  # noqa: E402
 from bilevel_kit.layout.fitness import PairScorer, PairTable, half_extents  # noqa: E402
 
@@ -69,8 +76,11 @@ def table_kit() -> Instance:
     )
 
 
-def eval_only_seconds(inst: Instance, batches: int, params: CEParams, seed: int) -> float:
-    """Time to score ``batches`` x ``params.samples`` random layouts (drawn before timing)."""
+def eval_only_seconds(
+    inst: Instance, batches: int, params: CEParams, seed: int, compiled: bool
+) -> tuple[float, float]:
+    """(wall, CPU) seconds to score ``batches`` x ``params.samples`` random layouts (drawn
+    before timing), with the compiled kernel or with numpy."""
     dt = np.float32 if params.precision == "float32" else np.float64
     types = [t for t in sorted(PARTS) for _ in range(PARTS[t])]
     w = np.array([inst.part_types[t].width for t in types], dtype=dt)[:, None]
@@ -85,28 +95,65 @@ def eval_only_seconds(inst: Instance, batches: int, params: CEParams, seed: int)
         )
         for _ in range(batches)
     ]
-    scorer = PairScorer(PairTable.build(types, dt), S, dt)
+    pairs = PairTable.build(types, dt)
     w6 = dt(inst.weights["W6"])
-    t0 = time.perf_counter()
+    kernel = _kernels.score_kernel() if compiled else None
+    if kernel is not None:
+        stacked = [np.concatenate(d) for d in data]
+        consts = np.array(
+            [math.pi / 180.0, inst.tray.width, inst.tray.height, w6, 0.0, 2.0], dtype=dt
+        )
+        args = (
+            np.arange(n, dtype=np.int64),
+            (w[:, 0] / 2).astype(dt),
+            (h[:, 0] / 2).astype(dt),
+            np.empty((n, S), dtype=dt),
+            np.empty((n, S), dtype=dt),
+            consts,
+            pairs.i.astype(np.int64),
+            pairs.j.astype(np.int64),
+            pairs.sign.astype(dt),
+        )
+        cost = np.empty(S, dtype=dt)
+        z = np.empty(S, dtype=dt)
+        t0, c0 = time.perf_counter(), time.process_time()
+        for X in stacked:
+            kernel(X, n, *args, cost, z)
+            np.argpartition(cost, params.elite - 1)
+        return time.perf_counter() - t0, time.process_time() - c0
+    scorer = PairScorer(pairs, S, dt)
+    t0, c0 = time.perf_counter(), time.process_time()
     for x, y, th in data:
         ex, ey = half_extents(w, h, th)
         dsd, z = scorer.signed(x, y, ex, ey)
         cost = dsd + w6 * z
         np.argpartition(cost, params.elite - 1)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
-def run(repeats: int, precision: str) -> dict[str, object]:
+def run(repeats: int, precision: str, scoring: str) -> dict[str, object]:
+    if scoring == "numpy":
+        os.environ[_kernels.ENV_DISABLE] = "1"
+    else:
+        os.environ.pop(_kernels.ENV_DISABLE, None)
+    compiled = _kernels.available()
+    if scoring == "numba" and not compiled:
+        raise SystemExit("numba is not installed")
     inst = table_kit()
     params = CEParams(precision=precision)
-    for s in range(2):  # warm-up
+    for s in range(2):  # warm-up (and the kernel's compilation or cache load)
         arrange(inst, PARTS, rng=1000 + s, params=params)
-    solve, evals, iters, fits, fitness, sources = [], [], [], [], [], []
+    solve, solve_cpu, evals, evals_cpu, np_evals = [], [], [], [], []
+    iters, fits, fitness, sources = [], [], [], []
     for seed in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         res = arrange(inst, PARTS, rng=seed, params=params)
         solve.append(time.perf_counter() - t0)
-        evals.append(eval_only_seconds(inst, res.iterations, params, seed))
+        solve_cpu.append(time.process_time() - c0)
+        wall, cpu = eval_only_seconds(inst, res.iterations, params, seed, compiled)
+        evals.append(wall)
+        evals_cpu.append(cpu)
+        np_evals.append(eval_only_seconds(inst, res.iterations, params, seed, False)[0])
         iters.append(res.iterations)
         fits.append(res.fits)
         fitness.append(res.fitness)
@@ -117,6 +164,7 @@ def run(repeats: int, precision: str) -> dict[str, object]:
         "kit": "table-28",
         "parts": sum(PARTS.values()),
         "precision": precision,
+        "scoring": "numba" if compiled else "numpy",
         "samples": params.samples,
         "elite": params.elite,
         "max_iter": params.max_iter,
@@ -128,10 +176,15 @@ def run(repeats: int, precision: str) -> dict[str, object]:
         "median_ratio_per_seed": round(
             statistics.median(a / b for a, b in zip(solve, evals, strict=True)), 3
         ),
+        "median_numpy_eval_ms": round(statistics.median(np_evals) * 1e3, 2),
+        "ratio_solve_to_numpy_eval": round(med_solve / statistics.median(np_evals), 3),
+        "median_solve_cpu_ms": round(statistics.median(solve_cpu) * 1e3, 2),
+        "median_eval_only_cpu_ms": round(statistics.median(evals_cpu) * 1e3, 2),
         "fits_rate": sum(fits) / repeats,
         "median_fitness": round(statistics.median(fitness), 1),
         "sources": ";".join(f"{s}={sources.count(s)}" for s in sorted(set(sources))),
         "openblas_threads": os.environ.get("OPENBLAS_NUM_THREADS", ""),
+        "load_avg_1min": round(os.getloadavg()[0], 2),
     }
 
 
@@ -139,10 +192,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=21)
     ap.add_argument("--precision", choices=["float32", "float64", "both"], default="both")
+    ap.add_argument("--scoring", choices=["numba", "numpy", "both"], default="both")
     ap.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "ce.csv")
     args = ap.parse_args()
     precisions = ["float32", "float64"] if args.precision == "both" else [args.precision]
-    rows = [run(args.repeats, p) for p in precisions]
+    scorings = ["numba", "numpy"] if args.scoring == "both" else [args.scoring]
+    rows = [run(args.repeats, p, sc) for sc in scorings for p in precisions]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -36,15 +36,22 @@ with small overlaps is first *repaired* by pushing overlapping bounding boxes ap
 candidate is valid, CE is re-run from the shelf packer's layout, and the packer's layout
 itself competes too. Overlapping layouts are never reported as ``fits=True``.
 
-Performance: all (n, S)- and (P, S)-sized arrays are allocated once per run; matrix products
-inside the loop are cut into blocks that OpenBLAS runs single-threaded (threaded products of
-this size were 10-100x slower on a busy 2-core machine).
+Performance: with numba installed the iterations run compiled
+(:mod:`bilevel_kit.layout._kernels`: sampling, extents, projection, the fused pair loop of
+the scores, elite refit and Cholesky factor in one call per pool of standard normals, which
+are still drawn here, so the random stream is the numpy loop's). Scores then differ from the
+numpy loop only by float32 rounding (summation order, ``cos``/``sin`` in the last bit), which
+can reorder near-tied samples; ``BILEVEL_KIT_NO_NUMBA=1`` forces the numpy loop. Runs with a
+reach map or with parts that can stick out of the tray use the numpy loop (with the compiled
+scorer). In the numpy loop all (n, S)- and (P, S)-sized arrays are allocated once per run;
+matrix products inside the loop are cut into blocks that OpenBLAS runs single-threaded
+(threaded products of this size were 10-100x slower on a busy 2-core machine).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -55,6 +62,7 @@ from ..errors import UsageError
 from ..instance import Instance, PartType, Tray
 from ..plan import Placement
 from ..reachability import ReachGrid, reach_grid
+from . import _kernels
 from .fitness import PairScorer, PairTable, box_overlap_1d, layout_terms
 
 
@@ -343,10 +351,23 @@ def _ce_run(
     floor = p.min_sd**2
     w6f, w_outf = dt(w6), dt(w_out)
     deg = dt(math.pi / 180.0)
+    kernel = _kernels.score_kernel()
+    if kernel is not None:
+        consts = np.array([math.pi / 180.0, W, H, w6, 0.0, 2.0], dtype=dt)
+        k_half_w, k_half_h = half_w[:, 0].copy(), half_h[:, 0].copy()
+        k_i, k_j = kit.pairs.i.astype(np.int64), kit.pairs.j.astype(np.int64)
+        k_sign = kit.pairs.sign.astype(dt)
+        k_rot = rot.astype(np.int64)
+        cost = np.empty(S, dtype=dt)
+        z = np.empty(S, dtype=dt)
     # Mirrored sampling: m normal columns give samples mu + LZ and mu - LZ.
     m = S - S // 2 if p.mirrored else S
     LZ = np.empty((dim, m), dtype=dt)
     step = max(1, _GEMM_SINGLE_THREAD // (dim * dim))
+
+    block = _kernels.ce_block_kernel()
+    if block is not None and not may_stick_out and kit.reach is None:
+        return _ce_run_compiled(kit, gen, p, block, (half_w, half_h, exT, eyT, consts), m, mu0, sd0)
 
     pool = np.empty((0, m), dtype=dt)
     mu = np.asarray(mu0, dtype=np.float64).copy()
@@ -374,27 +395,30 @@ def _ce_run(
         np.add(LZ, mu_col, out=X[:, :m])
         if m < S:
             np.subtract(mu_col, LZ[:, : S - m], out=X[:, m:])
-        if r:
-            np.multiply(th, deg, out=tmp)
-            np.cos(tmp, out=cs)
-            np.abs(cs, out=cs)
-            np.sin(tmp, out=sn)
-            np.abs(sn, out=sn)
-            np.multiply(cs, half_w, out=exr)
-            exr += np.multiply(sn, half_h, out=tmp)
-            np.multiply(sn, half_w, out=eyr)
-            eyr += np.multiply(cs, half_h, out=tmp)
-            if r < n:
-                exT[rot] = exr
-                eyT[rot] = eyr
-        # Project into the tray, in place: the refit sees the projected samples.
-        np.maximum(x, exT, out=x)
-        np.minimum(x, np.subtract(dt(W), exT, out=hi), out=x)
-        np.maximum(y, eyT, out=y)
-        np.minimum(y, np.subtract(dt(H), eyT, out=hi), out=y)
-        # Score all samples in one pass: D_same - D_diff + W6 * Z_box (+ overhang penalty).
-        cost, z = scorer.signed(x, y, exT, eyT)
-        cost += w6f * z
+        if kernel is not None:  # extents, projection and score in one compiled pass
+            kernel(X, n, k_rot, k_half_w, k_half_h, exT, eyT, consts, k_i, k_j, k_sign, cost, z)
+        else:
+            if r:
+                np.multiply(th, deg, out=tmp)
+                np.cos(tmp, out=cs)
+                np.abs(cs, out=cs)
+                np.sin(tmp, out=sn)
+                np.abs(sn, out=sn)
+                np.multiply(cs, half_w, out=exr)
+                exr += np.multiply(sn, half_h, out=tmp)
+                np.multiply(sn, half_w, out=eyr)
+                eyr += np.multiply(cs, half_h, out=tmp)
+                if r < n:
+                    exT[rot] = exr
+                    eyT[rot] = eyr
+            # Project into the tray, in place: the refit sees the projected samples.
+            np.maximum(x, exT, out=x)
+            np.minimum(x, np.subtract(dt(W), exT, out=hi), out=x)
+            np.maximum(y, eyT, out=y)
+            np.minimum(y, np.subtract(dt(H), eyT, out=hi), out=y)
+            # Score all samples in one pass: D_same - D_diff + W6 * Z_box (+ overhang penalty).
+            cost, z = scorer.signed(x, y, exT, eyT)
+            cost += w6f * z
         feasible = z == 0
         if may_stick_out:
             over = np.maximum(2 * exT - dt(W), dt(0)).sum(axis=0)
@@ -439,6 +463,56 @@ def _ce_run(
                 converged = True
                 break
     return _Run(best, best_feasible, mu, trace, it, converged)
+
+
+def _ce_run_compiled(
+    kit: _Kit,
+    gen: np.random.Generator,
+    p: CEParams,
+    block: Callable[..., int],
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    m: int,
+    mu0: np.ndarray,
+    sd0: np.ndarray,
+) -> _Run:
+    """:func:`_ce_run` with the iterations compiled (:func:`bilevel_kit.layout._kernels.
+    _ce_block`), one call per pool of standard normals drawn exactly as the numpy loop draws
+    them (the same random stream). Used without overhang penalty and reach map."""
+    half_w, half_h, exT, eyT, consts = arrays
+    dt = exT.dtype.type
+    n, dim, S = kit.n, kit.dim, p.samples
+    mu = np.asarray(mu0, dtype=np.float64).copy()
+    cov = np.diag(np.asarray(sd0, dtype=np.float64) ** 2)
+    L = np.ascontiguousarray(np.diag(np.asarray(sd0, dtype=np.float64)).astype(dt))
+    X = np.empty((dim, S), dtype=dt)
+    best = mu.copy()
+    best_feasible = np.zeros(dim)
+    state = np.array([math.inf, math.inf, 0.0, 0.0])
+    trace = np.zeros(p.max_iter)
+    gammas = np.zeros(p.max_iter)
+    fparams = np.array([p.smoothing, p.cov_smoothing, p.min_sd**2, p.tol])
+    statics = (
+        n,
+        kit.rot_idx.astype(np.int64),
+        np.ascontiguousarray(half_w[:, 0]),
+        np.ascontiguousarray(half_h[:, 0]),
+        consts,
+        kit.pairs.i.astype(np.int64),
+        kit.pairs.j.astype(np.int64),
+        kit.pairs.sign.astype(dt),
+    )
+    cost = np.empty(S, dtype=dt)
+    z = np.empty(S, dtype=dt)
+    it = 0
+    while it < p.max_iter and state[2] == 0.0:
+        pool = _standard_normal(gen, (_POOL * dim, m), dt)
+        n_it = min(_POOL, p.max_iter - it)
+        args = (mu, cov, L, X, exT, eyT, cost, z, *statics, p.elite, fparams, p.patience)
+        it += block(pool, it + 1, n_it, *args, best, best_feasible, state, trace, gammas)
+        if state[2] < 0:
+            raise np.linalg.LinAlgError("covariance is not positive definite")
+    feasible = best_feasible.copy() if math.isfinite(state[1]) else None
+    return _Run(best, feasible, mu, trace[:it].tolist(), it, bool(state[2] > 0))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,0 +1,302 @@
+"""Compiled kernels of the lower level (numba), with numpy as the fallback.
+
+The cross-entropy loop (:mod:`bilevel_kit.layout.cross_entropy`) spends most of its time
+scoring its samples (Eqs. 8-10 with the box Z, docs/errata.md for the sign of Eq. 11). Numpy
+needs a dozen passes over (pairs x samples) temporaries for that; the kernel here makes one
+pass: for each pair, a loop over the samples (contiguous, vectorised by the compiler) that
+adds the signed distance and ``W6`` times the box overlap to the sample's score. The same
+kernel first computes the rotated boxes' half-extents and projects the centres into the tray
+(the CE projection), in place.
+
+The arithmetic is the numpy path's, operation by operation (no fast-math, so no reassociation
+and no fused multiply-add); only the order in which the pair terms are summed differs (pair
+by pair here, ``np.einsum``'s blocking there) and the float32 ``cos``/``sin`` may differ in
+the last bit, so scores agree to float32 rounding and a ranking can differ only between
+samples whose scores are within that rounding (tests/layout/test_kernels.py compares both).
+
+numba is imported on first use, not at import time (it takes about a second). Set the
+environment variable ``BILEVEL_KIT_NO_NUMBA=1`` to force the numpy path (also used when numba
+is not installed); :func:`available` says which path runs.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+
+import numpy as np
+
+#: Environment variable that forces the numpy path when set to anything but "" or "0".
+ENV_DISABLE = "BILEVEL_KIT_NO_NUMBA"
+
+
+def _disabled() -> bool:
+    return os.environ.get(ENV_DISABLE, "") not in ("", "0")
+
+
+#: Signature of the compiled scorer (see :func:`score_kernel`).
+ScoreKernel = Callable[..., None]
+
+
+def _score_samples(
+    X: np.ndarray,
+    n: int,
+    rot_idx: np.ndarray,
+    half_w: np.ndarray,
+    half_h: np.ndarray,
+    exT: np.ndarray,
+    eyT: np.ndarray,
+    consts: np.ndarray,
+    pair_i: np.ndarray,
+    pair_j: np.ndarray,
+    sign: np.ndarray,
+    cost: np.ndarray,
+    z: np.ndarray,
+) -> None:  # pragma: no cover - compiled by numba (the numpy path is tested against it)
+    """Half-extents, projection and score of every sample, in place.
+
+    ``X``: (dim, S) decision vectors (x rows, y rows, then the angles in degrees of the
+    rotatable parts ``rot_idx``); ``exT``/``eyT``: (n, S) half-extents, the rows of fixed
+    parts pre-filled; ``half_w``/``half_h``: half sides of the rotatable parts; ``consts``:
+    (pi / 180, tray width, tray height, W6, 0, 2) in the samples' dtype. Writes the
+    projected centres into ``X``, ``z`` (box Z) and ``cost`` (D_same - D_diff + W6 Z)."""
+    S = X.shape[1]
+    deg = consts[0]
+    wd = consts[1]
+    ht = consts[2]
+    w6f = consts[3]
+    zero = consts[4]
+    two = consts[5]
+    for k in range(rot_idx.size):
+        row = rot_idx[k]
+        hw = half_w[k]
+        hh = half_h[k]
+        for s in range(S):
+            t = X[2 * n + k, s] * deg
+            c = abs(np.cos(t))
+            sn = abs(np.sin(t))
+            exT[row, s] = c * hw + sn * hh
+            eyT[row, s] = sn * hw + c * hh
+    for a in range(n):
+        for s in range(S):
+            ex = exT[a, s]
+            v = max(X[a, s], ex)
+            X[a, s] = min(v, wd - ex)
+            ey = eyT[a, s]
+            v = max(X[n + a, s], ey)
+            X[n + a, s] = min(v, ht - ey)
+    for s in range(S):
+        cost[s] = zero
+        z[s] = zero
+    for p in range(pair_i.size):
+        i = pair_i[p]
+        j = pair_j[p]
+        sg = sign[p]
+        for s in range(S):
+            dx = X[i, s] - X[j, s]
+            dy = X[n + i, s] - X[n + j, s]
+            dist = np.sqrt(dx * dx + dy * dy)
+            exi = exT[i, s]
+            exj = exT[j, s]
+            ox = min(exi + exj - abs(dx), two * min(exi, exj))
+            eyi = eyT[i, s]
+            eyj = eyT[j, s]
+            oy = min(eyi + eyj - abs(dy), two * min(eyi, eyj))
+            cost[s] += sg * dist
+            z[s] += max(ox, zero) * max(oy, zero)
+    for s in range(S):
+        cost[s] += w6f * z[s]
+
+
+def _cholesky_into(a: np.ndarray, floor: float, out: np.ndarray) -> bool:  # pragma: no cover
+    """Lower Cholesky factor of ``a + floor * I`` into ``out`` (any float dtype); False if
+    ``a + floor * I`` is not positive definite."""
+    d = a.shape[0]
+    f = np.zeros((d, d))
+    for j in range(d):
+        s = a[j, j] + floor
+        for k in range(j):
+            s -= f[j, k] * f[j, k]
+        if not s > 0.0:
+            return False
+        djj = np.sqrt(s)
+        f[j, j] = djj
+        for i in range(j + 1, d):
+            t = a[i, j]
+            for k in range(j):
+                t -= f[i, k] * f[j, k]
+            f[i, j] = t / djj
+    for i in range(d):
+        for j in range(d):
+            out[i, j] = f[i, j]
+    return True
+
+
+def _ce_block(
+    pool: np.ndarray,
+    it0: int,
+    n_it: int,
+    mu: np.ndarray,
+    cov: np.ndarray,
+    L: np.ndarray,
+    X: np.ndarray,
+    exT: np.ndarray,
+    eyT: np.ndarray,
+    cost: np.ndarray,
+    z: np.ndarray,
+    n: int,
+    rot_idx: np.ndarray,
+    half_w: np.ndarray,
+    half_h: np.ndarray,
+    consts: np.ndarray,
+    pair_i: np.ndarray,
+    pair_j: np.ndarray,
+    sign: np.ndarray,
+    elite: int,
+    fparams: np.ndarray,
+    patience: int,
+    best: np.ndarray,
+    best_feasible: np.ndarray,
+    state: np.ndarray,
+    trace: np.ndarray,
+    gammas: np.ndarray,
+) -> int:  # pragma: no cover - compiled by numba
+    """Up to ``n_it`` CE iterations (numbers ``it0``, ``it0 + 1``, ...) with the standard normals
+    of ``pool`` (``n_it * dim`` rows): sample, score (:func:`_score_samples`), track the best
+    (and best overlap-free) sample, refit mean and covariance to the elite, factor. The
+    numpy loop of :mod:`bilevel_kit.layout.cross_entropy` does the same steps; mirrored
+    sampling when ``pool`` has fewer columns than samples.
+
+    ``fparams``: (mean smoothing, covariance smoothing, Sigma floor, tol); ``state``:
+    (best cost, best overlap-free cost, converged flag, last iteration) in and out. Returns the
+    iterations performed."""
+    dim = X.shape[0]
+    S = X.shape[1]
+    m = pool.shape[1]
+    a_mu = fparams[0]
+    b_cov = fparams[1]
+    floor = fparams[2]
+    tol = fparams[3]
+    mu_dt = np.empty(dim, dtype=X.dtype)
+    LZ = np.empty((dim, m), dtype=X.dtype)
+    el = np.empty((dim, elite))
+    mu_e = np.empty(dim)
+    done = 0
+    for q in range(n_it):
+        it = it0 + q
+        Z = pool[q * dim : (q + 1) * dim]
+        LZ[:, :] = np.dot(L, Z)
+        for d in range(dim):
+            mu_dt[d] = mu[d]
+        for d in range(dim):
+            md = mu_dt[d]
+            for s in range(m):
+                X[d, s] = LZ[d, s] + md
+            for s in range(S - m):
+                X[d, m + s] = md - LZ[d, s]
+        _score_samples(
+            X, n, rot_idx, half_w, half_h, exT, eyT, consts, pair_i, pair_j, sign, cost, z
+        )
+        k = 0
+        kf = -1
+        for s in range(S):
+            if cost[s] < cost[k]:
+                k = s
+            if z[s] == 0 and (kf < 0 or cost[s] < cost[kf]):
+                kf = s
+        if cost[k] < state[0]:
+            state[0] = cost[k]
+            for d in range(dim):
+                best[d] = X[d, k]
+        if kf >= 0 and cost[kf] < state[1]:
+            state[1] = cost[kf]
+            for d in range(dim):
+                best_feasible[d] = X[d, kf]
+        trace[it - 1] = -state[0]
+        order = np.argsort(cost)[:elite]
+        gamma = cost[order[0]]
+        for e in range(elite):
+            if cost[order[e]] > gamma:
+                gamma = cost[order[e]]
+        gammas[it - 1] = gamma
+        for d in range(dim):
+            acc = 0.0
+            for e in range(elite):
+                v = np.float64(X[d, order[e]])
+                el[d, e] = v
+                acc += v
+            mu_e[d] = acc * (1.0 / elite)
+        for d in range(dim):
+            for e in range(elite):
+                el[d, e] -= mu_e[d]
+        cov_e = np.dot(el, el.T)
+        cov_e *= 1.0 / elite
+        if b_cov >= 1.0:
+            cov[:, :] = cov_e
+        else:
+            for i in range(dim):
+                for j in range(dim):
+                    cov[i, j] = cov[i, j] * (1.0 - b_cov) + cov_e[i, j] * b_cov
+        for d in range(dim):
+            mu[d] = mu[d] * (1.0 - a_mu) + a_mu * mu_e[d]
+        fl = floor
+        ok = False
+        for _ in range(8):
+            if _cholesky_into(cov, fl, L):
+                ok = True
+                break
+            fl *= 10.0
+        done = q + 1
+        state[3] = it
+        if not ok:
+            state[2] = -1.0  # the caller raises LinAlgError
+            return done
+        if it > patience:
+            gain = gammas[it - 1 - patience] - gammas[it - 1]
+            if abs(gain) <= tol * max(1.0, abs(gammas[it - 1])):
+                state[2] = 1.0
+                return done
+    return done
+
+
+#: The compiled (scorer, CE block) once built.
+_JITTED: tuple[ScoreKernel, Callable[..., int]] | None = None
+
+
+def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
+    """numba-compiled (scorer, CE block), or None when numba is disabled or missing.
+
+    Built on first use: the module's functions are replaced by their compiled versions, so
+    that the CE block calls the compiled scorer and Cholesky factorisation. The environment
+    variable is read at every call."""
+    global _JITTED, _score_samples, _cholesky_into, _ce_block
+    if _disabled():
+        return None
+    if _JITTED is None:
+        try:
+            import numba
+        except ImportError:
+            return None
+        jit = numba.njit(cache=True, nogil=True)
+        _score_samples = jit(_score_samples)
+        _cholesky_into = jit(_cholesky_into)
+        _ce_block = jit(_ce_block)
+        _JITTED = (_score_samples, _ce_block)
+    return _JITTED
+
+
+def score_kernel() -> ScoreKernel | None:
+    """The compiled scorer (:func:`_score_samples`), or None (numpy path)."""
+    got = _compiled()
+    return None if got is None else got[0]
+
+
+def ce_block_kernel() -> Callable[..., int] | None:
+    """The compiled CE iterations (:func:`_ce_block`), or None (numpy path)."""
+    got = _compiled()
+    return None if got is None else got[1]
+
+
+def available() -> bool:
+    """True when the compiled kernels run (numba importable and not disabled)."""
+    return _compiled() is not None

@@ -1,0 +1,102 @@
+"""The compiled CE scorer against the numpy path: same scores (float32 rounding), same CE result."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_cross_entropy import TABLE, TABLE_PARTS
+
+from bilevel_kit.layout import _kernels
+from bilevel_kit.layout.cross_entropy import arrange
+from bilevel_kit.layout.fitness import PairScorer, PairTable, half_extents
+
+needs_numba = pytest.mark.skipif(not _kernels.available(), reason="numba unavailable or disabled")
+
+
+def numpy_scores(
+    X: np.ndarray,
+    n: int,
+    w: np.ndarray,
+    h: np.ndarray,
+    types: list[str],
+    W: float,
+    H: float,
+    w6: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The numpy path of the CE loop: extents, projection, score (all parts rotatable)."""
+    dt = X.dtype.type
+    X = X.copy()
+    ex, ey = half_extents(w[:, None].astype(dt), h[:, None].astype(dt), X[2 * n :])
+    X[:n] = np.minimum(np.maximum(X[:n], ex), dt(W) - ex)
+    X[n : 2 * n] = np.minimum(np.maximum(X[n : 2 * n], ey), dt(H) - ey)
+    scorer = PairScorer(PairTable.build(types, dt), X.shape[1], dt)
+    dsd, z = scorer.signed(X[:n], X[n : 2 * n], ex, ey)
+    return dsd + dt(w6) * z, z, X
+
+
+@needs_numba
+@pytest.mark.parametrize("precision", [np.float32, np.float64])
+def test_kernel_scores_equal_numpy_scores(precision: type) -> None:
+    types = [t for t in sorted(TABLE_PARTS) for _ in range(TABLE_PARTS[t])]
+    n, S = len(types), 200
+    w = np.array([TABLE.part_types[t].width for t in types])
+    h = np.array([TABLE.part_types[t].height for t in types])
+    W, H, w6 = TABLE.tray.width, TABLE.tray.height, float(TABLE.weights["W6"])
+    rng = np.random.default_rng(3)
+    X = np.concatenate(
+        [
+            rng.uniform(-20, W + 20, (n, S)),
+            rng.uniform(-20, H + 20, (n, S)),
+            rng.uniform(-90, 270, (n, S)),
+        ]
+    ).astype(precision)
+    want_cost, want_z, want_X = numpy_scores(X, n, w, h, types, W, H, w6)
+    pairs = PairTable.build(types, precision)
+    exT = np.empty((n, S), dtype=precision)
+    eyT = np.empty((n, S), dtype=precision)
+    cost = np.empty(S, dtype=precision)
+    z = np.empty(S, dtype=precision)
+    consts = np.array([math.pi / 180.0, W, H, w6, 0.0, 2.0], dtype=precision)
+    kernel = _kernels.score_kernel()
+    assert kernel is not None
+    kernel(
+        X,
+        n,
+        np.arange(n, dtype=np.int64),
+        (w / 2).astype(precision),
+        (h / 2).astype(precision),
+        exT,
+        eyT,
+        consts,
+        pairs.i.astype(np.int64),
+        pairs.j.astype(np.int64),
+        pairs.sign.astype(precision),
+        cost,
+        z,
+    )
+    rtol = 1e-4 if precision is np.float32 else 1e-10
+    np.testing.assert_allclose(X, want_X, rtol=rtol, atol=rtol * 300)
+    np.testing.assert_allclose(z, want_z, rtol=rtol, atol=rtol * 1e3)
+    np.testing.assert_allclose(cost, want_cost, rtol=rtol, atol=rtol * abs(want_cost).max())
+    # the ranking that CE uses: the same elite set
+    assert set(np.argsort(cost)[:30]) == set(np.argsort(want_cost)[:30])
+
+
+@needs_numba
+def test_kernel_and_numpy_give_the_same_ce_result(monkeypatch: pytest.MonkeyPatch) -> None:
+    fast = arrange(TABLE, TABLE_PARTS, rng=0)
+    monkeypatch.setenv(_kernels.ENV_DISABLE, "1")
+    slow = arrange(TABLE, TABLE_PARTS, rng=0)
+    assert (fast.fits, fast.source, fast.iterations) == (slow.fits, slow.source, slow.iterations)
+    assert fast.fitness == pytest.approx(slow.fitness, rel=1e-4)
+    for p, q in zip(fast.layout, slow.layout, strict=True):
+        assert (p.part, p.type) == (q.part, q.type)
+        assert (p.x, p.y) == pytest.approx((q.x, q.y), abs=0.05)
+
+
+def test_env_var_forces_the_numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(_kernels.ENV_DISABLE, "1")
+    assert not _kernels.available()
+    assert _kernels.score_kernel() is None and _kernels.ce_block_kernel() is None
