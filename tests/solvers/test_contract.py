@@ -12,7 +12,7 @@ from bilevel_kit.methods import REGISTRY, Status
 FAST = {
     "greedy-ce": {"samples": 60, "elite": 10, "max_iter": 30},
     "cpsat": {"workers": 1},  # one worker: CP-SAT is deterministic for a given seed
-    "bilevel-milp": {"lower": "ce"},
+    "bilevel-milp": {"lower": "ce", "pack_time_limit": 5.0},  # packing decided, not timed out
 }
 INSTANCES = [
     "tiny.json",

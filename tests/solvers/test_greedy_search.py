@@ -96,7 +96,7 @@ def test_exact_decision_equals_the_enumeration(inst, seed, signed):
 def test_table_plan_is_the_enumerations(table):
     a = solve(table, "greedy-ce", seed=0)
     b = solve(table, "greedy-ce", seed=0, decision="enumerate")
-    assert a.plan == b.plan and a.objective == pytest.approx(459.78)
+    assert a.plan == b.plan and a.objective == pytest.approx(463.78)  # one tray
     assert a.extra["decision"] == "exact" and a.extra["beam_epochs"] == 0
     assert b.extra["sequences"] > 0 and a.extra["sequences"] == 0
     for x, y in zip(a.extra["kit_terms"], b.extra["kit_terms"], strict=True):

@@ -17,7 +17,10 @@ def plan_terms(instance, plan, fitness_of, *, weights=None, signed=False):
     w = {**instance.weights, **(weights or {})}
     tl = evaluate(instance, plan)
     r, h = np.array([kit_durations(instance, k.tasks) for k in plan.kits]).T
-    backlog = [0.0] + [k.human_end - k.arrive for k in tl.kits[:-1]]
+    # H_rem when the robot starts kit k (the tray rule decides when that is)
+    backlog = [0.0] + [
+        a.human_end - b.robot_start for a, b in zip(tl.kits, tl.kits[1:], strict=False)
+    ]
     diff5, diff6 = upper_level.plan_balance(
         r, h, backlog, delivery=instance.delivery_time, signed=signed
     )
@@ -72,7 +75,9 @@ def test_task_sums_with_overheads_give_the_same_terms(table, table_plans):
     inst = table.with_overrides(delivery_time=3.0)
     plan = table_plans[0]
     tl = evaluate(inst, plan)
-    backlog = np.array([0.0] + [k.human_end - k.arrive for k in tl.kits[:-1]])
+    backlog = np.array(
+        [0.0] + [a.human_end - b.robot_start for a, b in zip(tl.kits, tl.kits[1:], strict=False)]
+    )
     r = np.array([sum(inst.robot_time(t) for t in k.tasks) for k in plan.kits])
     h = np.array([sum(inst.human_time(t) for t in k.tasks) for k in plan.kits])
     m = len(plan.kits)
