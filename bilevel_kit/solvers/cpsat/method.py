@@ -16,9 +16,13 @@ the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never under
 every plan. Times are scaled to integers (:mod:`.scaling`).
 
 **Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
-checked to fit), every plan at least as good has :math:`m (o_R + d) \le U - \sum r_i - o_H -
-\min_{snk} h_i` and :math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which
-caps K; C <= U is added too.
+checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
+\min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
+:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U is added
+too.
+
+**Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
+scaled timeline (:mod:`.scaling`) and of every hint.
 
 **Time.** ``time_limit`` (default 60 s) covers everything, packing included; 1 % of it and
 0.15 s are kept back (CP-SAT stops a little after its own limit on large models). With
@@ -58,7 +62,7 @@ from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, chain_groups_idx, kit_order, pack_time_limit, quick_plan, reduced_edges
 from .context import MARGIN, Context, Model, State
-from .model import build, canonical
+from .model import build, canonical, tray_wait
 from .scaling import scale_times, scaled_makespan, scaled_objective
 
 TrayMode = Literal["auto", "embedded", "benders"]
@@ -369,9 +373,10 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     edges = _edges(ctx.instance)
     has_pred = {b for _, b in edges}
     has_succ = {a for a, _ in edges}
-    if sc.o_r + sc.d > 0:
-        slack = upper - sum(sc.r) - sc.o_h - min(sc.h[i] for i in range(n) if i not in has_succ)
-        K = min(K, max(1, slack // (sc.o_r + sc.d)))
+    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
+    if sc.o_r + sc.d + w > 0:
+        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
+        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
     if sc.o_h > 0:
         slack = (
             upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
