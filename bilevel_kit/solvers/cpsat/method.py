@@ -8,8 +8,9 @@ best heuristic plan (:func:`best_heuristic_plan`, option ``hint``).
 of master solutions with the packing oracle and cuts those that do not fit (:mod:`.tray`,
 :mod:`.benders`). ``auto`` uses ``embedded`` when the number of optional (part, kit)
 rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
-kits; two tables took 9 s embedded against 1.3 s with Benders) and the instance does not
-enforce reachability, else ``benders``. Embedded models run with
+kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
+enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
+with Benders on a loaded machine), else ``benders``. Embedded models run with
 :data:`~bilevel_kit.layout.cpsat_packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
 "optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
 the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
@@ -391,7 +392,9 @@ def _tray_mode(instance: Instance, tray: str, K: int) -> str:
         return tray
     n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
     small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
-    return "embedded" if small else "benders"
+    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
+    # (bench/results/cpsat_trays.csv)
+    return "embedded" if small and instance.tray_limit is None else "benders"
 
 
 def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> MethodOutput:
