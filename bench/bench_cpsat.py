@@ -6,6 +6,12 @@
 
 Writes bench/results/cpsat.csv and prints a Markdown table.
 Run: python bench/bench_cpsat.py [--time-limit 60] [--workers 2] [--seed 0]
+
+With ``--trays 1`` (issue 11, the study's one-tray protocol) it runs the one-tray suite
+instead and writes bench/results/cpsat_trays.csv: the table in each tray mode (goal: proven
+in < 2 s), 1, 2, 5, 10 units with Benders (goal: 10 units within 1 % in 60 s), greedy-ce's
+gap to the one-tray optimum of the table, and the unlimited-tray rows of the table and of
+1, 2, 10 units again (they must match bench/results/cpsat.csv).
 """
 
 from __future__ import annotations
@@ -70,6 +76,7 @@ def table_instance() -> Instance:
 
 
 def run(inst: Instance, label: str, mode: str, args: argparse.Namespace) -> dict[str, Any]:
+    """Solve one case (fresh packing cache) and return its row."""
     cpsat_packing.clear_cache()  # every row pays for its own packing
     t0 = time.perf_counter()
     out = solve(inst, tray=mode, time_limit=args.time_limit, workers=args.workers, seed=args.seed)
@@ -79,6 +86,7 @@ def run(inst: Instance, label: str, mode: str, args: argparse.Namespace) -> dict
     return {
         "case": label,
         "tasks": inst.n_tasks,
+        "trays": inst.trays if inst.trays is not None else "unlimited",
         "d": inst.delivery_time,
         "tray_mode": ex.get("tray_mode", mode),
         "status": out.status,
@@ -104,9 +112,15 @@ def main() -> None:
     ap.add_argument("--time-limit", type=float, default=60.0)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", type=Path, default=ROOT / "bench/results/cpsat.csv")
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--trays", type=int, default=None, help="run the one-tray suite (1)")
     args = ap.parse_args()
     table = table_instance()
+    if args.trays is not None:
+        args.out = args.out or ROOT / "bench/results/cpsat_trays.csv"
+        write(tray_rows(table, args), args)
+        return
+    args.out = args.out or ROOT / "bench/results/cpsat.csv"
     rows = []
     for d in (0.0, 10.0, 30.0):
         for mode in ("auto", "embedded", "benders"):
@@ -116,14 +130,60 @@ def main() -> None:
         for mode in ("embedded", "benders"):
             rows.append(run(table.with_overrides(units=units), f"table x{units}", mode, args))
             print(rows[-1], flush=True)
+    write(rows, args)
+
+
+def tray_rows(table: Instance, args: argparse.Namespace) -> list[dict[str, Any]]:
+    """The one-tray suite (module docstring)."""
+    from bilevel_kit.methods import solve as method_solve
+
+    one = table.with_overrides(trays=args.trays)
+    rows = []
+    for mode in ("auto", "embedded", "benders"):
+        rows.append(run(one, "table", mode, args))
+        print(rows[-1], flush=True)
+    for units in (1, 2, 5, 10):
+        rows.append(run(one.with_overrides(units=units), f"table x{units}", "benders", args))
+        print(rows[-1], flush=True)
+    optimum = rows[0]["makespan"]
+    t0 = time.perf_counter()
+    greedy = method_solve(one, "greedy-ce", seed=args.seed)
+    rows.append(
+        {
+            "case": f"table greedy-ce (gap to the one-tray optimum {optimum})",
+            "tasks": one.n_tasks,
+            "trays": args.trays,
+            "d": one.delivery_time,
+            "tray_mode": "",
+            "status": greedy.status,
+            "makespan": round(greedy.objective, 4),
+            "bound": optimum,
+            "gap_pct": round(100 * (greedy.objective - optimum) / greedy.objective, 3),
+            "wall_time_s": round(time.perf_counter() - t0, 2),
+            "n_kits": len(greedy.plan.kits),
+        }
+    )
+    print(rows[-1], flush=True)
+    free = table.with_overrides(trays="unlimited")
+    for units in (1, 2, 10):
+        for mode in ("embedded", "benders") if units < 10 else ("benders",):
+            inst = free.with_overrides(units=units)
+            rows.append(run(inst, f"table x{units}", mode, args))
+            print(rows[-1], flush=True)
+    return rows
+
+
+def write(rows: list[dict[str, Any]], args: argparse.Namespace) -> None:
+    """The CSV and a Markdown table on stdout."""
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]), restval="")
         w.writeheader()
         w.writerows(rows)
     cols = [
         "case",
         "tasks",
+        "trays",
         "d",
         "tray_mode",
         "status",
@@ -139,7 +199,7 @@ def main() -> None:
     print("\n| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))
     for r in rows:
-        print("| " + " | ".join(str(r[c]) for c in cols) + " |")
+        print("| " + " | ".join(str(r.get(c, "")) for c in cols) + " |")
     print(f"\nwrote {args.out}")
 
 

@@ -20,6 +20,24 @@ whose kits fit the tray, so ``best_bound`` can be printed next to any result.
   whose human time plus o_H is still to be done:
 
   .. math:: C \ge \sum_i r_i + m_{\min} (o_R + d) + o_H + \min_{i \in \mathrm{snk}} h_i.
+
+**Trays.** With T trays in circulation (the instance's ``trays``) the tray rule
+``robot_start_k >= human_start_{k-T} + o_H`` only adds constraints to the timeline, and the
+makespan is non-decreasing in every start time, so (a)-(c) hold for every T. With **one tray**
+(T = 1) (b) tightens by the robot's wait for the tray: the robot cannot start kit k + 1 before
+the human has taken kit k's parts, and the human cannot start kit k before it arrives, so
+
+.. math:: S_{k+1} \ge \mathrm{hs}_k + o_H \ge A_k + o_H = S_k + R_k + d + o_H,
+
+hence :math:`S_m \ge \sum_{k<m} (R_k + d + o_H)` and :math:`C \ge S_m + R_m + d + H_m`, with
+:math:`H_m \ge o_H + \min_{snk} h_i` (the last kit holds a sink) and
+:math:`\sum_k R_k = \sum_i r_i + m\, o_R`:
+
+.. math:: C \ge \sum_i r_i + m_{\min} (o_R + d) + (m_{\min} - 1)\, o_H + o_H
+          + \min_{i \in \mathrm{snk}} h_i
+
+(the one-tray robot bound, F2|block|Cmax's robot-side bound plus the overheads; every term is
+non-decreasing in m, so m_min may replace m). :func:`tray_wait` is the per-kit wait it adds.
 """
 
 from __future__ import annotations
@@ -40,6 +58,12 @@ def min_kits(instance: Instance) -> int:
     return max(1, math.ceil(total / instance.tray.area - _AREA_EPS))
 
 
+def tray_wait(instance: Instance) -> float:
+    """The robot's least wait per kit after the first for the tray: o_H with one tray (the
+    one-tray robot bound of the module docstring), else 0."""
+    return instance.kit_overhead_human if instance.tray_limit == 1 else 0.0
+
+
 def lower_bounds(instance: Instance) -> dict[str, float]:
     """All closed-form bounds (seconds), keyed ``human``, ``robot``, ``min_kits`` (a count)."""
     ids = [t.id for t in instance.tasks]
@@ -52,7 +76,13 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
     total_r = sum(instance.robot_time(i) for i in ids)
     total_h = sum(instance.human_time(i) for i in ids)
     human = min(instance.robot_time(i) for i in sources) + o_r + d + total_h + m * o_h
-    robot = total_r + m * (o_r + d) + o_h + min(instance.human_time(i) for i in sinks)
+    robot = (
+        total_r
+        + m * (o_r + d)
+        + (m - 1) * tray_wait(instance)
+        + o_h
+        + min(instance.human_time(i) for i in sinks)
+    )
     return {"human": human, "robot": robot, "min_kits": float(m)}
 
 

@@ -2,27 +2,43 @@
 
 At each decision epoch the robot takes the first ``window`` remaining tasks in the
 deterministic topological order (a set closed under predecessors), solves their segmentation
-and scheduling with the exact CP-SAT model (:func:`bilevel_kit.solvers.cpsat.solve`,
-short time limit, warm-started from the best heuristic plan) and commits the first kit of the
-optimum (or of the best plan found in time). Online information enters the sub-problem as:
+and scheduling with the exact CP-SAT model (:func:`bilevel_kit.solvers.cpsat.solve`, under the
+instance's tray limit) and commits the first kit of the optimum (or of the best plan found
+within the limit). Online information enters the sub-problem as:
 
 * **the human's remaining work** ``h0`` (``SimState.human_remaining``; ignored when the
   instance enforces reachability, whose reach map the token below could not satisfy): a dummy
-  first task that
-  every window task follows, with human time ``h0 - o_H`` and one part as large as the tray,
-  so no other task can share its kit. It shifts the robot's and the human's timelines by the
-  same ``o_R + d``, so the window's makespan is exactly the one that starts from the current
-  state (up to that constant);
+  first task that every window task follows, with one part as large as the tray, so no other
+  task can share its kit. With unlimited trays (or T >= 2) its human time is ``h0 - o_H``:
+  it shifts the robot's and the human's timelines by the same ``o_R + d``, so the window's
+  makespan is exactly the one that starts from the current state (up to that constant);
+* **the tray** (docs/timeline.md): the robot decides once a tray is free (the simulator waits
+  for it first). With **one tray** the dummy kit holds it: its human time is ``h0``, so its
+  tray comes back at ``o_R + d + o_H``, exactly when the robot may start the first real kit,
+  and the human finishes it ``h0`` later, both shifted by the same constant; the next trays
+  come back as the model's own timeline says, so the sub-model is exact. With T >= 2 trays
+  the dummy's tray stands for the last delivered kit's and the older delivered kits' trays are
+  taken as back: an optimistic approximation;
 * **parts not in stock**: each task's robot time is its parts' pick times plus the expected
   wait for the parts the stock lacks (``SimState.expected_wait``), the stock being consumed by
   the window's tasks in topological order. This is an estimate: waits are added to picking
   time, not overlapped with it.
 
+**Determinism.** Every CP-SAT solve is limited in deterministic units
+(``max_deterministic_time`` = ``deterministic_time``) with ``workers`` fixed (1: CP-SAT is then
+deterministic), so a simulation run is a pure function of (instance, policy, parameters, seed)
+whatever the machine load. ``time_limit`` is a wall-clock safety net only: a decision that hits
+it is no longer reproducible. Committed layouts come from the policy's own shelf-packer cache,
+not from the packing oracle's process-wide cache.
+
+**Warm start.** Each decision is hinted with the previous decision's plan minus the kit it
+committed (restricted to the window, the window's new tasks appended as single kits), or a
+baseline plan when that is worse. Decisions are memoised on (window, rounded times, rounded
+``h0``, hint): a pure function of that key, so the memo never changes an answer.
+
 Options (:class:`CPSATRollingOptions`, given as ``SimParams.policy_options`` or ``-p`` on the
-command line): ``window`` (12 tasks), ``time_limit`` (1.0 s per epoch), ``workers`` (1, so that
-simulation cells can run in parallel), ``tray`` ("benders").
-Decisions are memoised on (window, rounded times, rounded ``h0``), so runs without supply
-delays and with deterministic times re-use them.
+command line): ``window`` (12 tasks), ``deterministic_time`` (0.1 per solve, about 0.1 s),
+``time_limit`` (10 s per epoch, safety net), ``workers`` (1), ``tray`` ("benders").
 """
 
 from __future__ import annotations
@@ -47,10 +63,17 @@ class CPSATRollingOptions:
     """Options of the ``cpsat-rolling`` policy (see the module docstring)."""
 
     window: int = field(default=12, metadata={"help": "tasks re-planned per epoch", "min": 1})
-    time_limit: float = field(
-        default=1.0, metadata={"help": "CP-SAT time limit per epoch (s)", "min": 0.0}
+    deterministic_time: float = field(
+        default=0.1,
+        metadata={"help": "CP-SAT deterministic time per solve (reproducible)", "min": 0.0},
     )
-    workers: int = field(default=1, metadata={"help": "CP-SAT workers", "min": 1})
+    time_limit: float = field(
+        default=10.0,
+        metadata={"help": "wall-clock safety net per epoch (s); not reproducible", "min": 0.0},
+    )
+    workers: int = field(
+        default=1, metadata={"help": "CP-SAT workers (1: deterministic)", "min": 1}
+    )
     tray: Literal["auto", "embedded", "benders"] = field(
         default="benders", metadata={"help": "tray feasibility in the CP-SAT model"}
     )
@@ -74,11 +97,14 @@ class CPSATRollingPolicy:
         self.options = options if options is not None else CPSATRollingOptions()
         self._order = topological_order(instance)
         self._layouts = LayoutCache(instance)
-        self._memo: dict[tuple[Any, ...], Kit] = {}
+        self._memo: dict[tuple[Any, ...], tuple[Kit, tuple[tuple[str, ...], ...]]] = {}
+        self._rest: tuple[tuple[str, ...], ...] = ()  # the previous plan after its first kit
         self.solves = 0
 
     def reset(self) -> None:
-        """Decisions are a pure function of the sub-problem, so the memo is kept."""
+        """Forget the previous plan; decisions are a pure function of the memo's key, so the
+        memo is kept."""
+        self._rest = ()
 
     def decide(self, state: SimState) -> Kit | None:
         remaining = [t for t in self._order if t not in state.done]
@@ -87,12 +113,24 @@ class CPSATRollingPolicy:
         window = remaining[: self.options.window]
         times = self._robot_times(window, state)
         h0 = max(0.0, state.human_remaining)
-        key = (tuple(window), tuple(round(times[t], 3) for t in window), round(h0, 3))
-        kit = self._memo.get(key)
-        if kit is None:
-            kit = self._solve(window, times, h0)
-            self._memo[key] = kit
+        hint = self._warm_kits(window)
+        key = (tuple(window), tuple(round(times[t], 3) for t in window), round(h0, 3), hint)
+        hit = self._memo.get(key)
+        if hit is None:
+            hit = self._solve(window, times, h0, hint)
+            self._memo[key] = hit
+        kit, self._rest = hit
         return kit
+
+    def _warm_kits(self, window: list[str]) -> tuple[tuple[str, ...], ...]:
+        """The previous plan's remaining kits on the window, then the window's new tasks one
+        per kit (a precedence-feasible plan: new tasks come later in the topological order)."""
+        inside = set(window)
+        kits = [tuple(t for t in k if t in inside) for k in self._rest]
+        kits = [k for k in kits if k]
+        seen = {t for k in kits for t in k}
+        kits += [(t,) for t in window if t not in seen]
+        return tuple(kits)
 
     def _robot_times(self, window: list[str], state: SimState) -> dict[str, float]:
         """Pick times plus the expected wait for missing parts, stock consumed in order."""
@@ -123,18 +161,20 @@ class CPSATRollingPolicy:
         ]
         tasks = [
             {
-                "id": t.replace("@", "_u"),
+                "id": _sub_id(t),
                 "parts": [{"type": p, "count": n} for p, n in inst.task_by_id[t].parts],
                 "human_time": {"mean": inst.human_time(t)},
                 "robot_time": times[t],
             }
             for t in window
         ]
-        sub_ids = {t: t.replace("@", "_u") for t in window}
         edges = [
-            [sub_ids[a], sub_ids[b]] for a, b in inst.precedence if a in sub_ids and b in sub_ids
+            [_sub_id(a), _sub_id(b)]
+            for a, b in inst.precedence
+            if a in set(window) and b in set(window)
         ]
-        busy = h0 - inst.kit_overhead_human
+        # one tray: the dummy kit holds it (module docstring), else it only shifts time
+        busy = h0 if inst.tray_limit == 1 else h0 - inst.kit_overhead_human
         if busy > 0 and not inst.reachability:  # (with reachability h0 is ignored)
             # a part filling the (whole-mm) tray: nothing else can share the dummy kit
             w, h = math.floor(inst.tray.width), math.floor(inst.tray.height)
@@ -150,8 +190,8 @@ class CPSATRollingPolicy:
                     "robot_time": 0.0,
                 },
             )
-            edges += [[_TOKEN, sub_ids[t]] for t in window]
-        doc = {
+            edges += [[_TOKEN, _sub_id(t)] for t in window]
+        doc: dict[str, Any] = {
             "format": "bilevel-kit/1",
             "name": f"{inst.name}-window",
             "tray": {"width": inst.tray.width, "height": inst.tray.height},
@@ -161,6 +201,8 @@ class CPSATRollingPolicy:
             "tasks": tasks,
             "precedence": edges,
         }
+        if inst.tray_limit is not None:
+            doc["trays"] = inst.tray_limit
         if inst.station is not None:
             doc["station"] = inst.station.to_dict()
         if inst.reachability:
@@ -168,23 +210,41 @@ class CPSATRollingPolicy:
             doc["reach_resolution"] = inst.reach_resolution
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 
-    def _solve(self, window: list[str], times: dict[str, float], h0: float) -> Kit:
+    def _solve(
+        self,
+        window: list[str],
+        times: dict[str, float],
+        h0: float,
+        warm: tuple[tuple[str, ...], ...],
+    ) -> tuple[Kit, tuple[tuple[str, ...], ...]]:
+        """The first kit of the window's plan and the plan's other kits (task ids)."""
+        from ..plan import Plan, evaluate
         from ..solvers.cpsat import best_heuristic_plan, solve
 
         sub = self._sub_instance(window, times, h0)
-        back = {t.replace("@", "_u"): t for t in window}
-        hint, _ = best_heuristic_plan(sub, ("single-task", "whole-assembly"), self.seed)
+        back = {_sub_id(t): t for t in window}
+        dummy = (Kit((_TOKEN,)),) if _TOKEN in sub.task_by_id else ()
+        hint = Plan(dummy + tuple(Kit(tuple(_sub_id(t) for t in k)) for k in warm))
+        base, _ = best_heuristic_plan(sub, ("single-task", "whole-assembly"), self.seed)
+        if base is not None and evaluate(sub, base).makespan < evaluate(sub, hint).makespan:
+            hint = base
+        opts = self.options
         out = solve(
             sub,
             seed=self.seed,
-            time_limit=self.options.time_limit,
-            workers=self.options.workers,
-            tray=self.options.tray,
+            time_limit=opts.time_limit,
+            workers=opts.workers,
+            tray=opts.tray,
             hint=hint,
+            cpsat_params={"max_deterministic_time": opts.deterministic_time},
         )
         self.solves += 1
         plan = out.plan or hint
-        if plan is None:  # no plan at all in time: fall back to the next single task
-            return self._layouts.kit((window[0],), f"cpsat-rolling fallback {window[0]}")
-        first = next(k for k in plan.kits if _TOKEN not in k.tasks)
-        return Kit(tuple(back[t] for t in first.tasks), first.layout)
+        kits = [tuple(back[t] for t in k.tasks) for k in plan.kits if _TOKEN not in k.tasks]
+        first = self._layouts.kit(kits[0], f"cpsat-rolling {kits[0]}")
+        return first, tuple(kits[1:])
+
+
+def _sub_id(task: str) -> str:
+    """A task id of the window's instance (unit copies ``x@2`` become ``x_u2``)."""
+    return task.replace("@", "_u")

@@ -63,6 +63,16 @@ any layout); a kit is a column when its multiset fits (oracle "fits" or a valid 
 * minimise :math:`\sum_{c,k} (-W_2 |c| - W_5 f_c) z_{ck} + \sum_k W_3 (p_k + q_k)
   + W_4 (p'_k + q'_k)`.
 
+**Trays.** With T trays the robot starts kit k at :math:`A_{k-1} + w_k` with the tray wait
+:math:`w_k = \max(0, \mathrm{hs}_{k-T} + o_H - A_{k-1})` (docs/timeline.md), so
+:math:`B_{k-1} = q_{k-1} + H_{k-1} - w_k` (the same backlog :func:`paper_terms` reads off the
+evaluator's timeline). With one tray the human has started kit k - 1 when it arrived, so
+:math:`w_k = q_{k-1} + o_H` and :math:`B_{k-1} = H_{k-1} - o_H`: linear, no new variable.
+With T >= 2, :math:`y_k = q_{k-T} + o_H - \sum_{k-T < j < k} (w_j + R_j + d)` (the human start
+of kit k - T is its arrival plus its wait :math:`q`) and :math:`w_k - v_k = y_k` with
+complementarity by one binary, the big-M being the no-overlap horizon
+:math:`\sum_i (r_i + h_i) + n (o_R + o_H + d)` that bounds every time of the timeline.
+
 The big-M :math:`M = d + o_R + \sum r + n\,o_H + \sum h` bounds every |g| and B (derived from
 the data). The exact complementarity makes J exact for any sign of the weights. A MIP start
 is greedy-ce's plan (same seed and CE parameters) improved by :func:`local_search`.
@@ -552,9 +562,12 @@ def _model(
     def human(k: int) -> Any:
         return sum(cols[c].human * m.z[c, k] for c in at_k[k]) if at_k[k] else 0.0
 
+    wait = _tray_waits(m, instance, K, used, robot)
     backlog: Any = 0.0
     for k in range(K):
         u = used(k)
+        if k:
+            backlog = backlog - wait(k)  # B_{k-1} = human_end_{k-1} - robot_start_k
         g = d * u + robot(k) - backlog
         # exact on used positions; relaxed (and zeroed) on unused ones, which come last
         add(m.p5[k] - m.q5[k] - g <= big_m * (1 - u))
@@ -562,7 +575,7 @@ def _model(
         add(m.p5[k] + m.q5[k] <= big_m * u)
         add(m.p5[k] <= big_m * m.s5[k])
         add(m.q5[k] <= big_m * (1 - m.s5[k]))
-        backlog = m.q5[k] + human(k)  # = max(0, B_{k-1} - R_k - d) + H_k
+        backlog = m.q5[k] + human(k)  # = max(0, B_{k-1} - R_k - d) + H_k (before the tray)
         add(m.p6[k] - m.q6[k] == d * u + robot(k + 1) - human(k))
         add(m.p6[k] <= big_m * m.s6[k])
         add(m.q6[k] <= big_m * (1 - m.s6[k]))
@@ -574,6 +587,39 @@ def _model(
         sense=pyo.minimize,
     )
     return m, keys
+
+
+def _tray_waits(m: Any, instance: Instance, K: int, used: Any, robot: Any) -> Any:
+    """``w(k)``: how long the robot waits for a tray before kit k (module docstring), exact
+    on used positions; 0 with unlimited trays."""
+    import pyomo.environ as pyo
+
+    T = instance.tray_limit
+    o_h, d = instance.kit_overhead_human, instance.delivery_time
+    if T is None:
+        return lambda k: 0.0
+    if T == 1:  # the human has started kit k - 1 when it arrived: w_k = q5_{k-1} + o_H
+        return lambda k: m.q5[k - 1] + o_h * used(k)
+    ids = [t.id for t in instance.tasks]
+    horizon = sum(instance.robot_time(t) + instance.human_time(t) for t in ids) + len(ids) * (
+        instance.kit_overhead_robot + o_h + d
+    )  # every time of the timeline lies in [0, horizon]
+    m.w = pyo.Var(range(T, K), bounds=(0.0, horizon))
+    m.v = pyo.Var(range(T, K), bounds=(0.0, horizon))
+    m.sw = pyo.Var(range(T, K), domain=pyo.Binary)
+    add = m.cons.add
+    for k in range(T, K):
+        u = used(k)
+        # y_k = human start of kit k - T + o_H - arrival of kit k - 1
+        y = m.q5[k - T] + o_h * u
+        for j in range(k - T + 1, k):
+            y = y - (m.w[j] if j >= T else 0.0) - robot(j) - d * used(j)
+        add(m.w[k] - m.v[k] - y <= 2 * horizon * (1 - u))
+        add(m.w[k] - m.v[k] - y >= -2 * horizon * (1 - u))
+        add(m.w[k] <= horizon * u)
+        add(m.w[k] <= horizon * m.sw[k])
+        add(m.v[k] <= horizon * (1 - m.sw[k]))
+    return lambda k: m.w[k] if k >= T else 0.0
 
 
 @dataclass(frozen=True)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from dataclasses import asdict
 
 import pytest
 
-from bilevel_kit import check, evaluate, solve
+from bilevel_kit import Kit, Plan, check, evaluate, solve
 from bilevel_kit.sim import POLICIES, SimParams, TimingModel, make_policy, run, simulate
 from bilevel_kit.sim.cpsat_rolling import CPSATRollingPolicy
 from bilevel_kit.sim.state import SimState
@@ -44,7 +46,8 @@ def test_expected_waits_and_the_human_token(table):
     policy = make_policy("cpsat-rolling", table, params=SimParams())
     assert asdict(policy.options) == {
         "window": 12,
-        "time_limit": 1.0,
+        "deterministic_time": 0.1,
+        "time_limit": 10.0,
         "workers": 1,
         "tray": "benders",
     }
@@ -74,3 +77,62 @@ def test_unknown_option_is_a_usage_error(table):
 
     with pytest.raises(UsageError, match="unknown option"):
         make_policy("cpsat-rolling", table, params=SimParams(policy_options={"speed": 2}))
+
+
+def test_one_tray_token_holds_the_tray(table):
+    """With one tray the dummy kit carries the human's whole remaining work h0 and the tray:
+    its tray is back exactly when the robot may start (o_R + d + o_H), the human is busy h0
+    after that, and the sub-instance has the instance's tray limit."""
+    one = table.with_overrides(trays=1)
+    policy = make_policy("cpsat-rolling", one, params=SimParams())
+    window = ["foot1", "conn1", "top1"]
+    times = {t: one.robot_time(t) for t in window}
+    sub = policy._sub_instance(window, times, 50.0)
+    assert sub.tray_limit == 1
+    assert sub.task_by_id["__human_busy__"].human_mean == pytest.approx(50.0)
+    plan = Plan((Kit(("__human_busy__",)), Kit(("foot1",)), Kit(("conn1", "top1"))))
+    tl = evaluate(sub, plan)
+    shift = one.kit_overhead_robot + one.delivery_time + one.kit_overhead_human
+    assert tl.kits[1].robot_start == pytest.approx(shift)
+    assert tl.kits[0].human_end == pytest.approx(shift + 50.0)
+    # no remaining work: no token (the tray is back, the human idle)
+    assert "__human_busy__" not in policy._sub_instance(window, times, 0.0).task_by_id
+    # unlimited trays: the token only shifts time, as before
+    free = make_policy("cpsat-rolling", table, params=SimParams())._sub_instance(
+        window, times, 50.0
+    )
+    assert free.tray_limit is None
+    assert free.task_by_id["__human_busy__"].human_mean == pytest.approx(50.0 - 4.0)
+
+
+def test_warm_start_hint_is_the_previous_plan_on_the_window(table):
+    policy = make_policy("cpsat-rolling", table, params=SimParams())
+    policy._rest = (("conn1", "top1"), ("foot2", "conn2"))
+    assert policy._warm_kits(["conn1", "top1", "foot2", "foot3"]) == (
+        ("conn1", "top1"),
+        ("foot2",),
+        ("foot3",),
+    )
+    policy.reset()
+    assert policy._warm_kits(["foot1", "conn1"]) == (("foot1",), ("conn1",))
+
+
+def _burn(seconds: float) -> subprocess.Popen:
+    """A CPU-burning child process (machine load) for ``seconds``."""
+    code = f"import time\nt = time.time() + {seconds}\nwhile time.time() < t: pass\n"
+    return subprocess.Popen([sys.executable, "-c", code])
+
+
+def test_runs_are_identical_under_machine_load(table):
+    """Decisions are limited in deterministic units (one worker): the same run twice, once
+    with CPU-burning processes beside it, gives identical records."""
+    params = SimParams(units=2)
+    quiet = run(table, "cpsat-rolling", params=params, seed=3)
+    burners = [_burn(60.0) for _ in range(3)]
+    try:
+        loaded = run(table, "cpsat-rolling", params=params, seed=3)
+    finally:
+        for p in burners:
+            p.kill()
+            p.wait()
+    assert loaded == quiet

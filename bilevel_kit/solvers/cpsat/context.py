@@ -28,6 +28,8 @@ class Model:
     end: list[Any]
     C: Any
     obj_const: int = 0
+    #: Robot start of each kit position, None where it is the previous arrival (no tray rule).
+    start: list[Any] = field(default_factory=list)
     rects: dict[tuple[int, int], list[Rect]] = field(default_factory=dict)
     counts: dict[tuple[str, int], Any] = field(default_factory=dict)
     cut_lits: dict[tuple[str, int, int], Any] = field(default_factory=dict)

@@ -8,17 +8,22 @@ best heuristic plan (:func:`best_heuristic_plan`, option ``hint``).
 of master solutions with the packing oracle and cuts those that do not fit (:mod:`.tray`,
 :mod:`.benders`). ``auto`` uses ``embedded`` when the number of optional (part, kit)
 rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
-kits; two tables took 9 s embedded against 1.3 s with Benders) and the instance does not
-enforce reachability, else ``benders``. Embedded models run with
+kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
+enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
+with Benders on a loaded machine), else ``benders``. Embedded models run with
 :data:`~bilevel_kit.layout.cpsat_packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
 "optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
 the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
 every plan. Times are scaled to integers (:mod:`.scaling`).
 
 **Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
-checked to fit), every plan at least as good has :math:`m (o_R + d) \le U - \sum r_i - o_H -
-\min_{snk} h_i` and :math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which
-caps K; C <= U is added too.
+checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
+\min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
+:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U is added
+too.
+
+**Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
+scaled timeline (:mod:`.scaling`) and of every hint.
 
 **Time.** ``time_limit`` (default 60 s) covers everything, packing included; 1 % of it and
 0.15 s are kept back (CP-SAT stops a little after its own limit on large models). With
@@ -58,7 +63,7 @@ from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, chain_groups_idx, kit_order, pack_time_limit, quick_plan, reduced_edges
 from .context import MARGIN, Context, Model, State
-from .model import build, canonical
+from .model import build, canonical, tray_wait
 from .scaling import scale_times, scaled_makespan, scaled_objective
 
 TrayMode = Literal["auto", "embedded", "benders"]
@@ -369,9 +374,10 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     edges = _edges(ctx.instance)
     has_pred = {b for _, b in edges}
     has_succ = {a for a, _ in edges}
-    if sc.o_r + sc.d > 0:
-        slack = upper - sum(sc.r) - sc.o_h - min(sc.h[i] for i in range(n) if i not in has_succ)
-        K = min(K, max(1, slack // (sc.o_r + sc.d)))
+    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
+    if sc.o_r + sc.d + w > 0:
+        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
+        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
     if sc.o_h > 0:
         slack = (
             upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
@@ -386,7 +392,9 @@ def _tray_mode(instance: Instance, tray: str, K: int) -> str:
         return tray
     n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
     small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
-    return "embedded" if small else "benders"
+    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
+    # (bench/results/cpsat_trays.csv)
+    return "embedded" if small and instance.tray_limit is None else "benders"
 
 
 def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> MethodOutput:

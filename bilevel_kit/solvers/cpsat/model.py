@@ -18,14 +18,22 @@ first ``n - |descendants(i)|`` kits (every earlier kit needs a task that is not 
 * the timeline of docs/timeline.md, exactly, with scaled integer times::
 
       R_k = o_R u_k + sum_i r_i x[i,k]          H_k = o_H u_k + sum_i h_i x[i,k]
-      A_k = A_{k-1} + R_k + d u_k               (arrival; the robot is busy during delivery)
+      A_k = S_k + R_k + d u_k                   (arrival; the robot is busy during delivery)
+      S_k = A_{k-1}                             (k <= T, or unlimited trays)
+      S_k >= A_{k-1},  S_k >= E_{k-T} - H_{k-T} + o_H u_k      (k > T: T trays)
       E_k >= A_k + H_k,  E_k >= E_{k-1} + H_k   (human end = max(arrival, previous end) + H_k)
       C = E_K
 
-  Unused kits sit at the end and add nothing; E_k only needs ``>=``, since the objective
-  pushes it down to the max. The closed-form bounds of :mod:`bilevel_kit.bounds` on C are
-  added on the scaled times (redundant, they help the search), and ``C <= U`` for an upper
-  bound U;
+  Unused kits sit at the end and add nothing; E_k and S_k only need ``>=``: every constraint
+  is monotone, so for fixed kits the least solution is the true timeline and the objective
+  pushes C down to it. The tray rule (docs/timeline.md: the robot starts kit k once the tray
+  of kit k - T is back, o_H after the human started that kit, at E_{k-T} - H_{k-T}) needs no
+  big-M: on a used kit it is the rule itself; on an unused kit k it reads ``S_k >= human
+  start of kit k - T``, which is at most the last used kit's end, and so are ``A_k = S_k``
+  and ``E_k`` (induction), so unused trailing kits cannot inflate C. The closed-form bounds
+  of :mod:`bilevel_kit.bounds` on C are added on the scaled times (redundant, they help the
+  search; with one tray also the one-tray robot bound with the model's own kit count), and
+  ``C <= U`` for an upper bound U;
 * the tray: ``sum_i a_i x[i,k] <= W H`` (grid areas) always, plus either the embedded
   rectangles of :mod:`.tray` or, for logic-based Benders, the part counts ``c_{t,k}`` that the
   no-good cuts of :func:`.tray.add_cut` use.
@@ -46,7 +54,7 @@ from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ..common import reduced_edges
 from .context import Model
-from .scaling import Scaled
+from .scaling import Scaled, scaled_timeline
 
 
 def build(
@@ -69,10 +77,11 @@ def build(
     for group in groups:
         for c1, c2 in itertools.pairwise(group):
             add_lex_leq(m, [p[i] for i in c1], [p[i] for i in c2])
-    arrive, end = _timeline(m, sc, x, used, K, upper)
+    start, arrive, end = _timeline(m, sc, x, used, K, upper)
     C = end[-1]
     m.add(_closed_form_bound(instance, sc, K) <= C)
-    out = Model(m, K, x, used, arrive, end, C)
+    out = Model(m, K, x, used, arrive, end, C, start=start)
+    _one_tray_bound(instance, sc, out)
     if objective == "makespan":
         m.minimize(C)
     else:
@@ -136,26 +145,41 @@ def _used_kits(m: Any, instance: Instance, x: list[dict[int, Any]], K: int) -> l
 
 def _timeline(
     m: Any, sc: Scaled, x: list[dict[int, Any]], used: list[Any], K: int, upper: int | None
-) -> tuple[list[Any], list[Any]]:
-    """Arrival ``A_k`` and human end ``E_k`` of every kit position (module docstring)."""
+) -> tuple[list[Any], list[Any], list[Any]]:
+    """Robot start ``S_k`` (None where it is the previous arrival), arrival ``A_k`` and human
+    end ``E_k`` of every kit position (module docstring)."""
     n = len(x)
     hz = sum(sc.r) + sum(sc.h) + K * (sc.o_r + sc.o_h + sc.d)
     if upper is not None:
         hz = min(hz, upper)
+    trays = sc.trays
+    start: list[Any] = []
     arrive: list[Any] = []
     end: list[Any] = []
+    human: list[Any] = []
     for k in range(K):
         R = sc.o_r * used[k] + sum(sc.r[i] * x[i][k] for i in range(n) if k in x[i])
         Hk = sc.o_h * used[k] + sum(sc.h[i] * x[i][k] for i in range(n) if k in x[i])
         a = m.new_int_var(0, hz, f"A{k}")
         e = m.new_int_var(0, hz, f"E{k}")
-        m.add(a == (arrive[-1] if k else 0) + R + sc.d * used[k])
+        prev = arrive[-1] if k else 0
+        if trays is not None and k >= trays:
+            # the tray of kit k - T is back o_H after its human start E - H (docs/timeline.md)
+            s = m.new_int_var(0, hz, f"S{k}")
+            m.add(s >= prev)
+            m.add(s >= end[k - trays] - human[k - trays] + sc.o_h * used[k])
+            m.add(a == s + R + sc.d * used[k])
+        else:
+            s = None
+            m.add(a == prev + R + sc.d * used[k])
         m.add(e >= a + Hk)
         if k:
             m.add(e >= end[-1] + Hk)
+        start.append(s)
         arrive.append(a)
         end.append(e)
-    return arrive, end
+        human.append(Hk)
+    return start, arrive, end
 
 
 def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
@@ -176,10 +200,29 @@ def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
     lb_robot = (
         sum(sc.r)
         + mk * (sc.o_r + sc.d)
+        + (mk - 1) * tray_wait(sc)
         + sc.o_h
         + min(sc.h[i] for i in range(n) if i not in has_succ)
     )
     return max(lb_human, lb_robot)
+
+
+def tray_wait(sc: Scaled) -> int:
+    """The one-tray robot bound's wait per kit (:func:`bilevel_kit.bounds.tray_wait`)."""
+    return sc.o_h if sc.trays == 1 else 0
+
+
+def _one_tray_bound(instance: Instance, sc: Scaled, mdl: Model) -> None:
+    """With one tray, the one-tray robot bound of :mod:`bilevel_kit.bounds` with the model's
+    own kit count ``sum_k u_k`` (redundant; it lifts the LP bound)."""
+    w = tray_wait(sc)
+    if not w:
+        return
+    idx = instance.index
+    has_succ = {idx[a] for a, _ in reduced_edges(instance)}
+    last = min(sc.h[i] for i in range(len(sc.h)) if i not in has_succ)
+    n_used = sum(mdl.used)
+    mdl.model.add(sum(sc.r) + (sc.o_r + sc.d + w) * n_used - w + sc.o_h + last <= mdl.C)
 
 
 def _tray(instance: Instance, mdl: Model, embedded: bool, pack_res: float) -> None:
@@ -271,13 +314,11 @@ def hint(
     for i, xs in enumerate(mdl.x):
         for k, v in xs.items():
             m.add_hint(v, where.get(i) == k)
-    arrive = end = 0
-    for k in range(mdl.K):
-        kit = kits[k] if k < len(kits) else []
-        m.add_hint(mdl.used[k], bool(kit))
-        if kit:
-            arrive += sc.o_r + sum(sc.r[i] for i in kit) + sc.d
-            end = max(arrive, end) + sc.o_h + sum(sc.h[i] for i in kit)
+    padded = [list(kits[k]) if k < len(kits) else [] for k in range(mdl.K)]
+    for k, (start, arrive, end) in enumerate(scaled_timeline(sc, padded)):
+        m.add_hint(mdl.used[k], bool(padded[k]))
+        if mdl.start and mdl.start[k] is not None:
+            m.add_hint(mdl.start[k], start)
         m.add_hint(mdl.arrive[k], arrive)
         m.add_hint(mdl.end[k], end)
     if not mdl.rects:

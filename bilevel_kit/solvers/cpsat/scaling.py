@@ -28,7 +28,8 @@ class Scaled:
     """Integer times ``value_s = round_or_floor(value / res)`` (``exact``: rounding is exact).
 
     ``r``, ``h``: robot and human time of each task (file order); ``d`` delivery; ``o_r``,
-    ``o_h`` the per-kit overheads.
+    ``o_h`` the per-kit overheads; ``trays`` the binding tray limit
+    (:attr:`~bilevel_kit.instance.Instance.tray_limit`, None: unlimited).
     """
 
     res: float
@@ -38,6 +39,7 @@ class Scaled:
     d: int
     o_r: int
     o_h: int
+    trays: int | None = None
 
 
 def scale_times(instance: Instance, resolution: float, refine: bool = True) -> Scaled:
@@ -67,16 +69,34 @@ def scale_times(instance: Instance, resolution: float, refine: bool = True) -> S
         d=sc(instance.delivery_time),
         o_r=sc(instance.kit_overhead_robot),
         o_h=sc(instance.kit_overhead_human),
+        trays=instance.tray_limit,
     )
+
+
+def scaled_timeline(sc: Scaled, kits: Sequence[Sequence[int]]) -> list[tuple[int, int, int]]:
+    """Robot start, arrival and human end of every kit position on scaled times, with the tray
+    rule (docs/timeline.md); empty kits (unused trailing positions) take no time and need no
+    tray, which is exactly the least solution of the model's constraints on them."""
+    out: list[tuple[int, int, int]] = []
+    hs: list[int] = []  # human starts
+    arrive = end = 0
+    for k, kit in enumerate(kits):
+        used = bool(kit)
+        start = arrive
+        if sc.trays is not None and k >= sc.trays:
+            start = max(start, hs[k - sc.trays] + sc.o_h * used)
+        arrive = start + (sc.o_r + sum(sc.r[i] for i in kit) + sc.d if used else 0)
+        hk = sc.o_h + sum(sc.h[i] for i in kit) if used else 0
+        hs.append(max(arrive, end))
+        end = hs[-1] + hk
+        out.append((start, arrive, end))
+    return out
 
 
 def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
     """The timeline of docs/timeline.md on scaled integer times (kits of task indices)."""
-    arrive = end = 0
-    for kit in kits:
-        arrive += sc.o_r + sum(sc.r[i] for i in kit) + sc.d
-        end = max(arrive, end) + sc.o_h + sum(sc.h[i] for i in kit)
-    return end
+    tl = scaled_timeline(sc, kits)
+    return tl[-1][2] if tl else 0
 
 
 def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) -> int:

@@ -25,12 +25,23 @@ descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k 
       E_k >= A_k + H_k,   E_k >= E_{k-1} + H_k,   C = E_{K-1}
 
   An unused kit has R = H = 0 and adds no d and no overhead, so it adds no time; E only
-  needs ``>=`` because the objective pushes C down to the max. No big-M is needed here; the
-  variable bound :math:`E_k \le M = \sum_i (r_i + h_i) + K (o_R + o_H + d)` (a schedule
-  without any overlap) is derived from the data, and ``C <= U`` with U the makespan of a
-  quick feasible plan;
+  needs ``>=`` because the objective pushes C down to the max. With T trays (the instance's
+  tray limit) the robot start of kit k > T is a variable ``S_k`` and the arrivals become
+  :math:`A_k = S_k + R_k + d u_k` with
+
+      S_k >= A_{k-1},   S_k >= E_{k-T} - H_{k-T} + o_H u_k
+
+  (docs/timeline.md: the tray of kit k - T is back o_H after the human started it, at
+  E - H). Every constraint is monotone, so the least solution is the true timeline; the
+  ``o_H u_k`` term replaces a big-M: on an unused kit the bound is the human start of kit
+  k - T, at most the last used kit's end, so unused trailing kits cannot inflate C. No big-M
+  is needed here; the variable bound
+  :math:`E_k \le M = \sum_i (r_i + h_i) + K (o_R + o_H + d)` (a schedule without any
+  overlap, valid for every number of trays) is derived from the data, and ``C <= U`` with U
+  the makespan of a quick feasible plan;
 * the closed-form bounds of :mod:`bilevel_kit.bounds` on C, also with the model's own kit count
-  :math:`m = \sum_k u_k` in place of :math:`m_{\min}` (redundant, they lift the LP bound);
+  :math:`m = \sum_k u_k` in place of :math:`m_{\min}` (redundant, they lift the LP bound;
+  with one tray the robot bound includes the wait :math:`(m - 1) o_H` for the tray);
 * the tray's area relaxation :math:`\sum_i a_i x_{ik} \le W H` (areas on the packing grid of
   :mod:`~bilevel_kit.layout.cpsat_packing`, sizes rounded up, tray down) and the no-good cuts
   of :func:`add_cut`: :math:`\bigvee_t c_{tk} \le M_t - 1` with
@@ -55,7 +66,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...bounds import lower_bounds, min_kits
+from ...bounds import lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
 from ...layout import cpsat_packing as packing
 from ...plan import Kit, Plan, evaluate
@@ -202,14 +213,24 @@ def _timeline(
 
     add = m.cons.add
     r, h, d, o_r, o_h = data.r, data.h, data.d, data.o_r, data.o_h
-    arrive = 0.0
+    trays = instance.tray_limit
+    if trays is not None and trays < K:
+        m.S = pyo.Var(range(trays, K), bounds=(0.0, m.E[0].ub))  # robot starts (tray rule)
+    arrive: Any = 0.0
+    human: list[Any] = []
     for k in range(K):
         R = o_r * m.u[k] + sum(r[i] * m.x[i, k] for i in data.at_k[k])
         Hk = o_h * m.u[k] + sum(h[i] * m.x[i, k] for i in data.at_k[k])
+        if trays is not None and k >= trays:
+            # the tray of kit k - T is back o_H after its human start E - H (docs/timeline.md)
+            add(m.S[k] >= arrive)
+            add(m.S[k] >= m.E[k - trays] - human[k - trays] + o_h * m.u[k])
+            arrive = m.S[k]
         arrive = arrive + R + d * m.u[k]
         add(m.E[k] >= arrive + Hk)
         if k:
             add(m.E[k] >= m.E[k - 1] + Hk)
+        human.append(Hk)
     cmax = m.E[K - 1]
     lb = lower_bounds(instance)
     add(cmax >= max(lb["human"], lb["robot"]))
@@ -219,9 +240,14 @@ def _timeline(
     has_pred = {b for _, b in instance.precedence}
     has_succ = {a for a, _ in instance.precedence}
     n_used = sum(m.u[k] for k in range(K))
+    w = tray_wait(instance)  # one tray: the robot waits o_H per kit after the first
     add(
         cmax
-        >= sum(r) + (o_r + d) * n_used + o_h + min(h[i] for i in range(n) if ids[i] not in has_succ)
+        >= sum(r)
+        + (o_r + d + w) * n_used
+        - w
+        + o_h
+        + min(h[i] for i in range(n) if ids[i] not in has_succ)
     )
     add(
         cmax
@@ -298,13 +324,26 @@ def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]])
     for (i, k), v in master.x.items():
         v.set_value(float(where[master.ids[i]] == k), skip_validation=True)
     tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
-    end = 0.0
+    end = arrive = 0.0
+    starts: list[float] = []  # human starts (of an unused kit: its end)
+    trays = instance.tray_limit
     for k in range(master.K):
         if k < len(kits):
-            end = tl.kits[k].human_end
+            kt = tl.kits[k]
+            start, arrive, end = kt.robot_start, kt.arrive, kt.human_end
+            starts.append(kt.human_start)
+        else:  # the least values of the constraints on an unused kit (module docstring)
+            start = arrive
+            if trays is not None and k >= trays:
+                start = max(start, starts[k - trays])
+            arrive = start
+            starts.append(max(arrive, end))
+            end = starts[-1]
         if k:
             m.u[k].set_value(float(k < len(kits)), skip_validation=True)
         m.E[k].set_value(end, skip_validation=True)
+        if trays is not None and k >= trays:
+            m.S[k].set_value(start, skip_validation=True)
     for (t, k, c), var in master.lam.items():
         have = instance.kit_parts(kits[k]).get(t, 0) if k < len(kits) else 0
         var.set_value(float(have <= c - 1), skip_validation=True)
@@ -338,8 +377,10 @@ def extract(master: Master) -> list[list[str]]:
 def kit_cap(instance: Instance, upper: float) -> int:
     """Largest kit count m of a plan with makespan <= U, from the closed-form bounds with m:
 
-    .. math:: m (o_R + d) \\le U - \\sum r - o_H - \\min_{snk} h,\\qquad
-              m\\, o_H \\le U - \\min_{src} r - o_R - d - \\sum h.
+    .. math:: m (o_R + d + w) \\le U - \\sum r - o_H + w - \\min_{snk} h,\\qquad
+              m\\, o_H \\le U - \\min_{src} r - o_R - d - \\sum h
+
+    (w = o_H with one tray, else 0: :func:`bilevel_kit.bounds.tray_wait`).
     """
     ids = [t.id for t in instance.tasks]
     n = len(ids)
@@ -350,9 +391,10 @@ def kit_cap(instance: Instance, upper: float) -> int:
     d, o_r, o_h = instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human
     cap = n
     eps = TOL * max(1.0, upper)
-    if o_r + d > 0:
-        slack = upper - sum(r.values()) - o_h - min(h[t] for t in ids if t not in has_succ)
-        cap = min(cap, max(1, math.floor((slack + eps) / (o_r + d))))
+    w = tray_wait(instance)
+    if o_r + d + w > 0:
+        slack = upper - sum(r.values()) - o_h + w - min(h[t] for t in ids if t not in has_succ)
+        cap = min(cap, max(1, math.floor((slack + eps) / (o_r + d + w))))
     if o_h > 0:
         slack = upper - min(r[t] for t in ids if t not in has_pred) - o_r - d - sum(h.values())
         cap = min(cap, max(1, math.floor((slack + eps) / o_h)))
