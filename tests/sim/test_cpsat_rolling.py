@@ -42,7 +42,11 @@ def test_under_supply_delays_kits_are_valid_and_waits_happen(table):
     assert again["makespan"] == pytest.approx(res.makespan)
 
 
-def test_expected_waits_and_the_human_token(table):
+@pytest.mark.parametrize(("trays", "busy"), [(1, 50.0), ("unlimited", 50.0 - 4.0)])
+def test_expected_waits_and_the_human_token(table, trays, busy):
+    # one tray: the dummy kit holds it for the human's whole remaining time; unlimited trays:
+    # it only shifts time, its o_H is added back by the sub-instance's kit overhead
+    table = table.with_overrides(trays=trays)
     policy = make_policy("cpsat-rolling", table, params=SimParams())
     assert asdict(policy.options) == {
         "window": 12,
@@ -68,7 +72,7 @@ def test_expected_waits_and_the_human_token(table):
     assert times["foot2"] == pytest.approx(table.robot_time("foot2") + 20.0)
     sub = policy._sub_instance(window, times, 50.0)
     assert sub.tasks[0].id == "__human_busy__"
-    assert sub.task_by_id["__human_busy__"].human_mean == pytest.approx(50.0 - 4.0)
+    assert sub.task_by_id["__human_busy__"].human_mean == pytest.approx(busy)
     assert all(("__human_busy__", t) in set(sub.precedence) for t in window)
 
 
@@ -98,7 +102,8 @@ def test_one_tray_token_holds_the_tray(table):
     # no remaining work: no token (the tray is back, the human idle)
     assert "__human_busy__" not in policy._sub_instance(window, times, 0.0).task_by_id
     # unlimited trays: the token only shifts time, as before
-    free = make_policy("cpsat-rolling", table, params=SimParams())._sub_instance(
+    unlimited = table.with_overrides(trays="unlimited")
+    free = make_policy("cpsat-rolling", unlimited, params=SimParams())._sub_instance(
         window, times, 50.0
     )
     assert free.tray_limit is None
