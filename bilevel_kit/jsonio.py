@@ -288,7 +288,10 @@ def validate_document(
         missing = [r for r in err.validator_value if r not in err.instance]
         raise error(source, where, f"missing required field {missing[0]!r}")
     if err.validator == "additionalProperties":
-        raise error(source, where, err.message.replace("Additional properties", "unknown field"))
+        allowed = set(err.schema.get("properties", {}))
+        extra = sorted(k for k in err.instance if k not in allowed)
+        names = ", ".join(repr(k) for k in extra)
+        raise error(source, where, f"unknown field{'s' if len(extra) > 1 else ''} {names}")
     if err.validator == "const":
         raise error(source, where, f"expected {err.validator_value!r}, got {err.instance!r}")
     msg = err.message

@@ -217,7 +217,7 @@ ROWS: dict[str, Row] = {
     # --- instance files: structure ------------------------------------------------------------
     "missing format": bad_instance(_del("format"), "missing required field 'format'"),
     "wrong format": bad_instance(_set("format", "bilevel-kit/9"), "unsupported format"),
-    "unknown field": bad_instance(_set("colour", "red"), "unknown field"),
+    "unknown field": bad_instance(_set("colour", "red"), "unknown field 'colour'"),
     "missing name": bad_instance(_del("name"), "missing required field 'name'"),
     "empty name": bad_instance(_set("name", ""), "$.name"),
     "missing tray": bad_instance(_del("tray"), "missing required field 'tray'"),
