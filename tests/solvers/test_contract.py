@@ -1,6 +1,8 @@
 """The method contract, over every registered method and every committed instance small enough:
-the plan passes the independent checker, the same seed gives the same plan, the bound never
-exceeds the objective, the status is a :class:`Status`, and an unknown option is refused."""
+the plan passes the independent checker, the same seed gives the same plan (for an exact method:
+whenever it finished within its time limit, since a search stopped by the wall clock stops
+where the machine's load let it get), the bound never exceeds the objective, the status is a
+:class:`Status`, and an unknown option is refused."""
 
 from __future__ import annotations
 
@@ -21,6 +23,7 @@ INSTANCES = [
     "generated/intree_n8_s0.json",
     "generated/sp_n8_s0.json",
 ]
+EXACT = {"cpsat", "milp", "bilevel-milp"}
 SLOW = {("bilevel-milp", "hrc_table.json")}  # its column MILP needs minutes on the table
 
 
@@ -45,6 +48,10 @@ def test_contract(method, name, root):
     if method == "bilevel-milp":
         assert first.status_objective == "J" and "(for J)" in first.status_text
     again = solve(inst, method, seed=3, time_limit=30, **params)
+    if method in EXACT and Status.OPTIMAL not in (first.status, again.status):
+        # stopped by the wall clock: where the search stood depends on the machine's load
+        assert again.status != Status.OPTIMAL or first.status != Status.OPTIMAL
+        return
     assert again.plan == first.plan
 
 
