@@ -335,8 +335,9 @@ def run_sweep(
     the sweep's report.
 
     Records of cells already saved under ``cell_dir`` are read back; new ones are saved as
-    they arrive. Without ``cell_dir`` nothing is saved. Where cells run: ``executor`` if given,
-    else the active :func:`sweep_session`'s (it overrides ``jobs``), else
+    they arrive (one client per ``cell_dir``: it also removes the temporary files a killed
+    client left behind). Without ``cell_dir`` nothing is saved. Where cells run: ``executor``
+    if given, else the active :func:`sweep_session`'s (it overrides ``jobs``), else
     :func:`make_executor` of ``jobs``.
     ``progress=None``: the session's setting, else a bar only on a terminal. On Ctrl-C the
     cells in flight are dropped, the finished ones are kept, and ``KeyboardInterrupt`` is
@@ -349,6 +350,8 @@ def run_sweep(
     folder = Path(cell_dir) if cell_dir is not None else None
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
+        for tmp in folder.glob(".*.json.*.json"):  # a killed client's half-written file
+            tmp.unlink(missing_ok=True)
     paths = [folder / f"{c.key()}.json" if folder is not None else None for c in cells]
     records: list[Record | None] = [_saved(p) for p in paths]
     todo = [i for i, r in enumerate(records) if r is None]
