@@ -120,6 +120,22 @@ class SerialExecutor:
         """Nothing to release."""
 
 
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT while local worker processes are started (in the main thread only)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 class DaskExecutor:
     """Cells as Dask tasks: on a ``LocalCluster`` of ``jobs`` single-threaded worker processes,
     or on the existing cluster whose scheduler listens at ``scheduler`` (``tcp://HOST:PORT``).
@@ -139,6 +155,7 @@ class DaskExecutor:
         self.retries = retries
         self._client: Client | None = None
         self._cluster: LocalCluster | None = None
+        self._interrupted = False
 
     def client(self) -> Client:
         """The Dask client (started on first call)."""
@@ -150,13 +167,14 @@ class DaskExecutor:
             if self.scheduler is not None:
                 self._client = Client(self.scheduler, timeout=30)
             else:
-                self._cluster = LocalCluster(
-                    n_workers=self.jobs,
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=None,
-                    silence_logs=logging.ERROR,
-                )
+                with _sigint_ignored():  # the workers inherit it: Ctrl-C is the client's
+                    self._cluster = LocalCluster(
+                        n_workers=self.jobs,
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=None,
+                        silence_logs=logging.ERROR,
+                    )
                 self._client = Client(self._cluster)
         return self._client
 
@@ -188,6 +206,7 @@ class DaskExecutor:
                 yield i, rec
         finally:
             if pending:  # interrupted: drop the cells in flight
+                self._interrupted = True
                 with contextlib.suppress(Exception):
                     client.cancel(list(pending), force=True)
 
@@ -195,12 +214,24 @@ class DaskExecutor:
         """Disconnect (and stop the ``LocalCluster`` this executor started)."""
         client, cluster = self._client, self._cluster
         self._client = self._cluster = None
+        if cluster is not None and self._interrupted:
+            _kill_workers(cluster)  # busy with cells nobody waits for: stop now
         with contextlib.suppress(Exception):
             if client is not None:
                 client.close(timeout=2)
         with contextlib.suppress(Exception):
             if cluster is not None:
                 cluster.close(timeout=2)
+
+
+def _kill_workers(cluster: LocalCluster) -> None:
+    """Kill the worker processes a ``LocalCluster`` started, by their PIDs."""
+    import os
+    import signal
+
+    for nanny in list(cluster.workers.values()):
+        with contextlib.suppress(Exception):
+            os.kill(nanny.process.process.pid, signal.SIGKILL)
 
 
 def make_executor(
