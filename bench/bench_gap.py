@@ -5,7 +5,8 @@ writes bench/results/gap.md, gap.csv and gap.png. The gap of a method is measure
 lower bound of the instance (CP-SAT's proven bound when it has one, else the closed-form
 bounds); CP-SAT's own row shows whether it proved optimality within the time limit.
 
-Run: python bench/bench_gap.py [--time-limit 60]
+Run: python bench/bench_gap.py [--time-limit 60] [--jobs N | --scheduler tcp://HOST:PORT]
+(the cells on N local worker processes or a running Dask cluster, docs/cluster.md).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from bilevel_kit.experiments import (
     compare_cell,
     format_markdown,
     run_cells,
+    sweep_session,
     write_csv,
 )
 from bilevel_kit.plots import plot_gaps, save_figure
@@ -34,6 +36,8 @@ METHODS = ("single-task", "whole-assembly", "greedy-ce", "cpsat")
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--time-limit", type=float, default=60.0)
+    ap.add_argument("--jobs", type=int, default=1, help="local worker processes")
+    ap.add_argument("--scheduler", help="address of a running Dask scheduler")
     args = ap.parse_args()
     out = ROOT / "bench" / "results"
     files = sorted((ROOT / "instances" / "generated").glob("*.json"))
@@ -41,9 +45,10 @@ def main() -> None:
         CompareCell(str(f.relative_to(ROOT)), m, 0, args.time_limit) for f in files for m in METHODS
     ]
     os.chdir(ROOT)
-    records = add_best_bound_gap(
-        run_cells(cells, compare_cell, cell_dir=out / "gap_cells", progress=True, desc="gap")
-    )
+    with sweep_session(args.jobs, args.scheduler, progress=True):
+        records = add_best_bound_gap(
+            run_cells(cells, compare_cell, cell_dir=out / "gap_cells", desc="gap")
+        )
     write_text(out / "gap.md", format_markdown(records))
     write_csv(out / "gap.csv", records)
     ok = [r for r in records if r.get("makespan") is not None]

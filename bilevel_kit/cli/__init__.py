@@ -3,8 +3,9 @@
 Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> int`` that reads its
 inputs, calls the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
 invalid, 2 bad input or usage (a one-line message on stderr, no traceback), 3 a definite answer
-could not be reached within the time limit. Heavy back-ends are imported inside the commands,
-so ``bilevel-kit --help`` stays fast.
+could not be reached within the time limit, 4 a sweep finished but some of its cells failed
+(docs/cluster.md), 130 interrupted (Ctrl-C; a sweep keeps its finished cells). Heavy back-ends
+are imported inside the commands, so ``bilevel-kit --help`` stays fast.
 """
 
 from __future__ import annotations
