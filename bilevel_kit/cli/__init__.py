@@ -4,9 +4,10 @@ Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> int`
 inputs, calls the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
 invalid, 2 bad input or usage (a one-line message on stderr, no traceback), 3 a definite answer
 could not be reached within the time limit, 4 ``pack`` found no layout on a grid that is not
-exact (not a proof). Every output path is checked before any work (:mod:`bilevel_kit.paths`).
-Heavy back-ends are imported inside the commands,
-so ``bilevel-kit --help`` stays fast.
+exact (not a proof), 5 a sweep finished but some of its cells failed (docs/cluster.md), 130
+interrupted (Ctrl-C; a sweep keeps its finished cells). Every output path is checked before any
+work (:mod:`bilevel_kit.paths`). Heavy back-ends are imported inside the commands, so
+``bilevel-kit --help`` stays fast.
 """
 
 from __future__ import annotations

@@ -14,6 +14,9 @@ from collections.abc import Callable
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 if TYPE_CHECKING:
+    from contextlib import AbstractContextManager
+
+    from ..experiments.cells import SweepSession
     from ..instance import Instance
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
@@ -22,6 +25,13 @@ EXIT_NO_GRID_LAYOUT = 4
 
 #: The largest seed: CP-SAT takes 32-bit seeds, and every command's seed reaches one solver.
 MAX_SEED = 2**31 - 1
+
+#: A sweep finished but some of its cells failed (their error records say why).
+EXIT_FAILED = 5
+#: Ctrl-C: the sweep stopped, every finished cell is kept (128 + SIGINT).
+EXIT_INTERRUPTED = 130
+#: The environment variable naming a running Dask scheduler (as Dask itself reads it).
+SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 
 #: The ``subparsers`` object every command module's ``add_parser`` receives.
 Subparsers = argparse._SubParsersAction
@@ -238,6 +248,50 @@ def add_instance_overrides(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_sweep_options(p: argparse.ArgumentParser, what: str = "cells") -> None:
+    """``--jobs N``, ``--scheduler ADDRESS`` and ``-q``: where a sweep's cells run
+    (docs/cluster.md); :func:`sweep_session` reads them back."""
+    g = p.add_argument_group("running the sweep (docs/cluster.md)")
+    g.add_argument(
+        "--jobs",
+        "-j",
+        type=positive_int,
+        default=1,
+        metavar="N",
+        help=f"run the {what} on N local worker processes (a Dask LocalCluster); "
+        "1 (default): in this process",
+    )
+    g.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help=f"run the {what} on a running Dask cluster (default: ${SCHEDULER_ENV} if set); "
+        "overrides --jobs",
+    )
+    g.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bar (the summary line stays)"
+    )
+
+
+def sweep_session(args: argparse.Namespace) -> AbstractContextManager[SweepSession]:
+    """The sweep session of the command's ``--jobs``/``--scheduler``/``-q``."""
+    import os
+
+    from ..experiments.cells import sweep_session as session
+
+    scheduler = args.scheduler or os.environ.get(SCHEDULER_ENV) or None
+    return session(args.jobs, scheduler, progress=False if args.quiet else None)
+
+
+def sweep_exit(session: SweepSession, code: int, failed: int | None = None) -> int:
+    """:data:`EXIT_FAILED`, with a line on stderr, when cells failed (``failed``, default:
+    those computed in the session); it wins over ``code``: the results are incomplete."""
+    n = session.failed if failed is None else failed
+    if n:
+        print(f"{n} cell(s) failed (see their error records)", file=sys.stderr)
+        return EXIT_FAILED
+    return code
+
+
 def trays(text: str) -> int | str:
     """``--trays``: an integer >= 1, or ``unlimited``."""
     if text.lower() in ("unlimited", "none"):
@@ -294,4 +348,4 @@ def run_command(
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("bilevel-kit: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED

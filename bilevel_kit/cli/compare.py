@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .common import (
     EXIT_INVALID,
@@ -13,10 +13,16 @@ from .common import (
     add_instance_overrides,
     add_output,
     add_seed,
+    add_sweep_options,
     instance_overrides,
     nonneg,
     param,
+    sweep_exit,
+    sweep_session,
 )
+
+if TYPE_CHECKING:
+    from ..experiments import CompareCell
 
 
 def add_parser(subparsers: Subparsers) -> None:
@@ -26,7 +32,9 @@ def add_parser(subparsers: Subparsers) -> None:
         description="One row per instance x method: makespan, human idle, "
         "kits, status, best lower bound, gap to it, checker verdict, wall time. "
         "Each cell is saved on its own under --cells, so an interrupted run "
-        "resumes where it stopped.",
+        "resumes where it stopped; --jobs/--scheduler run the cells in parallel "
+        "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan "
+        "is invalid.",
     )
     p.add_argument("instances", nargs="+", metavar="INSTANCE")
     p.add_argument(
@@ -61,6 +69,7 @@ def add_parser(subparsers: Subparsers) -> None:
     )
     add_output(p, "--cells", folder=True, metavar="DIR", help="save/resume per-cell results in DIR")
     add_instance_overrides(p)
+    add_sweep_options(p, "solves")
 
 
 def method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, Any]]:
@@ -104,10 +113,27 @@ def run(args: argparse.Namespace) -> int:
         for path in args.instances
         for m in methods
     ]
-    records = add_best_bound_gap(
-        run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
-    )
-    return _report(args, records)
+    with sweep_session(args) as session:
+        raw = run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
+        records = add_best_bound_gap(_named(c, r) for c, r in zip(cells, raw, strict=True))
+        code = _report(args, records)
+        return sweep_exit(session, code, sum(r["status"] == "error" for r in records))
+
+
+def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
+    """A row for every cell: the error record of a cell that raised (rather than reporting
+    an error) gets the cell's instance and method."""
+    from pathlib import Path
+
+    if "method" in record:
+        return record
+    return {
+        "instance": Path(cell.instance).stem,
+        "instance_file": cell.instance,
+        "method": cell.method,
+        "seed": cell.seed,
+        **record,
+    }
 
 
 def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:

@@ -10,8 +10,11 @@ from .common import (
     add_delivery_time,
     add_output,
     add_seed,
+    add_sweep_options,
     nonneg,
     positive_int,
+    sweep_exit,
+    sweep_session,
 )
 
 
@@ -22,8 +25,9 @@ def add_parser(subparsers: Subparsers) -> None:
         description="user-study: 18 simulated participants x {Whole Assembly, Single Task, "
         "Optimized}, calibrated on two of the paper's numbers, ANOVA + Tukey HSD side by side "
         "with the paper. fig6: MAT x MTTF grid of the shop-floor simulation, percent "
-        "improvement heatmaps with significance marks; saved per cell (resumable). See "
-        "paper_repro/README.md.",
+        "improvement heatmaps with significance marks; saved per cell (resumable). "
+        "--jobs/--scheduler run the cells (fig6 grid points, user-study studies) in parallel "
+        "(docs/cluster.md); exit 5 when a cell failed. See paper_repro/README.md.",
     )
     p.add_argument("experiment", choices=("user-study", "fig6"))
     p.add_argument("--quick", action="store_true", help="a reduced run (seconds)")
@@ -37,7 +41,18 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="R",
         help="fig6: replications per cell (default 30; 3 with --quick)",
     )
-    p.add_argument("--jobs", type=positive_int, default=1, help="fig6: parallel cells")
+    p.add_argument(
+        "--mats",
+        type=numbers,
+        metavar="30,60",
+        help="fig6: the MAT values of the grid (default 30,60,90,120; 30,120 with --quick)",
+    )
+    p.add_argument(
+        "--mttfs",
+        type=numbers,
+        metavar="60,90",
+        help="fig6: the MTTF values of the grid (default 30,60,90,120; 60 with --quick)",
+    )
     add_delivery_time(p, "fig6: delivery time (default: the instance's)")
     p.add_argument(
         "--with-cpsat",
@@ -51,9 +66,31 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="S",
         help="fig6 --with-cpsat: CP-SAT time limit per decision (default 1 s)",
     )
+    add_sweep_options(p)
+
+
+def numbers(text: str) -> tuple[float, ...]:
+    """``30,60``: one or more finite numbers > 0."""
+    values = []
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        try:
+            v = float(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected numbers, got {item!r}") from None
+        if not 0 < v < float("inf"):
+            raise argparse.ArgumentTypeError(f"expected numbers > 0, got {item!r}")
+        values.append(v)
+    if not values:
+        raise argparse.ArgumentTypeError("expected at least one number")
+    return tuple(values)
 
 
 def run(args: argparse.Namespace) -> int:
+    with sweep_session(args) as session:
+        return sweep_exit(session, _run(args))
+
+
+def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from .. import repro
@@ -80,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             policies=policies,
             policy_options=options,
+            mats=args.mats,
+            mttfs=args.mttfs,
         )
     md = res.get("files", {}).get("markdown")
     if md and Path(md).exists():

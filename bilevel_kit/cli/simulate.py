@@ -19,10 +19,13 @@ from .common import (
     add_output,
     add_param_option,
     add_seed,
+    add_sweep_options,
     float_map,
     instance_overrides,
     nonneg,
     positive_int,
+    sweep_exit,
+    sweep_session,
 )
 
 #: The metrics summarised on stdout (mean, sd, min, max over the replications).
@@ -46,7 +49,9 @@ def add_parser(subparsers: Subparsers) -> None:
         description="Replications of the paper's shop-floor simulation (Section V-B): feeders "
         "with Poisson arrivals (mean inter-arrival MAT) and exponential failures (MTTF, fixed "
         "repair), the robot asking its policy for the next kit at each epoch, the human "
-        "assembling with sampled participant times. Replication r uses seed SEED + r.",
+        "assembling with sampled participant times. Replication r uses seed SEED + r. "
+        "--jobs/--scheduler run the replications in parallel (docs/cluster.md); exit 5 when "
+        "a replication failed.",
     )
     p.add_argument("instance")
     p.add_argument(
@@ -71,12 +76,15 @@ def add_parser(subparsers: Subparsers) -> None:
     add_output(p, "--csv", metavar="FILE", help="one row per replication")
     add_instance_overrides(p)
     add_param_option(p, "policy option, e.g. cpsat-rolling: window=12, time_limit=1 (repeatable)")
+    add_sweep_options(p, "replications")
 
 
 def run(args: argparse.Namespace) -> int:
     from ..errors import UsageError
+    from ..experiments.cells import is_failed, run_cells
+    from ..experiments.replications import ReplicationCell, replication_cell
     from ..instance import load
-    from ..sim import SimParams, replicate
+    from ..sim import POLICIES, SimParams
 
     if args.buffer is not None:
         raise UsageError("--buffer was removed: use --trays (trays = buffer + 1)")
@@ -95,13 +103,19 @@ def run(args: argparse.Namespace) -> int:
         repair_time=args.repair,
         policy_options=dict(args.param),
     )
-    records = replicate(
-        instance,
-        args.policy,
-        params,
-        seeds=range(args.seed, args.seed + args.reps),
-        progress=sys.stderr.isatty(),
-    )
+    POLICIES.spec(args.policy).parse(params.policy_options)  # fail before any run
+    cells = [
+        ReplicationCell(instance, args.policy, params, s)
+        for s in range(args.seed, args.seed + args.reps)
+    ]
+    with sweep_session(args) as session:
+        records = run_cells(cells, replication_cell, desc=f"simulate {args.policy}")
+    failed = [r for r in records if is_failed(r)]
+    for r in failed:
+        print(f"replication {r['cell']['seed']}: {r['error']}", file=sys.stderr)
+    records = [r for r in records if not is_failed(r)]
+    if not records:
+        return sweep_exit(session, EXIT_OK)
     _print_summary(instance.name, args, records)
     if args.csv:
         from ..experiments import write_csv
@@ -115,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
             for r in records
         ]
         write_csv(args.csv, rows)
-    return EXIT_OK
+    return sweep_exit(session, EXIT_OK)
 
 
 def _print_summary(name: str, args: argparse.Namespace, records: list[dict[str, Any]]) -> None:

@@ -1,29 +1,50 @@
 """The one resumable cell runner: a cell is a pure function of (config, seed).
 
-Why: ``compare``, ``repro fig6`` (and later a Dask cluster) must scale out and resume after an
-interruption. A cell therefore holds only plain data (an instance path, a method or a grid
-point, options, seeds) and has a stable :meth:`Cell.key` (a digest of its configuration); the
-function turns it into a JSON-serialisable record, saved as ``<cell_dir>/<key>.json`` through
-:mod:`bilevel_kit.atomic` as soon as it finishes. A rerun skips every cell whose file exists.
+Why: ``compare``, ``simulate --reps``, ``repro fig6``, the user study's repeated studies and the
+benchmarks must scale out to a cluster and resume after an interruption (docs/cluster.md). A
+cell therefore holds only plain data (an instance path, a method or a grid point, options,
+seeds) and has a stable :meth:`Cell.key` (a digest of its configuration); the function turns it
+into a JSON-serialisable record.
 
-Where the cells run is a small pluggable piece, an :class:`Executor`: :class:`SerialExecutor`
-(in order, in this process) or :class:`ProcessExecutor` (a process pool, ``jobs`` workers).
+Only this process (the client) writes results: each record is saved as
+``<cell_dir>/<key>.json`` through :mod:`bilevel_kit.atomic` as soon as it arrives, so a rerun
+skips every finished cell and an interrupted sweep (Ctrl-C, a killed client) loses only the
+cells in flight. A cell that raises becomes an *error record* (``status: "error"``, the error,
+its traceback and the cell's configuration); the sweep goes on and a rerun retries it.
+
+Where cells run is an :class:`Executor`: :class:`SerialExecutor` (in order, in this process,
+without importing Dask) or :class:`DaskExecutor` (a ``distributed.Client`` on a
+``LocalCluster`` of ``jobs`` single-threaded worker processes, or on an existing cluster at a
+scheduler address; a worker that dies mid-cell has its cell retried elsewhere by Dask).
+:func:`sweep_session` sets the executor, the progress bar and the summary line for every sweep
+a command runs, which is how the CLI's ``--jobs``, ``--scheduler`` and ``-q`` reach them.
 """
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import json
+import sys
+import time
+import traceback
+import uuid
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from .. import atomic
 
-C = TypeVar("C", bound="Cell")
+if TYPE_CHECKING:
+    from distributed import Client, LocalCluster
+
 Record = dict[str, Any]
+
+#: Dask retries of a cell whose worker died (on top of the scheduler's own allowed failures).
+RETRIES = 2
 
 
 class Cell(Protocol):
@@ -40,8 +61,54 @@ class Executor(Protocol):
     ) -> Iterator[tuple[int, Record]]: ...
 
 
+# ---------------------------------------------------------------------------------------------
+# Failures
+# ---------------------------------------------------------------------------------------------
+
+
+def cell_config(cell: Any) -> Any:
+    """The cell's configuration as plain data (a dataclass as a dict, else its ``repr``)."""
+    if dataclasses.is_dataclass(cell) and not isinstance(cell, type):
+        return json.loads(json.dumps(dataclasses.asdict(cell), default=str))
+    return repr(cell)
+
+
+def error_record(cell: Any, exc: BaseException, tb: str | None = None) -> Record:
+    """The record of a cell that raised: its key, the error and the cell's configuration."""
+    return {
+        "key": cell.key(),
+        "status": "error",
+        "error": f"{type(exc).__name__}: {exc}",
+        "traceback": tb if tb is not None else "".join(traceback.format_exception(exc)),
+        "cell": cell_config(cell),
+    }
+
+
+def is_failed(record: Record) -> bool:
+    """A record whose cell raised (or, for ``compare``, whose solve reported an error)."""
+    return record.get("status") == "error"
+
+
+@dataclass(frozen=True)
+class Guarded:
+    """``fn`` with its exceptions turned into error records (runs on the worker, pickles)."""
+
+    fn: Callable[[Any], Record]
+
+    def __call__(self, cell: Any) -> Record:
+        try:
+            return self.fn(cell)
+        except Exception as exc:
+            return error_record(cell, exc)
+
+
+# ---------------------------------------------------------------------------------------------
+# Executors
+# ---------------------------------------------------------------------------------------------
+
+
 class SerialExecutor:
-    """Every cell in order, in this process."""
+    """Every cell in order, in this process (no Dask import)."""
 
     def run(
         self, fn: Callable[[Any], Record], cells: Sequence[Any]
@@ -49,25 +116,217 @@ class SerialExecutor:
         for i, cell in enumerate(cells):
             yield i, fn(cell)
 
+    def close(self) -> None:
+        """Nothing to release."""
 
-class ProcessExecutor:
-    """A pool of ``jobs`` worker processes (``fn`` and the cells must pickle)."""
 
-    def __init__(self, jobs: int) -> None:
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT while local worker processes are started (in the main thread only)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+class DaskExecutor:
+    """Cells as Dask tasks: on a ``LocalCluster`` of ``jobs`` single-threaded worker processes,
+    or on the existing cluster whose scheduler listens at ``scheduler`` (``tcp://HOST:PORT``).
+
+    The client is started on first use and kept until :meth:`close`, so the sweeps of one
+    command share it. Each cell is one task with ``retries`` (a worker that dies mid-cell: the
+    scheduler reschedules the cell on another worker); results are yielded as they complete.
+    """
+
+    def __init__(
+        self, jobs: int | None = None, scheduler: str | None = None, retries: int = RETRIES
+    ) -> None:
+        if (jobs is None) == (scheduler is None):
+            raise ValueError("give exactly one of jobs and scheduler")
         self.jobs = jobs
+        self.scheduler = scheduler
+        self.retries = retries
+        self._client: Client | None = None
+        self._cluster: LocalCluster | None = None
+        self._interrupted = False
+
+    def client(self) -> Client:
+        """The Dask client (started on first call)."""
+        if self._client is None:
+            import logging
+
+            from distributed import Client, LocalCluster
+
+            if self.scheduler is not None:
+                self._client = Client(self.scheduler, timeout=30)
+            else:
+                with _sigint_ignored():  # the workers inherit it: Ctrl-C is the client's
+                    self._cluster = LocalCluster(
+                        n_workers=self.jobs,
+                        threads_per_worker=1,
+                        processes=True,
+                        dashboard_address=None,
+                        silence_logs=logging.ERROR,
+                    )
+                self._client = Client(self._cluster)
+        return self._client
 
     def run(
         self, fn: Callable[[Any], Record], cells: Sequence[Any]
     ) -> Iterator[tuple[int, Record]]:
-        with ProcessPoolExecutor(max_workers=min(self.jobs, len(cells))) as ex:
-            futures = {ex.submit(fn, cell): i for i, cell in enumerate(cells)}
+        from distributed import as_completed
+
+        client = self.client()
+        token = uuid.uuid4().hex[:8]  # unique task keys: never share a task with another sweep
+        index: dict[str, int] = {}
+        futures = []
+        for i, cell in enumerate(cells):
+            fut = client.submit(
+                fn, cell, key=f"cell-{cell.key()}-{token}", retries=self.retries, pure=False
+            )
+            index[fut.key] = i
+            futures.append(fut)
+        pending = set(futures)
+        try:
             for fut in as_completed(futures):
-                yield futures[fut], fut.result()
+                pending.discard(fut)
+                i = index[fut.key]
+                try:
+                    rec = fut.result()
+                except Exception as exc:  # the task itself failed: e.g. KilledWorker
+                    rec = error_record(cells[i], exc)
+                fut.release()
+                yield i, rec
+        finally:
+            if pending:  # interrupted: drop the cells in flight
+                self._interrupted = True
+                with contextlib.suppress(Exception):
+                    client.cancel(list(pending), force=True)
+
+    def close(self) -> None:
+        """Disconnect (and stop the ``LocalCluster`` this executor started)."""
+        client, cluster = self._client, self._cluster
+        self._client = self._cluster = None
+        if cluster is not None and self._interrupted:
+            _kill_workers(cluster)  # busy with cells nobody waits for: stop now
+        with contextlib.suppress(Exception):
+            if client is not None:
+                client.close(timeout=2)
+        with contextlib.suppress(Exception):
+            if cluster is not None:
+                cluster.close(timeout=2)
 
 
-def make_executor(jobs: int = 1, n_cells: int = 2) -> Executor:
-    """Serial for one job (or a single cell), else a process pool."""
-    return SerialExecutor() if jobs <= 1 or n_cells <= 1 else ProcessExecutor(jobs)
+def _kill_workers(cluster: LocalCluster) -> None:
+    """Kill the worker processes a ``LocalCluster`` started, by their PIDs."""
+    import os
+    import signal
+
+    for nanny in list(cluster.workers.values()):
+        with contextlib.suppress(Exception):
+            os.kill(nanny.process.process.pid, signal.SIGKILL)
+
+
+def make_executor(
+    jobs: int = 1, n_cells: int = 2, scheduler: str | None = None
+) -> SerialExecutor | DaskExecutor:
+    """A cluster at ``scheduler`` if given; else serial for one job (or a single cell), else a
+    ``LocalCluster`` of ``jobs`` worker processes."""
+    if scheduler:
+        return DaskExecutor(scheduler=scheduler)
+    return SerialExecutor() if jobs <= 1 or n_cells <= 1 else DaskExecutor(jobs=jobs)
+
+
+# ---------------------------------------------------------------------------------------------
+# Sessions: what a command's sweeps share
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass
+class SweepReport:
+    """What one sweep did: cells computed now, reused from the cell store, failed."""
+
+    desc: str
+    total: int
+    done: int = 0
+    skipped: int = 0
+    failed: int = 0
+    wall_s: float = 0.0
+    interrupted: bool = False
+
+    def line(self) -> str:
+        """The one-line summary printed at the end of a sweep."""
+        text = (
+            f"{self.desc}: {self.done} done, {self.skipped} skipped, {self.failed} failed "
+            f"of {self.total} cells in {self.wall_s:.1f} s"
+        )
+        return text + (" (interrupted)" if self.interrupted else "")
+
+
+@dataclass
+class SweepSession:
+    """The settings of every sweep a command runs, and their reports."""
+
+    jobs: int = 1
+    scheduler: str | None = None
+    progress: bool | None = None
+    summary: bool = False
+    reports: list[SweepReport] = field(default_factory=list)
+    _executor: SerialExecutor | DaskExecutor | None = None
+
+    def executor(self, n_cells: int) -> SerialExecutor | DaskExecutor:
+        """The session's executor (one Dask client for all its sweeps)."""
+        if self._executor is None or isinstance(self._executor, SerialExecutor):
+            ex = make_executor(self.jobs, n_cells, self.scheduler)
+            if isinstance(ex, SerialExecutor):
+                return ex
+            self._executor = ex
+        return self._executor
+
+    @property
+    def failed(self) -> int:
+        """Cells that failed over all the session's sweeps."""
+        return sum(r.failed for r in self.reports)
+
+    def close(self) -> None:
+        if self._executor is not None:
+            self._executor.close()
+            self._executor = None
+
+
+_SESSION: SweepSession | None = None
+
+
+@contextlib.contextmanager
+def sweep_session(
+    jobs: int = 1,
+    scheduler: str | None = None,
+    progress: bool | None = None,
+    summary: bool = True,
+) -> Iterator[SweepSession]:
+    """Run every sweep inside on ``jobs`` local workers or the cluster at ``scheduler``,
+    with a progress bar (``None``: only on a terminal) and a summary line on stderr."""
+    global _SESSION
+    previous = _SESSION
+    session = SweepSession(jobs, scheduler, progress, summary)
+    _SESSION = session
+    try:
+        yield session
+    finally:
+        _SESSION = previous
+        session.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# The runner
+# ---------------------------------------------------------------------------------------------
 
 
 def json_default(o: Any) -> Any:
@@ -85,50 +344,107 @@ def write_json(path: str | Path, obj: Any) -> Path:
     return Path(path)
 
 
-def run_cells_counted(
+def _saved(path: Path | None) -> Record | None:
+    """A finished cell's saved record (an error record counts as not finished: retried)."""
+    if path is None or not path.exists():
+        return None
+    rec: Record = json.loads(path.read_text())
+    return None if is_failed(rec) and "traceback" in rec else rec
+
+
+def run_sweep(
     cells: Sequence[Any],
     fn: Callable[[Any], Record],
     *,
     cell_dir: str | Path | None = None,
-    jobs: int = 1,
+    jobs: int | None = None,
     executor: Executor | None = None,
     progress: bool | None = None,
     desc: str = "cells",
-) -> tuple[list[Record], int]:
-    """Run ``fn`` on every cell without a saved record; return all records, in cell order,
-    and how many were computed now.
+) -> tuple[list[Record], SweepReport]:
+    """Run ``fn`` on every cell without a saved record; return all records in cell order and
+    the sweep's report.
 
     Records of cells already saved under ``cell_dir`` are read back; new ones are saved as
-    soon as they finish (an interrupted run loses only the cells in flight). Without
-    ``cell_dir`` nothing is saved. ``executor`` (default: :func:`make_executor` of ``jobs``)
-    decides where cells run; ``progress=None`` shows a bar only on a terminal.
+    they arrive (one client per ``cell_dir``: it also removes the temporary files a killed
+    client left behind). Without ``cell_dir`` nothing is saved. Where cells run: ``executor``
+    if given, else the active :func:`sweep_session`'s (it overrides ``jobs``), else
+    :func:`make_executor` of ``jobs``.
+    ``progress=None``: the session's setting, else a bar only on a terminal. On Ctrl-C the
+    cells in flight are dropped, the finished ones are kept, and ``KeyboardInterrupt`` is
+    raised again after the summary.
     """
     from tqdm import tqdm
 
+    t0 = time.perf_counter()
+    session = _SESSION
     folder = Path(cell_dir) if cell_dir is not None else None
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
+        for tmp in folder.glob(".*.json.*.json"):  # a killed client's half-written file
+            tmp.unlink(missing_ok=True)
     paths = [folder / f"{c.key()}.json" if folder is not None else None for c in cells]
-    records: list[Record | None] = [None] * len(cells)
-    todo = []
-    for i, p in enumerate(paths):
-        if p is not None and p.exists():
-            records[i] = json.loads(p.read_text())
+    records: list[Record | None] = [_saved(p) for p in paths]
+    todo = [i for i, r in enumerate(records) if r is None]
+    report = SweepReport(desc, len(cells), skipped=len(cells) - len(todo))
+    owned = None  # an executor started here, closed here
+    if executor is None:
+        if session is not None:
+            executor = session.executor(len(todo))
         else:
-            todo.append(i)
-    ex = executor if executor is not None else make_executor(jobs, len(todo))
-    bar = tqdm(total=len(todo), desc=desc, disable=None if progress is None else not progress)
+            executor = owned = make_executor(jobs or 1, len(todo))
+    if progress is None and session is not None:
+        progress = session.progress
+    bar = tqdm(
+        total=len(todo),
+        desc=desc,
+        unit="cell",
+        disable=None if progress is None else not progress,
+        file=sys.stderr,
+    )
     try:
-        for j, rec in ex.run(fn, [cells[i] for i in todo]):
+        for j, rec in executor.run(Guarded(fn), [cells[i] for i in todo]):
             i = todo[j]
             path = paths[i]
             if path is not None:
                 write_json(path, rec)
             records[i] = rec
+            if is_failed(rec):
+                report.failed += 1
+                bar.set_postfix(failed=report.failed)
+            else:
+                report.done += 1
             bar.update()
+    except KeyboardInterrupt:
+        report.interrupted = True
+        raise
     finally:
         bar.close()
-    return [r for r in records if r is not None], len(todo)
+        if owned is not None:
+            owned.close()
+        report.wall_s = time.perf_counter() - t0
+        if session is not None:
+            session.reports.append(report)
+            if session.summary:
+                print(report.line(), file=sys.stderr, flush=True)
+    return [r for r in records if r is not None], report
+
+
+def run_cells_counted(
+    cells: Sequence[Any],
+    fn: Callable[[Any], Record],
+    *,
+    cell_dir: str | Path | None = None,
+    jobs: int | None = None,
+    executor: Executor | None = None,
+    progress: bool | None = None,
+    desc: str = "cells",
+) -> tuple[list[Record], int]:
+    """The records of :func:`run_sweep` (in cell order) and how many cells ran now."""
+    records, report = run_sweep(
+        cells, fn, cell_dir=cell_dir, jobs=jobs, executor=executor, progress=progress, desc=desc
+    )
+    return records, report.done + report.failed
 
 
 def run_cells(
@@ -138,16 +454,10 @@ def run_cells(
     cell_dir: str | Path | None = None,
     progress: bool | None = None,
     desc: str = "cells",
-    jobs: int = 1,
+    jobs: int | None = None,
     executor: Executor | None = None,
 ) -> list[Record]:
-    """The records of :func:`run_cells_counted` (resumable under ``cell_dir``)."""
-    return run_cells_counted(
-        cells,
-        fn,
-        cell_dir=cell_dir,
-        jobs=jobs,
-        executor=executor,
-        progress=progress,
-        desc=desc,
+    """The records of :func:`run_sweep` (resumable under ``cell_dir``)."""
+    return run_sweep(
+        cells, fn, cell_dir=cell_dir, jobs=jobs, executor=executor, progress=progress, desc=desc
     )[0]

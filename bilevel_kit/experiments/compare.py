@@ -49,8 +49,8 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         res = solve(
             inst, cell.method, seed=cell.seed, time_limit=cell.time_limit, check=True, **cell.params
         )
-    except BilevelKitError as exc:
-        return {**record, "status": "error", "error": str(exc)}
+    except BilevelKitError as exc:  # a failed cell: its error and its configuration
+        return {**record, "status": "error", "error": str(exc), "cell": asdict(cell)}
     from ..solution import result_to_dict
 
     m = res.metrics or {}

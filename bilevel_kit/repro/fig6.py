@@ -5,7 +5,7 @@ Whole Assembly on a MAT x MTTF grid of feeder delays, with the paper's significa
 Each grid point is a :class:`Fig6Cell`, a pure function of its configuration
 (:func:`fig6_cell`) run through the one resumable cell runner
 (:func:`bilevel_kit.experiments.cells.run_cells_counted`): a rerun computes only the cells
-whose file is missing.
+whose file is missing, and the cells run wherever the sweep session says (docs/cluster.md).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import run_cells_counted, write_json
+from ..experiments.cells import is_failed, run_cells_counted, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance, load
 from ..layout.cross_entropy import CEParams
@@ -236,8 +236,8 @@ def format_fig6_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
             for a in mats:
                 cells = [f"{a:g}"]
                 for b in mttfs:
-                    r = next(x for x in grid if x["mat"] == a and x["mttf"] == b)
-                    v = r[f"pct_{m}:{name}"]
+                    r = next((x for x in grid if x["mat"] == a and x["mttf"] == b), None)
+                    v = None if r is None else r[f"pct_{m}:{name}"]
                     cells.append("-" if v is None else f"{v:.1f} {r[f'stars_{m}:{name}']}".strip())
                 table.append(cells)
             out += markdown_lines(["MAT \\ MTTF", *(f"{v:g}" for v in mttfs)], table)
@@ -344,9 +344,13 @@ def run_fig6(
     ``seed`` picks the replication seeds (the same in every cell: common random numbers).
 
     Cells are saved one JSON each under ``out_dir/cells/`` as they finish; a rerun computes
-    only the missing ones (``jobs`` > 1: a process pool). Writes ``fig6_cells.csv``,
-    ``fig6.md``, ``fig6.png`` (four heatmaps), ``fig6_<X>_over_optimized.png`` per extra
-    policy and ``fig6.json``. Returns the summary dict (rows, calibration, files, counts).
+    only the missing ones (``jobs`` > 1: a Dask ``LocalCluster``; inside
+    :func:`~bilevel_kit.experiments.cells.sweep_session`, its executor). Writes
+    ``fig6_cells.csv``, ``fig6.md``, ``fig6.png`` (four heatmaps),
+    ``fig6_<X>_over_optimized.png`` per extra policy and ``fig6.json``. Returns the summary
+    dict (rows, calibration, files, counts). Cells that raised are listed under ``"failed"``
+    (their error records are in ``cells/``, retried on a rerun); then only the CSV of the
+    other rows and ``fig6.json`` are written.
     """
     t0 = time.perf_counter()
     inst, path = load_instance(instance)
@@ -381,6 +385,8 @@ def run_fig6(
     records, computed = run_cells_counted(
         cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress, desc="fig6 cells"
     )
+    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
+    records = [r for r in records if not is_failed(r)]
     rows = [summarize_cell(r) for r in records]
     result = {
         "instance": inst.name,
@@ -398,10 +404,14 @@ def run_fig6(
         "cells": len(cells),
         "computed": computed,
         "reused": len(cells) - computed,
+        "failed": failed,
         "simulation_wall_s": {p: sum(r["wall_s"].get(p, 0.0) for r in records) for p in policies},
         "rows": rows,
     }
-    files = _write_fig6_outputs(out, rows, policies)
+    if failed:
+        files = {"csv": write_csv(out / "fig6_cells.csv", rows, exclude=(), line_end="\n")}
+    else:
+        files = _write_fig6_outputs(out, rows, policies)
     result["wall_s"] = time.perf_counter() - t0
     result["files"] = {k: str(v) for k, v in {**files, "json": out / "fig6.json"}.items()}
     write_json(out / "fig6.json", result)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -19,12 +19,12 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import write_json
+from ..experiments.cells import is_failed, run_cells, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance
 from ..layout.cross_entropy import CEParams
 from ..plots import save_figure
-from ..sim import TimingModel
+from ..sim import SimParams, SimulationError, TimingModel
 from .calibration import calibrate, condition_means, study_params, study_runs
 from .common import (
     CONDITIONS,
@@ -313,6 +313,46 @@ def _write_study(
     write_json(out / "user_study.json", result)
 
 
+@dataclass(frozen=True)
+class StudyCell:
+    """One repetition of the study: every condition on its participants' seeds."""
+
+    instance: Instance
+    params: SimParams
+    seeds: tuple[int, ...]
+    study: int
+
+    def key(self) -> str:
+        return f"study{self.study}"
+
+
+def study_cell(cell: StudyCell) -> dict[str, Any]:
+    """The rows of one study (:func:`study_runs`), tagged with the study's number."""
+    rows = study_runs(cell.instance, cell.params, cell.seeds)
+    for r in rows:
+        r["study"] = cell.study
+    return {"study": cell.study, "rows": rows}
+
+
+def _study_rows(
+    inst: Instance, params: SimParams, seeds: list[int], n: int, jobs: int
+) -> list[dict[str, Any]]:
+    """All studies' rows (one cell per study), in the order of one :func:`study_runs` call
+    over all seeds: condition, then study, then participant."""
+    cells = [
+        StudyCell(inst, params, tuple(seeds[j * n : (j + 1) * n]), j)
+        for j in range(len(seeds) // n)
+    ]
+    records = run_cells(cells, study_cell, jobs=jobs, desc="user-study studies")
+    failed = [r for r in records if is_failed(r)]
+    if failed:
+        raise SimulationError(f"{len(failed)} study(ies) failed: {failed[0]['error']}")
+    rows = [row for r in records for row in r["rows"]]
+    order = {c: i for i, c in enumerate(dict.fromkeys(row["condition"] for row in rows))}
+    rows.sort(key=lambda row: (order[row["condition"]], row["study"], row["participant"]))
+    return rows
+
+
 def run_user_study(
     out_dir: str | Path = "out/repro/user_study",
     quick: bool = False,
@@ -339,9 +379,9 @@ def run_user_study(
 
     ``trays`` overrides the instance's (the study's table: one tray; ``"unlimited"`` lets the
     robot run ahead). ``quick``: a coarse 5 x 5 calibration grid (plus the polish), 2 studies
-    and a small CE.
-    ``jobs`` is accepted for symmetry with :func:`run_fig6`; the study runs in one process
-    (it takes seconds).
+    and a small CE. The studies are cells of the one cell runner (not saved: they take
+    seconds), on ``jobs`` local workers or the sweep session's executor (docs/cluster.md); the
+    calibration runs here.
 
     Writes to ``out_dir``: ``user_study_runs.csv`` (study x participant x condition),
     ``user_study_summary.csv`` (the side-by-side table), ``user_study.md``,
@@ -359,10 +399,7 @@ def run_user_study(
     if ce is None and quick:
         ce = QUICK_CE
     params = study_params(timing, trays, ce)
-    rows = study_runs(inst, params, all_seeds)  # one policy object per condition: shared cache
-    for r in rows:
-        r["study"], r["participant"] = divmod(r["participant"] - 1, n_participants)
-        r["participant"] += 1
+    rows = _study_rows(inst, params, all_seeds, n_participants, jobs)
     studies = [[r for r in rows if r["study"] == j] for j in range(n_studies)]
     summary = summarize_study(studies[0])
     replicates = [summarize_study(st) for st in studies] if n_studies > 1 else []

@@ -6,7 +6,7 @@ import json
 from dataclasses import dataclass
 
 from bilevel_kit.experiments import (
-    ProcessExecutor,
+    DaskExecutor,
     SerialExecutor,
     make_executor,
     run_cells,
@@ -43,12 +43,12 @@ def test_resume_computes_only_missing_cells(tmp_path):
     assert (seen, n, again) == ([1], 1, recs)
 
 
-def test_process_pool_gives_the_same_records_in_order(tmp_path):
+def test_local_dask_cluster_gives_the_same_records_in_order(tmp_path):
     cells = [Square(i) for i in range(5)]
     serial = run_cells(cells, square, progress=False)
     pooled = run_cells(cells, square, cell_dir=tmp_path, jobs=2, progress=False)
     assert serial == pooled
-    assert isinstance(make_executor(2, 5), ProcessExecutor)
+    assert isinstance(make_executor(2, 5), DaskExecutor)
     assert isinstance(make_executor(1, 5), SerialExecutor)
     assert isinstance(make_executor(4, 1), SerialExecutor)
 

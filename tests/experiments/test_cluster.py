@@ -1,0 +1,185 @@
+"""Sweeps on a real Dask cluster: a ``dask scheduler`` and two ``dask worker`` processes on
+random 127.0.0.1 ports, driven through ``bilevel-kit repro fig6 --scheduler`` (docs/cluster.md).
+
+Each test compares the cell records with a serial run of the same grid (every field but the
+wall times), kills a worker or the client mid-sweep by PID, and checks that nothing is lost
+or written twice.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bilevel_kit.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+#: A small Figure 6 grid: 1 reference + 3 grid cells, long enough to kill things mid-sweep.
+GRID = ["--quick", "--reps", "4", "--mats", "30,60,120", "--mttfs", "60"]
+N_CELLS = 4
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1"}
+ENV.pop("DASK_SCHEDULER_ADDRESS", None)
+CLI = "from bilevel_kit.cli import main; raise SystemExit(main())"
+
+pytestmark = pytest.mark.slow
+
+
+def _spawn(args: list[str], log: Path) -> subprocess.Popen[bytes]:
+    with open(log, "wb") as fh:
+        return subprocess.Popen(args, cwd=ROOT, env=ENV, stdout=fh, stderr=subprocess.STDOUT)
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> None:
+    """Stop one process we started, by its PID."""
+    if proc.poll() is None:
+        os.kill(proc.pid, signal.SIGTERM)
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            os.kill(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+class Cluster:
+    """A scheduler and two workers (``--no-nanny``: the worker's PID is the worker)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        sfile = folder / "scheduler.json"
+        self.scheduler = _spawn(
+            [
+                *(sys.executable, "-m", "distributed.cli.dask_scheduler"),
+                *("--host", "127.0.0.1", "--port", "0", "--no-dashboard"),
+                *("--scheduler-file", str(sfile)),
+            ],
+            folder / "scheduler.log",
+        )
+        deadline = time.monotonic() + 30
+        while not sfile.exists() or not sfile.read_text().strip():
+            assert time.monotonic() < deadline, (folder / "scheduler.log").read_text()
+            time.sleep(0.1)
+        self.address: str = json.loads(sfile.read_text())["address"]
+        self.workers = [
+            _spawn(
+                [
+                    *(sys.executable, "-m", "distributed.cli.dask_worker", self.address),
+                    *("--nthreads", "1", "--no-nanny", "--no-dashboard"),
+                    *("--host", "127.0.0.1", "--name", f"w{i}"),
+                ],
+                folder / f"worker{i}.log",
+            )
+            for i in range(2)
+        ]
+        from distributed import Client
+
+        with Client(self.address, timeout=30) as client:
+            client.wait_for_workers(2, timeout=30)
+
+    def close(self) -> None:
+        for proc in [*self.workers, self.scheduler]:
+            _stop(proc)
+
+
+@pytest.fixture
+def cluster(tmp_path: Path) -> Iterator[Cluster]:
+    c = Cluster(tmp_path)
+    try:
+        yield c
+    finally:
+        c.close()
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
+    """The grid's cell records, computed in this process (``--jobs 1``)."""
+    out = tmp_path_factory.mktemp("serial")
+    assert main(["repro", "fig6", *GRID, "-q", "--out", str(out)]) == 0
+    return _records(out)
+
+
+def _cell_files(out: Path) -> list[Path]:
+    """The finished cells' files (not a temporary file being written)."""
+    folder = out / "cells"
+    return (
+        sorted(p for p in folder.glob("*.json") if not p.name.startswith("."))
+        if folder.exists()
+        else []
+    )
+
+
+def _records(out: Path) -> dict[str, dict]:
+    """Cell file name -> record without the wall times."""
+    recs = {}
+    for p in _cell_files(out):
+        rec = json.loads(p.read_text())
+        rec.pop("wall_s")
+        recs[p.name] = rec
+    return recs
+
+
+def _assert_clean(out: Path, serial: dict[str, dict]) -> None:
+    """Every cell once, no temporary files left, records equal to the serial run's."""
+    names = sorted(p.name for p in (out / "cells").iterdir())
+    assert names == sorted(serial), names
+    assert _records(out) == serial
+
+
+def _fig6(out: Path, address: str) -> list[str]:
+    cmd = [sys.executable, "-c", CLI, "repro", "fig6", *GRID, "--out", str(out)]
+    return [*cmd, "-q", "--scheduler", address]
+
+
+def _wait_for_cells(out: Path, n: int, proc: subprocess.Popen[bytes], timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while len(_cell_files(out)) < n:
+        assert proc.poll() is None, "the sweep ended before it could be interrupted"
+        assert time.monotonic() < deadline, "no cell finished in time"
+        time.sleep(0.05)
+
+
+def test_fig6_through_the_scheduler_equals_the_serial_run(cluster, serial, tmp_path):
+    out = tmp_path / "out"
+    proc = subprocess.run(_fig6(out, cluster.address), cwd=ROOT, env=ENV, capture_output=True)
+    err = proc.stderr.decode()
+    assert proc.returncode == 0, err[-3000:]
+    assert f"fig6 cells: {N_CELLS} done, 0 skipped, 0 failed" in err
+    _assert_clean(out, serial)
+
+
+def test_a_worker_killed_mid_sweep_loses_nothing(cluster, serial, tmp_path):
+    out = tmp_path / "out"
+    proc = _spawn(_fig6(out, cluster.address), tmp_path / "client.log")
+    try:
+        _wait_for_cells(out, 1, proc, timeout=50)
+        os.kill(cluster.workers[0].pid, signal.SIGKILL)
+        assert proc.wait(timeout=50) == 0, (tmp_path / "client.log").read_text()[-3000:]
+    finally:
+        _stop(proc)
+    assert cluster.workers[0].wait(timeout=5) == -signal.SIGKILL
+    _assert_clean(out, serial)
+
+
+def test_a_killed_client_resumes_with_the_finished_cells(cluster, serial, tmp_path):
+    out = tmp_path / "out"
+    proc = _spawn(_fig6(out, cluster.address), tmp_path / "client.log")
+    try:
+        _wait_for_cells(out, 1, proc, timeout=50)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+    finally:
+        _stop(proc)
+    kept = len(_cell_files(out))
+    assert 1 <= kept < N_CELLS
+    again = subprocess.run(_fig6(out, cluster.address), cwd=ROOT, env=ENV, capture_output=True)
+    err = again.stderr.decode()
+    assert again.returncode == 0, err[-3000:]
+    assert f"fig6 cells: {N_CELLS - kept} done, {kept} skipped, 0 failed" in err
+    _assert_clean(out, serial)
