@@ -185,7 +185,7 @@ class DaskExecutor:
 
         client = self.client()
         token = uuid.uuid4().hex[:8]  # unique task keys: never share a task with another sweep
-        index: dict[str, int] = {}
+        index: dict[Any, int] = {}  # Dask task key -> cell position
         futures = []
         for i, cell in enumerate(cells):
             fut = client.submit(

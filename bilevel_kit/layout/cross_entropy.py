@@ -53,6 +53,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.linalg.lapack
@@ -349,7 +350,8 @@ def _ce_run(
     reach = np.where(np.isin(np.arange(n), rot), np.hypot(kit.w, kit.h), np.maximum(kit.w, kit.h))
     may_stick_out = bool((reach > min(W, H)).any())
     floor = p.min_sd**2
-    w6f, w_outf = dt(w6), dt(w_out)
+    w6f: Any = dt(w6)
+    w_outf: Any = dt(w_out)
     deg = dt(math.pi / 180.0)
     kernel = _kernels.score_kernel()
     if kernel is not None:
@@ -358,8 +360,8 @@ def _ce_run(
         k_i, k_j = kit.pairs.i.astype(np.int64), kit.pairs.j.astype(np.int64)
         k_sign = kit.pairs.sign.astype(dt)
         k_rot = rot.astype(np.int64)
-        cost = np.empty(S, dtype=dt)
-        z = np.empty(S, dtype=dt)
+        cost: np.ndarray = np.empty(S, dtype=dt)
+        z: np.ndarray = np.empty(S, dtype=dt)
     # Mirrored sampling: m normal columns give samples mu + LZ and mu - LZ.
     m = S - S // 2 if p.mirrored else S
     LZ = np.empty((dim, m), dtype=dt)
@@ -419,7 +421,7 @@ def _ce_run(
             # Score all samples in one pass: D_same - D_diff + W6 * Z_box (+ overhang penalty).
             cost, z = scorer.signed(x, y, exT, eyT)
             cost += w6f * z
-        feasible = z == 0
+        feasible: np.ndarray = z == 0
         if may_stick_out:
             over = np.maximum(2 * exT - dt(W), dt(0)).sum(axis=0)
             over += np.maximum(2 * eyT - dt(H), dt(0)).sum(axis=0)
@@ -526,7 +528,7 @@ def _exactly_valid(layout: Sequence[Placement], tray: Tray, reach: ReachGrid | N
     every centre reachable: the final gate of every answer."""
     if not geometry.exactly_valid(layout, tray.width, tray.height):
         return False
-    return (
+    return bool(
         reach is None
         or reach.lookup(np.array([p.x for p in layout]), np.array([p.y for p in layout])).all()
     )
