@@ -74,7 +74,15 @@ def predictions_markdown(rows: Sequence[Row]) -> str:
 
 
 def parameters_markdown(rows: Sequence[Row]) -> str:
-    body = [[r["parameter"], _f(r["value"], 4), r["role"], r["source"]] for r in rows]
+    body = [
+        [
+            r["parameter"],
+            _f(r["value"], 4) if "." in str(r["value"]) else str(r["value"]),
+            r["role"],
+            r["source"],
+        ]
+        for r in rows
+    ]
     return "\n".join(markdown_lines(["parameter", "value", "role", "source"], body))
 
 
