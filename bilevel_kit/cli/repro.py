@@ -22,15 +22,21 @@ def add_parser(subparsers: Subparsers) -> None:
     p = subparsers.add_parser(
         "repro",
         help="reproduce the paper's user study (Fig. 5) or Figure 6",
-        description="user-study: 18 simulated participants x {Whole Assembly, Single Task, "
-        "Optimized}, calibrated on two of the paper's numbers, ANOVA + Tukey HSD side by side "
-        "with the paper. fig6: MAT x MTTF grid of the shop-floor simulation, percent "
-        "improvement heatmaps with significance marks; saved per cell (resumable). "
+        description="user-study: within-subject participants x {Whole Assembly, Single Task, "
+        "Optimized}, fitted on a calibration cohort to 3 of the paper's numbers, then 200 fresh "
+        "studies of 18 give every other paper number a median and 95%% prediction interval. "
+        "fig6: MAT x MTTF grid of the shop-floor simulation (10 tables per run), percent "
+        "improvement heatmaps with ANOVA + Tukey marks; saved per cell (resumable). "
         "--jobs/--scheduler run the cells (fig6 grid points, user-study studies) in parallel "
         "(docs/cluster.md); exit 5 when a cell failed. See paper_repro/README.md.",
     )
     p.add_argument("experiment", choices=("user-study", "fig6"))
-    p.add_argument("--quick", action="store_true", help="a reduced run (seconds)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smaller run of the same experiment (fewer studies, cells, replications); "
+        "its outputs say so",
+    )
     add_output(
         p, "--out", folder=True, metavar="DIR", help="output folder (default out/repro/EXPERIMENT)"
     )

@@ -40,6 +40,14 @@ DEFAULT_TARGETS: tuple[tuple[str, str, float], ...] = (
     ("idle", WHOLE, PAPER_MEANS["idle"][WHOLE]),
     ("idle", SINGLE, PAPER_MEANS["idle"][SINGLE]),
 )
+#: The within-participant fitting target: the paper's repeated-measures F of total task time.
+F_TARGET: tuple[str, float] = ("total", PAPER_F["total"])
+#: The co-located study's delivery time: "the absence of delivery distance (the human and robot
+#: were co-located across a table)", Section VI. Declared, not fitted.
+STUDY_DELIVERY = 0.0
+#: Calibration cohort (its own seed stream) and evaluation cohort sizes, in studies of 18.
+CALIBRATION_STUDIES = 10
+EVALUATION_STUDIES = 200
 #: Free TimingModel fields and their search boxes.
 DEFAULT_FREE: dict[str, tuple[float, float]] = {
     "robot_scale": (0.5, 2.0),
@@ -52,10 +60,11 @@ FIG6_SUPPLIED = ("leg", "foot")
 FIG6_REPAIR = 30.0
 FIG6_UNITS = 10
 FIG6_REPS = 30
-#: ``quick=True``: a reduced grid, 2 units, 3 replications, a small CE.
+#: ``quick=True`` for Figure 6: the same experiment (10 tables per run, the paper's CE) on a
+#: reduced grid with 3 replications. ``QUICK_CE`` is the user study's quick CE (tests only).
 QUICK_MATS = (30.0, 120.0)
 QUICK_MTTFS = (60.0,)
-QUICK_UNITS = 2
+QUICK_UNITS = FIG6_UNITS
 QUICK_REPS = 3
 QUICK_CE = CEParams(samples=40, elite=8, max_iter=15, patience=3)
 

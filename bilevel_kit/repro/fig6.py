@@ -29,8 +29,9 @@ from ..layout.cross_entropy import CEParams
 from ..options import NoOptions
 from ..plots import save_figure
 from ..sim import POLICIES, SimParams, TimingModel, replicate
-from .calibration import calibrate
+from .calibration import CALIBRATION, calibrate, draw_cohort
 from .common import (
+    CALIBRATION_STUDIES,
     CONDITIONS,
     FIG6_GRID,
     FIG6_REPAIR,
@@ -42,12 +43,11 @@ from .common import (
     METRICS,
     OPT,
     PAPER_N,
-    QUICK_CE,
     QUICK_MATS,
     QUICK_MTTFS,
     QUICK_REPS,
-    QUICK_UNITS,
     SINGLE,
+    STUDY_DELIVERY,
     WHOLE,
     load_instance,
     paper_idle,
@@ -262,15 +262,72 @@ def _grid_defaults(
     """The paper's grid, or the reduced one with ``quick``, where not given."""
     if reps is None:
         reps = QUICK_REPS if quick else FIG6_REPS
-    if quick:
+    if quick:  # the same experiment (10 tables, the paper's CE), fewer cells and replications
         mats = QUICK_MATS if mats is None else mats
         mttfs = QUICK_MTTFS if mttfs is None else mttfs
-        units = QUICK_UNITS if units is None else units
-        ce = QUICK_CE if ce is None else ce
     mats = FIG6_GRID if mats is None else mats
     mttfs = FIG6_GRID if mttfs is None else mttfs
     units = FIG6_UNITS if units is None else units
     return reps, mats, mttfs, units, ce
+
+
+def improvements(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Long format, one row per panel and cell: the percent improvement, the Tukey p, the
+    paper's stars, the paired-test p (``fig6_improvements.csv``)."""
+    pols = [k.split(":", 1)[1] for k in rows[0] if k.startswith("total_mean:")]
+    out: list[dict[str, Any]] = []
+    for subj, base in comparisons(pols):
+        name = f"{subj}_over_{base}"
+        for m in METRICS:
+            panel = f"{METRIC_LABELS[m]}, {LABELS.get(subj, subj)} over {LABELS.get(base, base)}"
+            for r in rows:
+                pct = r[f"pct_{m}:{name}"]
+                out.append(
+                    {
+                        "panel": panel,
+                        "mat": r["mat"],
+                        "mttf": r["mttf"],
+                        "reps": r["reps"],
+                        "units": r["units"],
+                        "pct": None if pct is None else round(pct, 3),
+                        "p_tukey": r[f"p_tukey_{m}:{name}"],
+                        "anova_p": r[f"anova_p_{m}:{'paper' if subj in CONDITIONS else 'all'}"],
+                        "stars": r[f"stars_{m}:{name}"],
+                        "p_paired": r[f"p_paired_{m}:{name}"],
+                    }
+                )
+    return out
+
+
+def verdicts(long_rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per panel, over the delay cells (not the reference): how many are significant with the
+    paper's test (ANOVA p < .05 and Tukey p < .05, no correction over the cells, as the paper
+    reports per cell), how many survive Holm's correction over the panel's cells, how many by
+    the paired t-test; the verdict on "significant for most scenarios" (more than half)."""
+    from statsmodels.stats.multitest import multipletests
+
+    out: list[dict[str, Any]] = []
+    for panel in dict.fromkeys(r["panel"] for r in long_rows):
+        cells = [r for r in long_rows if r["panel"] == panel and r["mat"] is not None]
+        sig = [bool(r["stars"]) for r in cells]
+        ps = np.array([1.0 if r["p_tukey"] is None else r["p_tukey"] for r in cells])
+        gate = np.array([r["anova_p"] is not None and r["anova_p"] < 0.05 for r in cells])
+        holm = multipletests(ps, alpha=0.05, method="holm")[0] & gate if len(ps) else []
+        paired = [r["p_paired"] is not None and r["p_paired"] < 0.05 for r in cells]
+        better = sum(bool(s) and (r["pct"] or 0) > 0 for s, r in zip(sig, cells, strict=True))
+        n = len(cells)
+        out.append(
+            {
+                "panel": panel,
+                "cells": n,
+                "significant": int(sum(sig)),
+                "significant_better": int(better),
+                "significant_holm": int(np.sum(holm)),
+                "significant_paired": int(sum(paired)),
+                "verdict": "yes" if better > n / 2 else "no",
+            }
+        )
+    return out
 
 
 def _check_fig6(
@@ -292,20 +349,37 @@ def _check_fig6(
 
 
 def _write_fig6_outputs(
-    out: Path, rows: Sequence[Mapping[str, Any]], policies: Sequence[str]
+    out: Path, rows: Sequence[Mapping[str, Any]], policies: Sequence[str], quick: bool
 ) -> dict[str, Path]:
     """The CSV, Markdown and figures of Figure 6 (one extra figure per extra policy)."""
     from .plots import plot_fig6
+    from .report import verdicts_markdown
 
+    long_rows = improvements(rows)
+    verdict = verdicts(long_rows)
     files = {
         "csv": write_csv(out / "fig6_cells.csv", rows, exclude=(), line_end="\n"),
+        "improvements_csv": write_csv(
+            out / "fig6_improvements.csv", long_rows, exclude=(), line_end="\n"
+        ),
+        "verdicts_csv": write_csv(out / "fig6_verdicts.csv", verdict, exclude=(), line_end="\n"),
         "markdown": out / "fig6.md",
-        "figure": save_figure(plot_fig6(rows), out / "fig6.png", dpi=130),
+        "figure": save_figure(plot_fig6(rows, quick=quick), out / "fig6.png", dpi=130),
     }
-    atomic.write_text(out / "fig6.md", format_fig6_markdown(rows))
+    r0 = rows[0]
+    head = (
+        f"Figure 6{' (QUICK: a reduced run, fewer cells and replications)' if quick else ''}: "
+        f"R = {r0['reps']} replications, {r0['units']} tables per run. \\* p < .05, "
+        "\\*\\* p < .001: one-way ANOVA over the three policies, then Tukey HSD (per cell, no "
+        "correction over the cells, as the paper).\n\n"
+    )
+    atomic.write_text(
+        out / "fig6.md",
+        head + format_fig6_markdown(rows) + "\n" + verdicts_markdown(verdict) + "\n",
+    )
     for x in policies:
         if x not in CONDITIONS and OPT in policies:
-            fig = plot_fig6(rows, subject=x, baselines=(OPT,))
+            fig = plot_fig6(rows, subject=x, baselines=(OPT,), quick=quick)
             path = out / f"fig6_{x}_over_optimized.png"
             files[f"figure_{x}"] = save_figure(fig, path, dpi=130)
     return files
@@ -338,7 +412,8 @@ def run_fig6(
     overrides it), the instance's trays (the study's table: one; ``trays`` overrides it, e.g.
     ``"unlimited"``), and the timing calibrated on the user study (:func:`calibrate` with
     participants of ``calibration_seed``; pass ``timing`` to skip).
-    ``quick``: MAT {30, 120} x MTTF {60}, 2 tables, 3 replications, a small CE.
+    ``quick``: the same experiment, smaller: MAT {30, 120} x MTTF {60}, 3 replications (still
+    10 tables per run and the paper's CE); every output says it was quick.
     ``policies``: the paper's three by default; an extra registered policy (e.g.
     ``"cpsat-rolling"``) adds "X over optimized" comparisons and a figure.
     ``seed`` picks the replication seeds (the same in every cell: common random numbers).
@@ -360,13 +435,17 @@ def run_fig6(
     _check_fig6(inst, policies, jobs, policy_options or {})
     cal: dict[str, Any] | None = None
     if timing is None:
-        grid, refine = (5, ()) if quick else (11, (7,))
+        # step 1 of the user study's protocol (the co-located study, d = 0): the robot's speed
+        # and o_H; Figure 6 samples one participant per table with the paper's total SD
         cal = calibrate(
             inst,
-            participant_seeds(calibration_seed, PAPER_N),
+            draw_cohort(
+                calibration_seed, 2 if quick else CALIBRATION_STUDIES, PAPER_N, CALIBRATION
+            ),
             trays=trays,
-            grid=grid,
-            refine=refine,
+            delivery_time=STUDY_DELIVERY,
+            f_target=None,
+            grid=3 if quick else 5,
         )
         timing = replace(TimingModel(), **cal["values"])
     common = {
@@ -387,7 +466,7 @@ def run_fig6(
     )
     failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
     records = [r for r in records if not is_failed(r)]
-    rows = [summarize_cell(r) for r in records]
+    rows = [{"quick": quick, **summarize_cell(r)} for r in records]
     result = {
         "instance": inst.name,
         "quick": quick,
@@ -411,7 +490,7 @@ def run_fig6(
     if failed:
         files = {"csv": write_csv(out / "fig6_cells.csv", rows, exclude=(), line_end="\n")}
     else:
-        files = _write_fig6_outputs(out, rows, policies)
+        files = _write_fig6_outputs(out, rows, policies, quick)
     result["wall_s"] = time.perf_counter() - t0
     result["files"] = {k: str(v) for k, v in {**files, "json": out / "fig6.json"}.items()}
     write_json(out / "fig6.json", result)

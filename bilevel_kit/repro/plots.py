@@ -8,51 +8,75 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .common import LABELS, METRIC_LABELS, OPT, PAPER_MEANS, SINGLE, WHOLE
+from .common import LABELS, METRIC_LABELS, OPT, SINGLE, WHOLE
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 
-def plot_user_study(summary: Mapping[str, Any], ax: Axes | None = None, paper: bool = True) -> Axes:
-    """The analogue of Fig. 5 (top): mean total task time and human idle time per condition,
-    error bars = 1 SD over participants; the paper's bars as black diamonds."""
+def plot_user_study(
+    table: Sequence[Mapping[str, Any]],
+    ax: Axes | None = None,
+    *,
+    quick: bool = False,
+    studies: int | None = None,
+) -> Axes:
+    """The analogue of Fig. 5 (top): per condition our median study mean with its 95 %
+    prediction interval (error bar) and, beside it (not on it), the paper's bar, hatched.
+    ``table``: the prediction table (:func:`.user_study.prediction_table`)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.0, 3.8))
-    per = summary["conditions"]
-    conds = [c for c in (OPT, SINGLE, WHOLE) if c in per]
+        _, ax = plt.subplots(figsize=(7.0, 4.0))
     colors = {OPT: "#2e7d32", SINGLE: "#1565c0", WHOLE: "#c62828"}
+    by = {r["quantity"]: r for r in table}
+    conds = (OPT, SINGLE, WHOLE)
     width = 0.8 / len(conds)
     for g, m in enumerate(("total", "idle")):
         for i, c in enumerate(conds):
+            r = by.get(f"mean {METRIC_LABELS[m]}, {LABELS[c]} (s)")
+            if r is None:
+                continue
             x = g + (i - (len(conds) - 1) / 2) * width
+            med, lo, hi = float(r["median"]), float(r["pi_low"]), float(r["pi_high"])
             ax.bar(
-                x,
-                per[c][f"{m}_mean"],
-                width * 0.92,
-                yerr=per[c][f"{m}_sd"],
+                x - width * 0.22,
+                med,
+                width * 0.44,
+                yerr=[[med - lo], [hi - med]],
                 capsize=3,
-                color=colors.get(c, "0.5"),
-                label=LABELS.get(c, c) if g == 0 else None,
+                color=colors[c],
+                label=f"{LABELS[c]} (ours)" if g == 0 else None,
                 gid=f"bar:{m}:{c}",
             )
-            if paper and c in PAPER_MEANS[m]:
-                ax.plot(
-                    x,
-                    PAPER_MEANS[m][c],
-                    "D",
-                    color="black",
-                    ms=5,
-                    zorder=5,
-                    label="paper (Fig. 5)" if g == 0 and i == 0 else None,
-                    gid=f"paper:{m}:{c}",
+            ax.bar(
+                x + width * 0.22,
+                float(r["paper"]),
+                width * 0.44,
+                color="white",
+                edgecolor=colors[c],
+                hatch="///",
+                label="paper (Fig. 5)" if g == 0 and i == 0 else None,
+                gid=f"paper:{m}:{c}",
+            )
+            if r["role"] == "fitted":
+                ax.annotate(
+                    "fitted",
+                    (x, hi),
+                    xytext=(0, 3),
+                    textcoords="offset points",
+                    ha="center",
+                    fontsize=7,
                 )
     ax.set_xticks([0, 1], ["Total task time", "Human idle time"])
-    ax.set_ylabel("time (s)")
-    ax.set_title("Simulated user study (error bars: 1 SD)")
+    ax.set_ylabel("time per table (s)")
+    n = f"{studies} simulated studies" if studies else "simulated studies"
+    ax.set_title(
+        f"User study: our median study mean, error bars = 95 % prediction interval over {n} "
+        f"of 18\n(hatched: the paper's value){' - QUICK run' if quick else ''}",
+        fontsize=9,
+    )
     ax.grid(axis="y", alpha=0.3)
     ax.legend(fontsize=8)
     return ax
@@ -64,10 +88,13 @@ def plot_fig6_panel(
     subject: str,
     baseline: str,
     ax: Axes | None = None,
+    span: float | None = None,
+    colorbar: bool = True,
 ) -> Axes:
     """One heatmap of Figure 6: percent improvement of ``subject`` over ``baseline`` in
     ``metric`` ("total" or "idle"), MAT on the y axis, MTTF on the x axis, annotated with the
-    value and the significance stars; the no-delay reference cell in the title."""
+    value and the significance stars; the no-delay reference cell in the title. ``span``: the
+    colour scale's half-range (a figure passes one for all its panels)."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
 
@@ -84,8 +111,8 @@ def plot_fig6_panel(
         v = r.get(f"pct_{metric}:{name}")
         z[i, j] = np.nan if v is None else v
         marks[i][j] = r.get(f"stars_{metric}:{name}", "")
-    finite = z[np.isfinite(z)]
-    span = max(1.0, float(np.abs(finite).max())) if finite.size else 1.0
+    if span is None:
+        span = _span(rows, [(metric, f"{subject}_over_{baseline}")])
     im = ax.imshow(
         z, origin="lower", cmap="RdYlGn", norm=TwoSlopeNorm(0.0, -span, span), aspect="auto"
     )
@@ -117,21 +144,53 @@ def plot_fig6_panel(
             f"{ref.get(f'stars_{metric}:{name}', '')}"
         )
     ax.set_title(title, fontsize=9)
-    ax.figure.colorbar(im, ax=ax, label="improvement (%)")
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, label="improvement (%)")
     return ax
+
+
+def _span(rows: Sequence[Mapping[str, Any]], panels: Sequence[tuple[str, str]]) -> float:
+    """Half-range of a colour scale that holds every value of ``panels`` (at least 1 %)."""
+    vals = [
+        abs(float(v))
+        for r in rows
+        if r["mat"] is not None
+        for m, name in panels
+        if (v := r.get(f"pct_{m}:{name}")) is not None
+    ]
+    return max([1.0, *vals])
 
 
 def plot_fig6(
     rows: Sequence[Mapping[str, Any]],
     subject: str = OPT,
     baselines: Sequence[str] = (SINGLE, WHOLE),
+    *,
+    quick: bool = False,
 ) -> Figure:
-    """Figure 6: a grid of heatmaps, one row per metric, one column per baseline."""
+    """Figure 6: a grid of heatmaps, one row per metric, one column per baseline, on one
+    shared colour scale (colours comparable across panels), with the test, R and whether the
+    run was quick written on the figure."""
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, len(baselines), figsize=(5.0 * len(baselines), 8.0), squeeze=False)
+    fig, axes = plt.subplots(2, len(baselines), figsize=(5.0 * len(baselines), 8.6), squeeze=False)
+    panels = [(m, f"{subject}_over_{b}") for m in ("total", "idle") for b in baselines]
+    span = _span(rows, panels)
     for i, m in enumerate(("total", "idle")):
         for j, b in enumerate(baselines):
-            plot_fig6_panel(rows, m, subject, b, ax=axes[i][j])
-    fig.tight_layout()
+            plot_fig6_panel(rows, m, subject, b, ax=axes[i][j], span=span, colorbar=False)
+    fig.tight_layout(rect=(0, 0.06, 0.9, 1))
+    cax = fig.add_axes((0.91, 0.12, 0.018, 0.8))
+    fig.colorbar(axes[0][0].images[0], cax=cax, label="improvement (%), one scale for all panels")
+    r0 = next(iter(rows), {})
+    fig.text(
+        0.01,
+        0.01,
+        f"R = {r0.get('reps', '?')} replications per cell, {r0.get('units', '?')} tables per run."
+        " * p < .05, ** p < .001: one-way ANOVA over the three policies, then Tukey HSD"
+        " (per cell, no correction over cells)."
+        + ("  QUICK run: fewer cells and replications." if quick else ""),
+        fontsize=8,
+        gid="fig6:note",
+    )
     return fig

@@ -14,6 +14,10 @@ human's active time, 374.78 s mean and 61.14 s SD. We therefore draw *participan
   this same perfectly correlated model; ``participant_cv=None`` derives the factor's SD from
   the instance instead (``sum(sd_i) / sum(mean_i)`` over one unit's tasks).
   The per-kit overhead ``o_H`` (taking the parts off the tray) is not scaled by ``s``.
+  ``session_factor`` multiplies every sampled human time of a run on top of that: a
+  within-subject study (:class:`WithinSubjectModel`) draws one factor per participant and
+  session and runs with ``participant_cv = 0``; the policies plan without it (as a real policy,
+  they do not know the participant's speed).
 * Robot. Each part's pick time is the instance's ``pick_time`` (after ``robot_scale``), times
   independent lognormal noise of SD ``robot_cv`` (0 by default: deterministic picks). A task
   with a ``robot_time`` override spreads it evenly over its parts, or is one block when it has
@@ -63,6 +67,9 @@ class TimingModel:
         kit_overhead_robot: overrides the instance's ``o_R`` when not None (s per kit).
         kit_overhead_human: overrides the instance's ``o_H`` when not None (the human's
             per-kit pickup time).
+        session_factor: multiplies every sampled human task time of the run (not the
+            instance's means, so the policies do not see it); default 1. The within-subject
+            participant model (:class:`WithinSubjectModel`) sets it per participant x session.
     """
 
     participant_cv: float | None = PAPER_CV
@@ -73,6 +80,7 @@ class TimingModel:
     robot_cv: float = 0.0
     kit_overhead_robot: float | None = None
     kit_overhead_human: float | None = None
+    session_factor: float = 1.0
 
     def __post_init__(self) -> None:
         if self.participant_dist not in _DISTS:
@@ -84,7 +92,7 @@ class TimingModel:
             v = getattr(self, name)
             if v is not None and (not math.isfinite(v) or v < 0):
                 raise UsageError(f"{name} must be finite and >= 0, got {v!r}")
-        for name in ("human_scale", "robot_scale"):
+        for name in ("human_scale", "robot_scale", "session_factor"):
             v = getattr(self, name)
             if not math.isfinite(v) or v <= 0:
                 raise UsageError(f"{name} must be finite and > 0, got {v!r}")
@@ -162,8 +170,9 @@ def sample_times(
     speed = sample_participants(instance, model, human_rng, instance.units)
     tasks = instance.tasks
     noise = _mean_one(human_rng, model.task_cv, len(tasks), "lognormal")
+    f = model.session_factor
     human = {
-        t.id: t.human_mean * float(speed[t.unit - 1]) * float(e)
+        t.id: t.human_mean * float(speed[t.unit - 1]) * float(e) * f
         for t, e in zip(tasks, noise, strict=True)
     }
     picks: dict[str, tuple[tuple[str | None, float], ...]] = {}
@@ -185,3 +194,80 @@ def sample_times(
             seq += [(p, base * next(rnoise)) for _ in range(n)]
         picks[t.id] = tuple(seq)
     return SampledTimes(human, picks, tuple(float(s) for s in speed))
+
+
+def counterbalanced_orders(n_conditions: int) -> list[tuple[int, ...]]:
+    """Every order of ``n_conditions`` conditions (3 -> the 6 orders a within-subject study
+    counterbalances over; participant ``i`` gets order ``i % 6``)."""
+    from itertools import permutations
+
+    return list(permutations(range(n_conditions)))
+
+
+@dataclass(frozen=True)
+class WithinSubjectModel:
+    """A participant's speed in each session of a within-subject study (paper Section V-A:
+    18 participants, 3 conditions, counterbalanced orders).
+
+    A session's human times are the means times ``f = exp(a_p + b_pc + c) * L[position]``:
+
+    * ``a_p ~ N(0, speed_sd^2)``: the participant's own speed, the same in every session;
+    * ``b_pc ~ N(0, within_cv^2)``: participant x condition (how this participant did in this
+      session: attention, the condition's rhythm); this is what a repeated-measures ANOVA
+      tests the conditions against;
+    * ``L = (1 + learning, 1, 1 - learning)`` by the session's position in the participant's
+      counterbalanced order (later sessions are faster; mean 1 over positions);
+    * ``c = -(speed_sd^2 + within_cv^2) / 2``, so ``E[f] = 1``.
+
+    Sources: ``total_cv`` is the paper's SD / mean of the human's active time per table over all
+    sessions, 61.14 / 374.78 (Section VI), and ``speed_sd`` is what is left of its log-variance
+    after the two within-participant components, so a session's active time keeps (about) the
+    paper's mean and SD; ``within_cv`` is fitted by the reproduction
+    (docs/reproduction.md); ``learning`` is assumed (the paper counterbalanced and let the
+    participants practise "to minimize learning effects", and reports no size).
+    """
+
+    total_cv: float = PAPER_CV
+    within_cv: float = 0.0
+    learning: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("total_cv", "within_cv"):
+            v = getattr(self, name)
+            if not math.isfinite(v) or v < 0:
+                raise UsageError(f"{name} must be finite and >= 0, got {v!r}")
+        if not 0 <= self.learning < 1:
+            raise UsageError(f"learning must be in [0, 1), got {self.learning!r}")
+        if self.speed_var < 0:
+            raise UsageError(
+                f"within_cv={self.within_cv:g} and learning={self.learning:g} leave no "
+                f"between-participant variance of total_cv={self.total_cv:g}"
+            )
+
+    @property
+    def learning_factors(self) -> tuple[float, float, float]:
+        return (1.0 + self.learning, 1.0, 1.0 - self.learning)
+
+    @property
+    def speed_var(self) -> float:
+        """Log-variance of the participant's own speed ``a_p``."""
+        logs = np.log(self.learning_factors)
+        return math.log1p(self.total_cv**2) - self.within_cv**2 - float(np.var(logs))
+
+    @property
+    def speed_sd(self) -> float:
+        return math.sqrt(max(self.speed_var, 0.0))
+
+    def session_factors(self, z_speed: np.ndarray, z_within: np.ndarray) -> np.ndarray:
+        """Factors ``f[p, c]`` from standard normals ``z_speed[p]`` and ``z_within[p, c]``
+        (common random numbers: the same z at every parameter value), with participant ``p``
+        in counterbalanced order ``p % n_orders`` (condition ``c`` at position
+        ``order.index(c)``)."""
+        n, k = z_within.shape
+        if k > 3:
+            raise UsageError("the learning effect is defined for at most 3 sessions")
+        orders = counterbalanced_orders(k)
+        pos = np.array([[orders[p % len(orders)].index(c) for c in range(k)] for p in range(n)])
+        lf = np.asarray(self.learning_factors)[pos]
+        c0 = -(self.speed_var + self.within_cv**2) / 2
+        return np.exp(self.speed_sd * z_speed[:, None] + self.within_cv * z_within + c0) * lf

@@ -100,49 +100,79 @@ def study(tmp_path_factory):
 
 def test_user_study_quick_summary_and_files(study):
     out, res = study
-    s = res["summary"]
-    assert set(s["conditions"]) == set(repro.CONDITIONS)
-    for c in repro.CONDITIONS:
-        assert s["conditions"][c]["n"] == repro.PAPER_N
-        assert {"total_mean", "total_sd", "idle_mean", "idle_sd"} <= set(s["conditions"][c])
-    for m in ("total", "idle"):
-        a = s["anova"][m]
-        assert (a["df1"], a["df2"]) == (2.0, 34.0)
-        assert a["F"] > 0
-        for pair, cond in (("ST-WA", "single-task"), ("OPT-WA", "optimized")):
-            t = s["tukey"][m][pair]
-            assert t["lo"] < t["diff"] < t["hi"]
-            assert t["paper"] == pytest.approx(list(repro.PAPER_CI[m][cond]))
-            assert isinstance(t["overlap"], bool)
-    roles = [r["role"] for r in res["table"]]
-    assert roles.count("fitted") == 2 and len(res["table"]) == 12
-    for name in ("runs_csv", "summary_csv", "markdown", "json", "figure"):
+    table = res["table"]
+    roles = [r["role"] for r in table]
+    # 6 means, 2 F, 8 Tukey interval ends; fitted: two idle means and F of total time
+    assert len(table) == 16 and roles.count("fitted") == 3
+    fitted = {r["quantity"] for r in table if r["role"] == "fitted"}
+    assert fitted == {
+        "mean human idle time, Whole Assembly (s)",
+        "mean human idle time, Single Task (s)",
+        "repeated-measures F(2, 34), total task time",
+    }
+    for r in table:
+        assert r["pi_low"] <= r["median"] <= r["pi_high"]
+        assert r["inside"] == (r["pi_low"] - 0.01 <= r["paper"] <= r["pi_high"] + 0.01)
+        assert r["studies"] == res["n_studies"]
+    assert res["inside"] == dict(
+        zip(("inside", "predicted"), repro.inside_count(table), strict=True)
+    )
+    assert res["inside"]["predicted"] == 13
+    assert res["delivery_time"] == 0.0 and res["trays"] == 1
+    for name in ("runs_csv", "summary_csv", "parameters_csv", "markdown", "json", "figure"):
         assert Path(res["files"][name]).is_file()
     assert Path(res["files"]["figure"]).read_bytes()[:8] == PNG_MAGIC
     rows = (out / "user_study_runs.csv").read_text().splitlines()
     assert len(rows) == 1 + 3 * repro.PAPER_N * res["n_studies"]
     assert json.loads((out / "user_study.json").read_text())["table"] == res["table"]
+    assert "quick" in (out / "user_study.md").read_text()
 
 
 def test_user_study_calibration_hits_its_targets(study):
     _, res = study
     cal = res["calibration"]
     assert set(cal["values"]) == {"robot_scale", "kit_overhead_human"}
-    for t in cal["targets"]:
+    assert cal["cohort"]["seed"] == 0 and cal["cohort"]["studies"] == 2
+    means = [t for t in cal["targets"] if t["condition"]]
+    assert len(means) == 2
+    for t in means:
         assert abs(t["residual"]) < 0.5, t
-    # the reported study's means are the fitted ones
-    per = res["summary"]["conditions"]
-    assert per["whole-assembly"]["idle_mean"] == pytest.approx(270.0, abs=0.5)
-    assert per["single-task"]["idle_mean"] == pytest.approx(99.0, abs=0.5)
+    (f,) = [t for t in cal["targets"] if not t["condition"]]
+    assert f["paper"] == pytest.approx(57.60)
+    assert 0 < res["design"]["within_cv"] < 0.16
 
 
 def test_user_study_same_seed_same_results(study, tmp_path):
     _, first = study
     again = repro.run_user_study(tmp_path, quick=True, seed=0)
     assert _strip_wall(again) == _strip_wall(first)
-    timing = repro.TimingModel(**first["timing"])  # skip the calibration: only seeds differ
-    other = repro.run_user_study(tmp_path / "s1", quick=True, seed=1, n_studies=1, timing=timing)
-    assert other["summary"]["conditions"] != first["summary"]["conditions"]
+
+
+def test_within_subject_model_counterbalances_and_keeps_the_papers_spread():
+    from bilevel_kit.sim.timing import WithinSubjectModel, counterbalanced_orders
+
+    assert len(counterbalanced_orders(3)) == 6
+    rng = np.random.default_rng(0)
+    n = 6 * 4000
+    design = WithinSubjectModel(within_cv=0.1, learning=0.05)
+    f = design.session_factors(rng.standard_normal(n), rng.standard_normal((n, 3)))
+    assert f.mean() == pytest.approx(1.0, abs=0.005)
+    assert f.std() == pytest.approx(repro.PAPER_ACTIVE[1] / repro.PAPER_ACTIVE[0], abs=0.005)
+    # every condition sees every session position equally often: same mean per condition
+    assert np.ptp(f.mean(axis=0)) < 0.01
+    # the participant's own speed makes sessions correlate; within_cv near its maximum: hardly
+    assert np.corrcoef(f[:, 0], f[:, 1])[0, 1] > 0.3
+    with pytest.raises(Exception, match="between-participant"):
+        WithinSubjectModel(within_cv=0.2)
+
+
+def test_session_factor_scales_human_times_only(table):
+    base = SimParams(units=1, trays=1, timing=TimingModel(participant_cv=0.0))
+    slow = SimParams(units=1, trays=1, timing=TimingModel(participant_cv=0.0, session_factor=1.5))
+    a = run(table, "single-task", params=base, seed=0)
+    b = run(table, "single-task", params=slow, seed=0)
+    for t, v in a["human_times"].items():
+        assert b["human_times"][t] == pytest.approx(1.5 * v)
 
 
 def test_plot_user_study_draws_into_given_axes(study):
@@ -150,9 +180,12 @@ def test_plot_user_study_draws_into_given_axes(study):
 
     _, res = study
     fig, ax = plt.subplots()
-    assert repro.plot_user_study(res["summary"], ax=ax) is ax
+    assert repro.plot_user_study(res["table"], ax=ax) is ax
     gids = {p.get_gid() for p in ax.patches}
-    assert {"bar:total:optimized", "bar:idle:whole-assembly"} <= gids
+    assert {"bar:total:optimized", "bar:idle:whole-assembly", "paper:idle:optimized"} <= gids
+    ours = next(p for p in ax.patches if p.get_gid() == "bar:idle:optimized")
+    paper = next(p for p in ax.patches if p.get_gid() == "paper:idle:optimized")
+    assert ours.get_x() + ours.get_width() <= paper.get_x() + 1e-9  # beside, not on, our bar
     plt.close(fig)
 
 
@@ -179,7 +212,23 @@ def test_fig6_quick_end_to_end(fig6):
                 assert row[f"pct_{m}:optimized_over_{base}"] is not None
                 assert row[f"stars_{m}:optimized_over_{base}"] in ("", "*", "**")
     ref = next(r for r in res["rows"] if r["mat"] is None)
-    assert ref["reps"] == repro.QUICK_REPS and ref["units"] == repro.QUICK_UNITS
+    assert ref["reps"] == repro.QUICK_REPS and ref["units"] == repro.QUICK_UNITS == 10
+    assert res["quick"] and all(r["quick"] for r in res["rows"])
+    assert "QUICK" in Path(res["files"]["markdown"]).read_text()
+    verdicts = (out / "fig6_verdicts.csv").read_text().splitlines()
+    assert len(verdicts) == 1 + 4
+
+
+def test_fig6_figure_shares_one_colour_scale(fig6):
+    import matplotlib.pyplot as plt
+
+    _, res = fig6
+    fig = repro.plot_fig6(res["rows"], quick=True)
+    norms = {(im.norm.vmin, im.norm.vmax) for ax in fig.axes for im in ax.images}
+    assert len(norms) == 1
+    texts = " ".join(t.get_text() for t in fig.texts)
+    assert "Tukey" in texts and "R = 3" in texts and "QUICK" in texts
+    plt.close(fig)
 
 
 def test_fig6_resumes_only_missing_cells_with_identical_results(fig6, tmp_path, monkeypatch):

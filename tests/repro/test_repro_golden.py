@@ -15,7 +15,7 @@ from bilevel_kit.cli import main
 def test_user_study_quick_matches_golden(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert main(["repro", "user-study", "--quick", "--out", str(tmp_path)]) == 0
     capsys.readouterr()
-    for name in ("user_study_runs.csv", "user_study_summary.csv"):
+    for name in ("user_study_runs.csv", "user_study_predictions.csv"):
         assert_matches_golden(tmp_path / name, name)
 
 
