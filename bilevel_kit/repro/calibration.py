@@ -201,7 +201,8 @@ def fit_means(
         key = tuple(round(float(v), 12) for v in x)
         hit = cache.get(key)
         if hit is None:
-            tm = replace(base, **dict(zip(names, key, strict=True)))
+            changes: dict[str, Any] = dict(zip(names, key, strict=True))
+            tm = replace(base, **changes)
             params = study_params(tm, trays, None, delivery_time)
             means = condition_means(study_runs(instance, params, design, cohort, conds))
             hit = np.array([means[m][c] for m, c, _ in targets])

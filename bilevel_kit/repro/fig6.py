@@ -237,8 +237,11 @@ def format_fig6_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
                 cells = [f"{a:g}"]
                 for b in mttfs:
                     r = next((x for x in grid if x["mat"] == a and x["mttf"] == b), None)
-                    v = None if r is None else r[f"pct_{m}:{name}"]
-                    cells.append("-" if v is None else f"{v:.1f} {r[f'stars_{m}:{name}']}".strip())
+                    if r is None or r[f"pct_{m}:{name}"] is None:
+                        cells.append("-")
+                    else:
+                        v, stars = r[f"pct_{m}:{name}"], r[f"stars_{m}:{name}"]
+                        cells.append(f"{v:.1f} {stars}".strip())
                 table.append(cells)
             out += markdown_lines(["MAT \\ MTTF", *(f"{v:g}" for v in mttfs)], table)
             if ref is not None and ref[f"pct_{m}:{name}"] is not None:
@@ -448,7 +451,7 @@ def run_fig6(
             grid=3 if quick else 5,
         )
         timing = replace(TimingModel(), **cal["values"])
-    common = {
+    common: dict[str, Any] = {
         "instance": path,
         "seeds": tuple(participant_seeds(seed, reps)),
         "policies": policies,
