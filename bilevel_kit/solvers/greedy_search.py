@@ -141,6 +141,7 @@ class _Level:
     """The prefix sets of one size: canonical sequences and their sums."""
 
     seqs: list[tuple[int, ...]]
+    tasks: np.ndarray
     robot: np.ndarray
     human: np.ndarray
     counts: np.ndarray
@@ -203,48 +204,91 @@ class PrefixSearch:
             return sorted([*out, *unlocked])
         return out
 
+    def _rest_sum_bounds(
+        self, tasks: np.ndarray, m: int, ctx: _Epoch
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds (lo, hi) of the rest's robot sum R(Q) (tasks only) of each prefix (rows of
+        ``tasks``) for rests of ``m`` tasks: the ``m`` smallest and largest robot times of the
+        window tasks (:meth:`_window`) outside the prefix. Every task of a rest is such a task,
+        so these bound every rest's sum."""
+        n = len(tasks)
+        if m == 0:
+            return np.zeros(n), np.zeros(n)
+        out = []
+        for ids in (ctx.low_ids, ctx.high_ids):
+            keep = ~(tasks[:, :, None] == ids[None, None, :]).any(axis=1)
+            chosen = keep & (np.cumsum(keep, axis=1) <= m)
+            out.append(chosen @ self.r[ids])
+        return out[0], out[1]
+
     def _optimistic(
         self,
         i: int,
         length: int,
+        tasks: np.ndarray,
         robot: np.ndarray,
         human: np.ndarray,
         counts: np.ndarray,
         ctx: _Epoch,
+        fitness: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Lower bounds of F over the rests of prefixes of size ``i`` (module docstring)."""
+        r"""Lower bounds of F over the rests of prefixes of size ``i`` (module docstring):
+        term (6) at its least over :math:`R(Q) \in [lo, hi]` (:meth:`_rest_sum_bounds`), the
+        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None."""
         if not self._prune:
             return np.full(len(robot), -math.inf)
         inst = self.instance
-        diff5, diff6 = upper_level.balance_terms(
-            robot,
-            human,
-            np.full(len(robot), ctx.min_rest[length - i]),
-            np.full(len(robot), i < length),
-            delivery=inst.delivery_time,
-            human_remaining=ctx.human_remaining,
-            overhead_robot=inst.kit_overhead_robot,
-            overhead_human=inst.kit_overhead_human,
-            signed=True,
-        )
+        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        diff5 = d + o_r + robot - ctx.human_remaining
+        h_kit = o_h + human
+        if i == length:
+            diff6 = d + 0.0 - h_kit
+            if not ctx.signed:
+                diff6 = np.abs(diff6)
+        else:
+            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
+            diff6 = d + (o_r + lo) - h_kit
+            if not ctx.signed:
+                diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-            diff6 = np.abs(diff6) if i == length else np.zeros_like(diff6)
+        bound = fitness_upper_bounds(inst, self.types, counts)
+        if fitness is not None:
+            bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
             inst.weights,
             n_tasks=float(i),
             diff5=diff5,
             diff6=diff6,
-            fitness=fitness_upper_bounds(inst, self.types, counts),
+            fitness=bound,
             unavailable=ctx.unavailable(counts),
         )
 
-    def _levels(self, done: np.ndarray, length: int, ctx: _Epoch) -> tuple[list[_Level], bool]:
-        avail = [
-            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
-        ]
+    def _window(self, done: np.ndarray, avail: list[int], length: int) -> np.ndarray:
+        """The tasks with at most ``length - 1`` undone ancestors (sorted): only they can be in
+        a window of ``length`` tasks, since a closed window holds every undone ancestor of its
+        tasks."""
+        anc: dict[int, frozenset[int]] = {y: frozenset() for y in avail}
+        queue = list(avail)
+        for x in queue:
+            for y in self.succ[x]:
+                if y in anc or done[y]:
+                    continue
+                ps = [p for p in self.pred[y] if not done[p]]
+                if not all(p in anc for p in ps):
+                    continue
+                a = frozenset().union(*(anc[p] for p in ps)) | frozenset(ps)
+                if len(a) <= length - 1:
+                    anc[y] = a
+                    queue.append(y)
+        return np.array(sorted(anc), dtype=np.int64)
+
+    def _levels(
+        self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
+    ) -> tuple[list[_Level], bool]:
         lim = self.limits
         parents = [()]
+        p_tasks = np.zeros((1, 0), dtype=np.int64)
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
         p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
@@ -266,14 +310,16 @@ class PrefixSearch:
             counts = p_counts[par] + self.part_matrix[child]
             if beam or total + n_kids > lim.max_prefix_sets:
                 beam = True
-                opt = self._optimistic(i, length, robot, human, counts, ctx)
+                tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
+                opt = self._optimistic(i, length, tasks, robot, human, counts, ctx)
                 keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
             seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
-            levels.append(_Level(seqs, robot, human, counts))
+            tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
+            levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
-            parents, p_robot, p_human, p_counts = seqs, robot, human, counts
+            parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
         return levels, beam
 
     # -- the rest of the window ------------------------------------------------------------------
@@ -371,26 +417,51 @@ class PrefixSearch:
         available: np.ndarray | None,
         fitness: FitnessFn,
         signed: bool,
+        cached: Callable[[np.ndarray], tuple[float, bool] | None] | None = None,
     ) -> Choice | None:
-        """The minimising (P, Q) of F (module docstring); None if no prefix fits the tray."""
+        """The minimising (P, Q) of F (module docstring); None if no prefix fits the tray.
+        ``cached``: the fitness of a multiset if already known (else None), without a CE run;
+        known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        remaining_r = np.sort(self.r[~done])
-        self._r_range = (float(remaining_r[0]), float(remaining_r[-1]))
-        min_rest = np.concatenate([[0.0], np.cumsum(remaining_r)])[: length + 1]
-        ctx = _Epoch(human_remaining, available, signed, min_rest)
-        levels, beam = self._levels(done, length, ctx)
-        self.stats.beam_epochs += beam
         avail = [
             j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
         ]
+        window = self._window(done, avail, length)
+        order = np.lexsort((window, self.r[window]))
+        low = window[order[:length]]
+        high = window[order[::-1][:length]]
+        self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
+        ctx = _Epoch(human_remaining, available, signed, low, high)
+        levels, beam = self._levels(done, length, ctx, avail)
+        self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
         queue: list[tuple[float, int, int, int]] = []
+        fits_of: dict[tuple[int, int], float] = {}
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            opt = self._optimistic(li + 1, length, lv.robot, lv.human, lv.counts, ctx)
-            queue.extend((o, 0, li, k) for k, o in enumerate(opt.tolist()))
+            fit = np.full(len(lv.seqs), np.nan)
+            keys, inverse = np.unique(lv.counts, axis=0, return_inverse=True)
+            fits = np.ones(len(lv.seqs), dtype=bool)
+            for u, row in enumerate(keys):
+                hit = cached(row) if cached is not None else None
+                if hit is not None:
+                    sel = inverse.reshape(-1) == u
+                    fit[sel] = hit[0]
+                    fits[sel] = hit[1]
+            opt = self._optimistic(
+                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, fit
+            )
+            known = ~np.isnan(fit)
+            rows = zip(opt.tolist(), known.tolist(), fits.tolist(), strict=True)
+            for k, (o, kn, ok) in enumerate(rows):
+                if not ok:
+                    continue
+                if kn:
+                    fits_of[li, k] = float(fit[k])
+                    self.stats.evaluated += 1
+                queue.append((o, int(kn), li, k))
         heapq.heapify(queue)
 
         def scorer(
@@ -419,29 +490,38 @@ class PrefixSearch:
             return f, lower
 
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
-        fits_of: dict[tuple[int, int], float] = {}
         incumbent = math.inf
         while queue and queue[0][0] <= incumbent + TIE_TOL:
             _, stage, li, k = heapq.heappop(queue)
             i = li + 1
+            lv = levels[li]
             if stage == 0:
-                fit, fits = fitness(levels[li].counts[k])
+                fit, fits = fitness(lv.counts[k])
                 if not fits:
                     continue
                 self.stats.evaluated += 1
                 fits_of[li, k] = fit
-                f, lower = scorer(li, k, fit)
-                if i == length:
-                    score = float(f(0.0))
-                    found.append((score, li, k, (), fit))
-                    incumbent = min(incumbent, score)
-                else:
-                    heapq.heappush(queue, (lower(float(min_rest[length - i])), 1, li, k))
+                bound = self._optimistic(
+                    i,
+                    length,
+                    lv.tasks[k : k + 1],
+                    lv.robot[k : k + 1],
+                    lv.human[k : k + 1],
+                    lv.counts[k : k + 1],
+                    ctx,
+                    np.array([fit]),
+                )
+                heapq.heappush(queue, (float(bound[0]), 1, li, k))
                 continue
             fit = fits_of[li, k]
             f, lower = scorer(li, k, fit)
+            if i == length:
+                score = float(f(0.0))
+                found.append((score, li, k, (), fit))
+                incumbent = min(incumbent, score)
+                continue
             score, rest, capped = self._rest(
-                levels[li].seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
+                lv.seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
             )
             self.stats.rest_capped += capped
             if rest:
@@ -484,13 +564,16 @@ class _DoneView:
 
 @dataclass
 class _Epoch:
-    """What one decision knows: H_rem, the parts at hand, the signed flag and the smallest
-    possible robot sums of the rest by size."""
+    """What one decision knows: H_rem, the parts at hand, the signed flag and the window tasks
+    that bound the rest's robot sums."""
 
     human_remaining: float
     available: np.ndarray | None
     signed: bool
-    min_rest: np.ndarray
+    #: the window tasks (:meth:`PrefixSearch._window`) of least and greatest robot times,
+    #: ``length`` of each, in increasing and decreasing order
+    low_ids: np.ndarray
+    high_ids: np.ndarray
 
     def unavailable(self, counts: np.ndarray) -> np.ndarray | None:
         if self.available is None:
