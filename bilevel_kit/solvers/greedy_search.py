@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import bisect
 import heapq
+import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -176,6 +177,7 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
+        self._sums = _SumTable.build(robot, instance.horizon - 1)
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _children(
@@ -264,7 +266,7 @@ class PrefixSearch:
             unavailable=ctx.unavailable(counts),
         )
 
-    def _window(self, done: np.ndarray, avail: list[int], length: int) -> np.ndarray:
+    def _window(self, done: np.ndarray, avail: list[int], length: int) -> dict[int, frozenset[int]]:
         """The tasks with at most ``length - 1`` undone ancestors (sorted): only they can be in
         a window of ``length`` tasks, since a closed window holds every undone ancestor of its
         tasks."""
@@ -281,7 +283,7 @@ class PrefixSearch:
                 if len(a) <= length - 1:
                     anc[y] = a
                     queue.append(y)
-        return np.array(sorted(anc), dtype=np.int64)
+        return anc
 
     def _levels(
         self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
@@ -427,7 +429,8 @@ class PrefixSearch:
         avail = [
             j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
         ]
-        window = self._window(done, avail, length)
+        anc = self._window(done, avail, length)
+        window = np.array(sorted(anc), dtype=np.int64)
         order = np.lexsort((window, self.r[window]))
         low = window[order[:length]]
         high = window[order[::-1][:length]]
@@ -489,6 +492,9 @@ class PrefixSearch:
 
             return f, lower
 
+        rests = None
+        if self._sums is not None and length > 1:
+            rests = _Rests(self, done, avail, anc, signed)
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
         incumbent = math.inf
         while queue and queue[0][0] <= incumbent + TIE_TOL:
@@ -520,9 +526,15 @@ class PrefixSearch:
                 found.append((score, li, k, (), fit))
                 incumbent = min(incumbent, score)
                 continue
-            score, rest, capped = self._rest(
-                lv.seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
-            )
+            if rests is not None:
+                target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+                score, rest, capped = rests.best(
+                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target
+                )
+            else:
+                score, rest, capped = self._rest(
+                    lv.seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
+                )
             self.stats.rest_capped += capped
             if rest:
                 found.append((score, li, k, rest, fit))
@@ -547,6 +559,202 @@ class PrefixSearch:
             if best_key is None or key < best_key:
                 best_key, best = key, Choice(prefix, rest, score)
         return best
+
+
+@dataclass(frozen=True)
+class _SumTable:
+    """Every multiset of ``k`` robot-time values (``k`` = 1..N-1) with its sum, sorted by sum:
+    the sums a rest of ``k`` precedence-free tasks can take. Built once per instance, only
+    when small (distinct robot times few, :data:`MAX_SUM_COMBOS`); else the rest search is
+    the depth-first one."""
+
+    vals: np.ndarray
+    #: value index of each task
+    vidx: np.ndarray
+    #: k -> (combos (n, k) of value indices, non-decreasing; rank of each entry among equal
+    #: values in its combo; sums), sorted by sum
+    tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+    @classmethod
+    def build(cls, robot: np.ndarray, kmax: int) -> _SumTable | None:
+        vals, vidx = np.unique(robot, return_inverse=True)
+        n_vals = len(vals)
+        if kmax < 1 or sum(math.comb(n_vals + k - 1, k) for k in range(1, kmax + 1)) > (
+            MAX_SUM_COMBOS
+        ):
+            return None
+        tables = {}
+        for k in range(1, kmax + 1):
+            combos = np.array(
+                list(itertools.combinations_with_replacement(range(n_vals), k)), dtype=np.int64
+            ).reshape(-1, k)
+            rank = np.zeros_like(combos)
+            for j in range(1, k):
+                rank[:, j] = np.where(combos[:, j] == combos[:, j - 1], rank[:, j - 1] + 1, 0)
+            sums = vals[combos].sum(axis=1)
+            order = np.argsort(sums, kind="stable")
+            tables[k] = (combos[order], rank[order], sums[order])
+        return cls(vals, vidx.reshape(-1), tables)
+
+
+#: Largest sum table (multisets over all k) :class:`_SumTable` builds.
+MAX_SUM_COMBOS = 300_000
+
+
+class _Rests:
+    r"""The best rest of each prefix at one epoch, by decomposition instead of a search over
+    sequences. Let :math:`A` be the tasks available at the epoch (every predecessor done).
+    A rest :math:`Q` (closed given done and :math:`P`) splits uniquely into its *core*
+    :math:`C`: its tasks outside :math:`A` with their undone ancestors outside :math:`P`
+    (all in :math:`Q`, by closedness), and the *free* tasks :math:`Q \setminus C \subseteq A
+    \setminus (P \cup C)`, any of which may be added since their predecessors are done.
+    So the best rest is the best over cores (few: unions of the needed sets of window tasks
+    outside :math:`A`, of total size at most :math:`m`) of :math:`R(C)` plus the sum of
+    :math:`m - |C|` free tasks closest to the target (or least, in the signed form), read
+    from the sorted multiset sums of :class:`_SumTable` (skipping multisets that use more
+    tasks of a value than are left). Exact: every rest is some (core, free multiset)."""
+
+    def __init__(
+        self,
+        search: PrefixSearch,
+        done: np.ndarray,
+        avail: list[int],
+        anc: dict[int, frozenset[int]],
+        signed: bool,
+    ) -> None:
+        tab = search._sums
+        assert tab is not None
+        self.search = search
+        self.done = done
+        self.r = search.r
+        self.vidx = tab.vidx
+        self.signed = signed
+        self.pool = set(avail)
+        self.anc = anc
+        self.deep = sorted(y for y in anc if y not in self.pool)
+        self.mult = np.bincount(tab.vidx[avail], minlength=len(tab.vals))
+        self.by_value: dict[int, list[int]] = {}
+        for t in avail:  # avail is sorted
+            self.by_value.setdefault(int(tab.vidx[t]), []).append(t)
+        self.tables: dict[int, tuple[list[tuple[int, ...]], list[tuple[int, ...]], list[float]]]
+        self.tables = {}
+        for k, (combos, rank, sums) in tab.tables.items():
+            ok = (rank < self.mult[combos]).all(axis=1)
+            self.tables[k] = (
+                [tuple(c) for c in combos[ok].tolist()],
+                [tuple(c) for c in rank[ok].tolist()],
+                sums[ok].tolist(),
+            )
+        self.max_cores = search.limits.max_rest_nodes
+
+    def _free(
+        self, k: int, target: float, removed: dict[int, int]
+    ) -> tuple[float, tuple[int, ...]] | None:
+        """The multiset of ``k`` free values with the sum closest to ``target`` (the least
+        sum if ``target`` is -inf), none of them beyond what ``removed`` leaves."""
+        if k == 0:
+            return 0.0, ()
+        combos, ranks, sums = self.tables[k]
+        mult = self.mult
+
+        def ok(j: int) -> bool:
+            if not removed:
+                return True
+            return all(
+                v not in removed or q < mult[v] - removed[v]
+                for v, q in zip(combos[j], ranks[j], strict=True)
+            )
+
+        n = len(sums)
+        j = 0 if target == -math.inf else bisect.bisect_left(sums, target)
+        up = j
+        while up < n and not ok(up):
+            up += 1
+        down = j - 1
+        if target != -math.inf:
+            while down >= 0 and not ok(down):
+                down -= 1
+        best = None
+        if up < n:
+            best = up
+        if down >= 0 and (best is None or target - sums[down] < sums[best] - target):
+            best = down
+        if best is None:
+            return None
+        return sums[best], combos[best]
+
+    def best(
+        self,
+        prefix: tuple[int, ...],
+        m: int,
+        score: Callable[[np.ndarray], np.ndarray],
+        cutoff: float,
+        target: float,
+    ) -> tuple[float, tuple[int, ...], bool]:
+        """(F, a rest of least F in its smallest topological order, capped) over the rests of
+        ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
+        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form)."""
+        pset = set(prefix)
+        cands: list[tuple[int, frozenset[int]]] = []
+        for y in self.deep:
+            if y in pset:
+                continue
+            need = (self.anc[y] - pset) | {y}
+            if len(need) <= m:
+                cands.append((y, frozenset(need)))
+        best_f = math.inf
+        best_set: frozenset[int] | None = None
+        best_free: tuple[int, ...] = ()
+        seen: set[frozenset[int]] = set()
+        stack: list[tuple[int, frozenset[int]]] = [(0, frozenset())]
+        cores = 0
+        capped = False
+        while stack:
+            start, core = stack.pop()
+            if core in seen:
+                continue
+            seen.add(core)
+            cores += 1
+            if cores > self.max_cores:
+                capped = True
+                break
+            removed: dict[int, int] = {}
+            for t in pset.union(core):
+                if t in self.pool:
+                    v = int(self.vidx[t])
+                    removed[v] = removed.get(v, 0) + 1
+            r_core = float(self.r[list(core)].sum()) if core else 0.0
+            free = self._free(m - len(core), target - r_core, removed)
+            if free is not None:
+                val = float(score(r_core + free[0]))
+                if val < best_f and val <= cutoff:
+                    best_f, best_set, best_free = val, core, free[1]
+            for a in range(start, len(cands)):
+                grown = core | cands[a][1]
+                if len(grown) <= m and grown != core:
+                    stack.append((a + 1, grown))
+        if best_set is None:
+            return math.inf, (), capped
+        return best_f, self._order(pset, best_set, best_free), capped
+
+    def _order(
+        self, pset: set[int], core: frozenset[int], free: tuple[int, ...]
+    ) -> tuple[int, ...]:
+        """A rest realising (core, free values), in its smallest topological order."""
+        tasks = set(core)
+        taken: dict[int, int] = {}
+        for v in free:
+            pool = [t for t in self.by_value[v] if t not in pset and t not in core]
+            tasks.add(pool[taken.get(v, 0)])
+            taken[v] = taken.get(v, 0) + 1
+        seen = _DoneView(self.done, pset)
+        out: list[int] = []
+        left = set(tasks)
+        while left:
+            y = min(t for t in left if all(seen[p] or p in out for p in self.search.pred[t]))
+            out.append(y)
+            left.discard(y)
+        return tuple(out)
 
 
 class _DoneView:
