@@ -186,6 +186,17 @@ class PrefixSearch:
         """Tasks y such that ``s + (y,)`` is the smallest topological order of its set, in
         increasing order. ``avail``: tasks available given ``done`` alone (sorted)."""
         out = avail[bisect.bisect_right(avail, max(s) if s else -1) :]
+        unlocked = self._unlocked(s, inset, done)
+        if unlocked:
+            return sorted([*out, *unlocked])
+        return out
+
+    def _unlocked(
+        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView
+    ) -> set[int]:
+        """The children of ``s`` (:meth:`_children`) that ``done`` alone does not make
+        available: successors of its tasks whose last predecessor in ``s`` comes after every
+        larger task of ``s``."""
         unlocked: set[int] = set()
         if s:
             pos = {x: k for k, x in enumerate(s)}
@@ -202,9 +213,7 @@ class PrefixSearch:
                     start = 1 + max(pos[p] for p in ps if p in inset)
                     if start == len(s) or y > suffix_max[start]:
                         unlocked.add(y)
-        if unlocked:
-            return sorted([*out, *unlocked])
-        return out
+        return unlocked
 
     def _rest_sum_bounds(
         self, tasks: np.ndarray, m: int, ctx: _Epoch
@@ -289,7 +298,8 @@ class PrefixSearch:
         self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
     ) -> tuple[list[_Level], bool]:
         lim = self.limits
-        parents = [()]
+        avail_arr = np.array(avail, dtype=np.int64)
+        parents: list[tuple[int, ...]] = [()]
         p_tasks = np.zeros((1, 0), dtype=np.int64)
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
@@ -298,15 +308,26 @@ class PrefixSearch:
         total = 0
         beam = False
         for i in range(1, length + 1):
-            kids: list[list[int]] = []
-            for s in parents:
-                inset = set(s)
-                kids.append(self._children(s, inset, done, avail))
-            n_kids = sum(len(k) for k in kids)
+            # children (module docstring: canonical sequences): the available tasks above the
+            # parent's largest, at once, plus the tasks the parent unlocks (per parent)
+            last = p_tasks.max(axis=1) if i > 1 else np.full(1, -1)
+            par, col = np.nonzero(avail_arr[None, :] > last[:, None])
+            child = avail_arr[col]
+            extra_par: list[int] = []
+            extra_child: list[int] = []
+            for a, seq in enumerate(parents):
+                if any(self.succ[x] for x in seq):
+                    for y in self._unlocked(seq, set(seq), done):
+                        extra_par.append(a)
+                        extra_child.append(y)
+            if extra_par:
+                par = np.concatenate([par, np.array(extra_par, dtype=np.int64)])
+                child = np.concatenate([child, np.array(extra_child, dtype=np.int64)])
+                order = np.lexsort((child, par))
+                par, child = par[order], child[order]
+            n_kids = len(child)
             if n_kids == 0:
                 break
-            par = np.repeat(np.arange(len(parents)), [len(k) for k in kids])
-            child = np.fromiter((y for k in kids for y in k), dtype=np.int64, count=n_kids)
             robot = p_robot[par] + self.r[child]
             human = p_human[par] + self.h[child]
             counts = p_counts[par] + self.part_matrix[child]
@@ -636,15 +657,9 @@ class _Rests:
         self.by_value: dict[int, list[int]] = {}
         for t in avail:  # avail is sorted
             self.by_value.setdefault(int(tab.vidx[t]), []).append(t)
-        self.tables: dict[int, tuple[list[tuple[int, ...]], list[tuple[int, ...]], list[float]]]
-        self.tables = {}
-        for k, (combos, rank, sums) in tab.tables.items():
-            ok = (rank < self.mult[combos]).all(axis=1)
-            self.tables[k] = (
-                [tuple(c) for c in combos[ok].tolist()],
-                [tuple(c) for c in rank[ok].tolist()],
-                sums[ok].tolist(),
-            )
+        self._tab = tab
+        #: k -> (combos, ranks, sums) of the multisets the epoch's available tasks can give
+        self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.max_cores = search.limits.max_rest_nodes
 
     def _free(
@@ -654,6 +669,10 @@ class _Rests:
         sum if ``target`` is -inf), none of them beyond what ``removed`` leaves."""
         if k == 0:
             return 0.0, ()
+        if k not in self.tables:  # built on first use
+            combos, rank, sums = self._tab.tables[k]
+            keep = (rank < self.mult[combos]).all(axis=1)
+            self.tables[k] = (combos[keep], rank[keep], sums[keep])
         combos, ranks, sums = self.tables[k]
         mult = self.mult
 
@@ -662,11 +681,11 @@ class _Rests:
                 return True
             return all(
                 v not in removed or q < mult[v] - removed[v]
-                for v, q in zip(combos[j], ranks[j], strict=True)
+                for v, q in zip(combos[j].tolist(), ranks[j].tolist(), strict=True)
             )
 
         n = len(sums)
-        j = 0 if target == -math.inf else bisect.bisect_left(sums, target)
+        j = 0 if target == -math.inf else int(np.searchsorted(sums, target))
         up = j
         while up < n and not ok(up):
             up += 1
@@ -681,7 +700,7 @@ class _Rests:
             best = down
         if best is None:
             return None
-        return sums[best], combos[best]
+        return float(sums[best]), tuple(combos[best].tolist())
 
     def best(
         self,
