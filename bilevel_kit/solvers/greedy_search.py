@@ -226,8 +226,14 @@ class PrefixSearch:
         if m == 0:
             return np.zeros(n), np.zeros(n)
         out = []
+        rows = np.arange(n)
         for ids in (ctx.low_ids, ctx.high_ids):
-            keep = ~(tasks[:, :, None] == ids[None, None, :]).any(axis=1)
+            pos = np.full(len(self.r), -1, dtype=np.int64)
+            pos[ids] = np.arange(len(ids))
+            keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
+            for c in range(tasks.shape[1]):
+                keep[rows, pos[tasks[:, c]]] = False
+            keep = keep[:, :-1]
             chosen = keep & (np.cumsum(keep, axis=1) <= m)
             out.append(chosen @ self.r[ids])
         return out[0], out[1]
