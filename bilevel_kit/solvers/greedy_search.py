@@ -11,14 +11,23 @@ only through
   tasks with :math:`P \cup Q` precedence-closed given the tasks already done (term 6).
 
 So this module minimises over the precedence-closed prefix sets :math:`P` (|P| = 1..L), each
-with the best rest :math:`Q` found by a depth-first search over closed extensions, and calls
-the lower level (a CE run, memoised per multiset) only for prefixes whose optimistic score can
-still reach the incumbent. The optimistic score of :math:`P` is :math:`F` with term (6) at its
-lower bound (its exact value when :math:`i = L`; 0, or the signed form's value with the
-:math:`L - i` smallest robot times, otherwise) and with :math:`W_5 f` replaced by
-:math:`W_5 \bar f(P)`, where :func:`fitness_upper_bounds` gives :math:`\bar f \ge f` for any
-valid layout. Prefixes are taken in increasing optimistic score; the search stops at the
-first one whose optimistic score exceeds the incumbent by more than the tie tolerance.
+with its best rest :math:`Q`, and calls the lower level (a CE run, memoised per multiset) only
+for prefixes whose optimistic score can still reach the incumbent. The optimistic score of
+:math:`P` is :math:`F` with term (6) at its least over :math:`R(Q) \in [lo, hi]` and with
+:math:`W_5 f` replaced by :math:`W_5 \bar f(P)` until the multiset's fitness is known (then
+the fitness itself). :math:`lo`/:math:`hi` are the sums of the :math:`L - i` smallest/largest
+robot times of the *window* tasks outside :math:`P`: the tasks with at most :math:`L - 1`
+undone ancestors, the only ones a closed window of :math:`L` tasks can hold.
+:func:`fitness_upper_bounds` gives :math:`\bar f \ge f` for any valid layout (a geometric
+bound; CE is a heuristic, so no bound from other multisets' CE fitness holds, and none is
+used). Prefixes are taken in increasing optimistic score; the search stops at the first one
+whose optimistic score exceeds the incumbent by more than the tie tolerance.
+
+The best rest of a prefix (its least F) is found by decomposition when the robot times take
+few distinct values (:class:`_Rests`: a rest is a *core* of tasks not available at the epoch
+with their undone ancestors, plus free available tasks whose best sum is read from a sorted
+table of value multisets), else by a depth-first search over closed extensions in
+lexicographic order (also used for the tie rule below).
 
 Ties (the enumeration's rule, reproduced): the enumeration returns the first pair within
 ``TIE_TOL`` of the minimum in its order (sequences lexicographic in task file positions,
@@ -34,8 +43,8 @@ Bounds on work (never silent, counted in :class:`SearchStats`):
 * ``max_prefix_sets``: if the closed prefix sets of a level would take the total beyond this
   cap, that level and the deeper ones keep only the ``beam_width`` sets of best optimistic
   score (a beam over prefix sets; the epoch counts in ``beam_epochs``);
-* ``max_rest_nodes``: the rest search stops after this many search nodes with the best rest
-  found so far (counted in ``rest_capped``).
+* ``max_rest_nodes``: the rest search stops after this many search nodes (or cores, in the
+  decomposition) with the best rest found so far (counted in ``rest_capped``).
 
 Within both caps the decision is exact: the same minimum F as the enumeration and the same
 chosen kit (property-tested against the enumeration in tests/solvers/test_greedy_search.py).
