@@ -293,6 +293,9 @@ class GreedyCEPolicy:
         self.seed = int(seed)
         self.stats = GreedyStats()
         self._arrangements: dict[tuple[tuple[str, int], ...], Arrangement] = {}
+        #: (fitness, fits) by the bytes of a count row over ``_types`` (the same memo, keyed
+        #: for the decision's hot path)
+        self._fit_memo: dict[bytes, tuple[float, bool]] = {}
         inst = self.instance
         self._ids = [t.id for t in inst.tasks]
         self._r = np.array([inst.robot_time(t) for t in self._ids])
@@ -361,8 +364,21 @@ class GreedyCEPolicy:
         return rec()
 
     def _fitness(self, row: np.ndarray) -> tuple[float, bool]:
+        """(fitness, fits) of a count row over the sorted part types (CE run if new)."""
+        hit = self._cached_fitness(row)
+        if hit is not None:
+            return hit
         arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
+        self._fit_memo[np.asarray(row, dtype=np.int64).tobytes()] = (arr.fitness, arr.fits)
         return arr.fitness, arr.fits
+
+    def _cached_fitness(self, row: np.ndarray) -> tuple[float, bool] | None:
+        """(fitness, fits) of a count row if its multiset was arranged already (a memo hit,
+        counted as in :meth:`arrangement`), else None."""
+        hit = self._fit_memo.get(np.asarray(row, dtype=np.int64).tobytes())
+        if hit is not None:
+            self.stats.fitness_cache_hits += 1
+        return hit
 
     def _enumerate(
         self, state: PolicyState, done: set[int], length: int
@@ -435,6 +451,7 @@ class GreedyCEPolicy:
             available_vector(state.available, self._types),
             self._fitness,
             self.params.signed,
+            self._cached_fitness,
         )
         st = search.stats
         self.stats.candidates += st.evaluated - before[0]

@@ -11,14 +11,23 @@ only through
   tasks with :math:`P \cup Q` precedence-closed given the tasks already done (term 6).
 
 So this module minimises over the precedence-closed prefix sets :math:`P` (|P| = 1..L), each
-with the best rest :math:`Q` found by a depth-first search over closed extensions, and calls
-the lower level (a CE run, memoised per multiset) only for prefixes whose optimistic score can
-still reach the incumbent. The optimistic score of :math:`P` is :math:`F` with term (6) at its
-lower bound (its exact value when :math:`i = L`; 0, or the signed form's value with the
-:math:`L - i` smallest robot times, otherwise) and with :math:`W_5 f` replaced by
-:math:`W_5 \bar f(P)`, where :func:`fitness_upper_bounds` gives :math:`\bar f \ge f` for any
-valid layout. Prefixes are taken in increasing optimistic score; the search stops at the
-first one whose optimistic score exceeds the incumbent by more than the tie tolerance.
+with its best rest :math:`Q`, and calls the lower level (a CE run, memoised per multiset) only
+for prefixes whose optimistic score can still reach the incumbent. The optimistic score of
+:math:`P` is :math:`F` with term (6) at its least over :math:`R(Q) \in [lo, hi]` and with
+:math:`W_5 f` replaced by :math:`W_5 \bar f(P)` until the multiset's fitness is known (then
+the fitness itself). :math:`lo`/:math:`hi` are the sums of the :math:`L - i` smallest/largest
+robot times of the *window* tasks outside :math:`P`: the tasks with at most :math:`L - 1`
+undone ancestors, the only ones a closed window of :math:`L` tasks can hold.
+:func:`fitness_upper_bounds` gives :math:`\bar f \ge f` for any valid layout (a geometric
+bound; CE is a heuristic, so no bound from other multisets' CE fitness holds, and none is
+used). Prefixes are taken in increasing optimistic score; the search stops at the first one
+whose optimistic score exceeds the incumbent by more than the tie tolerance.
+
+The best rest of a prefix (its least F) is found by decomposition when the robot times take
+few distinct values (:class:`_Rests`: a rest is a *core* of tasks not available at the epoch
+with their undone ancestors, plus free available tasks whose best sum is read from a sorted
+table of value multisets), else by a depth-first search over closed extensions in
+lexicographic order (also used for the tie rule below).
 
 Ties (the enumeration's rule, reproduced): the enumeration returns the first pair within
 ``TIE_TOL`` of the minimum in its order (sequences lexicographic in task file positions,
@@ -34,8 +43,8 @@ Bounds on work (never silent, counted in :class:`SearchStats`):
 * ``max_prefix_sets``: if the closed prefix sets of a level would take the total beyond this
   cap, that level and the deeper ones keep only the ``beam_width`` sets of best optimistic
   score (a beam over prefix sets; the epoch counts in ``beam_epochs``);
-* ``max_rest_nodes``: the rest search stops after this many search nodes with the best rest
-  found so far (counted in ``rest_capped``).
+* ``max_rest_nodes``: the rest search stops after this many search nodes (or cores, in the
+  decomposition) with the best rest found so far (counted in ``rest_capped``).
 
 Within both caps the decision is exact: the same minimum F as the enumeration and the same
 chosen kit (property-tested against the enumeration in tests/solvers/test_greedy_search.py).
@@ -46,6 +55,7 @@ from __future__ import annotations
 
 import bisect
 import heapq
+import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -141,6 +151,7 @@ class _Level:
     """The prefix sets of one size: canonical sequences and their sums."""
 
     seqs: list[tuple[int, ...]]
+    tasks: np.ndarray
     robot: np.ndarray
     human: np.ndarray
     counts: np.ndarray
@@ -175,6 +186,7 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
+        self._sums = _SumTable.build(robot, instance.horizon - 1)
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _children(
@@ -183,6 +195,17 @@ class PrefixSearch:
         """Tasks y such that ``s + (y,)`` is the smallest topological order of its set, in
         increasing order. ``avail``: tasks available given ``done`` alone (sorted)."""
         out = avail[bisect.bisect_right(avail, max(s) if s else -1) :]
+        unlocked = self._unlocked(s, inset, done)
+        if unlocked:
+            return sorted([*out, *unlocked])
+        return out
+
+    def _unlocked(
+        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView
+    ) -> set[int]:
+        """The children of ``s`` (:meth:`_children`) that ``done`` alone does not make
+        available: successors of its tasks whose last predecessor in ``s`` comes after every
+        larger task of ``s``."""
         unlocked: set[int] = set()
         if s:
             pos = {x: k for k, x in enumerate(s)}
@@ -199,52 +222,100 @@ class PrefixSearch:
                     start = 1 + max(pos[p] for p in ps if p in inset)
                     if start == len(s) or y > suffix_max[start]:
                         unlocked.add(y)
-        if unlocked:
-            return sorted([*out, *unlocked])
-        return out
+        return unlocked
+
+    def _rest_sum_bounds(
+        self, tasks: np.ndarray, m: int, ctx: _Epoch
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds (lo, hi) of the rest's robot sum R(Q) (tasks only) of each prefix (rows of
+        ``tasks``) for rests of ``m`` tasks: the ``m`` smallest and largest robot times of the
+        window tasks (:meth:`_window`) outside the prefix. Every task of a rest is such a task,
+        so these bound every rest's sum."""
+        n = len(tasks)
+        if m == 0:
+            return np.zeros(n), np.zeros(n)
+        out = []
+        rows = np.arange(n)
+        for ids in (ctx.low_ids, ctx.high_ids):
+            pos = np.full(len(self.r), -1, dtype=np.int64)
+            pos[ids] = np.arange(len(ids))
+            keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
+            for c in range(tasks.shape[1]):
+                keep[rows, pos[tasks[:, c]]] = False
+            keep = keep[:, :-1]
+            chosen = keep & (np.cumsum(keep, axis=1) <= m)
+            out.append(chosen @ self.r[ids])
+        return out[0], out[1]
 
     def _optimistic(
         self,
         i: int,
         length: int,
+        tasks: np.ndarray,
         robot: np.ndarray,
         human: np.ndarray,
         counts: np.ndarray,
         ctx: _Epoch,
+        fitness: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Lower bounds of F over the rests of prefixes of size ``i`` (module docstring)."""
+        r"""Lower bounds of F over the rests of prefixes of size ``i`` (module docstring):
+        term (6) at its least over :math:`R(Q) \in [lo, hi]` (:meth:`_rest_sum_bounds`), the
+        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None."""
         if not self._prune:
             return np.full(len(robot), -math.inf)
         inst = self.instance
-        diff5, diff6 = upper_level.balance_terms(
-            robot,
-            human,
-            np.full(len(robot), ctx.min_rest[length - i]),
-            np.full(len(robot), i < length),
-            delivery=inst.delivery_time,
-            human_remaining=ctx.human_remaining,
-            overhead_robot=inst.kit_overhead_robot,
-            overhead_human=inst.kit_overhead_human,
-            signed=True,
-        )
+        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        diff5 = d + o_r + robot - ctx.human_remaining
+        h_kit = o_h + human
+        if i == length:
+            diff6 = d + 0.0 - h_kit
+            if not ctx.signed:
+                diff6 = np.abs(diff6)
+        else:
+            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
+            diff6 = d + (o_r + lo) - h_kit
+            if not ctx.signed:
+                diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-            diff6 = np.abs(diff6) if i == length else np.zeros_like(diff6)
+        bound = fitness_upper_bounds(inst, self.types, counts)
+        if fitness is not None:
+            bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
             inst.weights,
             n_tasks=float(i),
             diff5=diff5,
             diff6=diff6,
-            fitness=fitness_upper_bounds(inst, self.types, counts),
+            fitness=bound,
             unavailable=ctx.unavailable(counts),
         )
 
-    def _levels(self, done: np.ndarray, length: int, ctx: _Epoch) -> tuple[list[_Level], bool]:
-        avail = [
-            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
-        ]
+    def _window(self, done: np.ndarray, avail: list[int], length: int) -> dict[int, frozenset[int]]:
+        """The tasks with at most ``length - 1`` undone ancestors (sorted): only they can be in
+        a window of ``length`` tasks, since a closed window holds every undone ancestor of its
+        tasks."""
+        anc: dict[int, frozenset[int]] = {y: frozenset() for y in avail}
+        queue = list(avail)
+        for x in queue:
+            for y in self.succ[x]:
+                if y in anc or done[y]:
+                    continue
+                ps = [p for p in self.pred[y] if not done[p]]
+                if not all(p in anc for p in ps):
+                    continue
+                a = frozenset().union(*(anc[p] for p in ps)) | frozenset(ps)
+                if len(a) <= length - 1:
+                    anc[y] = a
+                    queue.append(y)
+        return anc
+
+    def _levels(
+        self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
+    ) -> tuple[list[_Level], bool]:
         lim = self.limits
-        parents = [()]
+        avail_arr = np.array(avail, dtype=np.int64)
+        parents: list[tuple[int, ...]] = [()]
+        p_tasks = np.zeros((1, 0), dtype=np.int64)
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
         p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
@@ -252,28 +323,41 @@ class PrefixSearch:
         total = 0
         beam = False
         for i in range(1, length + 1):
-            kids: list[list[int]] = []
-            for s in parents:
-                inset = set(s)
-                kids.append(self._children(s, inset, done, avail))
-            n_kids = sum(len(k) for k in kids)
+            # children (module docstring: canonical sequences): the available tasks above the
+            # parent's largest, at once, plus the tasks the parent unlocks (per parent)
+            last = p_tasks.max(axis=1) if i > 1 else np.full(1, -1)
+            par, col = np.nonzero(avail_arr[None, :] > last[:, None])
+            child = avail_arr[col]
+            extra_par: list[int] = []
+            extra_child: list[int] = []
+            for a, seq in enumerate(parents):
+                if any(self.succ[x] for x in seq):
+                    for y in self._unlocked(seq, set(seq), done):
+                        extra_par.append(a)
+                        extra_child.append(y)
+            if extra_par:
+                par = np.concatenate([par, np.array(extra_par, dtype=np.int64)])
+                child = np.concatenate([child, np.array(extra_child, dtype=np.int64)])
+                order = np.lexsort((child, par))
+                par, child = par[order], child[order]
+            n_kids = len(child)
             if n_kids == 0:
                 break
-            par = np.repeat(np.arange(len(parents)), [len(k) for k in kids])
-            child = np.fromiter((y for k in kids for y in k), dtype=np.int64, count=n_kids)
             robot = p_robot[par] + self.r[child]
             human = p_human[par] + self.h[child]
             counts = p_counts[par] + self.part_matrix[child]
             if beam or total + n_kids > lim.max_prefix_sets:
                 beam = True
-                opt = self._optimistic(i, length, robot, human, counts, ctx)
+                tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
+                opt = self._optimistic(i, length, tasks, robot, human, counts, ctx)
                 keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
             seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
-            levels.append(_Level(seqs, robot, human, counts))
+            tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
+            levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
-            parents, p_robot, p_human, p_counts = seqs, robot, human, counts
+            parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
         return levels, beam
 
     # -- the rest of the window ------------------------------------------------------------------
@@ -371,26 +455,52 @@ class PrefixSearch:
         available: np.ndarray | None,
         fitness: FitnessFn,
         signed: bool,
+        cached: Callable[[np.ndarray], tuple[float, bool] | None] | None = None,
     ) -> Choice | None:
-        """The minimising (P, Q) of F (module docstring); None if no prefix fits the tray."""
+        """The minimising (P, Q) of F (module docstring); None if no prefix fits the tray.
+        ``cached``: the fitness of a multiset if already known (else None), without a CE run;
+        known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        remaining_r = np.sort(self.r[~done])
-        self._r_range = (float(remaining_r[0]), float(remaining_r[-1]))
-        min_rest = np.concatenate([[0.0], np.cumsum(remaining_r)])[: length + 1]
-        ctx = _Epoch(human_remaining, available, signed, min_rest)
-        levels, beam = self._levels(done, length, ctx)
-        self.stats.beam_epochs += beam
         avail = [
             j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
         ]
+        anc = self._window(done, avail, length)
+        window = np.array(sorted(anc), dtype=np.int64)
+        order = np.lexsort((window, self.r[window]))
+        low = window[order[:length]]
+        high = window[order[::-1][:length]]
+        self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
+        ctx = _Epoch(human_remaining, available, signed, low, high)
+        levels, beam = self._levels(done, length, ctx, avail)
+        self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
         queue: list[tuple[float, int, int, int]] = []
+        fits_of: dict[tuple[int, int], float] = {}
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            opt = self._optimistic(li + 1, length, lv.robot, lv.human, lv.counts, ctx)
-            queue.extend((o, 0, li, k) for k, o in enumerate(opt.tolist()))
+            fit = np.full(len(lv.seqs), np.nan)
+            keys, inverse = np.unique(lv.counts, axis=0, return_inverse=True)
+            fits = np.ones(len(lv.seqs), dtype=bool)
+            for u, row in enumerate(keys):
+                hit = cached(row) if cached is not None else None
+                if hit is not None:
+                    sel = inverse.reshape(-1) == u
+                    fit[sel] = hit[0]
+                    fits[sel] = hit[1]
+            opt = self._optimistic(
+                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, fit
+            )
+            known = ~np.isnan(fit)
+            rows = zip(opt.tolist(), known.tolist(), fits.tolist(), strict=True)
+            for k, (o, kn, ok) in enumerate(rows):
+                if not ok:
+                    continue
+                if kn:
+                    fits_of[li, k] = float(fit[k])
+                    self.stats.evaluated += 1
+                queue.append((o, int(kn), li, k))
         heapq.heapify(queue)
 
         def scorer(
@@ -418,31 +528,49 @@ class PrefixSearch:
 
             return f, lower
 
+        rests = None
+        if self._sums is not None and length > 1:
+            rests = _Rests(self, done, avail, anc, signed)
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
-        fits_of: dict[tuple[int, int], float] = {}
         incumbent = math.inf
         while queue and queue[0][0] <= incumbent + TIE_TOL:
             _, stage, li, k = heapq.heappop(queue)
             i = li + 1
+            lv = levels[li]
             if stage == 0:
-                fit, fits = fitness(levels[li].counts[k])
+                fit, fits = fitness(lv.counts[k])
                 if not fits:
                     continue
                 self.stats.evaluated += 1
                 fits_of[li, k] = fit
-                f, lower = scorer(li, k, fit)
-                if i == length:
-                    score = float(f(0.0))
-                    found.append((score, li, k, (), fit))
-                    incumbent = min(incumbent, score)
-                else:
-                    heapq.heappush(queue, (lower(float(min_rest[length - i])), 1, li, k))
+                bound = self._optimistic(
+                    i,
+                    length,
+                    lv.tasks[k : k + 1],
+                    lv.robot[k : k + 1],
+                    lv.human[k : k + 1],
+                    lv.counts[k : k + 1],
+                    ctx,
+                    np.array([fit]),
+                )
+                heapq.heappush(queue, (float(bound[0]), 1, li, k))
                 continue
             fit = fits_of[li, k]
             f, lower = scorer(li, k, fit)
-            score, rest, capped = self._rest(
-                levels[li].seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
-            )
+            if i == length:
+                score = float(f(0.0))
+                found.append((score, li, k, (), fit))
+                incumbent = min(incumbent, score)
+                continue
+            if rests is not None:
+                target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+                score, rest, capped = rests.best(
+                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target
+                )
+            else:
+                score, rest, capped = self._rest(
+                    lv.seqs[k], done, avail, length - i, f, lower, None, incumbent + TIE_TOL
+                )
             self.stats.rest_capped += capped
             if rest:
                 found.append((score, li, k, rest, fit))
@@ -469,6 +597,200 @@ class PrefixSearch:
         return best
 
 
+@dataclass(frozen=True)
+class _SumTable:
+    """Every multiset of ``k`` robot-time values (``k`` = 1..N-1) with its sum, sorted by sum:
+    the sums a rest of ``k`` precedence-free tasks can take. Built once per instance, only
+    when small (distinct robot times few, :data:`MAX_SUM_COMBOS`); else the rest search is
+    the depth-first one."""
+
+    vals: np.ndarray
+    #: value index of each task
+    vidx: np.ndarray
+    #: k -> (combos (n, k) of value indices, non-decreasing; rank of each entry among equal
+    #: values in its combo; sums), sorted by sum
+    tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+    @classmethod
+    def build(cls, robot: np.ndarray, kmax: int) -> _SumTable | None:
+        vals, vidx = np.unique(robot, return_inverse=True)
+        n_vals = len(vals)
+        if kmax < 1 or sum(math.comb(n_vals + k - 1, k) for k in range(1, kmax + 1)) > (
+            MAX_SUM_COMBOS
+        ):
+            return None
+        tables = {}
+        for k in range(1, kmax + 1):
+            combos = np.array(
+                list(itertools.combinations_with_replacement(range(n_vals), k)), dtype=np.int64
+            ).reshape(-1, k)
+            rank = np.zeros_like(combos)
+            for j in range(1, k):
+                rank[:, j] = np.where(combos[:, j] == combos[:, j - 1], rank[:, j - 1] + 1, 0)
+            sums = vals[combos].sum(axis=1)
+            order = np.argsort(sums, kind="stable")
+            tables[k] = (combos[order], rank[order], sums[order])
+        return cls(vals, vidx.reshape(-1), tables)
+
+
+#: Largest sum table (multisets over all k) :class:`_SumTable` builds.
+MAX_SUM_COMBOS = 300_000
+
+
+class _Rests:
+    r"""The best rest of each prefix at one epoch, by decomposition instead of a search over
+    sequences. Let :math:`A` be the tasks available at the epoch (every predecessor done).
+    A rest :math:`Q` (closed given done and :math:`P`) splits uniquely into its *core*
+    :math:`C`: its tasks outside :math:`A` with their undone ancestors outside :math:`P`
+    (all in :math:`Q`, by closedness), and the *free* tasks :math:`Q \setminus C \subseteq A
+    \setminus (P \cup C)`, any of which may be added since their predecessors are done.
+    So the best rest is the best over cores (few: unions of the needed sets of window tasks
+    outside :math:`A`, of total size at most :math:`m`) of :math:`R(C)` plus the sum of
+    :math:`m - |C|` free tasks closest to the target (or least, in the signed form), read
+    from the sorted multiset sums of :class:`_SumTable` (skipping multisets that use more
+    tasks of a value than are left). Exact: every rest is some (core, free multiset)."""
+
+    def __init__(
+        self,
+        search: PrefixSearch,
+        done: np.ndarray,
+        avail: list[int],
+        anc: dict[int, frozenset[int]],
+        signed: bool,
+    ) -> None:
+        tab = search._sums
+        assert tab is not None
+        self.search = search
+        self.done = done
+        self.r = search.r
+        self.vidx = tab.vidx
+        self.signed = signed
+        self.pool = set(avail)
+        self.anc = anc
+        self.deep = sorted(y for y in anc if y not in self.pool)
+        self.mult = np.bincount(tab.vidx[avail], minlength=len(tab.vals))
+        self.by_value: dict[int, list[int]] = {}
+        for t in avail:  # avail is sorted
+            self.by_value.setdefault(int(tab.vidx[t]), []).append(t)
+        self._tab = tab
+        #: k -> (combos, ranks, sums) of the multisets the epoch's available tasks can give
+        self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.max_cores = search.limits.max_rest_nodes
+
+    def _free(
+        self, k: int, target: float, removed: dict[int, int]
+    ) -> tuple[float, tuple[int, ...]] | None:
+        """The multiset of ``k`` free values with the sum closest to ``target`` (the least
+        sum if ``target`` is -inf), none of them beyond what ``removed`` leaves."""
+        if k == 0:
+            return 0.0, ()
+        if k not in self.tables:  # built on first use
+            combos, rank, sums = self._tab.tables[k]
+            keep = (rank < self.mult[combos]).all(axis=1)
+            self.tables[k] = (combos[keep], rank[keep], sums[keep])
+        combos, ranks, sums = self.tables[k]
+        mult = self.mult
+
+        def ok(j: int) -> bool:
+            if not removed:
+                return True
+            return all(
+                v not in removed or q < mult[v] - removed[v]
+                for v, q in zip(combos[j].tolist(), ranks[j].tolist(), strict=True)
+            )
+
+        n = len(sums)
+        j = 0 if target == -math.inf else int(np.searchsorted(sums, target))
+        up = j
+        while up < n and not ok(up):
+            up += 1
+        down = j - 1
+        if target != -math.inf:
+            while down >= 0 and not ok(down):
+                down -= 1
+        best = None
+        if up < n:
+            best = up
+        if down >= 0 and (best is None or target - sums[down] < sums[best] - target):
+            best = down
+        if best is None:
+            return None
+        return float(sums[best]), tuple(combos[best].tolist())
+
+    def best(
+        self,
+        prefix: tuple[int, ...],
+        m: int,
+        score: Callable[[np.ndarray], np.ndarray],
+        cutoff: float,
+        target: float,
+    ) -> tuple[float, tuple[int, ...], bool]:
+        """(F, a rest of least F in its smallest topological order, capped) over the rests of
+        ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
+        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form)."""
+        pset = set(prefix)
+        cands: list[tuple[int, frozenset[int]]] = []
+        for y in self.deep:
+            if y in pset:
+                continue
+            need = (self.anc[y] - pset) | {y}
+            if len(need) <= m:
+                cands.append((y, frozenset(need)))
+        best_f = math.inf
+        best_set: frozenset[int] | None = None
+        best_free: tuple[int, ...] = ()
+        seen: set[frozenset[int]] = set()
+        stack: list[tuple[int, frozenset[int]]] = [(0, frozenset())]
+        cores = 0
+        capped = False
+        while stack:
+            start, core = stack.pop()
+            if core in seen:
+                continue
+            seen.add(core)
+            cores += 1
+            if cores > self.max_cores:
+                capped = True
+                break
+            removed: dict[int, int] = {}
+            for t in pset.union(core):
+                if t in self.pool:
+                    v = int(self.vidx[t])
+                    removed[v] = removed.get(v, 0) + 1
+            r_core = float(self.r[list(core)].sum()) if core else 0.0
+            free = self._free(m - len(core), target - r_core, removed)
+            if free is not None:
+                val = float(score(r_core + free[0]))
+                if val < best_f and val <= cutoff:
+                    best_f, best_set, best_free = val, core, free[1]
+            for a in range(start, len(cands)):
+                grown = core | cands[a][1]
+                if len(grown) <= m and grown != core:
+                    stack.append((a + 1, grown))
+        if best_set is None:
+            return math.inf, (), capped
+        return best_f, self._order(pset, best_set, best_free), capped
+
+    def _order(
+        self, pset: set[int], core: frozenset[int], free: tuple[int, ...]
+    ) -> tuple[int, ...]:
+        """A rest realising (core, free values), in its smallest topological order."""
+        tasks = set(core)
+        taken: dict[int, int] = {}
+        for v in free:
+            pool = [t for t in self.by_value[v] if t not in pset and t not in core]
+            tasks.add(pool[taken.get(v, 0)])
+            taken[v] = taken.get(v, 0) + 1
+        seen = _DoneView(self.done, pset)
+        out: list[int] = []
+        left = set(tasks)
+        while left:
+            y = min(t for t in left if all(seen[p] or p in out for p in self.search.pred[t]))
+            out.append(y)
+            left.discard(y)
+        return tuple(out)
+
+
 class _DoneView:
     """``done`` plus the prefix, as seen by the rest search (indexable like ``done``)."""
 
@@ -484,13 +806,16 @@ class _DoneView:
 
 @dataclass
 class _Epoch:
-    """What one decision knows: H_rem, the parts at hand, the signed flag and the smallest
-    possible robot sums of the rest by size."""
+    """What one decision knows: H_rem, the parts at hand, the signed flag and the window tasks
+    that bound the rest's robot sums."""
 
     human_remaining: float
     available: np.ndarray | None
     signed: bool
-    min_rest: np.ndarray
+    #: the window tasks (:meth:`PrefixSearch._window`) of least and greatest robot times,
+    #: ``length`` of each, in increasing and decreasing order
+    low_ids: np.ndarray
+    high_ids: np.ndarray
 
     def unavailable(self, counts: np.ndarray) -> np.ndarray | None:
         if self.available is None:
