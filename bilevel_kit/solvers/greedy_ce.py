@@ -59,7 +59,7 @@ import math
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -269,7 +269,7 @@ class GreedyStats:
     rest_capped: int = 0
     #: True once ``time_limit`` ran out (the remaining kits are single tasks)
     time_limit_hit: bool = False
-    objective_terms: list[dict[str, object]] = field(default_factory=list)
+    objective_terms: list[dict[str, Any]] = field(default_factory=list)
 
 
 class GreedyCEPolicy:

@@ -59,7 +59,7 @@ import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -367,7 +367,7 @@ class PrefixSearch:
         done: np.ndarray,
         avail: list[int],
         m: int,
-        score: Callable[[np.ndarray], np.ndarray],
+        score: Callable[[Any], Any],
         bound: Callable[[float, float], float],
         threshold: float | None,
         cutoff: float = math.inf,
@@ -441,7 +441,7 @@ class PrefixSearch:
     ) -> FloatOrArray:
         """F of one pair in the same floating-point order as :func:`upper_level.objective`."""
         w = self.instance.weights
-        f = -w["W2"] * float(i)
+        f: Any = -w["W2"] * float(i)
         f = f + w["W3"] * diff5 + w["W4"] * diff6 - w["W5"] * fit
         if unav is not None:
             f = f + w["W7"] * unav
@@ -480,32 +480,32 @@ class PrefixSearch:
         fits_of: dict[tuple[int, int], float] = {}
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            fit = np.full(len(lv.seqs), np.nan)
+            level_fit = np.full(len(lv.seqs), np.nan)
             keys, inverse = np.unique(lv.counts, axis=0, return_inverse=True)
-            fits = np.ones(len(lv.seqs), dtype=bool)
+            level_fits = np.ones(len(lv.seqs), dtype=bool)
             for u, row in enumerate(keys):
                 hit = cached(row) if cached is not None else None
                 if hit is not None:
                     sel = inverse.reshape(-1) == u
-                    fit[sel] = hit[0]
-                    fits[sel] = hit[1]
+                    level_fit[sel] = hit[0]
+                    level_fits[sel] = hit[1]
             opt = self._optimistic(
-                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, fit
+                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, level_fit
             )
-            known = ~np.isnan(fit)
-            rows = zip(opt.tolist(), known.tolist(), fits.tolist(), strict=True)
+            known = ~np.isnan(level_fit)
+            rows = zip(opt.tolist(), known.tolist(), level_fits.tolist(), strict=True)
             for k, (o, kn, ok) in enumerate(rows):
                 if not ok:
                     continue
                 if kn:
-                    fits_of[li, k] = float(fit[k])
+                    fits_of[li, k] = float(level_fit[k])
                     self.stats.evaluated += 1
                 queue.append((o, int(kn), li, k))
         heapq.heapify(queue)
 
         def scorer(
             li: int, k: int, fit: float
-        ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[[float, float], float]]:
+        ) -> tuple[Callable[[Any], Any], Callable[[float, float], float]]:
             """F of prefix (li, k) as a function of the rest's robot sums (vectorised), and a
             lower bound of F given a lower bound of the sum (term 6 is |x| or x, x growing with
             the sum)."""
@@ -516,7 +516,7 @@ class PrefixSearch:
             u = None if unav is None else float(unav[0])
             human = o_h + float(lv.human[k])
 
-            def f(rest: np.ndarray) -> np.ndarray:
+            def f(rest: Any) -> Any:  # R(Q): a float or an array of candidate sums
                 diff6 = d + (o_r + rest) - human if i < length else d + 0.0 - human
                 return self._score(i, diff5, diff6 if signed else np.abs(diff6), fit, u)
 
@@ -538,11 +538,11 @@ class PrefixSearch:
             i = li + 1
             lv = levels[li]
             if stage == 0:
-                fit, fits = fitness(lv.counts[k])
+                fit0, fits = fitness(lv.counts[k])
                 if not fits:
                     continue
                 self.stats.evaluated += 1
-                fits_of[li, k] = fit
+                fits_of[li, k] = fit0
                 bound = self._optimistic(
                     i,
                     length,
@@ -551,11 +551,11 @@ class PrefixSearch:
                     lv.human[k : k + 1],
                     lv.counts[k : k + 1],
                     ctx,
-                    np.array([fit]),
+                    np.array([fit0]),
                 )
                 heapq.heappush(queue, (float(bound[0]), 1, li, k))
                 continue
-            fit = fits_of[li, k]
+            fit = float(fits_of[li, k])
             f, lower = scorer(li, k, fit)
             if i == length:
                 score = float(f(0.0))
@@ -721,7 +721,7 @@ class _Rests:
         self,
         prefix: tuple[int, ...],
         m: int,
-        score: Callable[[np.ndarray], np.ndarray],
+        score: Callable[[Any], Any],
         cutoff: float,
         target: float,
     ) -> tuple[float, tuple[int, ...], bool]:
