@@ -169,6 +169,11 @@ def read_index() -> list[dict[str, str]]:
             if not r["answer"] and known.get(r["name"]):
                 r["answer"] = known[r["name"]]
                 r["source"] = "reference"
+    for r in rows:
+        if not r["answer"]:
+            W, H, sizes = load(DATA / r["file"])
+            if sum(w * h for w, h, _ in sizes) > W * H:
+                r["answer"] = "infeasible"  # arithmetic: more part area than tray area
     return rows
 
 
@@ -221,7 +226,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", default="", help="comma-separated instance names")
     parser.add_argument("--reference", type=float, default=0.0, metavar="S")
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "packing.csv")
+    parser.add_argument(
+        "--from-csv", type=Path, default=None, help="re-summarise a results CSV (no runs)"
+    )
     args = parser.parse_args(argv)
+    if args.from_csv is not None:
+        with open(args.from_csv) as fh:
+            old = list(csv.DictReader(fh))
+        answers = {r["name"]: r["answer"] or "unknown" for r in read_index()}
+        for r in old:
+            r["answer"] = answers[r["name"]]
+            r["wrong"] = int(
+                (r["status"] == "infeasible" and r["answer"] == "feasible")
+                or (r["status"] == "feasible" and r["answer"] == "infeasible")
+                or r["status"] == "invalid"
+            )
+        return finish(old, args.from_csv.stem, args)
     rows = read_index()
     if args.classes:
         rows = [r for r in rows if r["class"] in args.classes.split(",")]
@@ -254,6 +274,17 @@ def main(argv: list[str] | None = None) -> int:
             }
             results.append(row)
             print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+    return finish(results, "", args)
+
+
+def finish(results: list[dict[str, Any]], _: str, args: argparse.Namespace) -> int:
+    solvers = list(dict.fromkeys(r["solver"] for r in results))
+    # an open instance on which some run found a checked layout is feasible
+    found = {r["name"] for r in results if r["status"] == "feasible"}
+    for r in results:
+        if r["answer"] == "unknown" and r["name"] in found:
+            r["answer"] = "feasible"
+            r["wrong"] = int(r["status"] == "infeasible")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(results[0]))
