@@ -85,10 +85,6 @@ DECISION_PARAMS: dict[str, Any] = {}
 #: Add one redundant cumulative per axis to the decision model.
 REDUNDANT_CUMULATIVE = True
 
-#: Search hint of the decision model: x (then y) corners, lowest minimum first, at their
-#: minimum (left-bottom placement); CP-SAT's portfolio gives it to some of its workers.
-DECISION_STRATEGY = False
-
 
 class _Rect(Protocol):
     @property
@@ -407,9 +403,6 @@ def pack(
         # crossing a horizontal line to at most W (tight for zero-waste kits)
         model.add_cumulative(x_iv, y_sizes, H)
         model.add_cumulative(y_iv, x_sizes, W)
-    if objective == "feasible" and DECISION_STRATEGY:
-        for axis in (xs, ys):
-            model.add_decision_strategy(axis, cp_model.CHOOSE_LOWEST_MIN, cp_model.SELECT_MIN_VALUE)
     # centres on the half grid: 2 cx = 2 x + (w or h)
     cx2 = [2 * xs[j] + w + (h - w) * rots[j] for j, (w, h, _) in enumerate(sizes)]
     cy2 = [2 * ys[j] + h + (w - h) * rots[j] for j, (w, h, _) in enumerate(sizes)]
