@@ -18,6 +18,16 @@ rectangles forbids overlap. Identical parts (same type) are interchangeable, so 
 are ordered lexicographically, :math:`(x_a, y_a) <_{lex} (x_b, y_b)` (two non-overlapping
 rectangles never share a lower-left corner, so the order is strict and loses no layout).
 
+**Before search** (both objectives): the cheap infeasibility tests of
+:mod:`bilevel_kit.layout.packing_bounds` (a part larger than the tray, area, incompatible pairs,
+tall parts, dual-feasible-function bounds) answer "infeasible" without a model.
+
+**Decision model** (``objective="feasible"``): one redundant ``add_cumulative`` per axis on the
+same intervals (the parts crossing any vertical line have heights summing to at most H, and
+symmetrically), the classic relaxation of 2D packing; it is what decides zero-waste kits, where
+every line is full (docs/formulations.md#cp-sat-packing, bench/results/packing.md). CP-SAT's
+parameters come from :data:`DECISION_PARAMS` on top of :data:`SAFE_NO_OVERLAP_2D`.
+
 **Fitness.** The paper's kit fitness (eq. 11 with the sign fix of docs/errata.md) is
 :math:`f = D_{diff} - D_{same} - W_6 Z` with Euclidean centre distances. Overlap is a hard
 constraint here, so Z = 0 and ``w6`` only enters the reported true fitness. CP-SAT needs a
@@ -39,7 +49,7 @@ reachable cells, or one column span per row when the rows are contiguous, allows
 
 **Oracle.** :func:`fit_counts` / :func:`kit_fits` answer "does this part multiset fit" with
 memoisation (monotone: sub-multisets of a fitting one fit, super-multisets of a non-fitting one
-do not), an area pre-check, the toolkit's shelf packer on the grid, then CP-SAT.
+do not), the pre-search tests, the toolkit's shelf packer on the grid, then CP-SAT.
 """
 
 from __future__ import annotations
@@ -65,6 +75,15 @@ _EPS = 1e-9
 #: sharing start variables). Setting the presolve limit to 0 removed every such run in our
 #: stress tests (hundreds of seeds), so every no-overlap-2D model here sets it.
 SAFE_NO_OVERLAP_2D = {"no_overlap_2d_boolean_relations_limit": 0}
+
+
+#: CP-SAT parameters of the decision model (``objective="feasible"``), on top of
+#: :data:`SAFE_NO_OVERLAP_2D`; chosen on a training half of bench/data/packing and checked on
+#: the other half (bench/results/packing.md).
+DECISION_PARAMS: dict[str, Any] = {}
+
+#: Add one redundant cumulative per axis to the decision model.
+REDUNDANT_CUMULATIVE = True
 
 
 class _Rect(Protocol):
@@ -329,10 +348,14 @@ def pack(
             surrogate_objective=0.0 if objective == "fitness" else None,
             bound=0.0 if objective == "fitness" else None,
         )
-    fits_alone = all((w <= W and h <= H) or (r and h <= W and w <= H) for w, h, r in sizes)
-    if not fits_alone or sum(w * h for w, h, _ in sizes) > W * H:
-        extra["reason"] = "area" if fits_alone else "part larger than tray"
-        extra["proof"] = (exact and reach is None) or _infeasible_at_true_sizes(tray, items)
+    from .packing_bounds import infeasibility_reason
+
+    why = infeasibility_reason(sizes, W, H)
+    if why is not None:
+        # the tests ignore reachability, which only removes layouts: on an exact grid the
+        # answer is a proof with or without a reach map
+        extra["reason"] = why
+        extra["proof"] = exact or _infeasible_at_true_sizes(tray, items)
         return done("infeasible", None)
     if objective == "feasible":
         shelf = _shelf(sizes, W, H)
@@ -345,6 +368,8 @@ def pack(
     ys: list[Any] = []
     rots: list[Any] = []  # 0/1 constants or rotation literals
     x_iv, y_iv = [], []
+    x_sizes: list[int] = []  # size of each interval of x_iv (and y_iv) on its axis
+    y_sizes: list[int] = []
     for j, (w, h, r) in enumerate(sizes):
         can_turn = r and w != h and h <= W and w <= H
         can_stay = w <= W and h <= H
@@ -361,14 +386,23 @@ def pack(
                 ye = model.new_int_var(0, H, f"ye{j}")
                 x_iv.append(model.new_optional_interval_var(x, size_x, xe, lit, f"ix{j}"))
                 y_iv.append(model.new_optional_interval_var(y, size_y, ye, lit, f"iy{j}"))
+                x_sizes.append(size_x)
+                y_sizes.append(size_y)
             rots.append(rot)
         else:
             turned = not can_stay
             sx, sy = (h, w) if turned else (w, h)
             x_iv.append(model.new_fixed_size_interval_var(x, sx, f"ix{j}"))
             y_iv.append(model.new_fixed_size_interval_var(y, sy, f"iy{j}"))
+            x_sizes.append(sx)
+            y_sizes.append(sy)
             rots.append(1 if turned else 0)
     model.add_no_overlap_2d(x_iv, y_iv)
+    if objective == "feasible" and REDUNDANT_CUMULATIVE:
+        # redundant: the parts crossing any vertical line stack to at most H, and those
+        # crossing a horizontal line to at most W (tight for zero-waste kits)
+        model.add_cumulative(x_iv, y_sizes, H)
+        model.add_cumulative(y_iv, x_sizes, W)
     # centres on the half grid: 2 cx = 2 x + (w or h)
     cx2 = [2 * xs[j] + w + (h - w) * rots[j] for j, (w, h, _) in enumerate(sizes)]
     cy2 = [2 * ys[j] + h + (w - h) * rots[j] for j, (w, h, _) in enumerate(sizes)]
@@ -401,6 +435,9 @@ def pack(
     solver.parameters.random_seed = seed
     solver.parameters.log_search_progress = log
     solver.parameters.no_overlap_2d_boolean_relations_limit = 0  # see SAFE_NO_OVERLAP_2D
+    if objective == "feasible":
+        for key, value in DECISION_PARAMS.items():
+            setattr(solver.parameters, key, value)
     st = solver.solve(model)
     extra["cpsat_status"] = solver.status_name(st)
     if st == cp_model.INFEASIBLE:
@@ -530,9 +567,9 @@ def fit_counts(
 ) -> tuple[bool | None, TypedLayout | None]:
     """Whether a part multiset fits, with a layout by type when it does (memoised).
 
-    Order of checks: cached answers (using monotonicity), the area bound, the shelf
-    heuristic, then CP-SAT. ``None`` = unknown within ``time_limit``; an unknown answer is
-    retried only with a longer limit.
+    Order of checks: cached answers (using monotonicity), the pre-search tests of
+    :mod:`~bilevel_kit.layout.packing_bounds`, the shelf heuristic, then CP-SAT. ``None`` =
+    unknown within ``time_limit``; an unknown answer is retried only with a longer limit.
     """
     counts = {k: int(n) for k, n in counts.items() if n > 0}
     cache = _cache_for(tray, part_types, resolution, reach)

@@ -50,7 +50,15 @@ def test_one_grid_unit_smaller_is_infeasible():
     assert res.layout is None
 
 
-def test_pinwheel_needs_cpsat_and_is_tight():
+@pytest.fixture
+def no_prechecks(monkeypatch):
+    """CP-SAT alone: the pre-search tests of packing_bounds never answer."""
+    from bilevel_kit.layout import packing_bounds
+
+    monkeypatch.setattr(packing_bounds, "infeasibility_reason", lambda sizes, W, H: None)
+
+
+def test_pinwheel_needs_cpsat_and_is_tight(no_prechecks):
     """Four 30x20 parts fit a 50x50 tray only as a pinwheel (the shelf heuristic fails);
     49 x 50 is proven infeasible by CP-SAT although the area (2400 <= 2450) allows it."""
     items = _items(("p", 30.0, 20.0, 4, True))
@@ -64,10 +72,115 @@ def test_pinwheel_needs_cpsat_and_is_tight():
     assert small.extra["cpsat_status"] == "INFEASIBLE"
 
 
-def test_two_60mm_squares_do_not_fit_although_area_does():
+def test_two_60mm_squares_do_not_fit_although_area_does(no_prechecks):
     res = pk.pack(Tray(100.0, 100.0), _items(("s", 60.0, 60.0, 2, True)), time_limit=10.0)
     assert res.status == "infeasible"
     assert res.extra["cpsat_status"] == "INFEASIBLE"
+
+
+def test_prechecks_answer_the_same_without_search():
+    """The pinwheel's 49 x 50 tray (a dual-feasible-function bound) and the two 60 mm squares
+    (both cross the midline) are proven infeasible before CP-SAT, as proofs."""
+    small = pk.pack(Tray(49.0, 50.0), _items(("p", 30.0, 20.0, 4, True)), time_limit=10.0)
+    assert small.status == "infeasible"
+    assert small.extra["reason"] == "dual-feasible function bound"
+    assert small.extra["proof"] is True
+    assert "cpsat_status" not in small.extra
+    two = pk.pack(Tray(100.0, 100.0), _items(("s", 60.0, 60.0, 2, True)), time_limit=10.0)
+    assert two.status == "infeasible"
+    assert two.extra["reason"] == "tall or wide parts"
+    assert two.extra["proof"] is True
+
+
+def _guillotine(W: int, H: int, n: int, rng) -> list[tuple[int, int]]:
+    pieces = [(W, H)]
+    while len(pieces) < n:
+        pieces.sort(key=lambda p: p[0] * p[1])
+        w, h = pieces.pop()
+        if w >= h:
+            c = rng.randint(1, w - 1)
+            pieces += [(c, h), (w - c, h)]
+        else:
+            c = rng.randint(1, h - 1)
+            pieces += [(w, c), (w, h - c)]
+    return pieces
+
+
+def test_zero_waste_kit_of_25_parts_is_decided():
+    """A 40 x 15 tray cut into 25 pieces (zero waste; bench P00 of bench/data/packing): the
+    plain no-overlap-2D model does not decide it in 10 s; the redundant cumulatives do."""
+    import random
+
+    pieces = _guillotine(40, 15, 25, random.Random(1000))
+    items = [
+        (f"q{j}", PartType(id=f"q{j}", width=w, height=h, pick_time=1.0, rotatable=False))
+        for j, (w, h) in enumerate(pieces)
+    ]
+    res = pk.pack(Tray(40.0, 15.0), items, time_limit=30.0)
+    assert res.status == "feasible"
+    _assert_valid(res.layout, Tray(40.0, 15.0), items)
+
+
+def test_clautiaux_infeasible_instance_is_proven():
+    """CJCM E07N15 (20 x 20, 15 parts, no rotation; known infeasible): no pre-check sees it,
+    the cumulative relaxation proves it quickly."""
+    spec = [
+        (5, 7, 1),
+        (4, 11, 1),
+        (1, 13, 2),
+        (11, 6, 1),
+        (2, 20, 1),
+        (3, 17, 1),
+        (1, 15, 1),
+        (13, 4, 1),
+        (3, 3, 1),
+        (1, 11, 1),
+        (1, 8, 1),
+        (1, 7, 1),
+        (1, 3, 1),
+        (1, 9, 1),
+    ]
+    items = _items(*[(f"e{k}", w, h, n, False) for k, (w, h, n) in enumerate(spec)])
+    res = pk.pack(Tray(20.0, 20.0), items, time_limit=30.0)
+    assert res.status == "infeasible"
+    assert res.extra["cpsat_status"] == "INFEASIBLE"
+    assert res.extra["proof"] is True
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_decisions_match_brute_force(seed):
+    """Random tiny kits (rotation allowed or not): pack's answer equals exhaustive search."""
+    import random
+
+    import numpy as np
+
+    rng = random.Random(seed)
+    W, H = rng.randint(3, 6), rng.randint(3, 6)
+    n = rng.randint(2, 5)
+    sizes = [(rng.randint(1, W), rng.randint(1, H), rng.random() < 0.5) for _ in range(n)]
+    occ = np.zeros((H, W), dtype=bool)
+
+    def fits(k: int) -> bool:
+        if k == n:
+            return True
+        w, h, r = sizes[k]
+        for ww, hh in {(w, h), (h, w)} if r else {(w, h)}:
+            for x in range(W - ww + 1):
+                for y in range(H - hh + 1):
+                    if not occ[y : y + hh, x : x + ww].any():
+                        occ[y : y + hh, x : x + ww] = True
+                        ok = fits(k + 1)
+                        occ[y : y + hh, x : x + ww] = False
+                        if ok:
+                            return True
+        return False
+
+    items = [
+        (f"b{j}", PartType(id=f"b{j}", width=w, height=h, pick_time=1.0, rotatable=r))
+        for j, (w, h, r) in enumerate(sizes)
+    ]
+    res = pk.pack(Tray(float(W), float(H)), items, time_limit=10.0)
+    assert res.status == ("feasible" if fits(0) else "infeasible")
 
 
 def test_rotation_makes_a_long_part_fit():
