@@ -30,13 +30,13 @@ class CompareCell:
     def key(self) -> str:
         """A stable file-name key for this cell's saved result.
 
-        It digests the instance file's bytes, not its path: an edited file never reuses a
-        saved result, a moved or copied one does.
+        The digest covers the instance file's bytes, not its path, so an edited file never
+        reuses a saved result; the file's stem only makes the name readable.
         """
         config = {k: v for k, v in asdict(self).items() if k != "instance"}
         blob = json.dumps(config, sort_keys=True, default=str)
         digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
-        return f"{self.method}__s{self.seed}__{digest}"
+        return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
 
 
 def file_digest(path: str | Path) -> str:
