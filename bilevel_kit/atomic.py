@@ -17,23 +17,26 @@ from pathlib import Path
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); rename it over ``path`` on success.
 
-    On an exception the temporary file is removed and ``path`` is left untouched.
+    On an exception (``KeyboardInterrupt`` included) the temporary file is removed and
+    ``path`` is left untouched.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
     folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{target.name}.", suffix=target.suffix or ".tmp", dir=folder
-    )
-    os.close(fd)
-    try:
+    tmp: str | None = None
+    try:  # whatever ends the write (an error, Ctrl-C, SIGTERM raised as one) removes the temp
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{target.name}.", suffix=target.suffix or ".tmp", dir=folder
+        )
+        os.close(fd)
         os.chmod(tmp, _mode_for(target))
         yield Path(tmp)
         os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+        tmp = None
+    finally:
+        if tmp is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
 
 
 def _mode_for(target: Path) -> int:

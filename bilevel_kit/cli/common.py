@@ -8,9 +8,13 @@ option. Only the standard library is imported here: ``bilevel-kit --help`` must 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import signal
 import sys
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from types import FrameType
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 if TYPE_CHECKING:
@@ -334,6 +338,28 @@ def print_violations(lines: list[str], stream: IO[str], limit: int = 20) -> None
         print(f"  ... and {len(lines) - limit} more", file=stream)
 
 
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM raises ``KeyboardInterrupt`` while a command runs (main thread, default handler
+    only), so a ``kill`` cleans up like Ctrl-C: temporary files removed, solver children
+    killed, finished sweep cells kept. Python's default SIGTERM ends the process at once."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
+        yield
+        return
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def run_command(
     name: str, run: Callable[[argparse.Namespace], int], args: argparse.Namespace
 ) -> int:
@@ -341,8 +367,9 @@ def run_command(
     from ..errors import BilevelKitError
 
     try:
-        check_output_options(args)
-        return run(args)
+        with _terminate_as_interrupt():
+            check_output_options(args)
+            return run(args)
     except BilevelKitError as exc:
         print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

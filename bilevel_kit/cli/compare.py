@@ -174,9 +174,16 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
     by_instance: dict[str, list[dict[str, Any]]] = {}
     for r in records:
         by_instance.setdefault(r["instance_file"], []).append(r)
+    used: set[str] = set()
     for path, rows in by_instance.items():
         inst = load(path).with_overrides(**overrides)
         name = safe_name(inst.name)  # a name is data, never a path
+        if name in used:  # another file has this name: tell the figures apart by file
+            base, i = f"{name}_{safe_name(Path(path).stem)}", 2
+            name = base
+            while name in used:
+                name, i = f"{base}_{i}", i + 1
+        used.add(name)
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue

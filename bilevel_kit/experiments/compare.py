@@ -21,12 +21,31 @@ class CompareCell:
     time_limit: float | None = None
     params: dict[str, Any] = field(default_factory=dict)
     overrides: dict[str, Any] = field(default_factory=dict)  # delivery_time, weights, ...
+    instance_sha256: str = ""  # the file's content digest, filled in when the cell is made
+
+    def __post_init__(self) -> None:
+        if not self.instance_sha256:
+            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
 
     def key(self) -> str:
-        """A stable file-name key for this cell's saved result."""
-        blob = json.dumps(asdict(self), sort_keys=True, default=str)
-        digest = hashlib.sha1(blob.encode()).hexdigest()[:10]
+        """A stable file-name key for this cell's saved result.
+
+        The digest covers the instance file's bytes, not its path, so an edited file never
+        reuses a saved result; the file's stem only makes the name readable.
+        """
+        config = {k: v for k, v in asdict(self).items() if k != "instance"}
+        blob = json.dumps(config, sort_keys=True, default=str)
+        digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
         return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (empty string when it cannot be read: the cell then fails
+    with the loader's message)."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return ""
 
 
 def compare_cell(cell: CompareCell) -> dict[str, Any]:
@@ -39,6 +58,7 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     record: dict[str, Any] = {
         "instance": inst.name,
         "instance_file": cell.instance,
+        "instance_sha256": cell.instance_sha256,
         "method": cell.method,
         "seed": cell.seed,
         "time_limit": cell.time_limit,
@@ -71,15 +91,22 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     }
 
 
+def _file_of(record: dict[str, Any]) -> str:
+    """The group of a row: its instance file (several files may share an instance name)."""
+    return str(record.get("instance_file", record.get("instance")))
+
+
 def add_best_bound_gap(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Add ``best_bound`` (max bound over the instance's rows) and ``gap`` to it (fraction)."""
+    """Add ``best_bound`` (max bound over the rows of the same instance file) and ``gap`` to
+    it (fraction)."""
     rows = list(records)
     best: dict[str, float] = {}
     for r in rows:
         if r.get("bound") is not None:
-            best[r["instance"]] = max(best.get(r["instance"], r["bound"]), r["bound"])
+            f = _file_of(r)
+            best[f] = max(best.get(f, r["bound"]), r["bound"])
     for r in rows:
-        b = best.get(r["instance"])
+        b = best.get(_file_of(r))
         r["best_bound"] = b
         ms = r.get("makespan")
         r["gap"] = None if b is None or not ms else max(0.0, (ms - b) / ms)

@@ -77,12 +77,24 @@ COMPARE_COLUMNS = [
     ("gap", "gap to best (%)", "{:.2%}"),
     ("valid", "valid", "{}"),
     ("wall_time_s", "time (s)", "{:.3f}"),
+    ("instance_file", "file", "path"),  # several files may share an instance name
 ]
+
+
+def _display_path(value: str) -> str:
+    """A path relative to the working folder when it lies under it, else as given."""
+    p = Path(value)
+    try:
+        return str(p.resolve().relative_to(Path.cwd().resolve()))
+    except (ValueError, OSError):
+        return str(value)
 
 
 def _cell_text(value: Any, fmt: str) -> str:
     if value is None:
         return "-"
+    if fmt == "path":
+        return _display_path(str(value))
     if fmt == "{:.2%}":
         return f"{100 * value:.2f}"
     return fmt.format(value)

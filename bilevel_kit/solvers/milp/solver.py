@@ -195,9 +195,24 @@ def _write_start(smap: Any, tmp: str) -> str:
     return start
 
 
+def _die_with_parent(parent: int) -> None:
+    """In the HiGHS child before it runs (Linux): ask the kernel to send it SIGKILL when its
+    parent dies, even by SIGKILL, so no solver runs on past the command that started it."""
+    import ctypes
+    import os
+    import signal
+
+    pr_set_pdeathsig = 1
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # the parent died before the request took effect
+        os._exit(1)
+
+
 def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
     """Write ``model`` as MPS, solve it with ``python -m bilevel_kit.solvers.milp.highs_child``
     and load its solution back into the model's variables."""
+    import functools
     import json
     import os
     import subprocess
@@ -223,19 +238,28 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
             json.dumps(dict(req.options)),
             start,
         ]
-        try:
-            proc = subprocess.run(
-                argv,
-                timeout=max(1.0, left) + KILL_GRACE,
-                stdout=None if req.log else subprocess.DEVNULL,
-                stderr=subprocess.PIPE,
-                text=True,
-                env=_child_env(),
-            )
+        proc = subprocess.Popen(
+            argv,
+            stdout=None if req.log else subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=_child_env(),
+            preexec_fn=(
+                functools.partial(_die_with_parent, os.getpid())
+                if sys.platform == "linux"
+                else None
+            ),
+        )
+        try:  # the child never outlives this call: killed on a timeout, an error or a signal
+            _, err = proc.communicate(timeout=max(1.0, left) + KILL_GRACE)
         except subprocess.TimeoutExpired:
             return SolveInfo("killed", False, False, False, None, None, 0.0)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
         if proc.returncode != 0 or not os.path.exists(out):
-            raise RuntimeError(f"HiGHS subprocess failed: {proc.stderr.strip()[-2000:]}")
+            raise RuntimeError(f"HiGHS subprocess failed: {err.strip()[-2000:]}")
         with open(out) as f:
             res = json.load(f)
     values = res.get("values", {})
