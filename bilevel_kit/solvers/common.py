@@ -191,24 +191,62 @@ class Packer:
         return shelf_pack(self.instance.tray, items)
 
 
+def johnson_topological_order(instance: Instance) -> list[str]:
+    """A topological order that takes, among the ready tasks, the first in Johnson's order of
+    the jobs (r_i, h_i) (:func:`bilevel_kit.bounds.johnson_order`): without precedence it is
+    Johnson's order, whose single-task kits attain the flow-shop bound when d = 0 and there
+    are no overheads."""
+    import heapq
+
+    from ..bounds import johnson_order
+
+    ids = [t.id for t in instance.tasks]
+    rank = {
+        ids[j]: k
+        for k, j in enumerate(
+            johnson_order(
+                [instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids]
+            )
+        )
+    }
+    indeg = dict.fromkeys(ids, 0)
+    succ: dict[str, list[str]] = {t: [] for t in ids}
+    for a, b in dict.fromkeys(instance.precedence):
+        indeg[b] += 1
+        succ[a].append(b)
+    heap = [(rank[t], t) for t in ids if indeg[t] == 0]
+    heapq.heapify(heap)
+    out: list[str] = []
+    while heap:
+        _, t = heapq.heappop(heap)
+        out.append(t)
+        for s in succ[t]:
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                heapq.heappush(heap, (rank[s], s))
+    return out
+
+
 def quick_plan(
     instance: Instance, packer: Packer | None = None, *, max_size: int = 40
 ) -> list[list[str]] | None:
-    """A cheap feasible plan (an upper bound and a hint): the topological order cut into
-    segments of a fixed size s (each split further until it fits), best s by the evaluator."""
+    """A cheap feasible plan (an upper bound and a hint): the topological order (then the
+    Johnson-priority one, :func:`johnson_topological_order`) cut into segments of a fixed size
+    s (each split further until it fits), best by the evaluator; stops once the packer's
+    budget has expired and a plan is known."""
     packer = packer or Packer(instance, 0.2, Budget(10.0))
-    order = topological_order(instance)
     best: tuple[float, list[list[str]]] | None = None
-    for s in range(1, min(len(order), max_size) + 1):
-        if best is not None and packer.budget.expired():
-            break
-        kits: list[list[str]] = []
-        for a in range(0, len(order), s):
-            parts = packer.split(list(kit_order(instance, order[a : a + s])))
-            if parts is None:
-                return best[1] if best else None
-            kits += parts
-        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
-        if best is None or ms < best[0] - 1e-9:
-            best = (ms, kits)
+    for order in (topological_order(instance), johnson_topological_order(instance)):
+        for s in range(1, min(len(order), max_size) + 1):
+            if best is not None and packer.budget.expired():
+                return best[1]
+            kits: list[list[str]] = []
+            for a in range(0, len(order), s):
+                parts = packer.split(list(kit_order(instance, order[a : a + s])))
+                if parts is None:
+                    return best[1] if best else None
+                kits += parts
+            ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+            if best is None or ms < best[0] - 1e-9:
+                best = (ms, kits)
     return best[1] if best else None

@@ -43,6 +43,8 @@ order with a non-overlapping layout. ``extra`` keys:
   ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
   scaled times); ``idle_bound`` for ``objective="human_idle"``;
 * ``reason`` when the run ends without a plan for a known reason;
+* ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (then no model is built: it is optimal);
 * ``hint_method``: the heuristic whose plan was the hint (registered method only).
 """
 
@@ -292,6 +294,13 @@ def run(
         if incumbent is None
         else evaluate(instance, _plan_of(instance, incumbent, None)).makespan,
     )
+    start_ms = extra["upper_start"]
+    closed_done = start_ms is not None and start_ms <= best_bound(instance) + 1e-9
+    if options.objective == "makespan" and closed_done:
+        # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
     mdl = build(
         instance,
         sc,
@@ -397,7 +406,7 @@ def _tray_mode(instance: Instance, tray: str, K: int) -> str:
     return "embedded" if small and instance.tray_limit is None else "benders"
 
 
-def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> MethodOutput:
+def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
     """The plan of the run's best kits with its status and makespan bound in seconds."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
     assert state.kits is not None
@@ -411,7 +420,7 @@ def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> Method
         bound_s = closed if lower_s is None else max(closed, lower_s)
         optimal = state.proven and (sc.exact or real.makespan <= bound_s + 1e-6)
     else:
-        if lower is not None and sc.exact:
+        if lower is not None and sc.exact and mdl is not None:
             idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
         w_min = (
             sum(instance.human_time(i) for i in ctx.ids)

@@ -25,6 +25,8 @@ the closed-form bounds). ``extra`` keys:
 * ``solver``, ``objective``, ``tray_mode``, ``time_limit_enforced`` (the solver's time limit is
   known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
   ``build_time_s``, ``wall_time_s``;
+* ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (no model is built: it is optimal);
 * ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``termination`` (the last
   master solve's), ``master_time_s`` (its wall time);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
@@ -170,6 +172,15 @@ def run(
         K = max(K, len(inc))
     extra["max_kits"] = K
     extra["upper_start"] = inc_obj
+    if inc is not None and options.objective == "makespan" and inc_obj <= closed + TOL:
+        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, termination="closed_form_bound")
+        plan = _with_layouts(instance, inc, packer, extra)
+        if plan is None:
+            return finish(None, Status.UNKNOWN, closed)
+        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
+        return finish(plan, Status.OPTIMAL, bound)
 
     master = build(instance, K, upper, options.objective)
     extra["build_time_s"] = budget.elapsed()
@@ -188,17 +199,27 @@ def run(
         if loop.infeasible:
             return finish(None, Status.INFEASIBLE, None)
         return finish(None, Status.UNKNOWN, closed)
+    plan = _with_layouts(instance, loop.inc, packer, extra)
+    if plan is None:
+        return finish(None, Status.UNKNOWN, closed)
+    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
+    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+
+
+def _with_layouts(
+    instance: Instance, kits: list[list[str]], packer: Packer, extra: dict[str, Any]
+) -> Plan | None:
+    """The plan of ``kits`` in human order with the oracle's layouts; None (and a ``reason``)
+    when some kit has none within the time limit."""
     kits_out = []
-    for kit in loop.inc:
+    for kit in kits:
         tasks = human_order(instance, kit)
         layout = packer.layout(tasks)
         if layout is None and instance.kit_parts(tasks):
             extra["reason"] = "no layout for some kit within the time limit"
-            return finish(None, Status.UNKNOWN, closed)
+            return None
         kits_out.append(Kit(tasks, layout or ()))
-    plan = Plan(tuple(kits_out))
-    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
-    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+    return Plan(tuple(kits_out))
 
 
 def _makespan_bound(
