@@ -96,6 +96,17 @@ def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+def assignment_cells(instance: Instance, K: int) -> int:
+    """Number of (task, kit position) variables of the exact models with K positions: task i
+    can only be in the first ``n - |descendants(i)|`` kits; their models grow with it."""
+    n = instance.n_tasks
+    n_desc = dict.fromkeys(instance.task_by_id, 0)
+    for t in instance.tasks:
+        for a in instance.ancestors[t.id]:
+            n_desc[a] += 1
+    return sum(min(K, n - n_desc[t.id]) for t in instance.tasks)
+
+
 def pack_time_limit(budget: Budget) -> float:
     """Seconds one packing call may take: 5 % of the time limit, within [0.2, 2] s."""
     return max(0.2, min(2.0, 0.05 * budget.time_limit))
@@ -136,8 +147,14 @@ class Packer:
         return self.counts(dict(self.instance.kit_parts(tasks)))[0]
 
     def task_not_fitting(self) -> str | None:
-        """A task whose parts alone provably do not fit the tray (then no plan exists)."""
-        return next((t.id for t in self.instance.tasks if self.fits([t.id]) is False), None)
+        """A task whose parts alone provably do not fit the tray (then no plan exists); stops
+        (None) once the budget has expired."""
+        for t in self.instance.tasks:
+            if self.budget.expired():
+                return None
+            if self.fits([t.id]) is False:
+                return t.id
+        return None
 
     def split(self, kit: Sequence[str]) -> list[list[str]] | None:
         """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
