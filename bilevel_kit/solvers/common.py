@@ -245,25 +245,48 @@ def johnson_topological_order(instance: Instance) -> list[str]:
 
 
 def quick_plan(
-    instance: Instance, packer: Packer | None = None, *, max_size: int = 40
+    instance: Instance,
+    packer: Packer | None = None,
+    *,
+    max_size: int = 40,
+    order: Sequence[str] | None = None,
+    target: float | None = None,
 ) -> list[list[str]] | None:
-    """A cheap feasible plan (an upper bound and a hint): the topological order (then the
-    Johnson-priority one, :func:`johnson_topological_order`) cut into segments of a fixed size
-    s (each split further until it fits), best by the evaluator; stops once the packer's
-    budget has expired and a plan is known."""
+    """A cheap feasible plan (an upper bound and a hint): ``order`` (default: the topological
+    order) cut into segments of a fixed size s (each split further until it fits), best s by
+    the evaluator; stops once the packer's budget has expired and a plan is known, or a plan
+    reaches ``target``."""
     packer = packer or Packer(instance, 0.2, Budget(10.0))
+    order = topological_order(instance) if order is None else list(order)
     best: tuple[float, list[list[str]]] | None = None
-    for order in (topological_order(instance), johnson_topological_order(instance)):
-        for s in range(1, min(len(order), max_size) + 1):
-            if best is not None and packer.budget.expired():
-                return best[1]
-            kits: list[list[str]] = []
-            for a in range(0, len(order), s):
-                parts = packer.split(list(kit_order(instance, order[a : a + s])))
-                if parts is None:
-                    return best[1] if best else None
-                kits += parts
-            ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
-            if best is None or ms < best[0] - 1e-9:
-                best = (ms, kits)
+    for s in range(1, min(len(order), max_size) + 1):
+        if best is not None and (
+            packer.budget.expired() or (target is not None and best[0] <= target)
+        ):
+            break
+        kits: list[list[str]] = []
+        for a in range(0, len(order), s):
+            parts = packer.split(list(kit_order(instance, order[a : a + s])))
+            if parts is None:
+                return best[1] if best else None
+            kits += parts
+        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+        if best is None or ms < best[0] - 1e-9:
+            best = (ms, kits)
     return best[1] if best else None
+
+
+def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | None:
+    """The quick plan on the Johnson-priority order (:func:`johnson_topological_order`) when
+    it attains the closed-form bound :func:`bilevel_kit.bounds.best_bound`, which proves it
+    optimal (e.g. Johnson's special case); else None."""
+    from ..bounds import best_bound
+
+    bound = best_bound(instance)
+    kits = quick_plan(
+        instance, packer, order=johnson_topological_order(instance), target=bound + 1e-9
+    )
+    if kits is None:
+        return None
+    ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    return kits if ms <= bound + 1e-9 else None

@@ -74,6 +74,7 @@ from ..common import (
     Packer,
     assignment_cells,
     chain_groups_idx,
+    closed_form_plan,
     kit_order,
     pack_time_limit,
     quick_plan,
@@ -420,9 +421,13 @@ def _incumbent(
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
             extra["hint_used"] = True
-    qp = quick_plan(
-        instance, Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
-    )
+    if ctx.objective == "makespan":
+        first = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.05), ctx.pack_res)
+        qp = closed_form_plan(instance, first)
+        if qp is not None:  # optimal by the closed-form bound: the run ends at once
+            return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
+    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    qp = quick_plan(instance, quick)
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])
     if not candidates:

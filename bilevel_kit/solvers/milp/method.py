@@ -59,7 +59,7 @@ from ...methods import gap as relative_gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget, check_model_memory, too_slow_to_build
-from ..common import Packer, assignment_cells, pack_time_limit, quick_plan
+from ..common import Packer, assignment_cells, closed_form_plan, pack_time_limit, quick_plan
 from .model import (
     Master,
     add_cut,
@@ -173,7 +173,10 @@ def run(
         return finish(None, Status.INFEASIBLE, None)
 
     # incumbent, upper bound and the kit cap (only valid for plans at least as good)
-    inc = quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
+    inc = None
+    if options.objective == "makespan":  # optimal at once if it attains the closed-form bound
+        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.05)))
+    inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
     upper = None
     K = instance.n_tasks
