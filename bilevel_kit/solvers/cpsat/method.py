@@ -98,6 +98,12 @@ HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
 HINT_SHARE = 0.3
 #: The least time (s) a step is given even when the budget is spent (it returns at once).
 MIN_RUN = 0.05
+#: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
+MIN_HINT = 0.3
+#: Seconds per task a heuristic runs past its ``time_limit`` (greedy-ce finishes the remaining
+#: kits as single tasks: measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks;
+#: bench/results/scale.md); kept back from its share of the warm start.
+HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
 #: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
 #: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
 BYTES_PER_CELL = 6_000
@@ -215,6 +221,10 @@ def best_heuristic_plan(
         left = None if end is None else end - time.perf_counter()
         if left is not None and left <= 0 and best is not None:
             break
+        if left is not None:  # keep back the method's overrun past its own limit
+            left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
+            if left <= MIN_HINT and best is not None:
+                continue
         try:
             spec = get_method(name)
             fn = spec.load()
