@@ -24,10 +24,10 @@ def allowed(t: float) -> float:
     return t + max(2.0, 0.05 * t)
 
 
-#: The instance per method: an in-tree of 60 tasks, except the MILP (30: it builds its model
+#: The instance per method: an in-tree of 60 tasks, except the MILP (20: it builds its model
 #: within the budget and then needs all of it) and bilevel-milp (the paper's table: its column
 #: MILP needs minutes there; it refuses more than 16 tasks).
-DOCS = {"milp": ("intree", 30), "bilevel-milp": ("table", 1)}
+DOCS = {"milp": ("intree", 20), "bilevel-milp": ("table", 1)}
 
 
 @pytest.mark.slow

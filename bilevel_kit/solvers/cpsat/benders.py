@@ -143,6 +143,8 @@ class _Benders:
             if state.proven:
                 state.lower = state.obj
             return False  # optimal, or the master ran out of time on a packable incumbent
+        if self.ctx.left() <= 0.01:  # no time for another master solve: no cuts, no repair
+            return False
         new = 0
         for kit, ok in zip(kits, verdicts, strict=True):
             if ok is not True:
