@@ -38,6 +38,31 @@ hence :math:`S_m \ge \sum_{k<m} (R_k + d + o_H)` and :math:`C \ge S_m + R_m + d 
 
 (the one-tray robot bound, F2|block|Cmax's robot-side bound plus the overheads; every term is
 non-decreasing in m, so m_min may replace m). :func:`tray_wait` is the per-kit wait it adds.
+
+* (d) **flow shop** (:func:`flow_bound`, tight on flow-shop-like instances). With unlimited
+  trays a plan of m kits is a two-machine flow shop on its kits (docs/timeline.md): kit k
+  occupies the robot for :math:`a_k = o_R + d + \sum_{i \in k} r_i` (the robot is busy while
+  delivering) and then the human for :math:`b_k = o_H + \sum_{i \in k} h_i`, starting no
+  earlier than its arrival. Split every kit into m "jobs": one **overhead job**
+  :math:`(o_R + d,\ o_H)` and one job :math:`(r_i, h_i)` per task. Inside kit k's robot
+  interval :math:`[S_k, A_k]` give each job a robot sub-interval of its length, inside the
+  human interval :math:`[\mathrm{hs}_k, E_k]` (:math:`\mathrm{hs}_k \ge A_k`) a human
+  sub-interval; every job then ends on the robot before it starts on the human, and no two
+  jobs overlap on a machine: a feasible F2||Cmax schedule of the n + m jobs with makespan C.
+  So :math:`C \ge J(m)`, the optimal F2||Cmax makespan of the tasks and m overhead jobs,
+  which Johnson's rule computes. Adding a job never lowers J (drop it from an optimal
+  schedule), so :math:`C \ge J(m_{\min})`. Precedence, the tray's geometry and the tray rule
+  (with T trays it only delays starts, and C is non-decreasing in every start) are relaxed,
+  so (d) holds for every plan and every T. With d = 0 and no overheads, J is Johnson's
+  makespan of the tasks, which the plan of single-task kits in Johnson's order attains when
+  there is no precedence: the bound is then exact. (a) and (b) are relaxations of F2 too,
+  but keep their source/sink and one-tray terms, so :func:`best_bound` takes the max.
+  :func:`johnson_lines` writes J(m) as the max of two lines in m, so the exact models add
+  (d) with their own kit count (``C >= c + s * sum_k u_k``).
+
+  The one-task-per-job Gilmore-Gomory makespan (F2|block) is **not** claimed as a bound with
+  one tray: a kit's tasks are all picked before the human starts any of them, which a
+  blocking flow shop of single tasks does not model.
 """
 
 from __future__ import annotations
@@ -83,13 +108,67 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
         + o_h
         + min(instance.human_time(i) for i in sinks)
     )
-    return {"human": human, "robot": robot, "min_kits": float(m)}
+    return {"human": human, "robot": robot, "flow": flow_bound(instance, m), "min_kits": float(m)}
 
 
 def best_bound(instance: Instance) -> float:
     """The largest of the closed-form makespan bounds (seconds)."""
     lb = lower_bounds(instance)
-    return max(lb["human"], lb["robot"])
+    return max(lb["human"], lb["robot"], lb["flow"])
+
+
+def flow_bound(instance: Instance, m: int | None = None) -> float:
+    """(d): Johnson's makespan of the tasks plus ``m`` (default m_min) overhead jobs
+    (o_R + d, o_H); a lower bound on the makespan of every plan of at least m kits."""
+    ids = [t.id for t in instance.tasks]
+    a = [instance.robot_time(i) for i in ids]
+    b = [instance.human_time(i) for i in ids]
+    a0 = instance.kit_overhead_robot + instance.delivery_time
+    b0 = instance.kit_overhead_human
+    return lines_value(johnson_lines(a, b, a0, b0), min_kits(instance) if m is None else m)
+
+
+Line = tuple[float, float]
+
+
+def lines_value(lines: Sequence[Line], m: int) -> float:
+    """max over the lines (c, s) of c + s m."""
+    return max(c + s * m for c, s in lines)
+
+
+def johnson_lines(
+    a: Sequence[float], b: Sequence[float], a0: float, b0: float
+) -> list[tuple[float, float]]:
+    """Lines (c, s) with J(m) = max_l (c_l + s_l m) for every m >= 1, J(m) the optimal
+    F2||Cmax makespan of the jobs (a_j, b_j) plus m identical jobs (a0, b0).
+
+    Johnson's rule puts the m identical jobs in one block at a slot q of the tasks' Johnson
+    order (ties by index). A permutation's makespan is the max over split jobs j of
+    (robot time up to and including j) + (human time from j on). A task before the block:
+    the block's m b0 is in its human suffix (slope b0); a task after it: m a0 is in its robot
+    prefix (slope a0); the t-th block job gives P + t a0 + (m - t + 1) b0 + S (P, S: robot time
+    before, human time after the block), linear in t, so t = 1 (slope b0) or t = m (slope a0).
+    Exact integers in, exact integers out."""
+    n = len(a)
+    order = johnson_order([*a, a0], [*b, b0])
+    q = order.index(n)
+    tasks = [j for j in order if j != n]
+    pre_a = a0 - a0  # zero of the inputs' type: ints stay ints
+    pre = []
+    for j in tasks:
+        pre_a += a[j]
+        pre.append(pre_a)
+    suf_b = b0 - b0
+    suf = [suf_b] * n
+    for pos in range(n - 1, -1, -1):
+        suf_b += b[tasks[pos]]
+        suf[pos] = suf_b
+    split = [pre[pos] + suf[pos] for pos in range(n)]
+    big_p = pre[q - 1] if q else a0 - a0
+    big_s = suf[q] if q < n else b0 - b0
+    c_b = max([big_p + big_s + a0, *split[:q]])
+    c_a = max([big_p + big_s + b0, *split[q:]])
+    return [(c_b, b0), (c_a, a0)]
 
 
 def johnson_order(a: Sequence[float], b: Sequence[float]) -> list[int]:

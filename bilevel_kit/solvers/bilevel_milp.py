@@ -252,6 +252,16 @@ class LowerLevel:
         self._reach = reach_grid(instance)
         self._values: dict[Multiset, KitValue] = {}
         self.time_s = 0.0
+        #: perf_counter time after which packing calls get only what is left (None: no end);
+        #: a value computed with a cut packing limit is not memoised
+        self.deadline: float | None = None
+
+    def _limit(self, limit: float) -> tuple[float, bool]:
+        """``limit`` cut to the time left before :attr:`deadline`; and whether it was cut."""
+        if self.deadline is None:
+            return limit, False
+        left = max(0.02, self.deadline - time.perf_counter())
+        return min(limit, left), left < limit
 
     @staticmethod
     def key(counts: Mapping[str, int]) -> Multiset:
@@ -269,7 +279,10 @@ class LowerLevel:
         arr = self._policy.arrangement(dict(key))
         if arr.fits:
             cands.append((arr.fitness, arr.layout, "ce"))
-        ok, typed = packing.fit_counts(inst.tray, inst.part_types, dict(key), reach=self._reach)
+        fit_tl, cut = self._limit(2.0)
+        ok, typed = packing.fit_counts(
+            inst.tray, inst.part_types, dict(key), time_limit=fit_tl, reach=self._reach
+        )
         if ok and typed is not None:
             layout = tuple(
                 Placement(
@@ -281,11 +294,13 @@ class LowerLevel:
             cands.append((layout_fitness_value(layout, w6), layout, "oracle"))
             if self.lower == "best" and len(layout) > 1:
                 items = [(p.part, inst.part_types[p.type]) for p in layout]
+                pack_tl, cut_pack = self._limit(self.pack_time_limit)
+                cut = cut or cut_pack
                 res = packing.pack(
                     inst.tray,
                     items,
                     objective="fitness",
-                    time_limit=self.pack_time_limit,
+                    time_limit=pack_tl,
                     workers=1,
                     w6=w6,
                     reach=self._reach,
@@ -297,7 +312,8 @@ class LowerLevel:
             val = KitValue(True, float(fit), layout, src)
         else:
             val = KitValue(False, float("-inf"), (), "none")
-        self._values[key] = val
+        if not cut:
+            self._values[key] = val
         self.time_s += time.perf_counter() - t0
         return val
 
@@ -391,6 +407,7 @@ def build_columns(
         for a in anc[t]:
             desc[a].add(t)
     out = []
+    lower.deadline = budget.deadline  # packing calls stop at the budget's end
     for s in sorted(kits, key=lambda s: (len(s), sorted(instance.index[t] for t in s))):
         if budget.expired():
             return None

@@ -3,6 +3,10 @@
 A method's ``time_limit`` covers everything it does (packing, model building, every solve), so
 each sub-step asks the budget how long it may take instead of doing its own deadline
 arithmetic. All times are :func:`time.perf_counter` values.
+
+The exact models also check their size here before building (:func:`check_model_memory`,
+:func:`too_slow_to_build`): a model over the memory limit is a usage error (exit 2, never a
+kernel kill), one that cannot be built in time leaves the run with its incumbent.
 """
 
 from __future__ import annotations
@@ -59,3 +63,37 @@ class Budget:
         """The first ``fraction`` of the time limit (a quick first step), within the deadline."""
         end = min(self.deadline, self.start + fraction * self.time_limit)
         return Budget(self.time_limit, start=self.start, deadline=end)
+
+
+# ---------------------------------------------------------------------------------------------
+# Model size: memory limit and build time
+# ---------------------------------------------------------------------------------------------
+
+#: Peak resident memory (bytes) a method may need; a larger model is refused before it is built.
+MEMORY_LIMIT = 2 * 1024**3
+#: Memory (bytes) a run needs besides its model: Python, OR-Tools, the instance, caches.
+BASE_MEMORY = 450 * 1024**2
+#: A model is not built when its estimated build time exceeds this share of the time left.
+BUILD_SHARE = 0.5
+
+
+def check_model_memory(owner: str, cells: int, bytes_per_cell: float, what: str) -> float:
+    """Refuse (``UsageError``, exit 2) a model whose estimated peak memory
+    ``BASE_MEMORY + cells * bytes_per_cell`` exceeds :data:`MEMORY_LIMIT`; else the estimate
+    in bytes. ``bytes_per_cell`` is measured per solver (bench/results/scale.md)."""
+    from ..errors import UsageError
+
+    need = BASE_MEMORY + cells * bytes_per_cell
+    if need > MEMORY_LIMIT:
+        raise UsageError(
+            f"{owner}: the model would have {cells:,} {what}, about {need / 2**30:.1f} GB, above "
+            f"the {MEMORY_LIMIT / 2**30:g} GB memory limit; use greedy-ce, or fewer tasks "
+            "(--units, --horizon)"
+        )
+    return need
+
+
+def too_slow_to_build(budget: Budget, estimate_s: float, margin: float = 0.0) -> bool:
+    """Would building a model (``estimate_s`` seconds) take more than :data:`BUILD_SHARE` of
+    the time left? Then the run keeps its incumbent instead of overrunning its limit."""
+    return estimate_s > BUILD_SHARE * budget.remaining(margin)

@@ -96,6 +96,17 @@ def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+def assignment_cells(instance: Instance, K: int) -> int:
+    """Number of (task, kit position) variables of the exact models with K positions: task i
+    can only be in the first ``n - |descendants(i)|`` kits; their models grow with it."""
+    n = instance.n_tasks
+    n_desc = dict.fromkeys(instance.task_by_id, 0)
+    for t in instance.tasks:
+        for a in instance.ancestors[t.id]:
+            n_desc[a] += 1
+    return sum(min(K, n - n_desc[t.id]) for t in instance.tasks)
+
+
 def pack_time_limit(budget: Budget) -> float:
     """Seconds one packing call may take: 5 % of the time limit, within [0.2, 2] s."""
     return max(0.2, min(2.0, 0.05 * budget.time_limit))
@@ -136,8 +147,14 @@ class Packer:
         return self.counts(dict(self.instance.kit_parts(tasks)))[0]
 
     def task_not_fitting(self) -> str | None:
-        """A task whose parts alone provably do not fit the tray (then no plan exists)."""
-        return next((t.id for t in self.instance.tasks if self.fits([t.id]) is False), None)
+        """A task whose parts alone provably do not fit the tray (then no plan exists); stops
+        (None) once the budget has expired."""
+        for t in self.instance.tasks:
+            if self.budget.expired():
+                return None
+            if self.fits([t.id]) is False:
+                return t.id
+        return None
 
     def split(self, kit: Sequence[str]) -> list[list[str]] | None:
         """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
@@ -191,16 +208,61 @@ class Packer:
         return shelf_pack(self.instance.tray, items)
 
 
+def johnson_topological_order(instance: Instance) -> list[str]:
+    """A topological order that takes, among the ready tasks, the first in Johnson's order of
+    the jobs (r_i, h_i) (:func:`bilevel_kit.bounds.johnson_order`): without precedence it is
+    Johnson's order, whose single-task kits attain the flow-shop bound when d = 0 and there
+    are no overheads."""
+    import heapq
+
+    from ..bounds import johnson_order
+
+    ids = [t.id for t in instance.tasks]
+    rank = {
+        ids[j]: k
+        for k, j in enumerate(
+            johnson_order(
+                [instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids]
+            )
+        )
+    }
+    indeg = dict.fromkeys(ids, 0)
+    succ: dict[str, list[str]] = {t: [] for t in ids}
+    for a, b in dict.fromkeys(instance.precedence):
+        indeg[b] += 1
+        succ[a].append(b)
+    heap = [(rank[t], t) for t in ids if indeg[t] == 0]
+    heapq.heapify(heap)
+    out: list[str] = []
+    while heap:
+        _, t = heapq.heappop(heap)
+        out.append(t)
+        for s in succ[t]:
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                heapq.heappush(heap, (rank[s], s))
+    return out
+
+
 def quick_plan(
-    instance: Instance, packer: Packer | None = None, *, max_size: int = 40
+    instance: Instance,
+    packer: Packer | None = None,
+    *,
+    max_size: int = 40,
+    order: Sequence[str] | None = None,
+    target: float | None = None,
 ) -> list[list[str]] | None:
-    """A cheap feasible plan (an upper bound and a hint): the topological order cut into
-    segments of a fixed size s (each split further until it fits), best s by the evaluator."""
+    """A cheap feasible plan (an upper bound and a hint): ``order`` (default: the topological
+    order) cut into segments of a fixed size s (each split further until it fits), best s by
+    the evaluator; stops once the packer's budget has expired and a plan is known, or a plan
+    reaches ``target``."""
     packer = packer or Packer(instance, 0.2, Budget(10.0))
-    order = topological_order(instance)
+    order = topological_order(instance) if order is None else list(order)
     best: tuple[float, list[list[str]]] | None = None
     for s in range(1, min(len(order), max_size) + 1):
-        if best is not None and packer.budget.expired():
+        if best is not None and (
+            packer.budget.expired() or (target is not None and best[0] <= target)
+        ):
             break
         kits: list[list[str]] = []
         for a in range(0, len(order), s):
@@ -212,3 +274,19 @@ def quick_plan(
         if best is None or ms < best[0] - 1e-9:
             best = (ms, kits)
     return best[1] if best else None
+
+
+def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | None:
+    """The quick plan on the Johnson-priority order (:func:`johnson_topological_order`) when
+    it attains the closed-form bound :func:`bilevel_kit.bounds.best_bound`, which proves it
+    optimal (e.g. Johnson's special case); else None."""
+    from ..bounds import best_bound
+
+    bound = best_bound(instance)
+    kits = quick_plan(
+        instance, packer, order=johnson_topological_order(instance), target=bound + 1e-9
+    )
+    if kits is None:
+        return None
+    ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    return kits if ms <= bound + 1e-9 else None

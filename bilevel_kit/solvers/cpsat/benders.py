@@ -81,6 +81,9 @@ class _Benders:
         packer = self.ctx.packer
         out = []
         for kit in kits:
+            if self.ctx.left() <= 0:  # out of time: the rest stays unknown
+                out.append(None)
+                continue
             counts = self.counts(kit)
             ok = packer.counts(counts)[0]
             if ok is None:  # a hard packing: one more try with a longer limit
@@ -140,13 +143,16 @@ class _Benders:
             if state.proven:
                 state.lower = state.obj
             return False  # optimal, or the master ran out of time on a packable incumbent
+        if self.ctx.left() <= 0.01:  # no time for another master solve: no cuts, no repair
+            return False
         new = 0
         for kit, ok in zip(kits, verdicts, strict=True):
             if ok is not True:
                 added = self.cut(self.counts(kit), ok is False)
                 new += added
                 self.unproven += int(added and ok is None)
-        self.repair(kits)
+        if self.ctx.left() > 0:
+            self.repair(kits)
         if state.obj is not None and state.lower is not None and state.lower >= state.obj:
             state.proven = True
             return False

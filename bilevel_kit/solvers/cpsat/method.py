@@ -25,9 +25,11 @@ too.
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
 
-**Time.** ``time_limit`` (default 60 s) covers everything, packing included; 1 % of it and
-0.15 s are kept back (CP-SAT stops a little after its own limit on large models). With
-``hint="auto"`` the heuristics' time counts in the method's wall time, not in ``time_limit``.
+**Time.** ``time_limit`` (default 60 s) covers everything, the warm start and packing
+included: the warm start's heuristics share :data:`HINT_SHARE` (30 %) of it (greedy-ce gets
+what is left of that share as its own ``time_limit``), the model run gets the rest; 1 % of the
+run's limit and 0.15 s are kept back (CP-SAT stops a little after its own limit on large
+models). A model whose size exceeds the memory limit is refused (:mod:`..budget`).
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
@@ -42,8 +44,15 @@ order with a non-overlapping layout. ``extra`` keys:
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
   scaled times); ``idle_bound`` for ``objective="human_idle"``;
-* ``reason`` when the run ends without a plan for a known reason;
-* ``hint_method``: the heuristic whose plan was the hint (registered method only).
+* ``reason`` when the run ends without a plan, or without a model, for a known reason;
+* ``model_cells``: the model's task x kit variables (its size; a model whose estimated memory
+  exceeds :data:`~bilevel_kit.solvers.budget.MEMORY_LIMIT` is refused with a
+  ``UsageError``, one that cannot be built within half the time left is not built:
+  ``cpsat_status`` ``NOT_BUILT``, the incumbent is returned);
+* ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (then no model is built: it is optimal);
+* ``hint_method``: the heuristic whose plan was the hint, ``hint_time_s`` the warm start's
+  time (registered method only; ``wall_time_s`` then includes it).
 """
 
 from __future__ import annotations
@@ -60,8 +69,17 @@ from ...methods import REGISTRY, MethodOutput, Status
 from ...methods import gap as relative_gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
-from ..budget import Budget
-from ..common import Packer, chain_groups_idx, kit_order, pack_time_limit, quick_plan, reduced_edges
+from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..common import (
+    Packer,
+    assignment_cells,
+    chain_groups_idx,
+    closed_form_plan,
+    kit_order,
+    pack_time_limit,
+    quick_plan,
+    reduced_edges,
+)
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, tray_wait
 from .scaling import scale_times, scaled_makespan, scaled_objective
@@ -76,6 +94,23 @@ AUTO_EMBEDDED_MAX_RECTS = 300
 KEEP_BACK = 0.01
 #: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
 HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
+#: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
+HINT_SHARE = 0.3
+#: The least time (s) a step is given even when the budget is spent (it returns at once).
+MIN_RUN = 0.05
+#: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
+MIN_HINT = 0.3
+#: Seconds per task a heuristic runs past its ``time_limit`` (greedy-ce finishes the remaining
+#: kits as single tasks: measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks;
+#: bench/results/scale.md); kept back from its share of the warm start.
+HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
+#: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
+#: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
+BYTES_PER_CELL = 6_000
+#: Build time per task x kit variable (measured: 90-120 us on in-trees of 60-500 tasks).
+BUILD_S_PER_CELL = 150e-6
+#: CP-SAT overruns its own limit on large models (presolve): 5.5 s at 247,000 variables.
+OVERRUN_S_PER_CELL = 25e-6
 
 
 def _positive(owner: object, *names: str) -> None:
@@ -147,34 +182,63 @@ def cpsat(
 ) -> MethodOutput:
     """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
     (module docstring)."""
+    budget = Budget(time_limit)
     plan: Plan | None = None
     source = None
-    if options.hint == "auto":
-        plan, source = best_heuristic_plan(instance, seed=seed)
+    hint_tl = HINT_SHARE * budget.time_limit
+    if options.objective == "makespan" and _closed_form_optimal(instance, budget):
+        pass  # the run proves a quick plan optimal at once: no warm start needed
+    elif options.hint == "auto":
+        plan, source = best_heuristic_plan(instance, seed=seed, time_limit=hint_tl)
     elif options.hint != "none":
-        plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed)
+        plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed, time_limit=hint_tl)
         if source is None:
             raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
-    out = run(instance, options, seed=seed, time_limit=time_limit, hint=plan)
+    rest = max(MIN_RUN, budget.remaining())
+    out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
     out.extra["hint_method"] = source
+    out.extra["hint_time_s"] = budget.elapsed() - out.extra.get("wall_time_s", 0.0)
+    out.extra["wall_time_s"] = budget.elapsed()
     return out
 
 
+def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
+    """Does a quick plan attain the closed-form bound (then :func:`run` ends at once)?"""
+    packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
+    return closed_form_plan(instance, packer) is not None
+
+
 def best_heuristic_plan(
-    instance: Instance, methods: Sequence[str] = HINT_METHODS, seed: int = 0
+    instance: Instance,
+    methods: Sequence[str] = HINT_METHODS,
+    seed: int = 0,
+    time_limit: float | None = None,
 ) -> tuple[Plan | None, str | None]:
     """The plan of lowest makespan among heuristic methods (a warm start for exact models);
-    methods that cannot lay out a kit are skipped."""
+    methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
+    all: each gets what is left of it, and once it is spent the remaining methods are
+    skipped (unless no plan is known yet)."""
+    import time
+
     from ...errors import BilevelKitError
     from ...methods import get_method
 
+    end = None if time_limit is None else time.perf_counter() + time_limit
     best: tuple[float, Plan, str] | None = None
     for name in methods:
+        left = None if end is None else end - time.perf_counter()
+        if left is not None and left <= 0 and best is not None:
+            break
+        if left is not None:  # keep back the method's overrun past its own limit
+            left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
+            if left <= MIN_HINT and best is not None:
+                continue
         try:
             spec = get_method(name)
             fn = spec.load()
+            tl = None if left is None else max(MIN_RUN, left)
             if spec.options:
-                out = fn(instance, spec.parse({}), seed=seed, time_limit=None)
+                out = fn(instance, spec.parse({}), seed=seed, time_limit=tl)
             else:
                 out = fn(instance, seed=seed)
         except BilevelKitError:
@@ -292,6 +356,27 @@ def run(
         if incumbent is None
         else evaluate(instance, _plan_of(instance, incumbent, None)).makespan,
     )
+    start_ms = extra["upper_start"]
+    closed_done = start_ms is not None and start_ms <= best_bound(instance) + 1e-9
+    if options.objective == "makespan" and closed_done:
+        # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+    cells = assignment_cells(instance, K)
+    extra["model_cells"] = cells
+    check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
+    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
+        extra.update(
+            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
+            "within the time limit; the incumbent is returned",
+            build_time_s=0.0,
+            cpsat_status="NOT_BUILT",
+            cuts=0,
+        )
+        if incumbent is None:
+            return report.finish(None, Status.UNKNOWN, best_bound(instance))
+        return _conclude(ctx, None, State(incumbent, upper), report)
     mdl = build(
         instance,
         sc,
@@ -303,6 +388,7 @@ def run(
         groups=groups,
     )
     extra["build_time_s"] = budget.elapsed()
+    ctx.budget = budget.cut(cells * OVERRUN_S_PER_CELL)  # CP-SAT's overrun, kept back
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = max(1, options.workers)
     solver.parameters.random_seed = seed
@@ -353,9 +439,13 @@ def _incumbent(
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
             extra["hint_used"] = True
-    qp = quick_plan(
-        instance, Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
-    )
+    if ctx.objective == "makespan":
+        first = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.05), ctx.pack_res)
+        qp = closed_form_plan(instance, first)
+        if qp is not None:  # optimal by the closed-form bound: the run ends at once
+            return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
+    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    qp = quick_plan(instance, quick)
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])
     if not candidates:
@@ -397,7 +487,7 @@ def _tray_mode(instance: Instance, tray: str, K: int) -> str:
     return "embedded" if small and instance.tray_limit is None else "benders"
 
 
-def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> MethodOutput:
+def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
     """The plan of the run's best kits with its status and makespan bound in seconds."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
     assert state.kits is not None
@@ -411,7 +501,7 @@ def _conclude(ctx: Context, mdl: Model, state: State, report: _Report) -> Method
         bound_s = closed if lower_s is None else max(closed, lower_s)
         optimal = state.proven and (sc.exact or real.makespan <= bound_s + 1e-6)
     else:
-        if lower is not None and sc.exact:
+        if lower is not None and sc.exact and mdl is not None:
             idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
         w_min = (
             sum(instance.human_time(i) for i in ctx.ids)

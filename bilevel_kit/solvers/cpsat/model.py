@@ -32,7 +32,9 @@ first ``n - |descendants(i)|`` kits (every earlier kit needs a task that is not 
   start of kit k - T``, which is at most the last used kit's end, and so are ``A_k = S_k``
   and ``E_k`` (induction), so unused trailing kits cannot inflate C. The closed-form bounds
   of :mod:`bilevel_kit.bounds` on C are added on the scaled times (redundant, they help the
-  search; with one tray also the one-tray robot bound with the model's own kit count), and
+  search; with one tray also the one-tray robot bound with the model's own kit count), the
+  flow-shop bound (d) as :math:`C \ge c_l + s_l \sum_k u_k` for the two lines of
+  :func:`bilevel_kit.bounds.johnson_lines` (exact on the Johnson special case), and
   ``C <= U`` for an upper bound U;
 * the tray: ``sum_i a_i x[i,k] <= W H`` (grid areas) always, plus either the embedded
   rectangles of :mod:`.tray` or, for logic-based Benders, the part counts ``c_{t,k}`` that the
@@ -49,7 +51,7 @@ import itertools
 from collections.abc import Sequence
 from typing import Any
 
-from ...bounds import min_kits
+from ...bounds import johnson_lines, min_kits
 from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ..common import reduced_edges
@@ -82,6 +84,8 @@ def build(
     m.add(_closed_form_bound(instance, sc, K) <= C)
     out = Model(m, K, x, used, arrive, end, C, start=start)
     _one_tray_bound(instance, sc, out)
+    for c, slope in johnson_lines(sc.r, sc.h, sc.o_r + sc.d, sc.o_h):  # bound (d), m = sum u
+        m.add(c + slope * sum(used) <= C)
     if objective == "makespan":
         m.minimize(C)
     else:

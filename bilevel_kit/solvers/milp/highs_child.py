@@ -1,7 +1,9 @@
 """Solve an MPS model with highspy in a child process (``solver="highs"`` of the MILPs).
 
 Run as ``python -m bilevel_kit.solvers.milp.highs_child MODEL OUT TIME_LIMIT SEED LOG OPTIONS
-START``: reads the model (MPS), sets the options (``OPTIONS`` a JSON object of HiGHS options,
+START [STARTED]``: ``TIME_LIMIT`` counts from ``STARTED`` (the parent's wall clock when it
+started the child), so the child's start-up and reading the model are inside it. It reads the
+model (MPS), sets the options (``OPTIONS`` a JSON object of HiGHS options,
 ``LOG`` 1 or 0), loads the MIP start (``START`` a JSON file of column name -> value, or an empty
 string), solves with a zero relative gap and writes a JSON result to ``OUT``: ``status``,
 ``optimal``, ``infeasible``, ``has_solution``, ``objective``, ``bound`` and, with a solution,
@@ -17,18 +19,28 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from typing import Any
+
+#: Default start of the time limit (wall clock): this module's import.
+STARTED = time.time()
 
 
 def solve_mps(
-    path: str, time_limit: float, seed: int, log: bool, options: dict[str, Any], start: str
+    path: str,
+    time_limit: float,
+    seed: int,
+    log: bool,
+    options: dict[str, Any],
+    start: str,
+    started: float = STARTED,
 ) -> dict[str, Any]:
-    """Solve the MPS model at ``path`` and return the result (module docstring)."""
+    """Solve the MPS model at ``path`` and return the result (module docstring); the time
+    limit counts from ``started`` (wall clock)."""
     import highspy
 
     h = highspy.Highs()
     h.setOptionValue("output_flag", log)
-    h.setOptionValue("time_limit", max(0.01, time_limit))
     h.setOptionValue("mip_rel_gap", 0.0)
     h.setOptionValue("random_seed", seed)
     for key, value in options.items():
@@ -36,6 +48,8 @@ def solve_mps(
     h.readModel(path)
     if start:
         _set_start(h, start)
+    # the limit counts from the parent's call: the import and the read above are inside it
+    h.setOptionValue("time_limit", max(0.01, time_limit - (time.time() - started)))
     h.run()
     st = h.getModelStatus()
     info = h.getInfo()
@@ -73,7 +87,8 @@ def _set_start(h: Any, start: str) -> None:
 
 def main(argv: list[str]) -> None:
     path, out, tl, seed, log, opts, start = argv[:7]
-    res = solve_mps(path, float(tl), int(seed), log == "1", json.loads(opts), start)
+    started = float(argv[7]) if len(argv) > 7 else STARTED
+    res = solve_mps(path, float(tl), int(seed), log == "1", json.loads(opts), start, started)
     with open(out, "w") as f:
         json.dump(res, f)
 

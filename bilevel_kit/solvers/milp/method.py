@@ -16,7 +16,9 @@ means what the oracle means: an axis-aligned layout on its grid, the same notion
 model. The incumbent (the quick plan, then the best packable plan) is the MIP start.
 
 **Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
-master solves), up to a small margin (0.2 s kept back).
+master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
+half the time left is not built (the quick plan is returned), and one over the memory limit
+is refused (:mod:`..budget`).
 
 **Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
 bound on the makespan in seconds (the master's best bound when every cut is proven, never below
@@ -25,12 +27,18 @@ the closed-form bounds). ``extra`` keys:
 * ``solver``, ``objective``, ``tray_mode``, ``time_limit_enforced`` (the solver's time limit is
   known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
   ``build_time_s``, ``wall_time_s``;
+* ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (no model is built: it is optimal);
 * ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``termination`` (the last
   master solve's), ``master_time_s`` (its wall time);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the master's bound, or None); ``idle_bound`` for
   ``objective="human_idle"``;
-* ``reason`` when the run ends without a plan for a known reason.
+* ``reason`` when the run ends without a plan, or without a model, for a known reason;
+* ``model_cells``: the model's task x kit variables (a model whose estimated memory exceeds
+  :data:`~bilevel_kit.solvers.budget.MEMORY_LIMIT` is refused with a ``UsageError``; one that
+  cannot be built within half the time left is not built: ``termination`` ``not_built``,
+  the quick plan is returned).
 
 On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
 needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
@@ -50,8 +58,8 @@ from ...methods import MethodOutput, Status
 from ...methods import gap as relative_gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
-from ..budget import Budget
-from ..common import Packer, pack_time_limit, quick_plan
+from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..common import Packer, assignment_cells, closed_form_plan, pack_time_limit, quick_plan
 from .model import (
     Master,
     add_cut,
@@ -68,6 +76,12 @@ TRAY_MODES: tuple[str, ...] = ("auto", "benders")
 OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
+#: Peak memory per task x kit variable of the Pyomo model (measured 5-9 kB on in-trees of
+#: 60-120 tasks; HiGHS runs in a child process); bench/results/scale.md.
+BYTES_PER_CELL = 12_000
+#: Time per task x kit variable to build the Pyomo model (measured 0.7-0.8 ms) and write it
+#: for the HiGHS child (about 1.3 ms more: 7 s for 5,263 variables on a loaded machine).
+BUILD_S_PER_CELL = 2.5e-3
 
 
 @dataclass(frozen=True)
@@ -160,7 +174,10 @@ def run(
         return finish(None, Status.INFEASIBLE, None)
 
     # incumbent, upper bound and the kit cap (only valid for plans at least as good)
-    inc = quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
+    inc = None
+    if options.objective == "makespan":  # optimal at once if it attains the closed-form bound
+        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.05)))
+    inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
     upper = None
     K = instance.n_tasks
@@ -170,7 +187,33 @@ def run(
         K = max(K, len(inc))
     extra["max_kits"] = K
     extra["upper_start"] = inc_obj
+    if inc is not None and options.objective == "makespan" and inc_obj <= closed + TOL:
+        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, termination="closed_form_bound")
+        plan = _with_layouts(instance, inc, packer, extra)
+        if plan is None:
+            return finish(None, Status.UNKNOWN, closed)
+        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
+        return finish(plan, Status.OPTIMAL, bound)
 
+    cells = assignment_cells(instance, K)
+    extra["model_cells"] = cells
+    check_model_memory(
+        "milp", cells, BYTES_PER_CELL, f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
+    )
+    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
+        extra.update(
+            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
+            "within the time limit; the quick plan is returned",
+            build_time_s=0.0,
+            termination="not_built",
+        )
+        plan = None if inc is None else _with_layouts(instance, inc, packer, extra)
+        if plan is None:
+            return finish(None, Status.UNKNOWN, closed)
+        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
+        return finish(plan, Status.FEASIBLE, bound)
     master = build(instance, K, upper, options.objective)
     extra["build_time_s"] = budget.elapsed()
     loop = _Benders(instance, master, packer, budget, options, inc, inc_obj)
@@ -188,17 +231,27 @@ def run(
         if loop.infeasible:
             return finish(None, Status.INFEASIBLE, None)
         return finish(None, Status.UNKNOWN, closed)
+    plan = _with_layouts(instance, loop.inc, packer, extra)
+    if plan is None:
+        return finish(None, Status.UNKNOWN, closed)
+    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
+    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+
+
+def _with_layouts(
+    instance: Instance, kits: list[list[str]], packer: Packer, extra: dict[str, Any]
+) -> Plan | None:
+    """The plan of ``kits`` in human order with the oracle's layouts; None (and a ``reason``)
+    when some kit has none within the time limit."""
     kits_out = []
-    for kit in loop.inc:
+    for kit in kits:
         tasks = human_order(instance, kit)
         layout = packer.layout(tasks)
         if layout is None and instance.kit_parts(tasks):
             extra["reason"] = "no layout for some kit within the time limit"
-            return finish(None, Status.UNKNOWN, closed)
+            return None
         kits_out.append(Kit(tasks, layout or ()))
-    plan = Plan(tuple(kits_out))
-    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
-    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+    return Plan(tuple(kits_out))
 
 
 def _makespan_bound(
@@ -341,13 +394,16 @@ class _Benders:
                 self.inc, self.inc_obj = kits, obj
             self.proven = info.optimal and self.unproven == 0
             return False  # optimal, or the master ran out of time on a packable incumbent
+        if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
+            return False
         new = 0
         for kit, ok in zip(kits, verdicts, strict=True):
             if ok is not True:
                 added = self.cut(instance.kit_parts(kit), ok is False)
                 new += added
                 self.unproven += int(added and ok is None)
-        self.repair(kits)
+        if self.left() > 0:
+            self.repair(kits)
         inc_obj, lower = self.inc_obj, self.lower
         if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
             self.proven = True
@@ -359,6 +415,9 @@ class _Benders:
         out = []
         pack_tl = self.packer.pack_tl
         for kit in kits:
+            if self.left() <= 0:  # out of time: the rest stays unknown
+                out.append(None)
+                continue
             counts = self.instance.kit_parts(kit)
             ok = self.packer.counts(counts)[0]
             if ok is None:  # a hard packing: one more try with a longer limit

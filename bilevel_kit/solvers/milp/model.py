@@ -41,7 +41,10 @@ descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k 
   the makespan of a quick feasible plan;
 * the closed-form bounds of :mod:`bilevel_kit.bounds` on C, also with the model's own kit count
   :math:`m = \sum_k u_k` in place of :math:`m_{\min}` (redundant, they lift the LP bound;
-  with one tray the robot bound includes the wait :math:`(m - 1) o_H` for the tray);
+  with one tray the robot bound includes the wait :math:`(m - 1) o_H` for the tray), among
+  them the flow-shop bound (d) as the two lines :math:`C \ge c_l + s_l m` of
+  :func:`bilevel_kit.bounds.johnson_lines` (Johnson's makespan of the tasks and m overhead
+  jobs; exact on the Johnson special case: d = 0, no overheads, no precedence);
 * the tray's area relaxation :math:`\sum_i a_i x_{ik} \le W H` (areas on the packing grid of
   :mod:`~bilevel_kit.layout.cpsat_packing`, sizes rounded up, tray down) and the no-good cuts
   of :func:`add_cut`: :math:`\bigvee_t c_{tk} \le M_t - 1` with
@@ -66,7 +69,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...bounds import lower_bounds, min_kits, tray_wait
+from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
 from ...layout import cpsat_packing as packing
 from ...plan import Kit, Plan, evaluate
@@ -233,7 +236,7 @@ def _timeline(
         human.append(Hk)
     cmax = m.E[K - 1]
     lb = lower_bounds(instance)
-    add(cmax >= max(lb["human"], lb["robot"]))
+    add(cmax >= max(lb["human"], lb["robot"], lb["flow"]))
     # the same bounds with the model's own kit count m = sum_k u_k (valid for integer plans:
     # the last kit holds a sink, the first a source; see :mod:`bilevel_kit.bounds`)
     ids, n = data.ids, len(data.ids)
@@ -253,6 +256,9 @@ def _timeline(
         cmax
         >= min(r[i] for i in range(n) if ids[i] not in has_pred) + o_r + d + sum(h) + o_h * n_used
     )
+    # the flow-shop bound (d) of :mod:`bilevel_kit.bounds` with the model's own kit count
+    for c, slope in johnson_lines(r, h, o_r + d, o_h):
+        add(cmax >= c + slope * n_used)
     if upper is not None:
         add(cmax <= upper)
     if objective == "makespan":
