@@ -259,6 +259,36 @@ def format_study_markdown(result: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _refit_means(
+    inst: Instance,
+    cohort: Cohort,
+    design: WithinSubjectModel,
+    base: TimingModel,
+    trays: int | str | None,
+    delivery_time: float,
+    quick: bool,
+    **fit: Any,
+) -> dict[str, Any]:
+    """Step 1 of the protocol alone (``within_cv`` kept: no F target), on the quick or the
+    full grid; ``fit``: further :func:`.calibration.calibrate` arguments (targets, free)."""
+    return calibrate(
+        inst,
+        cohort,
+        design=design,
+        base=base,
+        trays=trays,
+        delivery_time=delivery_time,
+        f_target=None,
+        grid=3 if quick else 5,
+        **fit,
+    )
+
+
+def _summaries(rows: Sequence[Mapping[str, Any]], n_studies: int) -> list[dict[str, Any]]:
+    """:func:`summarize_study` of each study 0 .. n_studies - 1 of ``rows``."""
+    return [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)]
+
+
 def _sensitivity(
     inst: Instance,
     design: WithinSubjectModel,
@@ -277,21 +307,11 @@ def _sensitivity(
     cal_cohort = draw_cohort(calibration_seed, cal_studies, n_participants, CALIBRATION)
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     for d, trays in SENSITIVITY:
-        cal = calibrate(
-            inst,
-            cal_cohort,
-            design=design,
-            base=base,
-            trays=trays,
-            delivery_time=d,
-            f_target=None,
-            grid=3 if quick else 5,
-        )
+        cal = _refit_means(inst, cal_cohort, design, base, trays, d, quick)
         tm = replace(base, **cal["values"])
         rows = study_runs(inst, study_params(tm, trays, ce, d), design, cohort)
         table = prediction_table(
-            [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)],
-            [*_fitted_keys(cal), (F_TARGET[0], "F")],
+            _summaries(rows, n_studies), [*_fitted_keys(cal), (F_TARGET[0], "F")]
         )
         k, n = inside_count(table)
         for r in table:
@@ -463,25 +483,15 @@ def run_user_study(
     timing = replace(base, **cal["values"])
     if f_target is not None:
         # step 1 again at the fitted within_cv: the reported fitted values are the final ones
-        cal1 = calibrate(
-            inst,
-            cal_cohort,
-            design=design,
-            base=timing,
-            trays=trays,
-            delivery_time=delivery_time,
-            targets=targets,
-            f_target=None,
-            free=free,
-            grid=3 if quick else 5,
-        )
+        fit = {"targets": targets, "free": free}
+        cal1 = _refit_means(inst, cal_cohort, design, timing, trays, delivery_time, quick, **fit)
         timing = replace(timing, **cal1["values"])
         cal["values"] = cal1["values"]
         cal["targets"] = cal1["targets"] + [t for t in cal["targets"] if not t["condition"]]
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     params = study_params(timing, trays, ce, delivery_time)
     rows = _study_rows(inst, params, design, cohort, jobs)
-    summaries = [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)]
+    summaries = _summaries(rows, n_studies)
     fitted = _fitted_keys(cal)
     table = prediction_table(summaries, fitted)
     eff_trays = inst.with_overrides(trays=trays).trays
