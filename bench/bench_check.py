@@ -24,7 +24,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bilevel_kit import instance, solution, solve  # noqa: E402
-from bilevel_kit.validate import check  # noqa: E402
 
 
 def chain(n: int) -> dict:
@@ -53,13 +52,7 @@ def measure(n: int, folder: Path) -> dict[str, float]:
     t1 = time.perf_counter()
     sol = solution.read(sol_path)
     t2 = time.perf_counter()
-    found = check(
-        inst,
-        sol.plan,
-        reported_kits=sol.reported_kits,
-        reported_metrics=sol.reported_metrics,
-        claims=sol.claims,
-    )
+    found = sol.check(inst)
     t3 = time.perf_counter()
     assert not found, found[:3]
     return {"read_instance_s": t1 - t0, "read_solution_s": t2 - t1, "check_s": t3 - t2}
