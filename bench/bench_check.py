@@ -12,7 +12,6 @@ Usage: python bench/bench_check.py [--sizes 5000,20000,80000] [--repeats 3]
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import statistics
 import sys
@@ -22,6 +21,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+from benchio import write_rows  # noqa: E402
 
 from bilevel_kit import instance, solution, solve  # noqa: E402
 
@@ -80,11 +81,7 @@ def main() -> None:
                     f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()
                 )
             )
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows(args.out, rows)
     print(f"wrote {args.out}")
 
 
