@@ -284,6 +284,17 @@ class Instance:
             return None
         return self.trays
 
+    def station_fields(self) -> dict[str, Any]:
+        """The document fields of the robot's station and of the reachability rule
+        (docs/formats.md), those that are set: shared by every writer of instance documents."""
+        doc: dict[str, Any] = {}
+        if self.station is not None:
+            doc["station"] = self.station.to_dict()
+        if self.reachability:
+            doc["reachability"] = True
+            doc["reach_resolution"] = self.reach_resolution
+        return doc
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of this instance (the base tasks, not the expansion)."""
         doc: dict[str, Any] = {"format": FORMAT, "name": self.name}
@@ -331,11 +342,7 @@ class Instance:
                 for k, s in self.supply.items()
             }
         doc["units"] = self.units
-        if self.station is not None:
-            doc["station"] = self.station.to_dict()
-        if self.reachability:
-            doc["reachability"] = True
-            doc["reach_resolution"] = self.reach_resolution
+        doc.update(self.station_fields())
         if self.robot_times != "pick_time":
             doc["robot_times"] = self.robot_times
         return doc

@@ -203,11 +203,7 @@ class CPSATRollingPolicy:
         }
         if inst.tray_limit is not None:
             doc["trays"] = inst.tray_limit
-        if inst.station is not None:
-            doc["station"] = inst.station.to_dict()
-        if inst.reachability:
-            doc["reachability"] = True
-            doc["reach_resolution"] = inst.reach_resolution
+        doc.update(inst.station_fields())
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 
     def _solve(
