@@ -29,19 +29,15 @@ from bilevel_kit import instance, solution, solve  # noqa: E402
 
 def chain(n: int) -> dict:
     """A chain of ``n`` tasks: the shape of the 180,000-task file of issue 14."""
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"chain{n}",
-        "tray": {"width": 100.0, "height": 100.0},
-        "delivery_time": 1.0,
-        "kit_overhead": {"robot": 1.0, "human": 1.0},
-        "part_types": [{"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-        "tasks": [
+    return instance.document(
+        f"chain{n}",
+        [{"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
+        [
             {"id": f"t{i}", "parts": [{"type": "a", "count": 1}], "human_time": {"mean": 2.0}}
             for i in range(n)
         ],
-        "precedence": [[f"t{i}", f"t{i + 1}"] for i in range(n - 1)],
-    }
+        precedence=[[f"t{i}", f"t{i + 1}"] for i in range(n - 1)],
+    )
 
 
 def measure(n: int, folder: Path) -> dict[str, float]:

@@ -576,6 +576,32 @@ def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
     return jsonio.read_json(path, error)
 
 
+def document(
+    name: str,
+    part_types: list[dict[str, Any]],
+    tasks: list[dict[str, Any]],
+    *,
+    tray: tuple[float, float] = (100.0, 100.0),
+    delivery_time: float = 1.0,
+    overhead: tuple[float, float] = (1.0, 1.0),
+    precedence: list[list[str]] | None = None,
+    **fields: Any,
+) -> dict[str, Any]:
+    """A minimal instance document (docs/formats.md) in the usual key order; ``overhead`` is
+    (robot, human) in seconds, ``fields`` any further top-level field (``trays`` ...)."""
+    return {
+        "format": FORMAT,
+        "name": name,
+        "tray": {"width": tray[0], "height": tray[1]},
+        "delivery_time": delivery_time,
+        "kit_overhead": {"robot": overhead[0], "human": overhead[1]},
+        "part_types": part_types,
+        "tasks": tasks,
+        "precedence": [] if precedence is None else precedence,
+        **fields,
+    }
+
+
 def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     """Validate a parsed JSON document and build the :class:`Instance`."""
     if isinstance(doc, dict) and "format" in doc and doc["format"] != FORMAT:

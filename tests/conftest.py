@@ -1,4 +1,4 @@
-"""Shared fixtures: the shipped instances and a factory for small instance documents."""
+"""Shared fixtures: the shipped instances and a small instance document to break in tests."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import os
 from pathlib import Path
 
 import pytest
-from instance_docs import instance_doc
+
+from bilevel_kit.instance import document
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -41,7 +42,7 @@ def tiny():
     return load(INSTANCES / "tiny.json")
 
 
-TINY_DOC = instance_doc(
+TINY_DOC = document(
     "doc",
     [
         {"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0},

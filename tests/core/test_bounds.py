@@ -6,10 +6,9 @@ import itertools
 import random
 
 import pytest
-from instance_docs import instance_doc
 
 from bilevel_kit import bounds
-from bilevel_kit.instance import from_dict
+from bilevel_kit.instance import document, from_dict
 from bilevel_kit.plan import Kit, Plan, evaluate
 
 
@@ -62,7 +61,7 @@ def _doc(seed: int) -> dict:
         for i in range(n)
     ]
     prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
-    return instance_doc(
+    return document(
         f"b{seed}",
         types,
         tasks,

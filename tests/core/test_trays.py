@@ -6,14 +6,13 @@ import copy
 import json
 
 import pytest
-from instance_docs import instance_doc
 
 from bilevel_kit import InstanceError, Kit, Plan, check, evaluate, load
-from bilevel_kit.instance import from_dict
+from bilevel_kit.instance import document, from_dict
 from bilevel_kit.plan import KitTimes
 
 # three one-task kits: r = 3, 1, 1 s; h = 10, 1, 1 s; d = 1 s, o_R = 0, o_H = 2 s
-DOC = instance_doc(
+DOC = document(
     "trays",
     [{"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
     [
