@@ -259,7 +259,7 @@ def format_study_markdown(result: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _refit_means(
+def _calibrate(
     inst: Instance,
     cohort: Cohort,
     design: WithinSubjectModel,
@@ -269,8 +269,8 @@ def _refit_means(
     quick: bool,
     **fit: Any,
 ) -> dict[str, Any]:
-    """Step 1 of the protocol alone (``within_cv`` kept: no F target), on the quick or the
-    full grid; ``fit``: further :func:`.calibration.calibrate` arguments (targets, free)."""
+    """:func:`.calibration.calibrate` on the quick or the full grid; ``fit``: its further
+    arguments (``f_target=None``: step 1 alone, ``within_cv`` kept)."""
     return calibrate(
         inst,
         cohort,
@@ -278,7 +278,6 @@ def _refit_means(
         base=base,
         trays=trays,
         delivery_time=delivery_time,
-        f_target=None,
         grid=3 if quick else 5,
         **fit,
     )
@@ -307,7 +306,7 @@ def _sensitivity(
     cal_cohort = draw_cohort(calibration_seed, cal_studies, n_participants, CALIBRATION)
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     for d, trays in SENSITIVITY:
-        cal = _refit_means(inst, cal_cohort, design, base, trays, d, quick)
+        cal = _calibrate(inst, cal_cohort, design, base, trays, d, quick, f_target=None)
         tm = replace(base, **cal["values"])
         rows = study_runs(inst, study_params(tm, trays, ce, d), design, cohort)
         table = prediction_table(
@@ -465,26 +464,18 @@ def run_user_study(
     design = design or WithinSubjectModel()
     base = TimingModel()
     cal_cohort = draw_cohort(calibration_seed, calibration_studies, n_participants, CALIBRATION)
-    cal = calibrate(
-        inst,
-        cal_cohort,
-        design=design,
-        base=base,
-        trays=trays,
-        delivery_time=delivery_time,
-        targets=targets,
-        f_target=f_target,
-        free=free,
-        grid=3 if quick else 5,
-        ce=ce,
+    fit = {"targets": targets, "free": free}
+    cal = _calibrate(
+        inst, cal_cohort, design, base, trays, delivery_time, quick, f_target=f_target, ce=ce, **fit
     )
     cal["f_target"] = f"{f_target[0]} {f_target[1]:g}" if f_target else None
     design = replace(design, within_cv=cal["within_cv"])
     timing = replace(base, **cal["values"])
     if f_target is not None:
         # step 1 again at the fitted within_cv: the reported fitted values are the final ones
-        fit = {"targets": targets, "free": free}
-        cal1 = _refit_means(inst, cal_cohort, design, timing, trays, delivery_time, quick, **fit)
+        cal1 = _calibrate(
+            inst, cal_cohort, design, timing, trays, delivery_time, quick, f_target=None, **fit
+        )
         timing = replace(timing, **cal1["values"])
         cal["values"] = cal1["values"]
         cal["targets"] = cal1["targets"] + [t for t in cal["targets"] if not t["condition"]]
