@@ -53,8 +53,9 @@ MAX_WEIGHT = 1e6
 DEFAULT_REPAIR_TIME = 30.0
 
 
-@dataclass(frozen=True)
-class Tray:
+class _Rectangle:
+    """The area of a tray or a part: width x height (mm^2)."""
+
     width: float
     height: float
 
@@ -64,7 +65,13 @@ class Tray:
 
 
 @dataclass(frozen=True)
-class PartType:
+class Tray(_Rectangle):
+    width: float
+    height: float
+
+
+@dataclass(frozen=True)
+class PartType(_Rectangle):
     """A kind of part; ``rotatable`` parts may lie at any angle on the tray."""
 
     id: str
@@ -75,10 +82,6 @@ class PartType:
     name: str = ""
     #: The file's pick time when ``pick_time`` comes from the Sawyer motion model.
     nominal_pick_time: float | None = None
-
-    @property
-    def area(self) -> float:
-        return self.width * self.height
 
 
 @dataclass(frozen=True)
