@@ -17,7 +17,6 @@ Writes bench/results/cluster.csv. Run: python bench/bench_cluster.py [--reps 30]
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import signal
@@ -30,6 +29,8 @@ from pathlib import Path
 from typing import Any
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from benchio import write_rows
 
 from bilevel_kit.experiments.cells import DaskExecutor, SerialExecutor, run_sweep
 from bilevel_kit.repro.common import CONDITIONS, DEFAULT_INSTANCE, FIG6_GRID, participant_seeds
@@ -159,11 +160,7 @@ def main() -> None:
         else:  # no cell time: the wall time per cell is the executor's throughput cost
             r["overhead_per_cell_s"] = round(r["wall_s"] / r["cells"], 5)
         r["startup_s"] = round(r["startup_s"], 2)
-    out = ROOT / "bench" / "results" / "cluster.csv"
-    with open(out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    out = write_rows(ROOT / "bench" / "results" / "cluster.csv", rows)
     print(out.read_text())
 
 

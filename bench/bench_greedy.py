@@ -7,13 +7,14 @@ Run: python bench/bench_greedy.py [--reps 5]
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import statistics
 import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from benchio import write_rows
 
 from bilevel_kit import check, load
 from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, plan
@@ -52,13 +53,7 @@ def main() -> None:
             }
         )
         print(rows[-1])
-    out = ROOT / "bench/results/greedy.csv"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with open(out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {out}")
+    print(f"wrote {write_rows(ROOT / 'bench/results/greedy.csv', rows)}")
 
 
 if __name__ == "__main__":

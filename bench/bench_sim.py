@@ -12,13 +12,14 @@ Writes bench/results/sim.csv. Run: python bench/bench_sim.py [--reps 10]
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import statistics
 import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from benchio import write_rows
 
 from bilevel_kit import load
 from bilevel_kit.sim import POLICIES, SimParams, effective_instance, make_policy, run
@@ -67,13 +68,7 @@ def main() -> None:
                 }
             )
             print(rows[-1], flush=True)
-    out = ROOT / "bench/results/sim.csv"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with open(out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {out}")
+    print(f"wrote {write_rows(ROOT / 'bench/results/sim.csv', rows)}")
 
 
 if __name__ == "__main__":

@@ -53,8 +53,9 @@ MAX_WEIGHT = 1e6
 DEFAULT_REPAIR_TIME = 30.0
 
 
-@dataclass(frozen=True)
-class Tray:
+class _Rectangle:
+    """The area of a tray or a part: width x height (mm^2)."""
+
     width: float
     height: float
 
@@ -64,7 +65,13 @@ class Tray:
 
 
 @dataclass(frozen=True)
-class PartType:
+class Tray(_Rectangle):
+    width: float
+    height: float
+
+
+@dataclass(frozen=True)
+class PartType(_Rectangle):
     """A kind of part; ``rotatable`` parts may lie at any angle on the tray."""
 
     id: str
@@ -75,10 +82,6 @@ class PartType:
     name: str = ""
     #: The file's pick time when ``pick_time`` comes from the Sawyer motion model.
     nominal_pick_time: float | None = None
-
-    @property
-    def area(self) -> float:
-        return self.width * self.height
 
 
 @dataclass(frozen=True)
@@ -284,6 +287,17 @@ class Instance:
             return None
         return self.trays
 
+    def station_fields(self) -> dict[str, Any]:
+        """The document fields of the robot's station and of the reachability rule
+        (docs/formats.md), those that are set: shared by every writer of instance documents."""
+        doc: dict[str, Any] = {}
+        if self.station is not None:
+            doc["station"] = self.station.to_dict()
+        if self.reachability:
+            doc["reachability"] = True
+            doc["reach_resolution"] = self.reach_resolution
+        return doc
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of this instance (the base tasks, not the expansion)."""
         doc: dict[str, Any] = {"format": FORMAT, "name": self.name}
@@ -331,11 +345,7 @@ class Instance:
                 for k, s in self.supply.items()
             }
         doc["units"] = self.units
-        if self.station is not None:
-            doc["station"] = self.station.to_dict()
-        if self.reachability:
-            doc["reachability"] = True
-            doc["reach_resolution"] = self.reach_resolution
+        doc.update(self.station_fields())
         if self.robot_times != "pick_time":
             doc["robot_times"] = self.robot_times
         return doc
@@ -567,6 +577,32 @@ def _station_schema() -> dict[str, Any]:
 def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
     """Parse a JSON file strictly (see :func:`bilevel_kit.jsonio.read_json`)."""
     return jsonio.read_json(path, error)
+
+
+def document(
+    name: str,
+    part_types: list[dict[str, Any]],
+    tasks: list[dict[str, Any]],
+    *,
+    tray: tuple[float, float] = (100.0, 100.0),
+    delivery_time: float = 1.0,
+    overhead: tuple[float, float] = (1.0, 1.0),
+    precedence: list[list[str]] | None = None,
+    **fields: Any,
+) -> dict[str, Any]:
+    """A minimal instance document (docs/formats.md) in the usual key order; ``overhead`` is
+    (robot, human) in seconds, ``fields`` any further top-level field (``trays`` ...)."""
+    return {
+        "format": FORMAT,
+        "name": name,
+        "tray": {"width": tray[0], "height": tray[1]},
+        "delivery_time": delivery_time,
+        "kit_overhead": {"robot": overhead[0], "human": overhead[1]},
+        "part_types": part_types,
+        "tasks": tasks,
+        "precedence": [] if precedence is None else precedence,
+        **fields,
+    }
 
 
 def from_dict(doc: Any, source: str = "<memory>") -> Instance:

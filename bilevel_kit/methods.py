@@ -16,7 +16,6 @@ independent checker.
 from __future__ import annotations
 
 import enum
-import importlib
 import math
 import time
 from collections.abc import Callable
@@ -25,7 +24,7 @@ from typing import Any
 
 from .errors import UsageError
 from .instance import Instance
-from .options import describe, parse_options
+from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
 from .validate import timeline_params
 
@@ -103,33 +102,15 @@ class Result:
         return self.timeline.metrics() if self.timeline is not None else None
 
 
-def _import(target: str) -> Any:
-    module, name = target.split(":")
-    return getattr(importlib.import_module(module), name)
-
-
 @dataclass(frozen=True)
-class MethodSpec:
-    """A registered method: ``target`` and ``options`` are ``"module:name"`` import paths."""
+class MethodSpec(Registered):
+    """A registered method (see :class:`~bilevel_kit.options.Registered`)."""
 
-    name: str
-    target: str
-    summary: str
-    options: str
+    options: str  # every method declares its options class
 
     def load(self) -> Callable[..., MethodOutput]:
-        return _import(self.target)
-
-    def options_class(self) -> type:
-        return _import(self.options)
-
-    def describe_options(self) -> list[Any]:
-        """Type, default and meaning of every option (``bilevel-kit methods NAME``)."""
-        return describe(self.options_class())
-
-    def parse(self, params: dict[str, Any]) -> Any:
-        """The method's options dataclass from loose ``key=value`` pairs, validated."""
-        return parse_options(self.options_class(), params, f"method {self.name!r}")
+        fn: Callable[..., MethodOutput] = import_target(self.target)
+        return fn
 
 
 REGISTRY: dict[str, MethodSpec] = {}

@@ -15,12 +15,13 @@ a plain ``str``). ``typing.Literal`` types give their choices themselves.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
 import types
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, TypeVar, Union, get_args, get_origin
+from typing import Any, ClassVar, Literal, TypeVar, Union, get_args, get_origin
 
 from .errors import UsageError
 
@@ -205,3 +206,33 @@ def as_params(options: Any) -> dict[str, Any]:
         if value != info.default:
             out[f.name] = value
     return out
+
+
+def import_target(target: str) -> Any:
+    """The object a ``"module:name"`` import path names, imported now."""
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+@dataclass(frozen=True)
+class Registered:
+    """A registered method or policy: ``target`` and ``options`` are ``"module:name"`` import
+    paths, so registering imports nothing heavy; ``kind`` names the owner in errors."""
+
+    kind: ClassVar[str] = "method"
+
+    name: str
+    target: str
+    summary: str
+    options: str | None = None  # None: it takes no options
+
+    def options_class(self) -> type:
+        return import_target(self.options) if self.options else NoOptions
+
+    def describe_options(self) -> list[OptionInfo]:
+        """Type, default and meaning of every option (``bilevel-kit methods NAME``)."""
+        return describe(self.options_class())
+
+    def parse(self, params: Mapping[str, Any]) -> Any:
+        """The options dataclass from loose ``key=value`` pairs, validated."""
+        return parse_options(self.options_class(), params, f"{self.kind} {self.name!r}")

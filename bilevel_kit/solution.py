@@ -17,10 +17,11 @@ from typing import Any
 
 from . import atomic
 from .errors import SolutionError
+from .instance import Instance
 from .jsonio import read_json, validate_document
 from .methods import Result
 from .plan import Kit, KitTimes, Placement, Plan
-from .validate import Claims
+from .validate import Claims, Violation, check
 
 FORMAT = "bilevel-kit-solution/1"
 _TIME_KEYS = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
@@ -178,6 +179,16 @@ class LoadedSolution:
     reported_kits: tuple[KitTimes, ...] | None
     reported_metrics: dict[str, float] | None
     claims: Claims = field(default_factory=Claims)
+
+    def check(self, instance: Instance) -> list[Violation]:
+        """The independent checker on the plan and on every number the file states."""
+        return check(
+            instance,
+            self.plan,
+            reported_kits=self.reported_kits,
+            reported_metrics=self.reported_metrics,
+            claims=self.claims,
+        )
 
 
 def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:

@@ -1,4 +1,4 @@
-"""Shared fixtures: the shipped instances and a factory for small instance documents."""
+"""Shared fixtures: the shipped instances and a small instance document to break in tests."""
 
 from __future__ import annotations
 
@@ -7,6 +7,8 @@ import os
 from pathlib import Path
 
 import pytest
+
+from bilevel_kit.instance import document
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -40,23 +42,19 @@ def tiny():
     return load(INSTANCES / "tiny.json")
 
 
-TINY_DOC = {
-    "format": "bilevel-kit/1",
-    "name": "doc",
-    "tray": {"width": 100.0, "height": 100.0},
-    "delivery_time": 1.0,
-    "kit_overhead": {"robot": 1.0, "human": 1.0},
-    "part_types": [
+TINY_DOC = document(
+    "doc",
+    [
         {"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0},
         {"id": "b", "width": 40.0, "height": 5.0, "pick_time": 2.0, "rotatable": False},
     ],
-    "tasks": [
+    [
         {"id": "x", "parts": [{"type": "a", "count": 2}], "human_time": {"mean": 5.0}},
         {"id": "y", "parts": [{"type": "b", "count": 1}], "human_time": {"mean": 3.0}},
         {"id": "z", "parts": [], "human_time": {"mean": 2.0}},
     ],
-    "precedence": [["x", "y"]],
-}
+    precedence=[["x", "y"]],
+)
 
 
 @pytest.fixture

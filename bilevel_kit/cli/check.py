@@ -32,17 +32,10 @@ def add_parser(subparsers: Subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from .. import solution
-    from ..validate import check
 
     instance = load_instance(args)
     sol = solution.read(args.solution)
-    violations = check(
-        instance,
-        sol.plan,
-        reported_kits=sol.reported_kits,
-        reported_metrics=sol.reported_metrics,
-        claims=sol.claims,
-    )
+    violations = sol.check(instance)
     if violations:
         print_violations([str(v) for v in violations], sys.stdout)
         return EXIT_INVALID

@@ -15,7 +15,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import IO, TYPE_CHECKING, Any, NoReturn
+from typing import IO, TYPE_CHECKING, Any, NoReturn, TypeVar
 
 if TYPE_CHECKING:
     from contextlib import AbstractContextManager
@@ -43,6 +43,8 @@ Subparsers = argparse._SubParsersAction
 #: The instance fields the override options replace (see :func:`instance_overrides`).
 OVERRIDES = ("delivery_time", "weights", "horizon", "units", "trays")
 
+N = TypeVar("N", int, float)
+
 
 class Parser(argparse.ArgumentParser):
     """argparse with one-line errors (exit 2) instead of the usage dump."""
@@ -69,53 +71,60 @@ def key_values(text: str) -> dict[str, str]:
 
 def weights(text: str) -> dict[str, float]:
     """``--weights W3=1,w4=2``: weight names upper-cased, values finite numbers >= 0."""
+    return _number_map(
+        text, lambda v: v >= 0 and math.isfinite(v), "a finite number >= 0, got {v!r}", str.upper
+    )
+
+
+def _checked(text: str, cast: Callable[[str], N], ok: Callable[[N], bool], what: str) -> N:
+    """``cast(text)`` when that parses and passes ``ok``; else "expected WHAT, got TEXT"
+    (WHAT names the kind: "an integer", "a number", then the range)."""
+    kind = "an integer" if cast is int else "a number"
+    try:
+        v = cast(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {kind}, got {text!r}") from None
+    if not ok(v):
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return v
+
+
+def _number_map(
+    text: str, ok: Callable[[float], bool], must: str, key: Callable[[str], str] = str
+) -> dict[str, float]:
+    """``k=v,...`` with every value a number passing ``ok``; else "K must be MUST" (MUST may
+    use ``{v!r}``, the value as given)."""
     out = {}
     for k, v in key_values(text).items():
-        key = k.upper()
         try:
-            out[key] = float(v)
+            out[key(k)] = value = float(v)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
-        if not (out[key] >= 0 and math.isfinite(out[key])):
-            raise argparse.ArgumentTypeError(f"{k} must be a finite number >= 0, got {v!r}")
+        if not ok(value):
+            raise argparse.ArgumentTypeError(f"{k} must be " + must.format(v=v))
     return out
 
 
 def seed(text: str) -> int:
     """A random seed: an integer in [0, 2^31 - 1] (the range every back-end accepts)."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if not 0 <= v <= MAX_SEED:
-        raise argparse.ArgumentTypeError(f"expected an integer in [0, {MAX_SEED}], got {text!r}")
-    return v
+    return _checked(text, int, lambda v: 0 <= v <= MAX_SEED, f"an integer in [0, {MAX_SEED}]")
 
 
 def length(text: str) -> float:
     """A length in mm in the instances' range [0.01, 1e5] (docs/formats.md#ranges)."""
     from ..instance import MAX_LENGTH, MIN_LENGTH
 
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not MIN_LENGTH <= v <= MAX_LENGTH:
-        raise argparse.ArgumentTypeError(
-            f"expected a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}] mm, got {text!r}"
-        )
-    return v
+    return _checked(
+        text,
+        float,
+        lambda v: MIN_LENGTH <= v <= MAX_LENGTH,
+        f"a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}] mm",
+    )
 
 
 def positive(text: str) -> float:
     """A finite number > 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (v > 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return v
+    return _checked(text, float, lambda v: v > 0 and math.isfinite(v), "a finite number > 0")
 
 
 def scalar(value: str) -> Any:
@@ -143,37 +152,17 @@ def param(text: str) -> tuple[str, Any]:
 
 def float_map(text: str) -> dict[str, float]:
     """``leg=60,foot=60``: every value a finite number > 0."""
-    out = {}
-    for k, v in key_values(text).items():
-        try:
-            out[k] = float(v)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{k} must be a number, got {v!r}") from None
-        if not out[k] > 0 or out[k] == float("inf"):
-            raise argparse.ArgumentTypeError(f"{k} must be a finite number > 0")
-    return out
+    return _number_map(text, lambda v: v > 0 and v != float("inf"), "a finite number > 0")
 
 
 def nonneg(text: str) -> float:
     """A finite number >= 0 (times in seconds)."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v >= 0 or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return v
+    return _checked(text, float, lambda v: v >= 0 and v != float("inf"), "a finite number >= 0")
 
 
 def positive_int(text: str) -> int:
     """An integer >= 1 (counts)."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return v
+    return _checked(text, int, lambda v: v >= 1, "an integer >= 1")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, TypedDict, Unpack
 
 import numpy as np
 
@@ -430,34 +430,26 @@ def run_sweep(
     return [r for r in records if r is not None], report
 
 
+class SweepOptions(TypedDict, total=False):
+    """The keyword options of :func:`run_sweep` the thin wrappers pass on unchanged."""
+
+    cell_dir: str | Path | None
+    jobs: int | None
+    executor: Executor | None
+    progress: bool | None
+    desc: str
+
+
 def run_cells_counted(
-    cells: Sequence[Any],
-    fn: Callable[[Any], Record],
-    *,
-    cell_dir: str | Path | None = None,
-    jobs: int | None = None,
-    executor: Executor | None = None,
-    progress: bool | None = None,
-    desc: str = "cells",
+    cells: Sequence[Any], fn: Callable[[Any], Record], **options: Unpack[SweepOptions]
 ) -> tuple[list[Record], int]:
     """The records of :func:`run_sweep` (in cell order) and how many cells ran now."""
-    records, report = run_sweep(
-        cells, fn, cell_dir=cell_dir, jobs=jobs, executor=executor, progress=progress, desc=desc
-    )
+    records, report = run_sweep(cells, fn, **options)
     return records, report.done + report.failed
 
 
 def run_cells(
-    cells: Sequence[Any],
-    fn: Callable[[Any], Record],
-    *,
-    cell_dir: str | Path | None = None,
-    progress: bool | None = None,
-    desc: str = "cells",
-    jobs: int | None = None,
-    executor: Executor | None = None,
+    cells: Sequence[Any], fn: Callable[[Any], Record], **options: Unpack[SweepOptions]
 ) -> list[Record]:
     """The records of :func:`run_sweep` (resumable under ``cell_dir``)."""
-    return run_sweep(
-        cells, fn, cell_dir=cell_dir, jobs=jobs, executor=executor, progress=progress, desc=desc
-    )[0]
+    return run_sweep(cells, fn, **options)[0]

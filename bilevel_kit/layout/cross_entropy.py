@@ -723,6 +723,8 @@ def arrange(
         ]
     )
     sd0 = np.maximum(sd0, params.min_sd)
+    # a run from a given start (a layout, the shelf packer's) begins with a narrower spread
+    restart_sd = np.maximum(sd0 * params.restart_sd_scale, params.min_sd)
 
     if start is None:
         mu0 = np.concatenate(
@@ -737,15 +739,7 @@ def arrange(
     else:
         mu0 = _start_vector(kit, start)
         tag = "ce+start"
-        run = _ce_run(
-            kit,
-            gen,
-            params,
-            w6,
-            w_out,
-            mu0,
-            np.maximum(sd0 * params.restart_sd_scale, params.min_sd),
-        )
+        run = _ce_run(kit, gen, params, w6, w_out, mu0, restart_sd)
     cands = _run_candidates(kit, run, w6, tag, params.repair)
     if start is not None:
         cands.append(_candidate(kit, mu0, w6, tag, params.repair))
@@ -757,15 +751,7 @@ def arrange(
         packed = shelf_pack(tray, list(zip(kit.ids, kit.types, strict=True)))
         if packed is not None:
             p0 = _start_vector(kit, packed)
-            run = _ce_run(
-                kit,
-                gen,
-                params,
-                w6,
-                w_out,
-                p0,
-                np.maximum(sd0 * params.restart_sd_scale, params.min_sd),
-            )
+            run = _ce_run(kit, gen, params, w6, w_out, p0, restart_sd)
             more = _run_candidates(kit, run, w6, "ce+packer-start", params.repair)
             more.append(_candidate(kit, p0, w6, "packer", repair=False))
             choice = _choose(kit, [*more, choice])

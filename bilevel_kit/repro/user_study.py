@@ -259,6 +259,35 @@ def format_study_markdown(result: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _calibrate(
+    inst: Instance,
+    cohort: Cohort,
+    design: WithinSubjectModel,
+    base: TimingModel,
+    trays: int | str | None,
+    delivery_time: float,
+    quick: bool,
+    **fit: Any,
+) -> dict[str, Any]:
+    """:func:`.calibration.calibrate` on the quick or the full grid; ``fit``: its further
+    arguments (``f_target=None``: step 1 alone, ``within_cv`` kept)."""
+    return calibrate(
+        inst,
+        cohort,
+        design=design,
+        base=base,
+        trays=trays,
+        delivery_time=delivery_time,
+        grid=3 if quick else 5,
+        **fit,
+    )
+
+
+def _summaries(rows: Sequence[Mapping[str, Any]], n_studies: int) -> list[dict[str, Any]]:
+    """:func:`summarize_study` of each study 0 .. n_studies - 1 of ``rows``."""
+    return [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)]
+
+
 def _sensitivity(
     inst: Instance,
     design: WithinSubjectModel,
@@ -277,21 +306,11 @@ def _sensitivity(
     cal_cohort = draw_cohort(calibration_seed, cal_studies, n_participants, CALIBRATION)
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     for d, trays in SENSITIVITY:
-        cal = calibrate(
-            inst,
-            cal_cohort,
-            design=design,
-            base=base,
-            trays=trays,
-            delivery_time=d,
-            f_target=None,
-            grid=3 if quick else 5,
-        )
+        cal = _calibrate(inst, cal_cohort, design, base, trays, d, quick, f_target=None)
         tm = replace(base, **cal["values"])
         rows = study_runs(inst, study_params(tm, trays, ce, d), design, cohort)
         table = prediction_table(
-            [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)],
-            [*_fitted_keys(cal), (F_TARGET[0], "F")],
+            _summaries(rows, n_studies), [*_fitted_keys(cal), (F_TARGET[0], "F")]
         )
         k, n = inside_count(table)
         for r in table:
@@ -445,35 +464,17 @@ def run_user_study(
     design = design or WithinSubjectModel()
     base = TimingModel()
     cal_cohort = draw_cohort(calibration_seed, calibration_studies, n_participants, CALIBRATION)
-    cal = calibrate(
-        inst,
-        cal_cohort,
-        design=design,
-        base=base,
-        trays=trays,
-        delivery_time=delivery_time,
-        targets=targets,
-        f_target=f_target,
-        free=free,
-        grid=3 if quick else 5,
-        ce=ce,
+    fit = {"targets": targets, "free": free}
+    cal = _calibrate(
+        inst, cal_cohort, design, base, trays, delivery_time, quick, f_target=f_target, ce=ce, **fit
     )
     cal["f_target"] = f"{f_target[0]} {f_target[1]:g}" if f_target else None
     design = replace(design, within_cv=cal["within_cv"])
     timing = replace(base, **cal["values"])
     if f_target is not None:
         # step 1 again at the fitted within_cv: the reported fitted values are the final ones
-        cal1 = calibrate(
-            inst,
-            cal_cohort,
-            design=design,
-            base=timing,
-            trays=trays,
-            delivery_time=delivery_time,
-            targets=targets,
-            f_target=None,
-            free=free,
-            grid=3 if quick else 5,
+        cal1 = _calibrate(
+            inst, cal_cohort, design, timing, trays, delivery_time, quick, f_target=None, **fit
         )
         timing = replace(timing, **cal1["values"])
         cal["values"] = cal1["values"]
@@ -481,7 +482,7 @@ def run_user_study(
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     params = study_params(timing, trays, ce, delivery_time)
     rows = _study_rows(inst, params, design, cohort, jobs)
-    summaries = [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)]
+    summaries = _summaries(rows, n_studies)
     fitted = _fitted_keys(cal)
     table = prediction_table(summaries, fitted)
     eff_trays = inst.with_overrides(trays=trays).trays

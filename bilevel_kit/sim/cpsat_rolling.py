@@ -47,7 +47,7 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
-from ..instance import Instance, from_dict, topological_order
+from ..instance import Instance, document, from_dict, topological_order
 from ..plan import Kit
 from .policies import LayoutCache
 from .state import SimState
@@ -191,23 +191,18 @@ class CPSATRollingPolicy:
                 },
             )
             edges += [[_TOKEN, _sub_id(t)] for t in window]
-        doc: dict[str, Any] = {
-            "format": "bilevel-kit/1",
-            "name": f"{inst.name}-window",
-            "tray": {"width": inst.tray.width, "height": inst.tray.height},
-            "delivery_time": inst.delivery_time,
-            "kit_overhead": {"robot": inst.kit_overhead_robot, "human": inst.kit_overhead_human},
-            "part_types": types,
-            "tasks": tasks,
-            "precedence": edges,
-        }
+        doc = document(
+            f"{inst.name}-window",
+            types,
+            tasks,
+            tray=(inst.tray.width, inst.tray.height),
+            delivery_time=inst.delivery_time,
+            overhead=(inst.kit_overhead_robot, inst.kit_overhead_human),
+            precedence=edges,
+        )
         if inst.tray_limit is not None:
             doc["trays"] = inst.tray_limit
-        if inst.station is not None:
-            doc["station"] = inst.station.to_dict()
-        if inst.reachability:
-            doc["reachability"] = True
-            doc["reach_resolution"] = inst.reach_resolution
+        doc.update(inst.station_fields())
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 
     def _solve(

@@ -39,11 +39,9 @@ class LayoutCache:
         return Kit(tasks, hit.layout)
 
 
-class SingleTaskPolicy:
-    """The paper's Single Task baseline: one kit per task, in the deterministic topological
-    order (:func:`bilevel_kit.instance.topological_order`), shelf-packer layout."""
-
-    name: ClassVar[str] = "single-task"
+class _NoOptionsPolicy:
+    """The constructor the option-less policies share: ``cls(instance, *, seed, params,
+    options)`` keeps the instance and hands it, the seed and the params to :meth:`_setup`."""
 
     def __init__(
         self,
@@ -54,6 +52,19 @@ class SingleTaskPolicy:
         options: NoOptions = NO_OPTIONS,
     ) -> None:
         self.instance = instance
+        self._setup(instance, seed, params)
+
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
+        raise NotImplementedError
+
+
+class SingleTaskPolicy(_NoOptionsPolicy):
+    """The paper's Single Task baseline: one kit per task, in the deterministic topological
+    order (:func:`bilevel_kit.instance.topological_order`), shelf-packer layout."""
+
+    name: ClassVar[str] = "single-task"
+
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
         self._order = topological_order(instance)
         self._layouts = LayoutCache(instance)
         self._pos = 0
@@ -70,21 +81,13 @@ class SingleTaskPolicy:
         return self._layouts.kit((t,), f"kit for task {t!r}")
 
 
-class WholeAssemblyPolicy:
+class WholeAssemblyPolicy(_NoOptionsPolicy):
     """The paper's Whole Assembly baseline: all (remaining) tasks of the next unit in one kit,
     in topological order, shelf-packer layout."""
 
     name: ClassVar[str] = "whole-assembly"
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: NoOptions = NO_OPTIONS,
-    ) -> None:
-        self.instance = instance
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
         order = topological_order(instance)
         unit = {t.id: t.unit for t in instance.tasks}
         self._units = [
@@ -103,7 +106,7 @@ class WholeAssemblyPolicy:
         return None
 
 
-class OptimizedPolicy:
+class OptimizedPolicy(_NoOptionsPolicy):
     """The paper's Optimized condition: greedy-ce called online through ``decide``.
 
     Passes the done set, the human's remaining time and (when some type has a supply process)
@@ -115,15 +118,7 @@ class OptimizedPolicy:
 
     name: ClassVar[str] = "optimized"
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: NoOptions = NO_OPTIONS,
-    ) -> None:
-        self.instance = instance
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
         ce = params.ce if params is not None and params.ce is not None else CEParams()
         signed = bool(params.signed) if params is not None else False
         self.greedy = GreedyCEPolicy(instance, GreedyParams(signed=signed, ce=ce), seed)

@@ -10,13 +10,12 @@ dataclass with :func:`bilevel_kit.options.parse_options`, so an unknown key or a
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, ClassVar
 
 from ..errors import UsageError
-from ..options import NoOptions, OptionInfo, describe, parse_options
+from ..options import Registered, import_target
 
 if TYPE_CHECKING:
     from ..instance import Instance
@@ -24,33 +23,15 @@ if TYPE_CHECKING:
     from .state import Policy
 
 
-def _import(target: str) -> Any:
-    module, name = target.split(":")
-    return getattr(importlib.import_module(module), name)
-
-
 @dataclass(frozen=True)
-class PolicySpec:
-    """A registered policy: ``target`` and ``options`` are ``"module:name"`` import paths."""
+class PolicySpec(Registered):
+    """A registered policy (see :class:`~bilevel_kit.options.Registered`)."""
 
-    name: str
-    target: str
-    summary: str
-    options: str | None = None  # None: the policy takes no options
+    kind: ClassVar[str] = "policy"
 
     def load(self) -> type[Policy]:
-        cls: type[Policy] = _import(self.target)
+        cls: type[Policy] = import_target(self.target)
         return cls
-
-    def options_class(self) -> type:
-        return _import(self.options) if self.options else NoOptions
-
-    def describe_options(self) -> list[OptionInfo]:
-        return describe(self.options_class())
-
-    def parse(self, params: Mapping[str, Any]) -> Any:
-        """The policy's options dataclass from loose ``key=value`` pairs, validated."""
-        return parse_options(self.options_class(), params, f"policy {self.name!r}")
 
 
 class PolicyRegistry(Mapping[str, "type[Policy]"]):

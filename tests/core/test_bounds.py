@@ -8,7 +8,7 @@ import random
 import pytest
 
 from bilevel_kit import bounds
-from bilevel_kit.instance import from_dict
+from bilevel_kit.instance import document, from_dict
 from bilevel_kit.plan import Kit, Plan, evaluate
 
 
@@ -61,16 +61,15 @@ def _doc(seed: int) -> dict:
         for i in range(n)
     ]
     prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"b{seed}",
-        "tray": {"width": 80.0, "height": 60.0},
-        "delivery_time": float(rng.randint(0, 6)),
-        "kit_overhead": {"robot": float(rng.randint(0, 3)), "human": float(rng.randint(0, 3))},
-        "part_types": types,
-        "tasks": tasks,
-        "precedence": prec,
-    }
+    return document(
+        f"b{seed}",
+        types,
+        tasks,
+        tray=(80.0, 60.0),
+        delivery_time=float(rng.randint(0, 6)),
+        overhead=(float(rng.randint(0, 3)), float(rng.randint(0, 3))),
+        precedence=prec,
+    )
 
 
 def _brute_force(inst) -> float:

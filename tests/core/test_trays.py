@@ -8,24 +8,20 @@ import json
 import pytest
 
 from bilevel_kit import InstanceError, Kit, Plan, check, evaluate, load
-from bilevel_kit.instance import from_dict
+from bilevel_kit.instance import document, from_dict
 from bilevel_kit.plan import KitTimes
 
 # three one-task kits: r = 3, 1, 1 s; h = 10, 1, 1 s; d = 1 s, o_R = 0, o_H = 2 s
-DOC = {
-    "format": "bilevel-kit/1",
-    "name": "trays",
-    "tray": {"width": 100.0, "height": 100.0},
-    "delivery_time": 1.0,
-    "kit_overhead": {"robot": 0.0, "human": 2.0},
-    "part_types": [{"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-    "tasks": [
+DOC = document(
+    "trays",
+    [{"id": "a", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
+    [
         {"id": "x", "parts": [], "robot_time": 3.0, "human_time": {"mean": 10.0}},
         {"id": "y", "parts": [], "robot_time": 1.0, "human_time": {"mean": 1.0}},
         {"id": "z", "parts": [], "robot_time": 1.0, "human_time": {"mean": 1.0}},
     ],
-    "precedence": [],
-}
+    overhead=(0.0, 2.0),
+)
 PLAN = Plan((Kit(("x",)), Kit(("y",)), Kit(("z",))))
 
 

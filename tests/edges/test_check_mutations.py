@@ -21,7 +21,6 @@ from bilevel_kit import load, solve
 from bilevel_kit.errors import SolutionError
 from bilevel_kit.plan import evaluate
 from bilevel_kit.solution import from_dict, result_to_dict
-from bilevel_kit.validate import check
 
 ROOT = Path(__file__).resolve().parents[2]
 TIMES = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
@@ -115,13 +114,7 @@ def test_check_rejects_or_every_claim_holds(case: tuple[str, dict[str, Any]]) ->
         sol = from_dict(copy.deepcopy(doc))
     except SolutionError:
         return  # rejected: exit 2
-    violations = check(
-        instance,
-        sol.plan,
-        reported_kits=sol.reported_kits,
-        reported_metrics=sol.reported_metrics,
-        claims=sol.claims,
-    )
+    violations = sol.check(instance)
     if violations:
         return  # rejected: exit 1
     # accepted: the plan is the one the file describes, and every stated number is its own

@@ -345,19 +345,18 @@ ROWS: dict[str, Row] = {
     "repro out is a file": row("repro user-study --quick --out {f}", 2, "--out", f="x"),
     "reach png folder": row("reach {i} --png {d}", 2, "--png", d=DIR),
     # --- pack ---------------------------------------------------------------------------------
-    "pack resolution 0": row("pack {p} --resolution 0", 2, "--resolution", p=pack_file(unchanged)),
-    "pack resolution inf": row(
-        "pack {p} --resolution inf", 2, "--resolution", p=pack_file(unchanged)
-    ),
-    "pack resolution nan": row(
-        "pack {p} --resolution nan", 2, "--resolution", p=pack_file(unchanged)
-    ),
-    "pack resolution negative": row(
-        "pack {p} --resolution -1", 2, "--resolution", p=pack_file(unchanged)
-    ),
-    "pack resolution 1e6": row(
-        "pack {p} --resolution 1e6", 2, "--resolution", p=pack_file(unchanged)
-    ),
+    **{
+        f"pack resolution {name}": row(
+            f"pack {{p}} --resolution {value}", 2, "--resolution", p=pack_file(unchanged)
+        )
+        for name, value in (
+            ("0", "0"),
+            ("inf", "inf"),
+            ("nan", "nan"),
+            ("negative", "-1"),
+            ("1e6", "1e6"),
+        )
+    },
     "pack coarse grid is not infeasible": row(
         "pack {p} --resolution 1000", 4, "no layout on the 1000 mm grid", p=pack_file(unchanged)
     ),

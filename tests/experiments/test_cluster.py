@@ -8,6 +8,7 @@ or written twice.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -154,28 +155,33 @@ def test_fig6_through_the_scheduler_equals_the_serial_run(cluster, serial, tmp_p
     _assert_clean(out, serial)
 
 
-def test_a_worker_killed_mid_sweep_loses_nothing(cluster, serial, tmp_path):
+@contextlib.contextmanager
+def _fig6_client(
+    cluster: Cluster, tmp_path: Path
+) -> Iterator[tuple[Path, subprocess.Popen[bytes]]]:
+    """A fig6 client on ``cluster``, yielded (output folder, process) once its first cell is
+    saved; stopped on exit."""
     out = tmp_path / "out"
     proc = _spawn(_fig6(out, cluster.address), tmp_path / "client.log")
     try:
         _wait_for_cells(out, 1, proc, timeout=50)
-        os.kill(cluster.workers[0].pid, signal.SIGKILL)
-        assert proc.wait(timeout=50) == 0, (tmp_path / "client.log").read_text()[-3000:]
+        yield out, proc
     finally:
         _stop(proc)
+
+
+def test_a_worker_killed_mid_sweep_loses_nothing(cluster, serial, tmp_path):
+    with _fig6_client(cluster, tmp_path) as (out, proc):
+        os.kill(cluster.workers[0].pid, signal.SIGKILL)
+        assert proc.wait(timeout=50) == 0, (tmp_path / "client.log").read_text()[-3000:]
     assert cluster.workers[0].wait(timeout=5) == -signal.SIGKILL
     _assert_clean(out, serial)
 
 
 def test_a_killed_client_resumes_with_the_finished_cells(cluster, serial, tmp_path):
-    out = tmp_path / "out"
-    proc = _spawn(_fig6(out, cluster.address), tmp_path / "client.log")
-    try:
-        _wait_for_cells(out, 1, proc, timeout=50)
+    with _fig6_client(cluster, tmp_path) as (out, proc):
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(timeout=10)
-    finally:
-        _stop(proc)
     kept = len(_cell_files(out))
     assert 1 <= kept < N_CELLS
     again = subprocess.run(_fig6(out, cluster.address), cwd=ROOT, env=ENV, capture_output=True)
