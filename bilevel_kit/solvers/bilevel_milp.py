@@ -370,10 +370,10 @@ def enumerate_kits(instance: Instance, max_columns: int = MAX_COLUMNS) -> list[f
                 new = mask | 1 << i
                 if new in seen:
                     continue
-                a = seen[mask] + area[i]
-                if a > cap or not convex(new):
+                total = seen[mask] + area[i]
+                if total > cap or not convex(new):
                     continue
-                seen[new] = a
+                seen[new] = total
                 nxt.append(new)
                 if len(seen) > max_columns:
                     raise UsageError(

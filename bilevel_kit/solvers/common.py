@@ -9,7 +9,7 @@ time budget, and a cheap feasible plan that gives an upper bound and a warm star
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import Any
 
 from ..instance import Instance, topological_order
@@ -77,7 +77,7 @@ def chain_groups(instance: Instance) -> list[list[list[str]]]:
     ]
 
 
-def kit_order(instance: Instance, tasks: Sequence[str]) -> tuple[str, ...]:
+def kit_order(instance: Instance, tasks: Collection[str]) -> tuple[str, ...]:
     """A topological order of a kit's tasks (ties by file order): the human's order."""
     members = set(tasks)
     anc = instance.ancestors

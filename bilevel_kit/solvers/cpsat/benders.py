@@ -79,7 +79,7 @@ class _Benders:
     def verdicts(self, kits: list[list[int]]) -> list[bool | None]:
         """Does each kit fit (None: unknown within the packing time limit)?"""
         packer = self.ctx.packer
-        out = []
+        out: list[bool | None] = []
         for kit in kits:
             if self.ctx.left() <= 0:  # out of time: the rest stays unknown
                 out.append(None)

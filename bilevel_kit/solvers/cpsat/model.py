@@ -122,10 +122,10 @@ def _assignment(m: Any, instance: Instance, K: int) -> tuple[list[dict[int, Any]
         pi = m.new_int_var(0, ub[i] - 1, f"p{i}")
         m.add(pi == sum(k * v for k, v in x[i].items()))
         p.append(pi)
-    for a, b in [(idx[a], idx[b]) for a, b in reduced_edges(instance)]:
-        m.add(p[a] <= p[b])
-        for k in range(min(ub[a], ub[b]) - 1):
-            m.add_implication(y[b][k], y[a][k])
+    for ia, ib in [(idx[a], idx[b]) for a, b in reduced_edges(instance)]:
+        m.add(p[ia] <= p[ib])
+        for k in range(min(ub[ia], ub[ib]) - 1):
+            m.add_implication(y[ib][k], y[ia][k])
     return x, p
 
 
@@ -275,7 +275,7 @@ def add_lex_leq(m: Any, u: Sequence[Any], v: Sequence[Any]) -> None:
     """u <=lex v for equal-length vectors of integer variables."""
     eq_prev = None
     for t, (a, b) in enumerate(zip(u, v, strict=True)):
-        cond = [] if eq_prev is None else [eq_prev]
+        cond: list[Any] = [] if eq_prev is None else [eq_prev]
         if t == len(u) - 1:
             m.add(a <= b).only_enforce_if(cond)
             break
@@ -330,7 +330,7 @@ def hint(
     for (i, k), rects in mdl.rects.items():
         here = where.get(i) == k and corners is not None and i in corners
         for ptype, j, xv, yv, rot in rects:
-            cx, cy, turned = corners[i][(ptype, j)] if here else (0, 0, False)
+            cx, cy, turned = corners[i][(ptype, j)] if here and corners else (0, 0, False)
             m.add_hint(xv, cx)
             m.add_hint(yv, cy)
             if isinstance(rot, tuple):

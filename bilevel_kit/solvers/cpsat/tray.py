@@ -61,7 +61,7 @@ def embed_tray(
                         a0 = m.new_bool_var("")
                         a1 = m.new_bool_var("")
                         m.add(a0 + a1 == present)
-                        alts = ((w, h, a0), (h, w, a1))
+                        alts: tuple[tuple[int, int, Any], ...] = ((w, h, a0), (h, w, a1))
                         rot: Any = (a0, a1)
                         cx2, cy2 = 2 * xv + w * a0 + h * a1, 2 * yv + h * a0 + w * a1
                         parked = (0, 0)  # absent: x = y = 0 and no orientation

@@ -187,7 +187,12 @@ def run(
         K = max(K, len(inc))
     extra["max_kits"] = K
     extra["upper_start"] = inc_obj
-    if inc is not None and options.objective == "makespan" and inc_obj <= closed + TOL:
+    if (
+        inc is not None
+        and inc_obj is not None
+        and options.objective == "makespan"
+        and inc_obj <= closed + TOL
+    ):
         # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, termination="closed_form_bound")
@@ -412,7 +417,7 @@ class _Benders:
 
     def verdicts(self, kits: list[list[str]]) -> list[bool | None]:
         """Does each kit fit (None: unknown within the packing time limit)?"""
-        out = []
+        out: list[bool | None] = []
         pack_tl = self.packer.pack_tl
         for kit in kits:
             if self.left() <= 0:  # out of time: the rest stays unknown

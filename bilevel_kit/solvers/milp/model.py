@@ -300,7 +300,7 @@ def add_cut(master: Master, counts: Mapping[str, int]) -> None:
 
     m = master.model
     for k in range(master.K):
-        lits = []
+        lits: list[Any] = []
         for t, c in counts.items():
             expr = master.counts.get((t, k))
             if expr is None:
