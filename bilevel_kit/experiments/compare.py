@@ -85,7 +85,8 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         "bound": res.bound,
         "gap_own": res.gap,
         "wall_time_s": res.wall_time_s,
-        "valid": res.plan is not None and not violations,
+        # None: the method returned no plan (unknown/infeasible), which is not an invalid plan
+        "valid": None if res.plan is None else not violations,
         "violations": len(violations),
         "solution": result_to_dict(res),
     }

@@ -103,7 +103,15 @@ def _cell_text(value: Any, fmt: str) -> str:
 def table_rows(records: Sequence[dict[str, Any]]) -> tuple[list[str], list[list[str]]]:
     """Header and text cells of the ``compare`` table."""
     header = [h for _, h, _ in COMPARE_COLUMNS]
-    rows = [[_cell_text(r.get(k), f) for k, _, f in COMPARE_COLUMNS] for r in records]
+    rows = [
+        [
+            "no plan"
+            if k == "valid" and r.get("valid") is None and r.get("status") != "error"
+            else _cell_text(r.get(k), f)
+            for k, _, f in COMPARE_COLUMNS
+        ]
+        for r in records
+    ]
     return header, rows
 
 

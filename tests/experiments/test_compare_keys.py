@@ -93,3 +93,18 @@ def test_add_best_bound_gap_groups_by_file():
     out = add_best_bound_gap(recs)
     assert [r["best_bound"] for r in out] == [10.0, 20.0]
     assert [r["gap"] for r in out] == [0.0, 0.0]
+
+
+def test_no_plan_is_not_an_invalid_plan():
+    from bilevel_kit.experiments.tables import table_rows
+
+    base = {"instance": "x", "method": "m", "makespan": None, "n_kits": None}
+    header, rows = table_rows(
+        [
+            {**base, "status": "unknown", "valid": None},
+            {**base, "status": "feasible", "valid": False, "makespan": 10.0},
+            {**base, "status": "error", "valid": None},
+        ]
+    )
+    col = header.index("valid")
+    assert [r[col] for r in rows] == ["no plan", "False", "-"]
