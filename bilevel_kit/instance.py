@@ -356,8 +356,9 @@ class Instance:
 # ---------------------------------------------------------------------------------------------
 
 
-def topological_order(instance: Instance) -> list[str]:
-    """Kahn's algorithm with ties broken by file order: the deterministic default order."""
+def topological_order(instance: Instance, rank: Mapping[str, int] | None = None) -> list[str]:
+    """Kahn's algorithm with ties broken by ``rank`` (default: file order, the deterministic
+    default order): among the ready tasks, the one of smallest rank comes first."""
     import heapq
 
     indeg = {t.id: 0 for t in instance.tasks}
@@ -365,7 +366,7 @@ def topological_order(instance: Instance) -> list[str]:
     for a, b in instance.precedence:
         indeg[b] += 1
         succ[a].append(b)
-    pos = {t.id: i for i, t in enumerate(instance.tasks)}
+    pos = rank if rank is not None else {t.id: i for i, t in enumerate(instance.tasks)}
     heap = [(pos[t], t) for t, d in indeg.items() if d == 0]
     heapq.heapify(heap)
     out: list[str] = []

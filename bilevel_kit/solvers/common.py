@@ -213,8 +213,6 @@ def johnson_topological_order(instance: Instance) -> list[str]:
     the jobs (r_i, h_i) (:func:`bilevel_kit.bounds.johnson_order`): without precedence it is
     Johnson's order, whose single-task kits attain the flow-shop bound when d = 0 and there
     are no overheads."""
-    import heapq
-
     from ..bounds import johnson_order
 
     ids = [t.id for t in instance.tasks]
@@ -226,22 +224,7 @@ def johnson_topological_order(instance: Instance) -> list[str]:
             )
         )
     }
-    indeg = dict.fromkeys(ids, 0)
-    succ: dict[str, list[str]] = {t: [] for t in ids}
-    for a, b in dict.fromkeys(instance.precedence):
-        indeg[b] += 1
-        succ[a].append(b)
-    heap = [(rank[t], t) for t in ids if indeg[t] == 0]
-    heapq.heapify(heap)
-    out: list[str] = []
-    while heap:
-        _, t = heapq.heappop(heap)
-        out.append(t)
-        for s in succ[t]:
-            indeg[s] -= 1
-            if indeg[s] == 0:
-                heapq.heappush(heap, (rank[s], s))
-    return out
+    return topological_order(instance, rank)
 
 
 def quick_plan(
