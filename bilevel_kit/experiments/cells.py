@@ -215,6 +215,11 @@ class DaskExecutor:
         client, cluster = self._client, self._cluster
         self._client = self._cluster = None
         if cluster is not None and self._interrupted:
+            import logging
+
+            # The in-process scheduler logs each killed worker's closed connection with a
+            # traceback (at INFO); after Ctrl-C that is noise, not news.
+            logging.getLogger("distributed").setLevel(logging.ERROR)
             _kill_workers(cluster)  # busy with cells nobody waits for: stop now
         with contextlib.suppress(Exception):
             if client is not None:
