@@ -135,6 +135,67 @@ def kit_durations(
     return r, h
 
 
+class TimelineBuilder:
+    """The timeline evaluator, one kit at a time: :func:`evaluate` is a loop over
+    :meth:`append`, and a planner that grows a plan kit by kit (greedy-ce's epochs) keeps one
+    builder instead of re-evaluating the whole plan each epoch (O(m) instead of O(m^2))."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        *,
+        robot_times: Mapping[str, float] | None = None,
+        human_times: Mapping[str, float] | None = None,
+    ) -> None:
+        self.instance = instance
+        self.robot_times = robot_times
+        self.human_times = human_times
+        self.kits: list[KitTimes] = []
+        self.task_start: dict[str, float] = {}
+        self.task_end: dict[str, float] = {}
+        self.robot_work = 0.0
+        self.human_work = 0.0
+
+    @property
+    def human_free(self) -> float:
+        """When the human finishes the last kit so far (0 before the first)."""
+        return self.kits[-1].human_end if self.kits else 0.0
+
+    def append(self, kit: Kit) -> KitTimes:
+        """Add the next kit in delivery order and return its times (the module docstring)."""
+        inst, human_times = self.instance, self.human_times
+        r, h = kit_durations(inst, kit.tasks, self.robot_times, human_times)
+        robot_start = next_robot_start(inst, self.kits)
+        robot_end = robot_start + r
+        arrive = robot_end + inst.delivery_time
+        human_start = max(arrive, self.human_free)
+        human_end = human_start + h
+        clock = human_start + inst.kit_overhead_human
+        for t in kit.tasks:
+            self.task_start[t] = clock
+            clock += human_times[t] if human_times is not None else inst.human_time(t)
+            self.task_end[t] = clock
+        times = KitTimes(robot_start, robot_end, arrive, human_start, human_end)
+        self.kits.append(times)
+        self.robot_work += r + inst.delivery_time
+        self.human_work += h
+        return times
+
+    def timeline(self) -> Timeline:
+        """The timeline of the kits appended so far."""
+        makespan = self.human_free
+        return Timeline(
+            kits=tuple(self.kits),
+            task_start=dict(self.task_start),
+            task_end=dict(self.task_end),
+            makespan=makespan,
+            human_idle=makespan - self.human_work,
+            robot_idle=makespan - self.robot_work,
+            human_work=self.human_work,
+            robot_work=self.robot_work,
+        )
+
+
 def evaluate(
     instance: Instance,
     plan: Plan,
@@ -148,38 +209,7 @@ def evaluate(
     passes sampled durations); they must cover every task of the plan. The plan is not checked
     here: see :func:`bilevel_kit.validate.check`.
     """
-    d = instance.delivery_time
-    oh = instance.kit_overhead_human
-    kits: list[KitTimes] = []
-    task_start: dict[str, float] = {}
-    task_end: dict[str, float] = {}
-    human_free = 0.0
-    robot_work = 0.0
-    human_work = 0.0
+    builder = TimelineBuilder(instance, robot_times=robot_times, human_times=human_times)
     for kit in plan.kits:
-        r, h = kit_durations(instance, kit.tasks, robot_times, human_times)
-        robot_start = next_robot_start(instance, kits)
-        robot_end = robot_start + r
-        arrive = robot_end + d
-        human_start = max(arrive, human_free)
-        human_end = human_start + h
-        clock = human_start + oh
-        for t in kit.tasks:
-            task_start[t] = clock
-            clock += human_times[t] if human_times is not None else instance.human_time(t)
-            task_end[t] = clock
-        kits.append(KitTimes(robot_start, robot_end, arrive, human_start, human_end))
-        human_free = human_end
-        robot_work += r + d
-        human_work += h
-    makespan = human_free
-    return Timeline(
-        kits=tuple(kits),
-        task_start=task_start,
-        task_end=task_end,
-        makespan=makespan,
-        human_idle=makespan - human_work,
-        robot_idle=makespan - robot_work,
-        human_work=human_work,
-        robot_work=robot_work,
-    )
+        builder.append(kit)
+    return builder.timeline()

@@ -67,7 +67,7 @@ from ..errors import KitDoesNotFit, UsageError
 from ..instance import Instance
 from ..layout.cross_entropy import Arrangement, CEParams, arrange
 from ..methods import MethodOutput, Status
-from ..plan import Kit, Plan, evaluate, next_robot_start
+from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
 from . import upper_level
 from .greedy_search import PrefixSearch, SearchLimits, available_vector
 
@@ -529,15 +529,16 @@ def plan(
     policy = policy or GreedyCEPolicy(instance, params, seed)
     kits: list[Kit] = []
     done: set[str] = set()
+    timeline = TimelineBuilder(policy.instance)
     while len(done) < instance.n_tasks:
         remaining = 0.0
         if kits:
-            tl = evaluate(policy.instance, Plan(tuple(kits)))
-            now = next_robot_start(policy.instance, tl.kits)
-            remaining = max(0.0, tl.kits[-1].human_end - now)
+            now = next_robot_start(policy.instance, timeline.kits)
+            remaining = max(0.0, timeline.human_free - now)
         kit = policy.decide(PolicyState(frozenset(done), remaining))
         assert kit is not None
         kits.append(kit)
+        timeline.append(kit)
         done.update(kit.tasks)
     return Plan(tuple(kits))
 

@@ -61,3 +61,19 @@ def test_sampled_times_replace_expected(stool):
     tl = evaluate(stool, _plan(["a1"], ["a2", "a3"]), human_times=h, robot_times=r)
     # kit 1: robot 0..3, arrive 8, human 8..19; kit 2: robot 8..12, arrive 17, human 19..40
     assert tl.makespan == pytest.approx(40)
+
+
+def test_builder_gives_each_prefix_the_timeline_of_evaluate(table):
+    """The incremental evaluator is the evaluator: after every kit, its timeline equals
+    ``evaluate`` of the plan so far (one tray, so the tray rule is exercised)."""
+    from bilevel_kit.plan import TimelineBuilder
+
+    order = [t.id for t in table.tasks]
+    kits = [Kit(tuple(order[i : i + 3])) for i in range(0, len(order), 3)]
+    builder = TimelineBuilder(table)
+    assert builder.human_free == 0.0
+    for k, kit in enumerate(kits, start=1):
+        times = builder.append(kit)
+        full = evaluate(table, Plan(tuple(kits[:k])))
+        assert builder.timeline() == full
+        assert times == full.kits[-1] and builder.human_free == full.makespan
