@@ -11,24 +11,22 @@ class BilevelKitError(Exception):
     """Base class of every error the CLI reports as bad input (exit code 2)."""
 
 
-class InstanceError(BilevelKitError):
+class DocumentError(BilevelKitError):
+    """A JSON file is malformed; the message names the file and the JSON path."""
+
+    def __init__(self, source: str, path: str, message: str) -> None:
+        self.source = source
+        self.path = path
+        self.detail = message
+        super().__init__(f"{source}: {path}: {message}")
+
+
+class InstanceError(DocumentError):
     """An instance file is malformed; the message names the file and the JSON path."""
 
-    def __init__(self, source: str, path: str, message: str) -> None:
-        self.source = source
-        self.path = path
-        self.detail = message
-        super().__init__(f"{source}: {path}: {message}")
 
-
-class SolutionError(BilevelKitError):
+class SolutionError(DocumentError):
     """A solution file is malformed; the message names the file and the JSON path."""
-
-    def __init__(self, source: str, path: str, message: str) -> None:
-        self.source = source
-        self.path = path
-        self.detail = message
-        super().__init__(f"{source}: {path}: {message}")
 
 
 class KitDoesNotFit(BilevelKitError):

@@ -20,7 +20,7 @@ Every solver, the checker, the simulator and the plots go through :func:`evaluat
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from .instance import Instance
 
@@ -40,15 +40,7 @@ class Placement:
 
     def to_dict(self) -> dict[str, str | float]:
         """The JSON form used by solution and layout files."""
-        return {
-            "part": self.part,
-            "type": self.type,
-            "x": self.x,
-            "y": self.y,
-            "theta": self.theta,
-            "w": self.w,
-            "h": self.h,
-        }
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
 @dataclass(frozen=True)

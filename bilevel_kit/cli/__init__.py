@@ -1,7 +1,8 @@
 """Command-line interface: ``bilevel-kit solve | compare | simulate | ... | methods``.
 
-Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> int`` that reads its
-inputs, calls the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
+Each command is a module with ``HELP`` (its line in ``bilevel-kit --help``), ``DESCRIPTION`` (its
+``--help`` text), ``add_arguments(parser)`` and ``run(args) -> int`` that reads its inputs, calls
+the library and prints or writes the result. Exit codes: 0 ok, 1 the solution is
 invalid, 2 bad input or usage (a one-line message on stderr, no traceback), 3 a definite answer
 could not be reached within the time limit, 4 ``pack`` found no layout on a grid that is not
 exact (not a proof), 5 a sweep finished but some of its cells failed (docs/cluster.md), 130
@@ -23,7 +24,6 @@ from .common import (
     EXIT_UNKNOWN,
     EXIT_USAGE,
     Parser,
-    Subparsers,
     run_command,
 )
 
@@ -41,7 +41,13 @@ __all__ = [
 class Command(Protocol):
     """What a command module provides."""
 
-    def add_parser(self, subparsers: Subparsers) -> None: ...
+    @property
+    def HELP(self) -> str: ...  # noqa: N802 (a module constant)
+
+    @property
+    def DESCRIPTION(self) -> str | None: ...  # noqa: N802
+
+    def add_arguments(self, p: argparse.ArgumentParser) -> None: ...
 
     def run(self, args: argparse.Namespace) -> int: ...
 
@@ -81,8 +87,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
-    for command in COMMANDS.values():
-        command.add_parser(sub)
+    for name, command in COMMANDS.items():
+        p = sub.add_parser(name, help=command.HELP, description=command.DESCRIPTION)
+        command.add_arguments(p)
     return parser
 
 

@@ -6,25 +6,17 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import (
-    EXIT_INVALID,
-    EXIT_OK,
-    Subparsers,
-    add_instance_overrides,
-    load_instance,
-    print_violations,
+from .common import EXIT_INVALID, EXIT_OK, add_instance_overrides, load_instance, print_violations
+
+HELP = "check a solution file against an instance"
+DESCRIPTION = (
+    "Run the independent checker on the plan and on every number the file states (kit times, "
+    "metrics, objective, bound, gap, status), all recomputed from the instance; exit 1 and list "
+    "the violations when anything is wrong, 2 when the file is malformed."
 )
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "check",
-        help="check a solution file against an instance",
-        description="Run the independent checker on the plan and on every number the file "
-        "states (kit times, metrics, objective, bound, gap, status), all recomputed from the "
-        "instance; exit 1 and list the violations when anything is wrong, 2 when the file is "
-        "malformed.",
-    )
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instance")
     p.add_argument("solution")
     add_instance_overrides(p)

@@ -37,9 +37,6 @@ EXIT_INTERRUPTED = 130
 #: The environment variable naming a running Dask scheduler (as Dask itself reads it).
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 
-#: The ``subparsers`` object every command module's ``add_parser`` receives.
-Subparsers = argparse._SubParsersAction
-
 #: The instance fields the override options replace (see :func:`instance_overrides`).
 OVERRIDES = ("delivery_time", "weights", "horizon", "units", "trays")
 
@@ -170,9 +167,23 @@ def positive_int(text: str) -> int:
 # ---------------------------------------------------------------------------------------------
 
 
-def add_seed(p: argparse.ArgumentParser, text: str = "random seed (default 0)") -> None:
+def add_seed(
+    p: argparse.ArgumentParser, text: str = "random seed (default 0)", default: int | None = 0
+) -> None:
     """``--seed N``, an integer >= 0 (:func:`seed`)."""
-    p.add_argument("--seed", type=seed, default=0, metavar="N", help=text)
+    p.add_argument("--seed", type=seed, default=default, metavar="N", help=text)
+
+
+def add_time_limit(
+    p: argparse.ArgumentParser, text: str, default: float | None = None, flag: str = "--time-limit"
+) -> None:
+    """``--time-limit S``, seconds >= 0 (:func:`nonneg`); None: the method's own."""
+    p.add_argument(flag, type=nonneg, default=default, metavar="S", help=text)
+
+
+def add_resolution(p: argparse.ArgumentParser, text: str, default: float | None = None) -> None:
+    """``--resolution MM``, a grid cell size in the instances' length range (:func:`length`)."""
+    p.add_argument("--resolution", type=length, default=default, metavar="MM", help=text)
 
 
 def add_output(

@@ -9,13 +9,12 @@ from typing import TYPE_CHECKING, Any
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
-    Subparsers,
     add_instance_overrides,
     add_output,
     add_seed,
     add_sweep_options,
+    add_time_limit,
     instance_overrides,
-    nonneg,
     param,
     sweep_exit,
     sweep_session,
@@ -24,18 +23,16 @@ from .common import (
 if TYPE_CHECKING:
     from ..experiments import CompareCell
 
+HELP = "solve instances with several methods and tabulate"
+DESCRIPTION = (
+    "One row per instance x method: makespan, human idle, kits, status, best lower bound, gap to "
+    "it, checker verdict, wall time. Each cell is saved on its own under --cells, so an "
+    "interrupted run resumes where it stopped; --jobs/--scheduler run the cells in parallel "
+    "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan is invalid."
+)
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "compare",
-        help="solve instances with several methods and tabulate",
-        description="One row per instance x method: makespan, human idle, "
-        "kits, status, best lower bound, gap to it, checker verdict, wall time. "
-        "Each cell is saved on its own under --cells, so an interrupted run "
-        "resumes where it stopped; --jobs/--scheduler run the cells in parallel "
-        "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan "
-        "is invalid.",
-    )
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instances", nargs="+", metavar="INSTANCE")
     p.add_argument(
         "--methods",
@@ -44,12 +41,7 @@ def add_parser(subparsers: Subparsers) -> None:
         help="comma-separated method names, or 'all' (default)",
     )
     add_seed(p, "random seed of every cell (default 0)")
-    p.add_argument(
-        "--time-limit",
-        type=nonneg,
-        metavar="S",
-        help="time limit per solve for methods that take one",
-    )
+    add_time_limit(p, "time limit per solve for methods that take one")
     p.add_argument(
         "--param",
         "-p",

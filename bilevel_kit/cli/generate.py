@@ -6,22 +6,20 @@ import argparse
 import json
 import sys
 
-from .common import EXIT_OK, Subparsers, add_delivery_time, add_output, positive, positive_int, seed
+from .common import EXIT_OK, add_delivery_time, add_output, add_seed, positive, positive_int
+
+HELP = "write a generated instance"
+DESCRIPTION = (
+    "Families: table (units of the paper's table), mixed (table + stool + chair per unit), "
+    "intree and series-parallel (random task graphs of SIZE tasks; --tightness = total part "
+    "area / tray area)."
+)
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "generate",
-        help="write a generated instance",
-        description="Families: table (units of the paper's table), mixed (table + stool + "
-        "chair per unit), intree and series-parallel (random task graphs of SIZE tasks; "
-        "--tightness = total part area / tray area).",
-    )
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("family", help="table | mixed | intree | series-parallel")
     p.add_argument("--size", type=positive_int, required=True, help="units or tasks")
-    p.add_argument(
-        "--seed", type=seed, metavar="N", help="random seed (random families; default 0)"
-    )
+    add_seed(p, "random seed (random families; default 0)", default=None)
     p.add_argument(
         "--tightness",
         type=positive,

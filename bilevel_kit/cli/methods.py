@@ -3,37 +3,38 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from .common import EXIT_OK, Subparsers
+from .common import EXIT_OK
 
-if TYPE_CHECKING:
-    from ..methods import MethodSpec
+HELP = "list the registered methods"
+DESCRIPTION = (
+    "Without NAME: one line per registered method. With NAME: that method's options "
+    "(solve --param KEY=VALUE) with type, default and meaning."
+)
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "methods",
-        help="list the registered methods",
-        description="Without NAME: one line per registered method. With NAME: that method's "
-        "options (solve --param KEY=VALUE) with type, default and meaning.",
-    )
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("name", nargs="?", metavar="NAME", help="a method whose options to list")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..methods import REGISTRY, get_method
+    from ..methods import REGISTRY
 
     if args.name is None:
         for s in REGISTRY.values():
             print(f"{s.name:<16} {s.summary}")
     else:
-        print(describe_method(get_method(args.name)))
+        print(describe_method(args.name))
     return EXIT_OK
 
 
-def describe_method(spec: MethodSpec) -> str:
-    """The name and summary of a method, then one line per option: name, type, default, help."""
+def describe_method(name: str) -> str:
+    """The name and summary of method NAME, then one line per option: name, type, default, help
+    (an unknown NAME raises the registry's usage error)."""
+    from ..methods import get_method
+
+    spec = get_method(name)
     lines = [f"{spec.name}: {spec.summary}"]
     infos = spec.describe_options()
     if not infos:

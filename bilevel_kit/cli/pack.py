@@ -9,11 +9,10 @@ from .common import (
     EXIT_NO_GRID_LAYOUT,
     EXIT_OK,
     EXIT_UNKNOWN,
-    Subparsers,
     add_output,
+    add_resolution,
     add_seed,
-    length,
-    nonneg,
+    add_time_limit,
     positive_int,
 )
 
@@ -23,19 +22,19 @@ NO_GRID_LAYOUT = "no_grid_layout"
 if TYPE_CHECKING:
     from ..instance import Instance
 
+HELP = "place parts on the tray with CP-SAT (fits? best layout?)"
+DESCRIPTION = (
+    "FILE is an instance (with --tasks a,b,c: the parts of those tasks) or a stand-alone pack "
+    'file {"tray": {"width", "height"}, "items": [{"id", "width", "height", "count", '
+    '"rotatable"}]}. Integer grid at --resolution mm, rotation 0/90 degrees for rotatable '
+    "parts, no-overlap-2D. Exit 0 for a definite answer (feasible, optimal or infeasible), 3 "
+    "for unknown within the time limit, 4 for no layout on this grid when the grid is not exact "
+    "(some size is not a multiple of --resolution): that is not a proof that the parts do not "
+    "fit; try a finer --resolution."
+)
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "pack",
-        help="place parts on the tray with CP-SAT (fits? best layout?)",
-        description="FILE is an instance (with --tasks a,b,c: the parts of those tasks) or a "
-        'stand-alone pack file {"tray": {"width", "height"}, "items": [{"id", "width", '
-        '"height", "count", "rotatable"}]}. Integer grid at --resolution mm, rotation 0/90 '
-        "degrees for rotatable parts, no-overlap-2D. Exit 0 for a definite answer (feasible, "
-        "optimal or infeasible), 3 for unknown within the time limit, 4 for no layout on "
-        "this grid when the grid is not exact (some size is not a multiple of --resolution): "
-        "that is not a proof that the parts do not fit; try a finer --resolution.",
-    )
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="FILE")
     p.add_argument("--tasks", metavar="A,B,C", help="tasks whose parts to pack (instances)")
     p.add_argument(
@@ -45,20 +44,8 @@ def add_parser(subparsers: Subparsers) -> None:
         help="feasible: decide whether they fit; fitness: maximise the L1 "
         "surrogate of the paper's kit fitness (default feasible)",
     )
-    p.add_argument(
-        "--resolution",
-        type=length,
-        default=1.0,
-        metavar="MM",
-        help="grid resolution in mm (default 1)",
-    )
-    p.add_argument(
-        "--time-limit",
-        type=nonneg,
-        default=10.0,
-        metavar="S",
-        help="time limit in seconds (default 10)",
-    )
+    add_resolution(p, "grid resolution in mm (default 1)", default=1.0)
+    add_time_limit(p, "time limit in seconds (default 10)", default=10.0)
     p.add_argument("--workers", type=positive_int, default=2, help="CP-SAT workers (2)")
     add_seed(p)
     add_output(p, "--out", "-o", metavar="FILE", help="write the layout as JSON")

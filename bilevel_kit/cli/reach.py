@@ -4,26 +4,21 @@ from __future__ import annotations
 
 import argparse
 
-from .common import EXIT_INVALID, EXIT_OK, Subparsers, add_output, length, positive_int
+from .common import EXIT_INVALID, EXIT_OK, add_output, add_resolution, positive_int
+
+HELP = "Sawyer reachability map of the tray (Pinocchio)"
+DESCRIPTION = (
+    "Discretise the tray, solve a top-down grasp (and its approach pose) per cell with the "
+    "project's own Sawyer model, and print/draw the map: reachable cells coloured by "
+    "manipulability. The instance's 'station' section places the tray (default station "
+    "otherwise). With --solution, kit K's layout is drawn on top and its unreachable parts are "
+    "listed."
+)
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "reach",
-        help="Sawyer reachability map of the tray (Pinocchio)",
-        description="Discretise the tray, solve a top-down grasp (and its approach pose) per "
-        "cell with the project's own Sawyer model, and print/draw the map: reachable cells "
-        "coloured by manipulability. The instance's 'station' section places the tray "
-        "(default station otherwise). With --solution, kit K's layout is drawn on top and "
-        "its unreachable parts are listed.",
-    )
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instance")
-    p.add_argument(
-        "--resolution",
-        type=length,
-        metavar="MM",
-        help="cell size in mm (default: the instance's reach_resolution, 10)",
-    )
+    add_resolution(p, "cell size in mm (default: the instance's reach_resolution, 10)")
     add_output(p, "--png", metavar="FILE", help="draw the map here")
     p.add_argument("--solution", metavar="FILE", help="solution whose kit to draw on the map")
     p.add_argument("--kit", type=positive_int, help="kit of --solution (default 1)")

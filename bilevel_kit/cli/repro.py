@@ -6,30 +6,29 @@ import argparse
 
 from .common import (
     EXIT_OK,
-    Subparsers,
     add_delivery_time,
     add_output,
     add_seed,
     add_sweep_options,
-    nonneg,
+    add_time_limit,
     positive_int,
     sweep_exit,
     sweep_session,
 )
 
+HELP = "reproduce the paper's user study (Fig. 5) or Figure 6"
+DESCRIPTION = (
+    "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}, fitted "
+    "on a calibration cohort to 3 of the paper's numbers, then 200 fresh studies of 18 give "
+    "every other paper number a median and 95% prediction interval. fig6: MAT x MTTF grid of "
+    "the shop-floor simulation (10 tables per run), percent improvement heatmaps with ANOVA + "
+    "Tukey marks; saved per cell (resumable). --jobs/--scheduler run the cells (fig6 grid "
+    "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. See "
+    "paper_repro/README.md."
+)
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "repro",
-        help="reproduce the paper's user study (Fig. 5) or Figure 6",
-        description="user-study: within-subject participants x {Whole Assembly, Single Task, "
-        "Optimized}, fitted on a calibration cohort to 3 of the paper's numbers, then 200 fresh "
-        "studies of 18 give every other paper number a median and 95%% prediction interval. "
-        "fig6: MAT x MTTF grid of the shop-floor simulation (10 tables per run), percent "
-        "improvement heatmaps with ANOVA + Tukey marks; saved per cell (resumable). "
-        "--jobs/--scheduler run the cells (fig6 grid points, user-study studies) in parallel "
-        "(docs/cluster.md); exit 5 when a cell failed. See paper_repro/README.md.",
-    )
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("experiment", choices=("user-study", "fig6"))
     p.add_argument(
         "--quick",
@@ -65,12 +64,11 @@ def add_parser(subparsers: Subparsers) -> None:
         action="store_true",
         help="fig6: add the cpsat-rolling policy and compare it with Optimized",
     )
-    p.add_argument(
-        "--cpsat-time-limit",
-        type=nonneg,
+    add_time_limit(
+        p,
+        "fig6 --with-cpsat: CP-SAT time limit per decision (default 1 s)",
         default=1.0,
-        metavar="S",
-        help="fig6 --with-cpsat: CP-SAT time limit per decision (default 1 s)",
+        flag="--cpsat-time-limit",
     )
     add_sweep_options(p)
 

@@ -6,11 +6,13 @@ import argparse
 import json
 import sys
 
-from .common import EXIT_OK, Subparsers, add_output
+from .common import EXIT_OK, add_output
+
+HELP = "print the JSON Schema of instance or solution files"
+DESCRIPTION = None
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser("schema", help="print the JSON Schema of instance or solution files")
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--solution", action="store_true", help="the solution schema instead")
     add_output(p, "--out", "-o", metavar="FILE", help="write it to FILE instead of stdout")
 

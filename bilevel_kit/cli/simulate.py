@@ -14,7 +14,6 @@ from typing import Any
 
 from .common import (
     EXIT_OK,
-    Subparsers,
     add_instance_overrides,
     add_output,
     add_param_option,
@@ -42,17 +41,17 @@ SIM_COLUMNS = (
 CSV_COLUMNS = ("seed", "units", *SIM_COLUMNS, "human_work", "robot_work", "max_queue")
 
 
-def add_parser(subparsers: Subparsers) -> None:
-    p = subparsers.add_parser(
-        "simulate",
-        help="shop-floor simulation (SimPy) of a kitting policy",
-        description="Replications of the paper's shop-floor simulation (Section V-B): feeders "
-        "with Poisson arrivals (mean inter-arrival MAT) and exponential failures (MTTF, fixed "
-        "repair), the robot asking its policy for the next kit at each epoch, the human "
-        "assembling with sampled participant times. Replication r uses seed SEED + r. "
-        "--jobs/--scheduler run the replications in parallel (docs/cluster.md); exit 5 when "
-        "a replication failed.",
-    )
+HELP = "shop-floor simulation (SimPy) of a kitting policy"
+DESCRIPTION = (
+    "Replications of the paper's shop-floor simulation (Section V-B): feeders with Poisson "
+    "arrivals (mean inter-arrival MAT) and exponential failures (MTTF, fixed repair), the robot "
+    "asking its policy for the next kit at each epoch, the human assembling with sampled "
+    "participant times. Replication r uses seed SEED + r. --jobs/--scheduler run the "
+    "replications in parallel (docs/cluster.md); exit 5 when a replication failed."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instance")
     p.add_argument(
         "--policy",

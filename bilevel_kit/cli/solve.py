@@ -10,13 +10,12 @@ from .common import (
     EXIT_INVALID,
     EXIT_OK,
     EXIT_UNKNOWN,
-    Subparsers,
     add_instance_overrides,
     add_output,
     add_param_option,
     add_seed,
+    add_time_limit,
     load_instance,
-    nonneg,
     positive_int,
     print_violations,
 )
@@ -28,15 +27,16 @@ if TYPE_CHECKING:
     from ..methods import Result
 
 
-def add_parser(subparsers: Subparsers) -> None:
+HELP = "solve an instance with one method"
+DESCRIPTION = (
+    "Solve an instance file with a registered method and print a summary; optionally write the "
+    "solution JSON and figures."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..methods import REGISTRY
 
-    p = subparsers.add_parser(
-        "solve",
-        help="solve an instance with one method",
-        description="Solve an instance file with a registered method and print "
-        "a summary; optionally write the solution JSON and figures.",
-    )
     p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
     p.add_argument(
         "--method",
@@ -66,12 +66,7 @@ def add_parser(subparsers: Subparsers) -> None:
         metavar="K",
         help="kit for --convergence (default: the kit with the most parts)",
     )
-    p.add_argument(
-        "--time-limit",
-        type=nonneg,
-        metavar="S",
-        help="time limit in seconds for methods that take one",
-    )
+    add_time_limit(p, "time limit in seconds for methods that take one")
     add_param_option(p, "method-specific option (repeatable)")
     p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
     add_instance_overrides(p)
