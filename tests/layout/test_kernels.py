@@ -124,7 +124,8 @@ def textbook_cholesky(a: np.ndarray, floor: float) -> np.ndarray | None:
 
 @needs_numba
 @pytest.mark.parametrize(
-    ("d", "floor", "factors"), [(1, 0.25, True), (7, 0.25, True), (30, 0.25, True), (30, 0.0, False)]
+    ("d", "floor", "factors"),
+    [(1, 0.25, True), (7, 0.25, True), (30, 0.25, True), (30, 0.0, False)],
 )
 def test_compiled_cholesky_is_the_textbook_loop_bit_for_bit(
     d: int, floor: float, factors: bool
