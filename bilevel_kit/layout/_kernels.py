@@ -110,25 +110,46 @@ def _score_samples(
 
 def _cholesky_into(a: np.ndarray, floor: float, out: np.ndarray) -> bool:  # pragma: no cover
     """Lower Cholesky factor of ``a + floor * I`` into ``out`` (any float dtype); False if
-    ``a + floor * I`` is not positive definite."""
+    ``a + floor * I`` is not positive definite.
+
+    Column q of the factor is row q of ``w`` (contiguous), and it is updated by the finished
+    columns k < q four at a time. Entry (i, q) still starts at ``a[i, q]`` (plus the floor on
+    the diagonal) and loses ``f[i, k] * f[q, k]`` for k = 0, 1, ... in turn, one rounding
+    per operation as in the textbook loop, so every entry is the same float as there; the
+    contiguous inner loops vectorise, about 2x faster at the 84 dimensions of the 28-part
+    kit."""
     d = a.shape[0]
-    f = np.zeros((d, d))
-    for j in range(d):
-        s = a[j, j] + floor
-        for k in range(j):
-            s -= f[j, k] * f[j, k]
-        if not s > 0.0:
+    w = np.empty((d, d))  # w[q, i]: entry (i, q) of the lower triangle, i >= q
+    for q in range(d):
+        # Slices and indices from 0: the loop form numba vectorises (not range(q, d)).
+        dst = w[q, q:]
+        m = d - q
+        for t in range(m):
+            dst[t] = a[q + t, q]
+        dst[0] += floor
+        k = 0
+        while k + 4 <= q:
+            c0, c1, c2, c3 = w[k, q], w[k + 1, q], w[k + 2, q], w[k + 3, q]
+            s0, s1, s2, s3 = w[k, q:], w[k + 1, q:], w[k + 2, q:], w[k + 3, q:]
+            for t in range(m):
+                dst[t] = (((dst[t] - s0[t] * c0) - s1[t] * c1) - s2[t] * c2) - s3[t] * c3
+            k += 4
+        while k < q:
+            c0 = w[k, q]
+            s0 = w[k, q:]
+            for t in range(m):
+                dst[t] -= s0[t] * c0
+            k += 1
+        if not dst[0] > 0.0:
             return False
-        djj = np.sqrt(s)
-        f[j, j] = djj
-        for i in range(j + 1, d):
-            t = a[i, j]
-            for k in range(j):
-                t -= f[i, k] * f[j, k]
-            f[i, j] = t / djj
-    for i in range(d):
-        for j in range(d):
-            out[i, j] = f[i, j]
+        djj = np.sqrt(dst[0])
+        dst[0] = djj
+        for t in range(1, m):
+            dst[t] = dst[t] / djj
+    out[:, :] = 0.0
+    for q in range(d):
+        for i in range(q, d):
+            out[i, q] = w[q, i]
     return True
 
 

@@ -100,3 +100,45 @@ def test_env_var_forces_the_numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv(_kernels.ENV_DISABLE, "1")
     assert not _kernels.available()
     assert _kernels.score_kernel() is None and _kernels.ce_block_kernel() is None
+
+
+def textbook_cholesky(a: np.ndarray, floor: float) -> np.ndarray | None:
+    """Left-looking Cholesky of ``a + floor * I`` in Python floats (one rounding per
+    operation, the subtraction order the compiled kernel must keep)."""
+    d = a.shape[0]
+    f = np.zeros((d, d))
+    for j in range(d):
+        s = float(a[j, j]) + floor
+        for k in range(j):
+            s -= f[j, k] * f[j, k]
+        if not s > 0.0:
+            return None
+        f[j, j] = math.sqrt(s)
+        for i in range(j + 1, d):
+            t = float(a[i, j])
+            for k in range(j):
+                t -= f[i, k] * f[j, k]
+            f[i, j] = t / f[j, j]
+    return f
+
+
+@needs_numba
+@pytest.mark.parametrize(
+    ("d", "floor", "factors"),
+    [(1, 0.25, True), (7, 0.25, True), (30, 0.25, True), (30, 0.0, False)],
+)
+def test_compiled_cholesky_is_the_textbook_loop_bit_for_bit(
+    d: int, floor: float, factors: bool
+) -> None:
+    _kernels.available()  # compiles the kernels
+    rng = np.random.default_rng(d)
+    e = rng.standard_normal((d, 9)) * 40.0
+    a = e @ e.T / 9 + rng.standard_normal((d, d)) * 1e-9  # not exactly symmetric
+    want = textbook_cholesky(a, floor)
+    out = np.full((d, d), 7.0)
+    ok = _kernels._cholesky_into(a, floor, out)
+    assert ok == (want is not None)
+    assert ok == factors  # rank 9 without a floor is not positive definite
+    if want is not None:
+        assert np.array_equal(out, want)
+        np.testing.assert_allclose(out @ out.T, a + floor * np.eye(d), rtol=1e-9, atol=1e-6)
