@@ -617,17 +617,23 @@ def kit_fits(
     resolution: float = 1.0,
 ) -> bool | None:
     """Cheap memoised oracle: do these parts (type -> count) fit on the instance's tray?"""
+    return _fit_on_tray(instance, part_counts, time_limit, resolution)[0]
+
+
+def _fit_on_tray(
+    instance: Instance, counts: Mapping[str, int], time_limit: float, resolution: float
+) -> tuple[bool | None, TypedLayout | None]:
+    """:func:`fit_counts` on the instance's tray and part types, within the robot's reach."""
     from ..reachability import reach_grid
 
-    ok, _ = fit_counts(
+    return fit_counts(
         instance.tray,
         instance.part_types,
-        part_counts,
+        counts,
         time_limit=time_limit,
         resolution=resolution,
         reach=reach_grid(instance),
     )
-    return ok
 
 
 def kit_layout(
@@ -639,17 +645,7 @@ def kit_layout(
 ) -> tuple[Placement, ...] | None:
     """A non-overlapping layout for the parts of these tasks (part ids ``task:type:j``), or
     None when they do not fit or the answer is unknown."""
-    from ..reachability import reach_grid
-
-    counts = instance.kit_parts(task_ids)
-    ok, typed = fit_counts(
-        instance.tray,
-        instance.part_types,
-        counts,
-        time_limit=time_limit,
-        resolution=resolution,
-        reach=reach_grid(instance),
-    )
+    ok, typed = _fit_on_tray(instance, instance.kit_parts(task_ids), time_limit, resolution)
     if not ok or typed is None:
         return None
     return typed_to_placements(instance, task_ids, typed)

@@ -669,17 +669,6 @@ class BilevelMilpOptions:
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
 
 
-def bilevel_milp(
-    instance: Instance,
-    options: BilevelMilpOptions,
-    *,
-    seed: int = 0,
-    time_limit: float | None = None,
-) -> MethodOutput:
-    """Registered method ``bilevel-milp``: :func:`run` warm-started from greedy-ce's plan."""
-    return run(instance, options, seed=seed, time_limit=time_limit)
-
-
 def solve(
     instance: Instance,
     *,
@@ -726,14 +715,15 @@ def run(
     options: BilevelMilpOptions,
     *,
     seed: int = 0,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = None,
     warm_plan: Plan | str | None = "greedy",
     ce_params: Any = None,
     values: LowerLevel | None = None,
     solver_options: Mapping[str, Any] | None = None,
 ) -> MethodOutput:
     """Minimise the paper's whole-plan objective J exactly over enumerated kits (the result:
-    module docstring; each kit of the plan has its best known layout).
+    module docstring; each kit of the plan has its best known layout); with its defaults, the
+    registered method ``bilevel-milp`` (no time limit: the budget's default, 60 s).
 
     ``warm_plan``: a plan, or ``"greedy"`` (greedy-ce with this seed and these CE parameters),
     improved by :func:`local_search`, is the MIP start; ``ce_params`` (a
@@ -825,6 +815,10 @@ def run(
         makespan=evaluate(instance, plan).makespan,
     )
     return finish(plan, Status.OPTIMAL if info.optimal else Status.FEASIBLE)
+
+
+#: The registered method ``bilevel-milp``: :func:`run` warm-started from greedy-ce's plan.
+bilevel_milp = run
 
 
 def _solution_plan(

@@ -1,21 +1,25 @@
 """Pieces both exact schedule models share (CP-SAT and the MILP).
 
 The transitive reduction of the precedence graph, the human's order inside a kit, groups of
-interchangeable precedence chains (for symmetry breaking), the packing oracle under a run's
-time budget, and a cheap feasible plan that gives an upper bound and a warm start
+interchangeable precedence chains (for symmetry breaking), the kit positions a task can take,
+the packing oracle under a run's time budget, the no-good cuts of the Benders loops, a cheap
+feasible plan that gives an upper bound and a warm start, and the ``extra`` entries of a plan
 (docs/formulations.md).
 """
 
 from __future__ import annotations
 
+import itertools
 import time
-from collections.abc import Collection, Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from typing import Any, TypeVar
 
 from ..instance import Instance, topological_order
 from ..layout import cpsat_packing as packing
-from ..plan import Kit, Placement, Plan, evaluate
+from ..plan import Kit, Placement, Plan, Timeline, evaluate
 from .budget import Budget
+
+T = TypeVar("T")
 
 
 def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
@@ -77,6 +81,20 @@ def chain_groups(instance: Instance) -> list[list[list[str]]]:
     ]
 
 
+def relabel_chains(pos: Mapping[T, int], groups: Iterable[Sequence[Sequence[T]]]) -> dict[T, int]:
+    """The kit of every task (``pos``) once the interchangeable chains of each group (listed
+    in task order, as :func:`chain_groups_idx` gives them) are relabelled so that their kit
+    vectors are in lexicographic order: the exact models' symmetry breaking. Kit contents stay
+    the same multisets."""
+    new = dict(pos)
+    for group in groups:
+        vectors = sorted(tuple(pos[t] for t in chain) for chain in group)
+        for chain, vec in zip(group, vectors, strict=True):
+            for t, k in zip(chain, vec, strict=True):
+                new[t] = k
+    return new
+
+
 def kit_order(instance: Instance, tasks: Collection[str]) -> tuple[str, ...]:
     """A topological order of a kit's tasks (ties by file order): the human's order."""
     members = set(tasks)
@@ -96,15 +114,39 @@ def kit_order(instance: Instance, tasks: Collection[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
-def assignment_cells(instance: Instance, K: int) -> int:
-    """Number of (task, kit position) variables of the exact models with K positions: task i
-    can only be in the first ``n - |descendants(i)|`` kits; their models grow with it."""
+def kit_positions(instance: Instance, K: int) -> list[int]:
+    """How many of the K kit positions each task (in ``instance.tasks`` order) can take: task i
+    is in one of the first ``n - |descendants(i)|`` kits, since every later kit needs a task."""
     n = instance.n_tasks
     n_desc = dict.fromkeys(instance.task_by_id, 0)
     for t in instance.tasks:
         for a in instance.ancestors[t.id]:
             n_desc[a] += 1
-    return sum(min(K, n - n_desc[t.id]) for t in instance.tasks)
+    return [min(K, n - n_desc[t.id]) for t in instance.tasks]
+
+
+def assignment_cells(instance: Instance, K: int) -> int:
+    """Number of (task, kit position) variables of the exact models with K positions
+    (:func:`kit_positions`); their models grow with it."""
+    return sum(kit_positions(instance, K))
+
+
+def plan_extra(
+    plan: Plan, real: Timeline, bound: float, closed: float, model_bound: float | None
+) -> dict[str, Any]:
+    """The ``extra`` entries of an exact model's plan (``real``: its timeline): the gap to the
+    makespan ``bound``, makespan, human idle, kit count, the closed-form bound and the model's
+    own bound."""
+    from ..methods import gap
+
+    return {
+        "gap": gap(real.makespan, bound) or 0.0,
+        "makespan": real.makespan,
+        "human_idle": real.human_idle,
+        "n_kits": len(plan.kits),
+        "bound_closed_form": closed,
+        "bound_model": model_bound,
+    }
 
 
 def pack_time_limit(budget: Budget) -> float:
@@ -206,6 +248,67 @@ class Packer:
             for j in range(1, n + 1)
         ]
         return shelf_pack(self.instance.tray, items)
+
+
+class NoGoodCuts:
+    """The cuts of a logic-based Benders loop (``cpsat`` and ``milp``): a part multiset that
+    does not fit is cut from every kit by ``add``, once; shrunk first to a minimal non-fitting
+    multiset when the misfit is proven. A cut from a packing that timed out is unproven (a
+    heuristic: after one, the master's bound is no proof); ``unproven`` counts them."""
+
+    def __init__(
+        self,
+        packer: Packer,
+        budget: Budget,
+        margin: float,
+        add: Callable[[dict[str, int]], None],
+    ) -> None:
+        self.packer = packer
+        self.budget = budget
+        self.margin = margin
+        self.add = add
+        self.seen: set[frozenset[tuple[str, int]]] = set()
+        self.unproven = 0
+
+    def cut(self, counts: Mapping[str, int], proven: bool) -> bool:
+        """Cut ``counts`` (shrunk when ``proven``) unless the same cut was added before."""
+        mini = (
+            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, self.margin))
+            if proven
+            else dict(counts)
+        )
+        key = frozenset(mini.items())
+        if key in self.seen:
+            return False
+        self.seen.add(key)
+        self.add(mini)
+        return True
+
+    def cut_kits(self, kits: Iterable[Mapping[str, int]], verdicts: Iterable[bool | None]) -> int:
+        """Cut the part multisets of the kits that do not fit (verdict False) or may not (None,
+        unproven); how many cuts are new."""
+        new = 0
+        for counts, ok in zip(kits, verdicts, strict=True):
+            if ok is not True:
+                added = self.cut(counts, ok is False)
+                new += added
+                self.unproven += int(added and ok is None)
+        return new
+
+    def seed_pairs(self) -> None:
+        """Cut every pair of tasks (distinct part multisets) that does not fit together, while
+        a tenth of the time left lasts."""
+        instance = self.packer.instance
+        seed_until = self.budget.share(0.1, self.margin)
+        reps = list(
+            {frozenset(instance.kit_parts([t.id]).items()): t.id for t in instance.tasks}.values()
+        )
+        for a, b in itertools.combinations_with_replacement(reps, 2):
+            if time.perf_counter() > seed_until:
+                break
+            counts = instance.kit_parts([a, b])
+            if self.packer.counts(counts)[0] is False:
+                self.cut(counts, True)
 
 
 def johnson_topological_order(instance: Instance) -> list[str]:

@@ -69,7 +69,7 @@ from ..layout.cross_entropy import Arrangement, CEParams, arrange
 from ..methods import MethodOutput, Status
 from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
 from . import upper_level
-from .greedy_search import PrefixSearch, SearchLimits, available_vector
+from .greedy_search import PrefixSearch, SearchLimits, SearchStats, available_vector
 
 #: Refuse to enumerate more than this many partial sequences at one epoch.
 MAX_SEQUENCES = 2_000_000
@@ -254,19 +254,17 @@ class PolicyState:
 
 
 @dataclass
-class GreedyStats:
+class GreedyStats(SearchStats):
+    """The policy's counters; the prefix search's (:class:`SearchStats`: closed prefix sets
+    scored, prefixes evaluated with their layout, beam epochs, capped window-rest searches)
+    are copied from it after each exact decision."""
+
     epochs: int = 0
     sequences: int = 0
     candidates: int = 0
     ce_calls: int = 0
     fitness_cache_hits: int = 0
     kits_not_fitting: int = 0
-    #: closed prefix sets scored (exact decision), prefixes evaluated with their layout
-    prefix_sets: int = 0
-    evaluated: int = 0
-    #: epochs whose prefix search became a beam; window-rest searches stopped at their cap
-    beam_epochs: int = 0
-    rest_capped: int = 0
     #: True once ``time_limit`` ran out (the remaining kits are single tasks)
     time_limit_hit: bool = False
     objective_terms: list[dict[str, Any]] = field(default_factory=list)
@@ -455,8 +453,8 @@ class GreedyCEPolicy:
         )
         st = search.stats
         self.stats.candidates += st.evaluated - before[0]
-        self.stats.prefix_sets, self.stats.evaluated = st.prefix_sets, st.evaluated
-        self.stats.beam_epochs, self.stats.rest_capped = st.beam_epochs, st.rest_capped
+        for f in fields(SearchStats):
+            setattr(self.stats, f.name, getattr(st, f.name))
         if choice is None:
             return [], math.inf
         return list(choice.prefix), choice.score

@@ -10,12 +10,11 @@ the master's bound is no longer a proof.
 
 from __future__ import annotations
 
-import itertools
+import functools
 import math
-import time
 from typing import Any
 
-from ..common import kit_order
+from ..common import NoGoodCuts, kit_order
 from .context import MARGIN, Context, Model, State
 from .model import canonical, extract_kits, hint
 from .scaling import scaled_objective
@@ -25,56 +24,29 @@ from .tray import add_cut
 def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]] | None) -> State:
     """Iterate master solves and packing checks (module docstring) within the budget."""
     loop = _Benders(ctx, mdl, incumbent)
-    loop.seed_cuts()
+    loop.cuts.seed_pairs()
     it = 0
     while ctx.left() > 0.01:
         it += 1
         if not loop.iterate(solver):
             break
-    loop.state.info = {"benders_iterations": it, "unproven_cuts": loop.unproven}
+    loop.state.info = {"benders_iterations": it, "unproven_cuts": loop.cuts.unproven}
     return loop.state
 
 
 class _Benders:
-    """The loop's state: the incumbent, the cuts seen and how many are unproven."""
+    """The loop's state: the incumbent and the cuts (how many are unproven)."""
 
     def __init__(self, ctx: Context, mdl: Model, incumbent: list[list[int]] | None) -> None:
         self.ctx = ctx
         self.mdl = mdl
         obj = None if incumbent is None else scaled_objective(ctx.sc, incumbent, ctx.objective)
         self.state = State(incumbent, obj)
-        self.unproven = 0
-        self.seen: set[frozenset[tuple[str, int]]] = set()
+        self.cuts = NoGoodCuts(ctx.packer, ctx.budget, MARGIN, functools.partial(add_cut, mdl))
 
     def counts(self, kit: list[int]) -> dict[str, int]:
         ids = self.ctx.ids
         return dict(self.ctx.instance.kit_parts([ids[i] for i in kit]))
-
-    def cut(self, counts: dict[str, int], proven: bool) -> bool:
-        """Cut ``counts`` (shrunk to a minimal non-fitting multiset when ``proven``) unless
-        the same cut was added before."""
-        packer = self.ctx.packer
-        mini = (
-            packer.minimal_nofit(counts, self.ctx.budget.share(1 / 4, MARGIN)) if proven else counts
-        )
-        key = frozenset(mini.items())
-        if key in self.seen:
-            return False
-        self.seen.add(key)
-        add_cut(self.mdl, mini)
-        return True
-
-    def seed_cuts(self) -> None:
-        """Every pair of (distinct part multisets of) tasks that does not fit together."""
-        instance, packer = self.ctx.instance, self.ctx.packer
-        seed_until = self.ctx.budget.share(0.1, MARGIN)
-        reps = list({frozenset(instance.kit_parts([t]).items()): t for t in self.ctx.ids}.values())
-        for a, b in itertools.combinations_with_replacement(range(len(reps)), 2):
-            if time.perf_counter() > seed_until:
-                break
-            counts = dict(instance.kit_parts([reps[a], reps[b]]))
-            if packer.counts(counts)[0] is False:
-                self.cut(counts, True)
 
     def verdicts(self, kits: list[list[int]]) -> list[bool | None]:
         """Does each kit fit (None: unknown within the packing time limit)?"""
@@ -122,13 +94,13 @@ class _Benders:
         state.status_name = solver.status_name(st)
         if st == cp_model.INFEASIBLE:
             # the master holds C <= U, so without an unproven cut the incumbent is optimal
-            state.infeasible = state.kits is None and self.unproven == 0
-            if state.kits is not None and self.unproven == 0:
+            state.infeasible = state.kits is None and self.cuts.unproven == 0
+            if state.kits is not None and self.cuts.unproven == 0:
                 state.proven, state.lower = True, state.obj
             return False
         if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
             return False
-        if self.unproven == 0:  # after an unproven cut the master bound is no proof
+        if self.cuts.unproven == 0:  # after an unproven cut the master bound is no proof
             bound = math.ceil(solver.best_objective_bound - 1e-6)
             state.lower = bound if state.lower is None else max(state.lower, bound)
         kits = extract_kits(mdl, solver)
@@ -137,7 +109,7 @@ class _Benders:
             obj = round(solver.objective_value)
             if state.obj is None or obj <= state.obj:
                 state.kits, state.obj = kits, obj
-            state.proven = (st == cp_model.OPTIMAL and self.unproven == 0) or (
+            state.proven = (st == cp_model.OPTIMAL and self.cuts.unproven == 0) or (
                 state.lower is not None and state.lower >= state.obj
             )
             if state.proven:
@@ -145,12 +117,7 @@ class _Benders:
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.ctx.left() <= 0.01:  # no time for another master solve: no cuts, no repair
             return False
-        new = 0
-        for kit, ok in zip(kits, verdicts, strict=True):
-            if ok is not True:
-                added = self.cut(self.counts(kit), ok is False)
-                new += added
-                self.unproven += int(added and ok is None)
+        new = self.cuts.cut_kits(map(self.counts, kits), verdicts)
         if self.ctx.left() > 0:
             self.repair(kits)
         if state.obj is not None and state.lower is not None and state.lower >= state.obj:

@@ -66,7 +66,6 @@ from ...errors import UsageError
 from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ...methods import REGISTRY, MethodOutput, Status
-from ...methods import gap as relative_gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget, check_model_memory, too_slow_to_build
@@ -77,6 +76,7 @@ from ..common import (
     closed_form_plan,
     kit_order,
     pack_time_limit,
+    plan_extra,
     quick_plan,
     reduced_edges,
 )
@@ -514,15 +514,7 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
         return report.finish(None, Status.UNKNOWN, bound_s)
-    extra.update(
-        gap=relative_gap(real.makespan, bound_s) or 0.0,
-        makespan=real.makespan,
-        human_idle=real.human_idle,
-        n_kits=len(plan.kits),
-        bound_closed_form=closed,
-        bound_model=lower_s,
-        scaled_optimal=state.proven,
-    )
+    extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
     return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
 
 

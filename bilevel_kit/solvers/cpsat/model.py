@@ -54,7 +54,7 @@ from typing import Any
 from ...bounds import johnson_lines, min_kits
 from ...instance import Instance
 from ...layout import cpsat_packing as packing
-from ..common import reduced_edges
+from ..common import kit_positions, reduced_edges, relabel_chains
 from .context import Model
 from .scaling import Scaled, scaled_timeline
 
@@ -97,15 +97,9 @@ def build(
 
 def _assignment(m: Any, instance: Instance, K: int) -> tuple[list[dict[int, Any]], list[Any]]:
     """``x[i][k]`` and the kit ``p_i`` of every task, with precedence on the reduced graph."""
-    ids = [t.id for t in instance.tasks]
-    n = len(ids)
+    n = instance.n_tasks
     idx = instance.index
-    # kit positions; p_i <= n - |descendants(i)| since every earlier kit needs a task
-    n_desc = [0] * n
-    for t in ids:
-        for a in instance.ancestors[t]:
-            n_desc[idx[a]] += 1
-    ub = [min(K, n - n_desc[i]) for i in range(n)]
+    ub = kit_positions(instance, K)  # p_i <= n - |descendants(i)|: every later kit needs a task
     # x[i][k] = [p_i == k] and the order encoding y[i][k] = [p_i <= k]; precedence as the
     # implications y[b][k] => y[a][k] (stronger propagation and LP than p_a <= p_b alone)
     x = [{k: m.new_bool_var(f"x{i}_{k}") for k in range(ub[i])} for i in range(n)]
@@ -290,13 +284,7 @@ def add_lex_leq(m: Any, u: Sequence[Any], v: Sequence[Any]) -> None:
 def canonical(kits: list[list[int]], groups: list[list[list[int]]]) -> list[list[int]]:
     """Relabel interchangeable chains so that their kit vectors are in lexicographic order
     (the symmetry-breaking constraints of the model); makespan and kit contents unchanged."""
-    pos = {i: k for k, kit in enumerate(kits) for i in kit}
-    new = dict(pos)
-    for group in groups:
-        vectors = sorted(tuple(pos[i] for i in chain) for chain in group)
-        for chain, vec in zip(group, vectors, strict=True):
-            for i, k in zip(chain, vec, strict=True):
-                new[i] = k
+    new = relabel_chains({i: k for k, kit in enumerate(kits) for i in kit}, groups)
     out: list[list[int]] = [[] for _ in kits]
     for i in sorted(new):
         out[new[i]].append(i)

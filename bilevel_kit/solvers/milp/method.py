@@ -46,8 +46,7 @@ needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py
 
 from __future__ import annotations
 
-import itertools
-import time
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -55,11 +54,18 @@ from typing import Any, Literal
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status
-from ...methods import gap as relative_gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget, check_model_memory, too_slow_to_build
-from ..common import Packer, assignment_cells, closed_form_plan, pack_time_limit, quick_plan
+from ..common import (
+    NoGoodCuts,
+    Packer,
+    assignment_cells,
+    closed_form_plan,
+    pack_time_limit,
+    plan_extra,
+    quick_plan,
+)
 from .model import (
     Master,
     add_cut,
@@ -105,17 +111,6 @@ class MilpOptions:
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
 
 
-def milp(
-    instance: Instance,
-    options: MilpOptions,
-    *,
-    seed: int = 0,
-    time_limit: float | None = None,
-) -> MethodOutput:
-    """Registered method ``milp`` (module docstring)."""
-    return run(instance, options, seed=seed, time_limit=time_limit)
-
-
 def solve(
     instance: Instance,
     *,
@@ -139,10 +134,11 @@ def run(
     options: MilpOptions,
     *,
     seed: int = 0,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = None,
     solver_options: Mapping[str, Any] | None = None,
 ) -> MethodOutput:
-    """Minimise makespan (or human idle) over all segmentations and orders with a MILP.
+    """Minimise makespan (or human idle) over all segmentations and orders with a MILP; the
+    registered method ``milp`` (no time limit: the budget's default, 60 s).
 
     Returns the result of the module docstring: ``bound`` is a proven lower bound on the
     makespan in seconds, every kit has a topological human order and a non-overlapping layout
@@ -223,12 +219,12 @@ def run(
     extra["build_time_s"] = budget.elapsed()
     loop = _Benders(instance, master, packer, budget, options, inc, inc_obj)
     if options.tray == "auto":
-        loop.seed_cuts()
+        loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
     extra.update(
         iterations=loop.iterations,
         cuts=master.n_cuts,
-        unproven_cuts=loop.unproven,
+        unproven_cuts=loop.cuts.unproven,
         termination=None if info is None else info.termination,
         master_time_s=None if info is None else info.wall_time_s,
     )
@@ -241,6 +237,10 @@ def run(
         return finish(None, Status.UNKNOWN, closed)
     bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
     return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+
+
+#: The registered method ``milp`` (module docstring) is :func:`run`.
+milp = run
 
 
 def _with_layouts(
@@ -281,14 +281,7 @@ def _makespan_bound(
             bound = max(closed, lower + instance.kit_overhead_human * min_kits(instance))
     if bound > real.makespan:  # only float noise of the solver can do this
         bound = real.makespan
-    extra.update(
-        gap=relative_gap(real.makespan, bound) or 0.0,
-        makespan=real.makespan,
-        human_idle=real.human_idle,
-        n_kits=len(plan.kits),
-        bound_closed_form=closed,
-        bound_model=lower,
-    )
+    extra.update(plan_extra(plan, real, bound, closed, lower))
     return bound
 
 
@@ -313,8 +306,7 @@ class _Benders:
         self.options = options
         self.inc = inc
         self.inc_obj = inc_obj
-        self.seen: set[frozenset[tuple[str, int]]] = set()
-        self.unproven = 0
+        self.cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
         self.lower: float | None = None
         self.proven = False
         self.infeasible = False
@@ -322,34 +314,6 @@ class _Benders:
 
     def left(self) -> float:
         return self.budget.remaining(MARGIN)
-
-    def cut(self, counts: Mapping[str, int], proven: bool) -> bool:
-        """Cut ``counts`` (shrunk to a minimal non-fitting multiset when ``proven``) unless
-        the same cut was added before."""
-        mini = (
-            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, MARGIN))
-            if proven
-            else dict(counts)
-        )
-        key = frozenset(mini.items())
-        if key in self.seen:
-            return False
-        self.seen.add(key)
-        add_cut(self.master, mini)
-        return True
-
-    def seed_cuts(self) -> None:
-        """Every pair of tasks (distinct part multisets) that does not fit together."""
-        instance = self.instance
-        seed_until = self.budget.share(0.1, MARGIN)
-        ids = [t.id for t in instance.tasks]
-        reps = list({frozenset(instance.kit_parts([t]).items()): t for t in ids}.values())
-        for a, b in itertools.combinations_with_replacement(reps, 2):
-            if time.perf_counter() > seed_until:
-                break
-            counts = instance.kit_parts([a, b])
-            if self.packer.counts(counts)[0] is False:
-                self.cut(counts, True)
 
     def run(
         self, opt: Any, seed: int, solver_options: Mapping[str, Any] | None
@@ -381,13 +345,13 @@ class _Benders:
         instance, objective = self.instance, self.options.objective
         if info.infeasible:
             # the master holds C <= U: without unproven cuts the incumbent is optimal
-            if self.unproven == 0:
+            if self.cuts.unproven == 0:
                 if self.inc is not None:
                     self.proven, self.lower = True, self.inc_obj
                 else:
                     self.infeasible = True
             return False
-        if self.unproven == 0 and info.bound is not None:
+        if self.cuts.unproven == 0 and info.bound is not None:
             self.lower = info.bound if self.lower is None else max(self.lower, info.bound)
         if not info.has_solution:
             return False
@@ -397,16 +361,11 @@ class _Benders:
             obj = objective_value(instance, kits, objective)
             if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
                 self.inc, self.inc_obj = kits, obj
-            self.proven = info.optimal and self.unproven == 0
+            self.proven = info.optimal and self.cuts.unproven == 0
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
             return False
-        new = 0
-        for kit, ok in zip(kits, verdicts, strict=True):
-            if ok is not True:
-                added = self.cut(instance.kit_parts(kit), ok is False)
-                new += added
-                self.unproven += int(added and ok is None)
+        new = self.cuts.cut_kits(map(instance.kit_parts, kits), verdicts)
         if self.left() > 0:
             self.repair(kits)
         inc_obj, lower = self.inc_obj, self.lower

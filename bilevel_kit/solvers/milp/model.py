@@ -73,7 +73,7 @@ from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
 from ...layout import cpsat_packing as packing
 from ...plan import Kit, Plan, evaluate
-from ..common import chain_groups, kit_order, reduced_edges
+from ..common import chain_groups, kit_order, kit_positions, reduced_edges, relabel_chains
 from .solver import TOL
 
 human_order = kit_order  # the human's order inside a kit (one definition: common.py)
@@ -120,20 +120,14 @@ class _Data:
     @classmethod
     def of(cls, instance: Instance, K: int) -> _Data:
         ids = [t.id for t in instance.tasks]
-        n = len(ids)
-        idx = instance.index
-        n_desc = [0] * n
-        for t in ids:
-            for a in instance.ancestors[t]:
-                n_desc[idx[a]] += 1
-        ub = [min(K, n - n_desc[i]) for i in range(n)]
-        keys = [(i, k) for i in range(n) for k in range(ub[i])]
+        ub = kit_positions(instance, K)
+        keys = [(i, k) for i in range(len(ids)) for k in range(ub[i])]
         at_k: list[list[int]] = [[] for _ in range(K)]
         for i, k in keys:
             at_k[k].append(i)
         return cls(
             ids=ids,
-            idx=idx,
+            idx=instance.index,
             r=[instance.robot_time(t) for t in ids],
             h=[instance.human_time(t) for t in ids],
             d=instance.delivery_time,
@@ -358,14 +352,7 @@ def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]])
 def canonical_kits(instance: Instance, kits: Sequence[Sequence[str]]) -> list[list[str]]:
     """Relabel interchangeable chains so that their kit vectors are in lexicographic order
     (what the model's symmetry constraints require); kit contents stay the same multisets."""
-    pos = {t: k for k, kit in enumerate(kits) for t in kit}
-    new = dict(pos)
-    for group in chain_groups(instance):
-        vectors = sorted(tuple(pos[t] for t in chain) for chain in group)
-        order = sorted(group, key=lambda c: [instance.index[t] for t in c])
-        for chain, vec in zip(order, vectors, strict=True):
-            for t, k in zip(chain, vec, strict=True):
-                new[t] = k
+    new = relabel_chains({t: k for k, kit in enumerate(kits) for t in kit}, chain_groups(instance))
     out: list[list[str]] = [[] for _ in kits]
     for t in topological_order(instance):
         out[new[t]].append(t)
