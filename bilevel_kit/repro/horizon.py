@@ -43,10 +43,17 @@ from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import Record, is_failed, run_cells_counted, write_json
 from ..experiments.compare import CompareCell, compare_cell
-from ..experiments.tables import markdown_lines, write_csv
+from ..experiments.tables import write_csv
 from ..sim import POLICIES, TimingModel
 from .common import DEFAULT_INSTANCE, FIG6_UNITS, OPT, load_instance, participant_seeds
 from .fig6 import Fig6Cell, calibrated_timing, fig6_cell
+from .horizon_tables import (
+    horizon_summary,
+    mean_gap_by_n,
+    planning_markdown,
+    typed_rows,
+    window_markdown,
+)
 from .stats import paired_p
 
 GREEDY, EXACT, ROLLING = "greedy-ce", "cpsat", "cpsat-rolling"
@@ -239,39 +246,6 @@ def planning_rows(
     return rows
 
 
-def horizon_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per instance: the gap at the shortest N, the best N (the shortest with the least gap),
-    the share of the gap it closes, the gap at the longest N and the plan times there."""
-    out = []
-    for inst in dict.fromkeys(r["instance_file"] for r in rows):
-        rs = sorted(
-            (r for r in rows if r["instance_file"] == inst and r["gap_pct"] is not None),
-            key=lambda r: r["horizon"],
-        )
-        if not rs:
-            continue
-        first, last = rs[0], rs[-1]
-        best = min(rs, key=lambda r: (round(r["gap_pct"], 9), r["horizon"]))
-        g0 = first["gap_pct"]
-        out.append(
-            {
-                "instance": first["instance"],
-                "instance_file": inst,
-                "reference": first["reference"],
-                "n_first": first["horizon"],
-                "gap_first_pct": g0,
-                "best_n": best["horizon"],
-                "gap_best_pct": best["gap_pct"],
-                "closed_pct": 100.0 * (g0 - best["gap_pct"]) / g0 if g0 > 1e-9 else None,
-                "n_last": last["horizon"],
-                "gap_last_pct": last["gap_pct"],
-                "plan_time_best_s": best["plan_time_s"],
-                "plan_time_last_s": last["plan_time_s"],
-            }
-        )
-    return out
-
-
 # ---------------------------------------------------------------------------------------------
 # Part B: simulation
 # ---------------------------------------------------------------------------------------------
@@ -332,66 +306,14 @@ def window_rows(records: Sequence[Mapping[str, Any]], quick: bool) -> list[dict[
 # ---------------------------------------------------------------------------------------------
 
 
-def _pct(x: Any, nd: int = 1) -> str:
-    return "-" if x is None else f"{x:.{nd}f}"
-
-
 def format_horizon_markdown(
-    summary: Sequence[Mapping[str, Any]], window: Sequence[Mapping[str, Any]], head: str
+    rows: Sequence[Mapping[str, Any]], window: Sequence[Mapping[str, Any]], head: str
 ) -> str:
-    """The two tables of ``horizon.md``: per instance the gap at the shortest, the best and
-    the longest N; per delay cell and window, cpsat-rolling against Optimized."""
-    out = [head, ""]
-    out += markdown_lines(
-        [
-            "instance",
-            "reference",
-            "gap at N = 1 (%)",
-            "best N",
-            "gap there (%)",
-            "gap closed (%)",
-            "gap at N = 12 (%)",
-            "plan time at best N / N = 12 (s)",
-        ],
-        [
-            [
-                s["instance"],
-                s["reference"],
-                _pct(s["gap_first_pct"]),
-                str(s["best_n"]),
-                _pct(s["gap_best_pct"]),
-                _pct(s["closed_pct"], 0),
-                _pct(s["gap_last_pct"]),
-                f"{s['plan_time_best_s']:.2f} / {s['plan_time_last_s']:.2f}",
-            ]
-            for s in summary
-        ],
-    )
+    """``horizon.md``: ``head``, Part A's tables and, with Part B, its table."""
+    out = [head, "", planning_markdown(rows)]
     if window:
         out += ["", "cpsat-rolling against Optimized in the same runs (positive: better):", ""]
-        out += markdown_lines(
-            [
-                "delay",
-                "policy (window)",
-                "total time (s)",
-                "vs Optimized (%)",
-                "idle (s)",
-                "kits",
-                "s per decision",
-            ],
-            [
-                [
-                    r["label"],
-                    r["policy"] + (f" ({r['window']})" if r["window"] is not None else ""),
-                    f"{r['total_mean']:.0f}",
-                    _pct(r["total_pct_over_optimized"]),
-                    f"{r['idle_mean']:.0f}",
-                    f"{r['kits_mean']:.1f}",
-                    f"{r['plan_s_per_decision']:.3f}",
-                ]
-                for r in window
-            ],
-        )
+        out.append(window_markdown(window))
     return "\n".join(out) + "\n"
 
 
@@ -414,6 +336,7 @@ def run_horizon(
     mats: Sequence[float] | None = None,
     mttfs: Sequence[float] | None = None,
     reps: int | None = None,
+    units: int = FIG6_UNITS,
     simulation: bool = True,
     timing: TimingModel | None = None,
     progress: bool | None = None,
@@ -421,11 +344,12 @@ def run_horizon(
     """The horizon study (module docstring); defaults: the full grid, or the quick one.
 
     ``instances``: Part A's instance files (default: the table, 2 and 5 units, and
-    ``instances/generated``). ``simulation=False`` skips Part B. ``timing``: Part B's timing
-    model (default: Figure 6's calibration). Cells are saved under ``out_dir/cells/`` (a rerun
-    computes only the missing ones). Writes ``horizon.csv``, ``horizon_window.csv`` (with
-    Part B), ``horizon.md``, ``horizon.png`` and ``horizon.json``; returns the summary with the
-    output paths under ``"files"`` and the cell counts (``computed``, ``reused``, ``failed``).
+    ``instances/generated``). ``simulation=False`` skips Part B; ``units``: its tables per run
+    (Figure 6's 10). ``timing``: Part B's timing model (default: Figure 6's calibration).
+    Cells are saved under ``out_dir/cells/`` (a rerun computes only the missing ones). Writes
+    ``horizon.csv``, ``horizon_window.csv`` (with Part B), ``horizon.md``, ``horizon.png`` and
+    ``horizon.json``; returns the summary with the output paths under ``"files"`` and the cell
+    counts (``computed``, ``reused``, ``failed``).
     """
     t0 = time.perf_counter()
     out = Path(out_dir)
@@ -470,7 +394,7 @@ def run_horizon(
         common: dict[str, Any] = {
             "instance": table,
             "seeds": tuple(participant_seeds(seed, reps)),
-            "units": FIG6_UNITS,
+            "units": units,
             "timing": asdict(timing),
         }
         delays: list[tuple[float | None, float | None]] = [(None, None)]
@@ -503,7 +427,7 @@ def run_horizon(
         "windows": list(windows) if simulation else [],
         "delay_cells": [[a, b] for a in mats for b in mttfs] if simulation else [],
         "reps": reps if simulation else 0,
-        "units": FIG6_UNITS if simulation else None,
+        "units": units if simulation else None,
         "timing": asdict(timing) if timing is not None else None,
         "calibration": cal,
         "cells": total,
@@ -512,7 +436,7 @@ def run_horizon(
         "failed": failed,
         "summary": summary,
     }
-    files = _write_outputs(out, rows, sim_rows, summary, quick, ref_tl, reps)
+    files = _write_outputs(out, rows, sim_rows, quick, ref_tl, (units, reps))
     result["wall_s"] = time.perf_counter() - t0
     result["files"] = {k: str(v) for k, v in {**files, "json": out / "horizon.json"}.items()}
     write_json(out / "horizon.json", result)
@@ -523,10 +447,9 @@ def _write_outputs(
     out: Path,
     rows: Sequence[Mapping[str, Any]],
     sim_rows: Sequence[Mapping[str, Any]],
-    summary: Sequence[Mapping[str, Any]],
     quick: bool,
     ref_tl: float,
-    reps: int,
+    runs: tuple[int, int],
 ) -> dict[str, Path]:
     """The CSVs, the Markdown summary and the figure."""
     from ..plots import save_figure
@@ -550,15 +473,16 @@ def _write_outputs(
         "'optimum' where proven, else its lower bound, so the gap is an upper bound); gap = "
         "(makespan - reference) / makespan."
         + (
-            f" Simulation: {FIG6_UNITS} tables per run, R = {reps} replications, one tray."
+            f" Simulation: {runs[0]} tables per run, R = {runs[1]} replications, one tray."
             if sim_rows
             else ""
         )
     )
-    atomic.write_text(out / "horizon.md", format_horizon_markdown(summary, sim_rows, head))
+    atomic.write_text(out / "horizon.md", format_horizon_markdown(rows, sim_rows, head))
     files["markdown"] = out / "horizon.md"
     if rows or sim_rows:
-        fig = plot_horizon(rows, sim_rows, quick=quick)
+        mean = mean_gap_by_n(rows) if len({r["instance_file"] for r in rows}) > 1 else None
+        fig = plot_horizon(rows, sim_rows, quick=quick, mean=mean)
         files["figure"] = save_figure(fig, out / "horizon.png")
     return files
 
@@ -571,8 +495,12 @@ __all__ = [
     "format_horizon_markdown",
     "horizon_cell",
     "horizon_summary",
+    "mean_gap_by_n",
     "planning_instances",
+    "planning_markdown",
     "planning_rows",
     "run_horizon",
+    "typed_rows",
+    "window_markdown",
     "window_rows",
 ]

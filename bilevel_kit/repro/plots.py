@@ -227,10 +227,15 @@ def _style_legend(ax: Axes, handles: list[Any], what: str, time_what: str) -> No
 
 
 @style.styled
-def plot_horizon_gap(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
+def plot_horizon_gap(
+    rows: Sequence[Mapping[str, Any]],
+    ax: Axes | None = None,
+    mean: Mapping[int, float] | None = None,
+) -> Axes:
     """Part A of the horizon study: the gap (%) of greedy-ce's makespan to the exact reference
     against the horizon N, one line per instance (hollow markers: the reference is CP-SAT's
-    lower bound, not a proven optimum), and the plan's wall time (dotted) on a second axis."""
+    lower bound, not a proven optimum), ``mean`` (N -> mean gap) as a thick black line, and
+    the plan's wall time (dotted) on a second axis."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
@@ -264,6 +269,9 @@ def plot_horizon_gap(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) 
             gid=f"time:{name}",
         )
         handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
+    if mean:
+        ax.plot(list(mean), list(mean.values()), color="black", lw=2.4, gid="gap:mean")
+        handles.append(Line2D([], [], color="black", lw=2.4, label="mean over instances"))
     ax.set_xlabel("greedy horizon N (tasks per window)")
     ax.set_ylabel("gap to exact reference (%)")
     ax.set_title("greedy-ce: makespan gap against the horizon N")
@@ -330,13 +338,15 @@ def plot_horizon(
     window_rows: Sequence[Mapping[str, Any]] = (),
     *,
     quick: bool = False,
+    mean: Mapping[int, float] | None = None,
 ) -> Figure:
-    """The horizon study's figure: the gap against N and, with Part B, the window panel."""
+    """The horizon study's figure: the gap against N (``mean``: the mean over the instances)
+    and, with Part B, the window panel."""
     import matplotlib.pyplot as plt
 
     n = 1 + bool(window_rows)
     fig, axes = plt.subplots(1, n, figsize=(6.6 * n, 4.6), squeeze=False, layout="constrained")
-    plot_horizon_gap(rows, ax=axes[0][0])
+    plot_horizon_gap(rows, ax=axes[0][0], mean=mean)
     if window_rows:
         plot_horizon_window(window_rows, ax=axes[0][1])
     if quick:
