@@ -1,4 +1,5 @@
-"""``bilevel-kit repro``: the paper's user study (Fig. 5) or Figure 6 (see paper_repro/)."""
+"""``bilevel-kit repro``: the paper's user study (Fig. 5), Figure 6, or the horizon study
+beyond the paper (see paper_repro/)."""
 
 from __future__ import annotations
 
@@ -11,25 +12,29 @@ from .common import (
     add_seed,
     add_sweep_options,
     add_time_limit,
+    positive,
     positive_int,
     sweep_exit,
     sweep_session,
 )
 
-HELP = "reproduce the paper's user study (Fig. 5) or Figure 6"
+HELP = "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon study"
 DESCRIPTION = (
     "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}, fitted "
     "on a calibration cohort to 3 of the paper's numbers, then 200 fresh studies of 18 give "
     "every other paper number a median and 95% prediction interval. fig6: MAT x MTTF grid of "
     "the shop-floor simulation (10 tables per run), percent improvement heatmaps with ANOVA + "
     "Tukey marks; saved per cell (resumable). --jobs/--scheduler run the cells (fig6 grid "
-    "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. See "
+    "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. "
+    "horizon: greedy-ce at horizon N = 1..12 against the exact cpsat optimum (or its bound) on "
+    "the table, 2 and 5 table units and instances/generated, and cpsat-rolling's window against "
+    "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s). See "
     "paper_repro/README.md."
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("experiment", choices=("user-study", "fig6"))
+    p.add_argument("experiment", choices=("user-study", "fig6", "horizon"))
     p.add_argument(
         "--quick",
         action="store_true",
@@ -44,19 +49,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--reps",
         type=positive_int,
         metavar="R",
-        help="fig6: replications per cell (default 30; 3 with --quick)",
+        help="fig6: replications per cell (default 30; 3 with --quick); horizon: replications "
+        "per simulation cell (default 3; 1 with --quick)",
     )
     p.add_argument(
         "--mats",
         type=numbers,
         metavar="30,60",
-        help="fig6: the MAT values of the grid (default 30,60,90,120; 30,120 with --quick)",
+        help="fig6: the MAT values of the grid (default 30,60,90,120; 30,120 with --quick); "
+        "horizon: of the delay cells (default 60,90; 60 with --quick)",
     )
     p.add_argument(
         "--mttfs",
         type=numbers,
         metavar="60,90",
-        help="fig6: the MTTF values of the grid (default 30,60,90,120; 60 with --quick)",
+        help="fig6: the MTTF values of the grid (default 30,60,90,120; 60 with --quick); "
+        "horizon: of the delay cells (default 60)",
     )
     add_delivery_time(p, "fig6: delivery time (default: the instance's)")
     p.add_argument(
@@ -70,7 +78,53 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=1.0,
         flag="--cpsat-time-limit",
     )
+    g = p.add_argument_group("horizon")
+    g.add_argument(
+        "--horizons",
+        type=integers,
+        metavar="1,2,5",
+        help="greedy horizons N (default 1..12; 1,2,4,6,8,12 with --quick)",
+    )
+    g.add_argument(
+        "--windows",
+        type=integers,
+        metavar="4,12",
+        help="cpsat-rolling windows, tasks (default 4,8,...,24; 4,12,24 with --quick)",
+    )
+    g.add_argument(
+        "--instances",
+        nargs="+",
+        metavar="FILE",
+        help="planning instances (default: the table, 2 and 5 table units, "
+        "instances/generated; the table and 2 units with --quick)",
+    )
+    g.add_argument(
+        "--reference-time-limit",
+        type=positive,
+        metavar="S",
+        help="CP-SAT time limit of the exact reference per instance (default 60 s; 20 s with "
+        "--quick)",
+    )
+    g.add_argument(
+        "--no-simulation", action="store_true", help="planning only (skip the window study)"
+    )
     add_sweep_options(p)
+
+
+def integers(text: str) -> tuple[int, ...]:
+    """``1,2,5``: one or more integers >= 1."""
+    values = []
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        try:
+            v = int(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected integers, got {item!r}") from None
+        if v < 1:
+            raise argparse.ArgumentTypeError(f"expected integers >= 1, got {item!r}")
+        values.append(v)
+    if not values:
+        raise argparse.ArgumentTypeError("expected at least one integer")
+    return tuple(values)
 
 
 def numbers(text: str) -> tuple[float, ...]:
@@ -100,13 +154,27 @@ def _run(args: argparse.Namespace) -> int:
     from .. import repro
     from ..paths import check_outputs
 
-    default = "out/repro/user_study" if args.experiment == "user-study" else "out/repro/fig6"
+    default = f"out/repro/{args.experiment.replace('-', '_')}"
     check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
+    out = args.out or default
     if args.experiment == "user-study":
-        out = args.out or default
         res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
+    elif args.experiment == "horizon":
+        res = repro.run_horizon(
+            out,
+            quick=args.quick,
+            jobs=args.jobs,
+            seed=args.seed,
+            horizons=args.horizons,
+            instances=args.instances,
+            reference_time_limit=args.reference_time_limit,
+            windows=args.windows,
+            mats=args.mats,
+            mttfs=args.mttfs,
+            reps=args.reps,
+            simulation=not args.no_simulation,
+        )
     else:
-        out = args.out or default
         policies = tuple(repro.CONDITIONS)
         options = None
         if args.with_cpsat:

@@ -1,19 +1,20 @@
 """Reproduction of the paper's user study (Section V-A, Fig. 5 top) and Figure 6 (Section V-B).
 
-The two entry points the CLI (``bilevel-kit repro user-study|fig6 [--quick]``) calls::
+The entry points the CLI (``bilevel-kit repro user-study|fig6|horizon [--quick]``) calls::
 
     run_user_study(out_dir="out/repro/user_study", quick=False, seed=0, jobs=1) -> dict
     run_fig6(out_dir="out/repro/fig6", quick=False, reps=None, jobs=1,
              delivery_time=None, seed=0) -> dict
+    run_horizon(out_dir="out/repro/horizon", quick=False, jobs=1, seed=0) -> dict
 
-Both take further keyword-only options (see their docstrings), write their results atomically
+All take further keyword-only options (see their docstrings), write their results atomically
 under ``out_dir`` and return a JSON-serialisable summary with the output paths under
-``"files"``. Modules: :mod:`.user_study`, :mod:`.fig6`, :mod:`.calibration` (the timing fit),
-:mod:`.stats` (ANOVA, Tukey HSD, t-tests), :mod:`.plots` (figures), :mod:`.common` (the paper's
-numbers). ``paper_repro/README.md`` documents the choices and the results
-(docs/reproduction.md).
+``"files"``. Modules: :mod:`.user_study`, :mod:`.fig6`, :mod:`.horizon` (beyond the paper:
+what the greedy horizon costs), :mod:`.calibration` (the timing fit), :mod:`.stats` (ANOVA,
+Tukey HSD, t-tests), :mod:`.plots` (figures), :mod:`.common` (the paper's numbers).
+``paper_repro/README.md`` documents the choices and the results (docs/reproduction.md).
 
-Choices that apply to both (why, in short):
+Choices that apply to the user study and Figure 6 (why, in short):
 
 * **Human idle time.** The paper's idle time is the time the participant was *not actively
   assembling*, so taking the parts off the tray counts as idle. The simulation's
@@ -72,8 +73,17 @@ from .common import (
     paper_idle,
     participant_seeds,
 )
-from .fig6 import Fig6Cell, comparisons, fig6_cell, format_fig6_markdown, run_fig6, summarize_cell
-from .plots import plot_fig6, plot_fig6_panel, plot_user_study
+from .fig6 import (
+    Fig6Cell,
+    calibrated_timing,
+    comparisons,
+    fig6_cell,
+    format_fig6_markdown,
+    run_fig6,
+    summarize_cell,
+)
+from .horizon import horizon_cell, run_horizon
+from .plots import plot_fig6, plot_fig6_panel, plot_horizon, plot_user_study
 from .stats import anova_rm, stars, tukey_pairs
 from .user_study import (
     format_study_markdown,
@@ -131,12 +141,14 @@ __all__ = [
     "TimingModel",
     "anova_rm",
     "calibrate",
+    "calibrated_timing",
     "comparisons",
     "condition_means",
     "draw_cohort",
     "fig6_cell",
     "format_fig6_markdown",
     "format_study_markdown",
+    "horizon_cell",
     "inside_count",
     "load_instance",
     "paper_idle",
@@ -144,10 +156,12 @@ __all__ = [
     "participant_seeds",
     "plot_fig6",
     "plot_fig6_panel",
+    "plot_horizon",
     "plot_user_study",
     "prediction_table",
     "run_cells_parallel",
     "run_fig6",
+    "run_horizon",
     "run_user_study",
     "stars",
     "study_params",

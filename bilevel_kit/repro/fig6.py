@@ -388,6 +388,24 @@ def _write_fig6_outputs(
     return files
 
 
+def calibrated_timing(
+    inst: Instance, quick: bool, trays: int | str | None = None, calibration_seed: int = 0
+) -> tuple[TimingModel, dict[str, Any]]:
+    """Figure 6's timing: step 1 of the user study's protocol (the co-located study, d = 0)
+    fits the robot's speed and ``o_H`` on the calibration cohort (2 studies and a coarser grid
+    when ``quick``); one participant per table with the paper's total SD. Returns the timing
+    and the calibration's record."""
+    cal = calibrate(
+        inst,
+        draw_cohort(calibration_seed, 2 if quick else CALIBRATION_STUDIES, PAPER_N, CALIBRATION),
+        trays=trays,
+        delivery_time=STUDY_DELIVERY,
+        f_target=None,
+        grid=3 if quick else 5,
+    )
+    return replace(TimingModel(), **cal["values"]), cal
+
+
 def run_fig6(
     out_dir: str | Path = "out/repro/fig6",
     quick: bool = False,
@@ -438,19 +456,7 @@ def run_fig6(
     _check_fig6(inst, policies, jobs, policy_options or {})
     cal: dict[str, Any] | None = None
     if timing is None:
-        # step 1 of the user study's protocol (the co-located study, d = 0): the robot's speed
-        # and o_H; Figure 6 samples one participant per table with the paper's total SD
-        cal = calibrate(
-            inst,
-            draw_cohort(
-                calibration_seed, 2 if quick else CALIBRATION_STUDIES, PAPER_N, CALIBRATION
-            ),
-            trays=trays,
-            delivery_time=STUDY_DELIVERY,
-            f_target=None,
-            grid=3 if quick else 5,
-        )
-        timing = replace(TimingModel(), **cal["values"])
+        timing, cal = calibrated_timing(inst, quick, trays, calibration_seed)
     common: dict[str, Any] = {
         "instance": path,
         "seeds": tuple(participant_seeds(seed, reps)),

@@ -1,5 +1,5 @@
-"""Figures of the reproductions: the analogue of Fig. 5 (top) and Figure 6's heatmaps
-(matplotlib, imported lazily)."""
+"""Figures of the reproductions: the analogue of Fig. 5 (top), Figure 6's heatmaps and the
+horizon study (matplotlib, imported lazily)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import style
 from .common import LABELS, METRIC_LABELS, OPT, SINGLE, WHOLE
 
 if TYPE_CHECKING:
@@ -193,4 +194,161 @@ def plot_fig6(
         fontsize=8,
         gid="fig6:note",
     )
+    return fig
+
+
+def _time_axis(ax: Axes, label: str, values: Sequence[float]) -> Axes:
+    """A second y axis for wall times: log scale when they span a decade or more."""
+    twin = ax.twinx()
+    pos = [v for v in values if v and v > 0]
+    if pos and max(pos) / min(pos) >= 10.0:
+        twin.set_yscale("log")
+        twin.set_ylim(min(pos) / 2.0, max(pos) * 2.0)
+    twin.set_ylabel(label)
+    return twin
+
+
+def _style_legend(ax: Axes, handles: list[Any], what: str, time_what: str) -> None:
+    """The series' colours plus what a solid and a dotted line mean."""
+    from matplotlib.lines import Line2D
+
+    handles = [
+        *handles,
+        Line2D([], [], color="black", linestyle="-", marker="o", label=what),
+        Line2D([], [], color="black", linestyle=":", label=time_what),
+    ]
+    ax.legend(
+        handles=handles,
+        fontsize=style.SMALL_SIZE,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.14),
+        ncols=3,
+    )
+
+
+@style.styled
+def plot_horizon_gap(
+    rows: Sequence[Mapping[str, Any]],
+    ax: Axes | None = None,
+    mean: Mapping[int, float] | None = None,
+) -> Axes:
+    """Part A of the horizon study: the gap (%) of greedy-ce's makespan to the exact reference
+    against the horizon N, one line per instance (hollow markers: the reference is CP-SAT's
+    lower bound, not a proven optimum), ``mean`` (N -> mean gap) as a thick black line, and
+    the plan's wall time (dotted) on a second axis."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    names = list(dict.fromkeys(str(r["instance_file"]) for r in rows))
+    swatches = style.categorical(len(names))
+    twin = _time_axis(ax, "plan time (s), dotted", [r["plan_time_s"] for r in rows])
+    handles = []
+    for name, sw in zip(names, swatches, strict=True):
+        rs = sorted((r for r in rows if r["instance_file"] == name), key=lambda r: r["horizon"])
+        pts = [(r["horizon"], r["gap_pct"]) for r in rs if r["gap_pct"] is not None]
+        bound = any(r["reference"] == "bound" for r in rs)
+        label = f"{rs[0]['instance']}" + (" (vs bound)" if bound else "")
+        if pts:
+            x, y = zip(*pts, strict=True)
+            ax.plot(
+                x,
+                y,
+                marker="o",
+                color=sw.color,
+                markerfacecolor="white" if bound else sw.color,
+                gid=f"gap:{name}",
+            )
+        twin.plot(
+            [r["horizon"] for r in rs],
+            [r["plan_time_s"] for r in rs],
+            linestyle=":",
+            color=sw.color,
+            linewidth=1.0,
+            gid=f"time:{name}",
+        )
+        handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
+    if mean:
+        ax.plot(list(mean), list(mean.values()), color="black", lw=2.4, gid="gap:mean")
+        handles.append(Line2D([], [], color="black", lw=2.4, label="mean over instances"))
+    ax.set_xlabel("greedy horizon N (tasks per window)")
+    ax.set_ylabel("gap to exact reference (%)")
+    ax.set_title("greedy-ce: makespan gap against the horizon N")
+    ax.grid(alpha=0.3)
+    ax.set_xticks(sorted({int(r["horizon"]) for r in rows}))
+    _style_legend(ax, handles, "gap (solid)", "plan time (dotted)")
+    return ax
+
+
+@style.styled
+def plot_horizon_window(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
+    """Part B of the horizon study: cpsat-rolling's improvement in total time over Optimized
+    in the same runs (%, positive: faster) against its window, one line per delay cell, and
+    the planning time per decision (dotted; Optimized's as a dash-dot level) on a second
+    axis."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    labels = list(dict.fromkeys(str(r["label"]) for r in rows))
+    swatches = style.categorical(len(labels))
+    twin = _time_axis(
+        ax, "planning time per decision (s), dotted", [r["plan_s_per_decision"] for r in rows]
+    )
+    handles = []
+    for label, sw in zip(labels, swatches, strict=True):
+        rs = [r for r in rows if r["label"] == label]
+        roll = sorted((r for r in rs if r["window"] is not None), key=lambda r: r["window"])
+        ax.plot(
+            [r["window"] for r in roll],
+            [r["total_pct_over_optimized"] for r in roll],
+            marker="o",
+            color=sw.color,
+            gid=f"window:{label}",
+        )
+        twin.plot(
+            [r["window"] for r in roll],
+            [r["plan_s_per_decision"] for r in roll],
+            linestyle=":",
+            color=sw.color,
+            linewidth=1.0,
+        )
+        for r in rs:
+            if r["window"] is None:
+                twin.axhline(r["plan_s_per_decision"], color=sw.color, linestyle="-.", lw=0.8)
+        handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
+    ax.axhline(0.0, color="black", linewidth=0.8)
+    ax.set_xlabel("cpsat-rolling window (tasks)")
+    ax.set_ylabel("total time, improvement over Optimized (%)")
+    ax.set_title("cpsat-rolling against Optimized (N = 5) in the same runs")
+    ax.grid(alpha=0.3)
+    ax.set_xticks(sorted({int(r["window"]) for r in rows if r["window"] is not None}))
+    handles.append(
+        Line2D([], [], color="black", linestyle="-.", lw=0.8, label="Optimized, s per decision")
+    )
+    _style_legend(ax, handles, "improvement (solid)", "s per decision (dotted)")
+    return ax
+
+
+@style.styled
+def plot_horizon(
+    rows: Sequence[Mapping[str, Any]],
+    window_rows: Sequence[Mapping[str, Any]] = (),
+    *,
+    quick: bool = False,
+    mean: Mapping[int, float] | None = None,
+) -> Figure:
+    """The horizon study's figure: the gap against N (``mean``: the mean over the instances)
+    and, with Part B, the window panel."""
+    import matplotlib.pyplot as plt
+
+    n = 1 + bool(window_rows)
+    fig, axes = plt.subplots(1, n, figsize=(6.6 * n, 4.6), squeeze=False, layout="constrained")
+    plot_horizon_gap(rows, ax=axes[0][0], mean=mean)
+    if window_rows:
+        plot_horizon_window(window_rows, ax=axes[0][1])
+    if quick:
+        fig.suptitle("QUICK run: a reduced grid (fewer instances, N, windows, replications)")
     return fig

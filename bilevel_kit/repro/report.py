@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..experiments.tables import markdown_lines
+from .horizon_tables import planning_markdown, typed_rows, window_markdown
 
 Row = Mapping[str, Any]
 
@@ -160,6 +161,16 @@ def verdicts_markdown(rows: Sequence[Row]) -> str:
     )
 
 
+def horizon_markdown(rows: Sequence[Row]) -> str:
+    """The horizon study's planning tables (``horizon.csv``)."""
+    return planning_markdown(typed_rows(rows))
+
+
+def horizon_window_markdown(rows: Sequence[Row]) -> str:
+    """The horizon study's window table (``horizon_window.csv``)."""
+    return window_markdown(typed_rows(rows))
+
+
 #: README block name -> (CSV file in the results folder, renderer).
 BLOCKS: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
     "user_study_predictions": ("user_study_predictions.csv", predictions_markdown),
@@ -167,6 +178,8 @@ BLOCKS: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
     "user_study_sensitivity": ("user_study_sensitivity.csv", sensitivity_markdown),
     "fig6_improvements": ("fig6_improvements.csv", fig6_markdown),
     "fig6_verdicts": ("fig6_verdicts.csv", verdicts_markdown),
+    "horizon": ("horizon.csv", horizon_markdown),
+    "horizon_window": ("horizon_window.csv", horizon_window_markdown),
 }
 
 _BLOCK = re.compile(r"(<!-- results:(\w+) -->\n)(.*?)(<!-- /results:\2 -->)", re.S)
