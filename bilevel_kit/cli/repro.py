@@ -1,4 +1,5 @@
-"""``bilevel-kit repro``: the paper's user study (Fig. 5) or Figure 6 (see paper_repro/)."""
+"""``bilevel-kit repro``: the paper's user study (Fig. 5), Figure 6, or the adaptive-pace study
+beyond the paper (see paper_repro/)."""
 
 from __future__ import annotations
 
@@ -28,9 +29,12 @@ def add_parser(subparsers: Subparsers) -> None:
         "fig6: MAT x MTTF grid of the shop-floor simulation (10 tables per run), percent "
         "improvement heatmaps with ANOVA + Tukey marks; saved per cell (resumable). "
         "--jobs/--scheduler run the cells (fig6 grid points, user-study studies) in parallel "
-        "(docs/cluster.md); exit 5 when a cell failed. See paper_repro/README.md.",
+        "(docs/cluster.md); exit 5 when a cell failed. adaptive: optimized, optimized-adaptive "
+        "(learns the human's pace) and optimized-oracle over fast, median, slow and sampled "
+        "participants, without and with supply delays (docs/simulation.md). See "
+        "paper_repro/README.md.",
     )
-    p.add_argument("experiment", choices=("user-study", "fig6"))
+    p.add_argument("experiment", choices=("user-study", "fig6", "adaptive"))
     p.add_argument(
         "--quick",
         action="store_true",
@@ -45,7 +49,8 @@ def add_parser(subparsers: Subparsers) -> None:
         "--reps",
         type=positive_int,
         metavar="R",
-        help="fig6: replications per cell (default 30; 3 with --quick)",
+        help="fig6: replications per cell (default 30; 3 with --quick); adaptive: runs per "
+        "participant group (default 10; 2 with --quick), 3R sampled participants",
     )
     p.add_argument(
         "--mats",
@@ -102,9 +107,15 @@ def _run(args: argparse.Namespace) -> int:
     from .. import repro
     from ..paths import check_outputs
 
-    default = "out/repro/user_study" if args.experiment == "user-study" else "out/repro/fig6"
+    default = "out/repro/" + args.experiment.replace("-", "_")
     check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
-    if args.experiment == "user-study":
+    if args.experiment == "adaptive":
+        from ..repro.adaptive import run_adaptive
+
+        res = run_adaptive(
+            args.out or default, quick=args.quick, reps=args.reps, jobs=args.jobs, seed=args.seed
+        )
+    elif args.experiment == "user-study":
         out = args.out or default
         res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
     else:
