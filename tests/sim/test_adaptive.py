@@ -172,3 +172,14 @@ def test_estimator_reads_observed_durations(table):
     est = PaceEstimator(table, 0.2, 0.0)
     t = table.tasks[0].id
     assert est.posterior({t: 2 * table.human_time(t)}).factor == pytest.approx(2.0)
+
+
+def test_simulate_cli_runs_the_adaptive_policy(root, capsys):
+    from bilevel_kit.cli import main
+
+    inst = str(root / "instances/hrc_table.json")
+    argv = ["simulate", inst, "--policy", "optimized-adaptive", "--reps", "1", "-q"]
+    assert main([*argv, "-p", "prior_cv=0.3"]) == 0
+    assert "policy optimized-adaptive, 1 unit(s)" in capsys.readouterr().out
+    assert main([*argv, "-p", "window=3"]) == 2
+    assert "its options are prior_cv, task_cv" in capsys.readouterr().err
