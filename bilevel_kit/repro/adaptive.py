@@ -180,24 +180,24 @@ def _cells(
 
 
 def format_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
-    """One table: per supply setting and group, the idle time and makespan of the three
-    policies and the share of the gap closed."""
+    """One table: per supply setting and group, the metrics of the three policies and the
+    share of the gap closed (rows as :func:`summarize` returns them or as read back from
+    ``adaptive.csv``: the README renders its table from the committed file)."""
     head = ["supply", "group (factor)", "metric", "fixed", "adaptive", "oracle", "gap",
             "closed", "share"]  # fmt: skip
     body = []
     for r in rows:
         share = r["share_closed"]
+        num = {k: float(r[k]) for k in r if k.startswith(("mean_", "gap_", "se_", "fixed_"))}
         body.append(
             [
                 r["delay"],
                 f"{r['group']} ({r['factor']})",
                 METRICS[r["metric"]],
-                f"{r[f'mean_{FIXED}']:.1f}",
-                f"{r[f'mean_{ADAPTIVE}']:.1f}",
-                f"{r[f'mean_{ORACLE}']:.1f}",
-                f"{r['gap_fixed_minus_oracle']:.1f} ± {r['se_gap']:.1f}",
-                f"{r['fixed_minus_adaptive']:.1f} ± {r['se_fixed_minus_adaptive']:.1f}",
-                "no gap" if share is None else f"{100 * share:.0f} %",
+                *(f"{num[f'mean_{p}']:.1f}" for p in POLICIES),
+                f"{num['gap_fixed_minus_oracle']:.1f} ± {num['se_gap']:.1f}",
+                f"{num['fixed_minus_adaptive']:.1f} ± {num['se_fixed_minus_adaptive']:.1f}",
+                "no gap" if share in (None, "") else f"{100 * float(share):.0f} %",
             ]
         )
     return "\n".join(markdown_lines(head, body))

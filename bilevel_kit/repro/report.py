@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..experiments.tables import markdown_lines
+from .adaptive import format_markdown as adaptive_markdown
 
 Row = Mapping[str, Any]
 
@@ -167,6 +168,7 @@ BLOCKS: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
     "user_study_sensitivity": ("user_study_sensitivity.csv", sensitivity_markdown),
     "fig6_improvements": ("fig6_improvements.csv", fig6_markdown),
     "fig6_verdicts": ("fig6_verdicts.csv", verdicts_markdown),
+    "adaptive": ("adaptive.csv", adaptive_markdown),
 }
 
 _BLOCK = re.compile(r"(<!-- results:(\w+) -->\n)(.*?)(<!-- /results:\2 -->)", re.S)
