@@ -247,13 +247,14 @@ def run_adaptive(
     atomic.write_text(files["markdown"], head + format_markdown(rows) + "\n")
     result = {
         "instance": inst.name,
+        "units": units,
+        "reps": reps,
+        "population": 3 * reps,
         "quick": quick,
         "seed": seed,
-        "reps": reps,
-        "units": units,
         "timing": tm,
-        "cells": len(cells),
         "computed": computed,
+        "cells": len(cells),
         "failed": failed,
         "simulation_wall_s": {
             p: sum(r["wall_s"].get(p, 0.0) for r in records if not is_failed(r)) for p in POLICIES
