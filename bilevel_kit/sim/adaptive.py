@@ -1,5 +1,5 @@
 """Policies that plan with the human's pace: learnt online (``*-adaptive``) or known
-(``*-oracle``, a reference); docs/simulation.md, "Adaptive policies".
+(``*-oracle``, a reference); docs/simulation.md#adaptive-policies.
 
 ``optimized`` and ``cpsat-rolling`` plan with the instance's mean task times. Their variants
 here plan every decision with ``factor * mean`` for every task the human has not finished, in

@@ -1,5 +1,5 @@
 r"""An online estimate of the human's pace: the conjugate Bayesian update of the participant's
-speed factor from the observed task durations (docs/simulation.md, "Adaptive policies").
+speed factor from the observed task durations (docs/simulation.md#adaptive-policies).
 
 Model (the participant model of :mod:`.timing`): the human takes ``d_t = f * mu_t * e_t`` for
 task ``t`` of mean ``mu_t``, with one speed factor ``f`` for the run and independent per-task
