@@ -1,5 +1,5 @@
-"""``bilevel-kit repro``: the paper's user study (Fig. 5), Figure 6, or the horizon study
-beyond the paper (see paper_repro/)."""
+"""``bilevel-kit repro``: the paper's user study (Fig. 5), Figure 6, the horizon study or
+the adaptive-pace study beyond the paper (see paper_repro/)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from .common import (
     sweep_session,
 )
 
-HELP = "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon study"
+HELP = "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon and adaptive studies"
 DESCRIPTION = (
     "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}, fitted "
     "on a calibration cohort to 3 of the paper's numbers, then 200 fresh studies of 18 give "
@@ -28,13 +28,15 @@ DESCRIPTION = (
     "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. "
     "horizon: greedy-ce at horizon N = 1..12 against the exact cpsat optimum (or its bound) on "
     "the table, 2 and 5 table units and instances/generated, and cpsat-rolling's window against "
-    "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s). See "
-    "paper_repro/README.md."
+    "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s). adaptive: "
+    "optimized, optimized-adaptive (learns the human's pace) and optimized-oracle over fast, "
+    "median, slow and sampled participants, without and with supply delays "
+    "(docs/simulation.md). See paper_repro/README.md."
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("experiment", choices=("user-study", "fig6", "horizon"))
+    p.add_argument("experiment", choices=("user-study", "fig6", "horizon", "adaptive"))
     p.add_argument(
         "--quick",
         action="store_true",
@@ -50,7 +52,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=positive_int,
         metavar="R",
         help="fig6: replications per cell (default 30; 3 with --quick); horizon: replications "
-        "per simulation cell (default 3; 1 with --quick)",
+        "per simulation cell (default 3; 1 with --quick); adaptive: runs per participant group "
+        "(default 10; 2 with --quick), 3R sampled participants",
     )
     p.add_argument(
         "--mats",
@@ -157,7 +160,11 @@ def _run(args: argparse.Namespace) -> int:
     default = f"out/repro/{args.experiment.replace('-', '_')}"
     check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
     out = args.out or default
-    if args.experiment == "user-study":
+    if args.experiment == "adaptive":
+        from ..repro.adaptive import run_adaptive
+
+        res = run_adaptive(out, quick=args.quick, reps=args.reps, jobs=args.jobs, seed=args.seed)
+    elif args.experiment == "user-study":
         res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
     elif args.experiment == "horizon":
         res = repro.run_horizon(

@@ -57,7 +57,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--policy",
         default="optimized",
         metavar="NAME",
-        help="single-task | whole-assembly | optimized | cpsat-rolling (default optimized)",
+        help="single-task | whole-assembly | optimized | cpsat-rolling | optimized-adaptive | "
+        "cpsat-rolling-adaptive | optimized-oracle | cpsat-rolling-oracle (default optimized)",
     )
     p.add_argument(
         "--mat",

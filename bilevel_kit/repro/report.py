@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..experiments.tables import markdown_lines
+from .adaptive import format_markdown as adaptive_markdown
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
 
 Row = Mapping[str, Any]
@@ -180,6 +181,7 @@ BLOCKS: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
     "fig6_verdicts": ("fig6_verdicts.csv", verdicts_markdown),
     "horizon": ("horizon.csv", horizon_markdown),
     "horizon_window": ("horizon_window.csv", horizon_window_markdown),
+    "adaptive": ("adaptive.csv", adaptive_markdown),
 }
 
 _BLOCK = re.compile(r"(<!-- results:(\w+) -->\n)(.*?)(<!-- /results:\2 -->)", re.S)

@@ -44,6 +44,7 @@ command line): ``window`` (12 tasks), ``deterministic_time`` (0.1 per solve, abo
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
@@ -100,6 +101,9 @@ class CPSATRollingPolicy:
         self._memo: dict[tuple[Any, ...], tuple[Kit, tuple[tuple[str, ...], ...]]] = {}
         self._rest: tuple[tuple[str, ...], ...] = ()  # the previous plan after its first kit
         self.solves = 0
+        #: the human time of a task in the window's model: the mean (the adaptive variants,
+        #: :mod:`.adaptive`, set their pace estimate here before each decision)
+        self.human_time: Callable[[str], float] = instance.human_time
 
     def reset(self) -> None:
         """Forget the previous plan; decisions are a pure function of the memo's key, so the
@@ -114,7 +118,13 @@ class CPSATRollingPolicy:
         times = self._robot_times(window, state)
         h0 = max(0.0, state.human_remaining)
         hint = self._warm_kits(window)
-        key = (tuple(window), tuple(round(times[t], 3) for t in window), round(h0, 3), hint)
+        key = (
+            tuple(window),
+            tuple(round(times[t], 3) for t in window),
+            tuple(round(self.human_time(t), 3) for t in window),
+            round(h0, 3),
+            hint,
+        )
         hit = self._memo.get(key)
         if hit is None:
             hit = self._solve(window, times, h0, hint)
@@ -163,7 +173,7 @@ class CPSATRollingPolicy:
             {
                 "id": _sub_id(t),
                 "parts": [{"type": p, "count": n} for p, n in inst.task_by_id[t].parts],
-                "human_time": {"mean": inst.human_time(t)},
+                "human_time": {"mean": self.human_time(t)},
                 "robot_time": times[t],
             }
             for t in window

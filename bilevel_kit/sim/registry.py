@@ -87,6 +87,29 @@ POLICIES.register(
     "exact CP-SAT re-planning of a window of the remaining tasks at each epoch",
     options="bilevel_kit.sim.cpsat_rolling:CPSATRollingOptions",
 )
+POLICIES.register(
+    "optimized-adaptive",
+    "bilevel_kit.sim.adaptive:OptimizedAdaptivePolicy",
+    "optimized, planning with a Bayesian estimate of the human's pace from observed tasks",
+    options="bilevel_kit.sim.pace:PaceOptions",
+)
+POLICIES.register(
+    "optimized-oracle",
+    "bilevel_kit.sim.adaptive:OptimizedOraclePolicy",
+    "optimized, planning with the participant's true speed factor (a reference)",
+)
+POLICIES.register(
+    "cpsat-rolling-adaptive",
+    "bilevel_kit.sim.adaptive:CPSATRollingAdaptivePolicy",
+    "cpsat-rolling, planning with a Bayesian estimate of the human's pace",
+    options="bilevel_kit.sim.adaptive:CPSATRollingAdaptiveOptions",
+)
+POLICIES.register(
+    "cpsat-rolling-oracle",
+    "bilevel_kit.sim.adaptive:CPSATRollingOraclePolicy",
+    "cpsat-rolling, planning with the participant's true speed factor (a reference)",
+    options="bilevel_kit.sim.cpsat_rolling:CPSATRollingOptions",
+)
 
 
 def make_policy(

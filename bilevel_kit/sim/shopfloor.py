@@ -57,7 +57,7 @@ from ..instance import Instance
 from ..plan import Kit
 from .feeders import Feeder
 from .params import SimParams
-from .state import UNLIMITED, Policy, SimState
+from .state import UNLIMITED, HumanProgress, Policy, SimState
 from .timing import SampledTimes
 
 #: Stream tag of every run's random numbers (``SeedSequence([seed, STREAM, stream])``).
@@ -110,6 +110,7 @@ class ShopFloor:
         self.phase_start = 0.0
         self.task_start: dict[str, float] = {}
         self.task_end: dict[str, float] = {}
+        self.observed: dict[str, float] = {}  # measured durations of finished tasks
         self.human_work = 0.0
         self.robot_work = 0.0
         self.robot_wait = 0.0
@@ -119,35 +120,39 @@ class ShopFloor:
         env.process(self._human())
 
     # -- the robot's view ----------------------------------------------------------------------
-    def _human_remaining(self) -> float:
-        now = self.env.now
-        oh = self.inst.kit_overhead_human
-        dur = self._dur
-        rem = 0.0
-        if self.in_hand is not None:
-            tasks = self.kits[self.in_hand].tasks
-            if self.phase < 0:
-                rem += max(0.0, self.phase_start + oh - now) + sum(dur(t) for t in tasks)
-            else:
-                rem += max(0.0, self.phase_start + dur(tasks[self.phase]) - now)
-                rem += sum(dur(t) for t in tasks[self.phase + 1 :])
-        for k in self.queue:
-            rem += oh + sum(dur(t) for t in self.kits[k].tasks)
-        return rem
+    def _progress(self) -> HumanProgress:
+        """The human's position now: task ids and clock times only."""
+        k = self.in_hand
+        return HumanProgress(
+            now=self.env.now,
+            overhead=self.inst.kit_overhead_human,
+            in_hand=self.kits[k].tasks if k is not None else (),
+            phase=self.phase,
+            phase_start=self.phase_start,
+            queued=tuple(self.kits[q].tasks for q in self.queue),
+        )
 
     def state(self) -> SimState:
         avail = dict.fromkeys(self.inst.part_types, UNLIMITED)
         for t, f in self.feeders.items():
             avail[t] = f.stock
+        progress = self._progress()
+        true_speed: tuple[float, ...] = ()
+        if getattr(self.policy, "sees_true_speed", False):  # the oracle references only
+            sf = self.params.timing.session_factor
+            true_speed = tuple(s * sf for s in self.times.speed)
         return SimState(
             time=self.env.now,
             done=frozenset(self.done),
-            human_remaining=self._human_remaining(),
+            human_remaining=progress.remaining(self._dur),
             available=avail,
             expected_arrival={t: f.expected_time_to_arrival() for t, f in self.feeders.items()},
             repair_remaining={t: f.repair_remaining() for t, f in self.feeders.items()},
             supply=dict(self.inst.supply),
             kits_delivered=len(self.kits),
+            observed=dict(self.observed),
+            progress=progress,
+            true_speed=true_speed,
         )
 
     def _check_kit(self, kit: Kit) -> None:
@@ -296,6 +301,7 @@ class ShopFloor:
                 work += h[t]
                 yield env.timeout(h[t])
                 self.task_end[t] = env.now
+                self.observed[t] = h[t]
             self.kit_times[k]["human_end"] = env.now
             self.human_work += work
             self.in_hand = None

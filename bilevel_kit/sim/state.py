@@ -14,7 +14,7 @@ options dataclass, validated by :func:`.registry.make_policy`) with two methods:
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
 
@@ -24,6 +24,46 @@ from ..solvers.greedy_ce import PolicyState
 
 #: Stock reported for part types without a supply process (they never run out).
 UNLIMITED = 10**9
+
+
+@dataclass(frozen=True)
+class HumanProgress:
+    """What the robot observes of the human's work at an epoch: task ids and clock times, no
+    durations (a policy must not see how long unfinished tasks will take).
+
+    Attributes:
+        now: the simulated clock (s).
+        overhead: the per-kit pickup time ``o_H`` (s).
+        in_hand: the tasks of the kit the human holds, in order (empty when idle).
+        phase: -1 while the human takes the parts off the tray, else the index in ``in_hand``
+            of the task being assembled.
+        phase_start: when the current phase began (s).
+        queued: the tasks of each delivered kit still waiting at the station, in order.
+    """
+
+    now: float = 0.0
+    overhead: float = 0.0
+    in_hand: tuple[str, ...] = ()
+    phase: int = -1
+    phase_start: float = 0.0
+    queued: tuple[tuple[str, ...], ...] = ()
+
+    def remaining(self, duration: Callable[[str], float]) -> float:
+        """Expected seconds until the human has finished everything delivered, with
+        ``duration(task)`` for every task not finished yet: the current phase's rest (never
+        negative), the in-hand kit's later tasks, then per queued kit ``o_H`` plus its tasks."""
+        oh, now = self.overhead, self.now
+        rem = 0.0
+        if self.in_hand:
+            tasks = self.in_hand
+            if self.phase < 0:
+                rem += max(0.0, self.phase_start + oh - now) + sum(duration(t) for t in tasks)
+            else:
+                rem += max(0.0, self.phase_start + duration(tasks[self.phase]) - now)
+                rem += sum(duration(t) for t in tasks[self.phase + 1 :])
+        for kit in self.queued:
+            rem += oh + sum(duration(t) for t in kit)
+        return rem
 
 
 @dataclass(frozen=True)
@@ -42,6 +82,14 @@ class SimState:
         repair_remaining: per supplied type, seconds until its machine is repaired (0: up).
         supply: the supply process of each supplied type.
         kits_delivered: kits delivered so far.
+        observed: the human's measured duration (s) of every task finished by now (task id ->
+            seconds); never a task in progress or not started (docs/simulation.md, "What the
+            robot knows").
+        progress: the human's position (:class:`HumanProgress`), from which a policy with
+            its own duration estimates recomputes ``human_remaining``.
+        true_speed: the participant's true speed factor per unit (the sampled factor times
+            the timing model's ``session_factor``), given only to policies whose class sets
+            ``sees_true_speed = True`` (the oracle references); empty for every other policy.
     """
 
     time: float
@@ -52,6 +100,9 @@ class SimState:
     repair_remaining: Mapping[str, float] = field(default_factory=dict)
     supply: Mapping[str, Supply] = field(default_factory=dict)
     kits_delivered: int = 0
+    observed: Mapping[str, float] = field(default_factory=dict)
+    progress: HumanProgress = field(default_factory=HumanProgress)
+    true_speed: tuple[float, ...] = ()
 
     def expected_wait(self, part_type: str, count: int = 1) -> float:
         """Expected seconds until ``count`` parts of a type are in stock (0 if they are).

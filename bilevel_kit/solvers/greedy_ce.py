@@ -297,7 +297,8 @@ class GreedyCEPolicy:
         inst = self.instance
         self._ids = [t.id for t in inst.tasks]
         self._r = np.array([inst.robot_time(t) for t in self._ids])
-        self._h = np.array([inst.human_time(t) for t in self._ids])
+        self._h_mean = np.array([inst.human_time(t) for t in self._ids])
+        self._h = self._h_mean
         self._pred = [frozenset(inst.index[p] for p in inst.predecessors[t]) for t in self._ids]
         self._types = sorted(inst.part_types)
         col = {t: k for k, t in enumerate(self._types)}
@@ -314,6 +315,14 @@ class GreedyCEPolicy:
         )
         #: ``time.perf_counter()`` after which decisions are single tasks (None: no limit)
         self.deadline: float | None = None
+
+    def set_human_scale(self, scale: float | np.ndarray) -> None:
+        """Plan the next decisions with every task's human time ``H`` (terms (5)-(6)) the
+        instance's mean times ``scale`` (one factor, or one per task in instance order); 1
+        restores the means exactly. The adaptive policies' estimate of the participant's pace
+        (docs/simulation.md); the per-kit ``o_H`` is not scaled, layouts do not depend on it."""
+        self._h = self._h_mean * scale
+        self._search.h = self._h
 
     # -- lower level, memoised ---------------------------------------------------------------
     def arrangement(self, counts: Mapping[str, int]) -> Arrangement:

@@ -12,7 +12,16 @@ from bilevel_kit.sim.cpsat_rolling import CPSATRollingOptions
 
 
 def test_registry_is_lazy_and_ordered():
-    assert list(POLICIES) == ["single-task", "whole-assembly", "optimized", "cpsat-rolling"]
+    assert list(POLICIES) == [
+        "single-task",
+        "whole-assembly",
+        "optimized",
+        "cpsat-rolling",
+        "optimized-adaptive",
+        "optimized-oracle",
+        "cpsat-rolling-adaptive",
+        "cpsat-rolling-oracle",
+    ]
     assert "optimized" in POLICIES and "magic" not in POLICIES
     assert POLICIES.spec("single-task").options_class() is NoOptions
     assert POLICIES.spec("cpsat-rolling").options_class() is CPSATRollingOptions
