@@ -73,23 +73,31 @@ def add_parser(subparsers: Subparsers) -> None:
         help="time limit in seconds for methods that take one",
     )
     add_param_option(p, "method-specific option (repeatable)")
-    p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
+    p.add_argument(
+        "--quiet",
+        "-q",
+        action="store_true",
+        help="print only the summary line (and no live progress line on the terminal)",
+    )
     add_instance_overrides(p)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..methods import get_method, solve
+    from ..progress import LiveLine
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
     instance = load_instance(args)
-    result = solve(
-        instance,
-        args.method,
-        seed=args.seed,
-        time_limit=args.time_limit,
-        check=args.check,
-        **dict(args.param),
-    )
+    with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
+        result = solve(
+            instance,
+            args.method,
+            seed=args.seed,
+            time_limit=args.time_limit,
+            check=args.check,
+            progress=line if line.enabled else None,
+            **dict(args.param),
+        )
     _write_outputs(args, instance, result)
     print(summary(instance, result, args.quiet))
     violations = result.extra.get("violations")

@@ -360,3 +360,24 @@ def test_trays_override(capsys, root):
     for bad in ("0", "-1", "1.5", "abc"):
         code, _, err = run(capsys, "solve", table, "-m", "single-task", "--trays", bad)
         assert code == 2 and "--trays" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_solve_live_line_on_a_terminal_unless_q(capsys, monkeypatch, root, quiet):
+    from bilevel_kit import progress
+
+    monkeypatch.setattr(progress, "is_terminal", lambda stream: True)
+    live = not quiet
+    args = ["solve", root / "instances/hrc_table.json", "-m", "cpsat", "--time-limit", "20"]
+    code, out, err = run(capsys, *args, *(["-q"] if quiet else []))
+    assert code == 0 and "hrc_table: cpsat" in out
+    assert ("\r" in err and "bound" in err and err.endswith("\n")) is live
+    if not live:
+        assert err == ""
+
+
+def test_solve_prints_no_live_line_off_a_terminal(capsys, root):
+    args = ["solve", root / "instances/hrc_table.json", "-m", "cpsat", "--time-limit", "20"]
+    code, out, err = run(capsys, *args)
+    assert code == 0 and "hrc_table: cpsat" in out
+    assert err == ""
