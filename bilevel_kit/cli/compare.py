@@ -16,6 +16,7 @@ from .common import (
     add_sweep_options,
     instance_overrides,
     nonneg,
+    options_epilog,
     param,
     sweep_exit,
     sweep_session,
@@ -35,6 +36,7 @@ def add_parser(subparsers: Subparsers) -> None:
         "resumes where it stopped; --jobs/--scheduler run the cells in parallel "
         "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan "
         "is invalid.",
+        lazy_epilog=lambda: options_epilog("-p METHOD:KEY=VALUE"),
     )
     p.add_argument("instances", nargs="+", metavar="INSTANCE")
     p.add_argument(

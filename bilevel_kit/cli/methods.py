@@ -1,4 +1,5 @@
-"""``bilevel-kit methods [NAME]``: the registered methods, or one method's options."""
+"""``bilevel-kit methods [NAME]``: the registered methods, or one method's (or simulation
+policy's) options."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from .common import EXIT_OK, Subparsers
 
 if TYPE_CHECKING:
-    from ..methods import MethodSpec
+    from ..options import Registered
 
 
 def add_parser(subparsers: Subparsers) -> None:
@@ -16,32 +17,49 @@ def add_parser(subparsers: Subparsers) -> None:
         "methods",
         help="list the registered methods",
         description="Without NAME: one line per registered method. With NAME: that method's "
-        "options (solve --param KEY=VALUE) with type, default and meaning.",
+        "options (solve --param KEY=VALUE) with type, default and meaning; NAME may also be "
+        "a simulation policy that is not a method (optimized, cpsat-rolling: simulate "
+        "--param KEY=VALUE).",
     )
-    p.add_argument("name", nargs="?", metavar="NAME", help="a method whose options to list")
+    p.add_argument(
+        "name", nargs="?", metavar="NAME", help="a method or policy whose options to list"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..methods import REGISTRY, get_method
+    from ..methods import REGISTRY
 
     if args.name is None:
         for s in REGISTRY.values():
             print(f"{s.name:<16} {s.summary}")
     else:
-        print(describe_method(get_method(args.name)))
+        print(describe_method(find(args.name)))
     return EXIT_OK
 
 
-def describe_method(spec: MethodSpec) -> str:
-    """The name and summary of a method, then one line per option: name, type, default, help."""
-    lines = [f"{spec.name}: {spec.summary}"]
+def find(name: str) -> Registered:
+    """The method ``name``, else the simulation policy ``name`` (methods win: the baselines
+    are both, and their policies take no options either)."""
+    from ..methods import REGISTRY, get_method
+    from ..sim.registry import POLICIES
+
+    if name not in REGISTRY and name in POLICIES:
+        return POLICIES.spec(name)
+    return get_method(name)
+
+
+def describe_method(spec: Registered) -> str:
+    """The name and summary of a method or policy, then one line per option: name, type,
+    default, help."""
+    policy = spec.kind == "policy"
+    lines = [f"{spec.name}: {spec.summary}" + (" (simulation policy)" if policy else "")]
     infos = spec.describe_options()
     if not infos:
         lines.append("takes no options")
         return "\n".join(lines)
     rows = [(i.name, i.type, _show(i.default), i.help) for i in infos]
     widths = [max(len(r[c]) for r in rows) for c in range(3)]
-    lines.append("options (solve --param KEY=VALUE):")
+    lines.append(f"options ({'simulate' if policy else 'solve'} --param KEY=VALUE):")
     for name, tp, default, text in rows:
         lines.append(
             f"  {name:<{widths[0]}}  {tp:<{widths[1]}}  default {default:<{widths[2]}}  {text}"

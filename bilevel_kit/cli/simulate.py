@@ -23,6 +23,7 @@ from .common import (
     float_map,
     instance_overrides,
     nonneg,
+    options_epilog,
     positive_int,
     sweep_exit,
     sweep_session,
@@ -52,6 +53,7 @@ def add_parser(subparsers: Subparsers) -> None:
         "assembling with sampled participant times. Replication r uses seed SEED + r. "
         "--jobs/--scheduler run the replications in parallel (docs/cluster.md); exit 5 when "
         "a replication failed.",
+        lazy_epilog=lambda: options_epilog("-p KEY=VALUE", policies=True),
     )
     p.add_argument("instance")
     p.add_argument(

@@ -17,6 +17,7 @@ from .common import (
     add_seed,
     load_instance,
     nonneg,
+    options_epilog,
     positive_int,
     print_violations,
 )
@@ -35,7 +36,9 @@ def add_parser(subparsers: Subparsers) -> None:
         "solve",
         help="solve an instance with one method",
         description="Solve an instance file with a registered method and print "
-        "a summary; optionally write the solution JSON and figures.",
+        "a summary; optionally write the solution JSON and figures. Exact methods show a live "
+        "line (incumbent, bound, gap, elapsed) on a terminal; -q hides it.",
+        lazy_epilog=lambda: options_epilog("-p KEY=VALUE"),
     )
     p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
     p.add_argument(
