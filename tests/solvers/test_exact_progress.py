@@ -1,4 +1,4 @@
-"""The live progress of ``cpsat``: honest, monotone numbers in seconds that end at the result."""
+"""Live progress of ``cpsat`` and ``milp``: monotone numbers in seconds that end at the result."""
 
 from __future__ import annotations
 
@@ -55,3 +55,16 @@ def test_cpsat_progress_in_human_idle(table):
 def test_no_sink_no_updates_same_contract(table):
     r = solve(table, "single-task", progress=lambda u: pytest.fail("single-task reported"))
     assert r.objective is not None
+
+
+@pytest.mark.parametrize("objective", ["makespan", "human_idle"])
+def test_milp_reports_the_highs_child_bounds(table, objective):
+    pytest.importorskip("highspy")
+    updates: list[Update] = []
+    r = solve(table, "milp", time_limit=40, progress=updates.append, objective=objective)
+    value = r.objective if objective == "makespan" else r.metrics["human_idle"]
+    check_updates(updates, value, tol=1e-6)
+    assert {u.objective for u in updates} == {objective}
+    assert any(u.stage.startswith("MILP (highs)") for u in updates)
+    if objective == "makespan":
+        assert updates[-1].bound == pytest.approx(r.bound, abs=1e-6)
