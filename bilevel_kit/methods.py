@@ -15,6 +15,7 @@ independent checker.
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import math
 import time
@@ -26,6 +27,7 @@ from .errors import UsageError
 from .instance import Instance
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
+from .progress import Sink, reporting
 from .validate import timeline_params
 
 
@@ -169,12 +171,15 @@ def solve(
     seed: int = 0,
     time_limit: float | None = None,
     check: bool = False,
+    progress: Sink | None = None,
     **params: Any,
 ) -> Result:
     """Run a registered method and return the honest :class:`Result`.
 
     With ``check=True`` the independent checker runs on the plan and its violations are stored
-    in ``result.extra["violations"]`` (an empty list means valid).
+    in ``result.extra["violations"]`` (an empty list means valid). ``progress``: a sink that
+    receives the live incumbent, bound and gap of the exact methods (:mod:`.progress`); it
+    changes nothing in the result.
     """
     from .bounds import best_bound
     from .reachability import ensure_kit_placeable
@@ -186,7 +191,8 @@ def solve(
     fn = spec.load()
     ensure_kit_placeable(instance)  # an empty reach map is a clear error, not "no kit fits"
     t0 = time.perf_counter()
-    out = fn(instance, options, seed=seed, time_limit=time_limit)
+    with contextlib.nullcontext() if progress is None else reporting(progress):
+        out = fn(instance, options, seed=seed, time_limit=time_limit)
     wall = time.perf_counter() - t0
     timeline = evaluate(instance, out.plan) if out.plan is not None else None
     objective = timeline.makespan if timeline is not None else None

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from ..experiments.cells import SweepSession
     from ..instance import Instance
+    from ..options import Registered
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
 #: ``pack``: no layout on the chosen grid, which is not a proof that none exists.
@@ -44,10 +45,54 @@ N = TypeVar("N", int, float)
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (exit 2) instead of the usage dump."""
+    """argparse with one-line errors (exit 2) instead of the usage dump.
+
+    ``lazy_epilog``: a function giving text printed after the help, called only when the help
+    is printed (it may import modules that parsing arguments must not pay for).
+    """
+
+    def __init__(self, *args: Any, lazy_epilog: Callable[[], str] | None = None, **kw: Any):
+        super().__init__(*args, **kw)
+        self.lazy_epilog = lazy_epilog
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+    def format_help(self) -> str:
+        text = super().format_help()
+        return text if self.lazy_epilog is None else f"{text}\n{self.lazy_epilog()}\n"
+
+
+def options_epilog(usage: str, policies: bool = False) -> str:
+    """Every method's (``policies``: simulation policy's) option names, ``usage`` saying how
+    to pass them; it imports the options dataclasses, hence a :class:`Parser` ``lazy_epilog``."""
+    import shutil
+    import textwrap
+
+    from ..methods import REGISTRY
+
+    specs: list[Registered] = list(REGISTRY.values())
+    if policies:
+        from ..sim.registry import POLICIES
+
+        specs = [POLICIES.spec(n) for n in POLICIES]
+    width = max(len(s.name) for s in specs) + 2
+    columns = max(60, min(100, shutil.get_terminal_size().columns - 2))  # as argparse wraps
+    what = "policy" if policies else "method"
+    lines = textwrap.wrap(
+        f"{what} options ({usage}); their types, defaults and meaning: bilevel-kit methods NAME",
+        width=columns,
+    )
+    for spec in specs:
+        names = ", ".join(i.name for i in spec.describe_options()) or "no options"
+        lines += textwrap.wrap(
+            names,
+            width=columns,
+            initial_indent=f"  {spec.name:<{width}}",
+            subsequent_indent=" " * (width + 2),
+            break_on_hyphens=False,
+        )
+    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from .common import (
     add_sweep_options,
     add_time_limit,
     instance_overrides,
+    options_epilog,
     param,
     sweep_exit,
     sweep_session,
@@ -30,6 +31,11 @@ DESCRIPTION = (
     "interrupted run resumes where it stopped; --jobs/--scheduler run the cells in parallel "
     "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan is invalid."
 )
+
+
+def epilog() -> str:
+    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
+    return options_epilog("-p METHOD:KEY=VALUE")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,21 +1,28 @@
-"""``bilevel-kit methods [NAME]``: the registered methods, or one method's options."""
+"""``bilevel-kit methods [NAME]``: the registered methods, or one method's (or simulation
+policy's) options."""
 
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .common import EXIT_OK
 
 HELP = "list the registered methods"
 DESCRIPTION = (
     "Without NAME: one line per registered method. With NAME: that method's options "
-    "(solve --param KEY=VALUE) with type, default and meaning."
+    "(solve --param KEY=VALUE) with type, default and meaning; NAME may also be a simulation "
+    "policy that is not a method (optimized, cpsat-rolling: simulate --param KEY=VALUE)."
 )
+
+if TYPE_CHECKING:
+    from ..options import Registered
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("name", nargs="?", metavar="NAME", help="a method whose options to list")
+    p.add_argument(
+        "name", nargs="?", metavar="NAME", help="a method or policy whose options to list"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -25,24 +32,33 @@ def run(args: argparse.Namespace) -> int:
         for s in REGISTRY.values():
             print(f"{s.name:<16} {s.summary}")
     else:
-        print(describe_method(args.name))
+        print(describe_method(find(args.name)))
     return EXIT_OK
 
 
-def describe_method(name: str) -> str:
-    """The name and summary of method NAME, then one line per option: name, type, default, help
-    (an unknown NAME raises the registry's usage error)."""
-    from ..methods import get_method
+def find(name: str) -> Registered:
+    """The method ``name``, else the simulation policy ``name`` (methods win: the baselines
+    are both, and their policies take no options either)."""
+    from ..methods import REGISTRY, get_method
+    from ..sim.registry import POLICIES
 
-    spec = get_method(name)
-    lines = [f"{spec.name}: {spec.summary}"]
+    if name not in REGISTRY and name in POLICIES:
+        return POLICIES.spec(name)
+    return get_method(name)
+
+
+def describe_method(spec: Registered) -> str:
+    """The name and summary of a method or policy, then one line per option: name, type,
+    default, help."""
+    policy = spec.kind == "policy"
+    lines = [f"{spec.name}: {spec.summary}" + (" (simulation policy)" if policy else "")]
     infos = spec.describe_options()
     if not infos:
         lines.append("takes no options")
         return "\n".join(lines)
     rows = [(i.name, i.type, _show(i.default), i.help) for i in infos]
     widths = [max(len(r[c]) for r in rows) for c in range(3)]
-    lines.append("options (solve --param KEY=VALUE):")
+    lines.append(f"options ({'simulate' if policy else 'solve'} --param KEY=VALUE):")
     for name, tp, default, text in rows:
         lines.append(
             f"  {name:<{widths[0]}}  {tp:<{widths[1]}}  default {default:<{widths[2]}}  {text}"

@@ -22,6 +22,7 @@ from .common import (
     float_map,
     instance_overrides,
     nonneg,
+    options_epilog,
     positive_int,
     sweep_exit,
     sweep_session,
@@ -39,6 +40,11 @@ SIM_COLUMNS = (
 )
 #: The columns of ``--csv`` after ``instance`` and ``policy``.
 CSV_COLUMNS = ("seed", "units", *SIM_COLUMNS, "human_work", "robot_work", "max_queue")
+
+
+def epilog() -> str:
+    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
+    return options_epilog("-p KEY=VALUE", policies=True)
 
 
 HELP = "shop-floor simulation (SimPy) of a kitting policy"

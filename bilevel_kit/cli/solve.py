@@ -16,6 +16,7 @@ from .common import (
     add_seed,
     add_time_limit,
     load_instance,
+    options_epilog,
     positive_int,
     print_violations,
 )
@@ -30,8 +31,14 @@ if TYPE_CHECKING:
 HELP = "solve an instance with one method"
 DESCRIPTION = (
     "Solve an instance file with a registered method and print a summary; optionally write the "
-    "solution JSON and figures."
+    "solution JSON and figures. Exact methods show a live line (incumbent, bound, gap, elapsed) "
+    "on a terminal; -q hides it."
 )
+
+
+def epilog() -> str:
+    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
+    return options_epilog("-p KEY=VALUE")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -68,23 +75,31 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_time_limit(p, "time limit in seconds for methods that take one")
     add_param_option(p, "method-specific option (repeatable)")
-    p.add_argument("--quiet", "-q", action="store_true", help="print only the summary line")
+    p.add_argument(
+        "--quiet",
+        "-q",
+        action="store_true",
+        help="print only the summary line (and no live progress line on the terminal)",
+    )
     add_instance_overrides(p)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..methods import get_method, solve
+    from ..progress import LiveLine
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
     instance = load_instance(args)
-    result = solve(
-        instance,
-        args.method,
-        seed=args.seed,
-        time_limit=args.time_limit,
-        check=args.check,
-        **dict(args.param),
-    )
+    with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
+        result = solve(
+            instance,
+            args.method,
+            seed=args.seed,
+            time_limit=args.time_limit,
+            check=args.check,
+            progress=line if line.enabled else None,
+            **dict(args.param),
+        )
     _write_outputs(args, instance, result)
     print(summary(instance, result, args.quiet))
     violations = result.extra.get("violations")

@@ -56,7 +56,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg.lapack
 
 from .. import geometry
 from ..errors import UsageError
@@ -303,11 +302,13 @@ def _gram(e: np.ndarray) -> np.ndarray:
 
 def _cholesky(cov: np.ndarray, floor: float) -> np.ndarray:
     """Lower Cholesky factor of ``cov + floor * I``; the floor grows tenfold on failure."""
+    from scipy.linalg.lapack import dpotrf  # lazily: 0.5 s of import, not for --help
+
     d = cov.shape[0]
     for _ in range(8):
         a = cov.copy()
         a.flat[:: d + 1] += floor
-        factor, info = scipy.linalg.lapack.dpotrf(a, lower=1, clean=1, overwrite_a=1)
+        factor, info = dpotrf(a, lower=1, clean=1, overwrite_a=1)
         if info == 0:
             return factor
         floor *= 10.0

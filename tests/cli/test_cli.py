@@ -360,3 +360,73 @@ def test_trays_override(capsys, root):
     for bad in ("0", "-1", "1.5", "abc"):
         code, _, err = run(capsys, "solve", table, "-m", "single-task", "--trays", bad)
         assert code == 2 and "--trays" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_solve_live_line_on_a_terminal_unless_q(capsys, monkeypatch, root, quiet):
+    from bilevel_kit import progress
+
+    monkeypatch.setattr(progress, "is_terminal", lambda stream: True)
+    live = not quiet
+    args = ["solve", root / "instances/hrc_table.json", "-m", "cpsat", "--time-limit", "20"]
+    code, out, err = run(capsys, *args, *(["-q"] if quiet else []))
+    assert code == 0 and "hrc_table: cpsat" in out
+    assert ("\r" in err and "bound" in err and err.endswith("\n")) is live
+    if not live:
+        assert err == ""
+
+
+def test_solve_prints_no_live_line_off_a_terminal(capsys, root):
+    args = ["solve", root / "instances/hrc_table.json", "-m", "cpsat", "--time-limit", "20"]
+    code, out, err = run(capsys, *args)
+    assert code == 0 and "hrc_table: cpsat" in out
+    assert err == ""
+
+
+def help_option_lists(text: str) -> dict[str, list[str]]:
+    """The epilog of ``--help``: method or policy name -> the option keys it lists."""
+    entries: dict[str, str] = {}
+    name = None
+    for line in text[text.index(" options (-p") :].splitlines():
+        if line.startswith("  ") and line[2] != " ":
+            name, _, rest = line.strip().partition(" ")
+            entries[name] = rest
+        elif line.startswith("   ") and name is not None:
+            entries[name] += " " + line
+    return {
+        k: [] if "no options" in v else v.replace(" ", "").split(",") for k, v in entries.items()
+    }
+
+
+@pytest.mark.parametrize("command", ["solve", "compare", "simulate"])
+def test_help_lists_every_option_key(capsys, command):
+    from bilevel_kit.methods import REGISTRY
+    from bilevel_kit.sim.registry import POLICIES
+
+    code, text, _ = run(capsys, command, "--help")
+    assert code == 0
+    assert "types, defaults and meaning: bilevel-kit methods NAME" in " ".join(text.split())
+    specs = [POLICIES.spec(n) for n in POLICIES] if command == "simulate" else REGISTRY.values()
+    listed = help_option_lists(text)
+    assert listed == {s.name: [i.name for i in s.describe_options()] for s in specs}
+    if command == "simulate":
+        assert listed["cpsat-rolling"][0] == "window"
+    else:
+        assert {"W1", "W7", "samples", "horizon"} <= set(listed["greedy-ce"])
+        assert listed["single-task"] == [] and "hint" in listed["cpsat"]
+
+
+def test_methods_name_describes_a_simulation_policy(capsys):
+    code, text, _ = run(capsys, "methods", "cpsat-rolling")
+    lines = text.splitlines()
+    assert code == 0 and lines[0].endswith("(simulation policy)")
+    assert lines[1] == "options (simulate --param KEY=VALUE):"
+    assert [line.split()[0] for line in lines[2:]] == [
+        "window",
+        "deterministic_time",
+        "time_limit",
+        "workers",
+        "tray",
+    ]
+    code, text, _ = run(capsys, "methods", "optimized")
+    assert code == 0 and text.splitlines()[1:] == ["takes no options"]

@@ -80,7 +80,13 @@ class _Benders:
             repaired = canonical(repaired, ctx.groups)
             obj = scaled_objective(ctx.sc, repaired, ctx.objective)
             if state.obj is None or obj < state.obj:
-                state.kits, state.obj = repaired, obj
+                self.improve(repaired, obj)
+
+    def improve(self, kits: list[list[int]], obj: int) -> None:
+        """A new incumbent (packable kits of scaled objective ``obj``)."""
+        self.state.kits, self.state.obj = kits, obj
+        if self.ctx.live is not None:
+            self.ctx.live.kits(kits, obj)
 
     def iterate(self, solver: Any) -> bool:
         """One master solve and its packing checks; False when the loop is done."""
@@ -90,7 +96,13 @@ class _Benders:
         if state.kits is not None:
             hint(mdl, self.ctx.sc, state.kits)
         solver.parameters.max_time_in_seconds = self.ctx.left()
-        st = solver.solve(mdl.model)
+        live = self.ctx.live
+        if live is not None:
+            live.bound_valid = (
+                self.cuts.unproven == 0
+            )  # after an unproven cut the bound is no proof
+            live.tracker.report(stage=f"CP-SAT Benders, {self.mdl.n_cuts} cuts")
+        st = solver.solve(mdl.model, self.ctx.callback)
         state.status_name = solver.status_name(st)
         if st == cp_model.INFEASIBLE:
             # the master holds C <= U, so without an unproven cut the incumbent is optimal
@@ -108,9 +120,10 @@ class _Benders:
         if all(v is True for v in verdicts):
             obj = round(solver.objective_value)
             if state.obj is None or obj <= state.obj:
-                state.kits, state.obj = kits, obj
+                self.improve(kits, obj)
+            best = obj if state.obj is None else state.obj
             state.proven = (st == cp_model.OPTIMAL and self.cuts.unproven == 0) or (
-                state.lower is not None and state.lower >= state.obj
+                state.lower is not None and state.lower >= best
             )
             if state.proven:
                 state.lower = state.obj

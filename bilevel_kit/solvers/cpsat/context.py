@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from ...instance import Instance
 from ...plan import Placement
+from ...progress import Tracker
 from ..budget import Budget
 from ..common import Packer
 from .scaling import Scaled
@@ -36,6 +38,16 @@ class Model:
     n_cuts: int = 0
 
 
+class Live(Protocol):
+    """What the loops tell the live progress (:class:`.live.Live`)."""
+
+    tracker: Tracker
+    #: Are the master's bounds proofs (False after an unproven Benders cut)?
+    bound_valid: bool
+
+    def kits(self, kits: Sequence[Sequence[int]] | None, scaled: int | None) -> None: ...
+
+
 #: Seconds kept back from the time limit for extraction and packing the final layouts.
 MARGIN = 0.15
 
@@ -58,6 +70,9 @@ class Context:
     packer: Packer
     budget: Budget
     pack_res: float
+    #: The live progress (None: nobody listens) and the solution callback it gives the solver.
+    live: Live | None = None
+    callback: Any = None  # a CpSolverSolutionCallback (OR-Tools is imported lazily)
 
     @property
     def ids(self) -> list[str]:

@@ -61,6 +61,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ... import progress
 from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import Instance
@@ -186,6 +187,8 @@ def cpsat(
     plan: Plan | None = None
     source = None
     hint_tl = HINT_SHARE * budget.time_limit
+    live = progress.tracker(options.objective)
+    live.report(bound=_closed_bound(instance, options.objective), stage="warm start")
     if options.objective == "makespan" and _closed_form_optimal(instance, budget):
         pass  # the run proves a quick plan optimal at once: no warm start needed
     elif options.hint == "auto":
@@ -194,12 +197,20 @@ def cpsat(
         plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed, time_limit=hint_tl)
         if source is None:
             raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
+    if plan is not None and live.active:
+        tl = evaluate(instance, plan)
+        live.report(incumbent=tl.makespan if options.objective == "makespan" else tl.human_idle)
     rest = max(MIN_RUN, budget.remaining())
     out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
     out.extra["hint_method"] = source
     out.extra["hint_time_s"] = budget.elapsed() - out.extra.get("wall_time_s", 0.0)
     out.extra["wall_time_s"] = budget.elapsed()
     return out
+
+
+def _closed_bound(instance: Instance, objective: str) -> float | None:
+    """The closed-form bound on ``objective`` (:mod:`bilevel_kit.bounds`; none for idle)."""
+    return best_bound(instance) if objective == "makespan" else None
 
 
 def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
@@ -344,6 +355,15 @@ def run(
     ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
 
     incumbent = _incumbent(ctx, hint, pack_tl, extra)
+    tracker = progress.tracker(options.objective)
+    live = None
+    if tracker.active:
+        from .live import Live
+
+        ctx.live = live = Live(ctx, tracker)
+        tracker.report(bound=_closed_bound(instance, options.objective), stage="CP-SAT")
+        if incumbent is not None:
+            tracker.report(incumbent=live.real(incumbent))
     upper = None
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
@@ -395,6 +415,9 @@ def run(
     solver.parameters.log_search_progress = options.log
     for key, value in (cpsat_params or {}).items():
         setattr(solver.parameters, key, value)
+    if live is not None:
+        live.mdl = mdl
+        ctx.callback = live.attach(solver, solutions_are_plans=mode == "embedded")
     state = _search(ctx, mdl, solver, mode, incumbent)
     extra.update(state.info)
     extra["cpsat_status"] = state.status_name
@@ -514,6 +537,11 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
         return report.finish(None, Status.UNKNOWN, bound_s)
+    if ctx.live is not None:  # the final numbers, as the result reports them
+        final = real.makespan if ctx.objective == "makespan" else real.human_idle
+        ctx.live.tracker.report(
+            incumbent=final, bound=bound_s if ctx.objective == "makespan" else idle_bound
+        )
     extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
     return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
 

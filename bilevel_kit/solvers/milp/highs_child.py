@@ -1,8 +1,11 @@
 """Solve an MPS model with highspy in a child process (``solver="highs"`` of the MILPs).
 
 Run as ``python -m bilevel_kit.solvers.milp.highs_child MODEL OUT TIME_LIMIT SEED LOG OPTIONS
-START [STARTED]``: ``TIME_LIMIT`` counts from ``STARTED`` (the parent's wall clock when it
-started the child), so the child's start-up and reading the model are inside it. It reads the
+START [STARTED [PROGRESS_FD]]``: ``TIME_LIMIT`` counts from ``STARTED`` (the parent's wall clock
+when it started the child), so the child's start-up and reading the model are inside it. With
+``PROGRESS_FD`` (an inherited pipe) the child writes ``PRIMAL DUAL`` lines there (Python float
+reprs, ``inf`` when none) on every improving solution and, at most every
+:data:`PROGRESS_EVERY` s, when the bounds moved (HiGHS's MIP callbacks). It reads the
 model (MPS), sets the options (``OPTIONS`` a JSON object of HiGHS options,
 ``LOG`` 1 or 0), loads the MIP start (``START`` a JSON file of column name -> value, or an empty
 string), solves with a zero relative gap and writes a JSON result to ``OUT``: ``status``,
@@ -20,10 +23,12 @@ from __future__ import annotations
 import json
 import sys
 import time
-from typing import Any
+from typing import IO, Any
 
 #: Default start of the time limit (wall clock): this module's import.
 STARTED = time.time()
+#: Seconds between two progress lines from HiGHS's interrupt callback (improvements: always).
+PROGRESS_EVERY = 0.25
 
 
 def solve_mps(
@@ -34,6 +39,7 @@ def solve_mps(
     options: dict[str, Any],
     start: str,
     started: float = STARTED,
+    progress: IO[str] | None = None,
 ) -> dict[str, Any]:
     """Solve the MPS model at ``path`` and return the result (module docstring); the time
     limit counts from ``started`` (wall clock)."""
@@ -48,6 +54,8 @@ def solve_mps(
     h.readModel(path)
     if start:
         _set_start(h, start)
+    if progress is not None:
+        _report_progress(h, progress)
     # the limit counts from the parent's call: the import and the read above are inside it
     h.setOptionValue("time_limit", max(0.01, time_limit - (time.time() - started)))
     h.run()
@@ -69,6 +77,29 @@ def solve_mps(
     return res
 
 
+def _report_progress(h: Any, out: IO[str]) -> None:
+    """Write ``PRIMAL DUAL`` lines to ``out`` (module docstring)."""
+    last: list[Any] = [0.0, None]  # time of the last line, the bounds written
+
+    def write(primal: float, dual: float, now: float) -> None:
+        if (primal, dual) != last[1]:
+            out.write(f"{primal!r} {dual!r}\n")
+            out.flush()
+            last[:] = [now, (primal, dual)]
+
+    def improving(event: Any) -> None:
+        d = event.data_out
+        write(d.objective_function_value, d.mip_dual_bound, time.monotonic())
+
+    def interrupt(event: Any) -> None:
+        now = time.monotonic()
+        if now - last[0] >= PROGRESS_EVERY:
+            write(event.data_out.mip_primal_bound, event.data_out.mip_dual_bound, now)
+
+    h.cbMipImprovingSolution.subscribe(improving)
+    h.cbMipInterrupt.subscribe(interrupt)
+
+
 def _set_start(h: Any, start: str) -> None:
     """Give HiGHS the (partial) MIP start of the JSON file ``start``."""
     import numpy as np
@@ -88,7 +119,12 @@ def _set_start(h: Any, start: str) -> None:
 def main(argv: list[str]) -> None:
     path, out, tl, seed, log, opts, start = argv[:7]
     started = float(argv[7]) if len(argv) > 7 else STARTED
-    res = solve_mps(path, float(tl), int(seed), log == "1", json.loads(opts), start, started)
+    progress = open(int(argv[8]), "w") if len(argv) > 8 else None  # noqa: SIM115
+    res = solve_mps(
+        path, float(tl), int(seed), log == "1", json.loads(opts), start, started, progress
+    )
+    if progress is not None:
+        progress.close()
     with open(out, "w") as f:
         json.dump(res, f)
 

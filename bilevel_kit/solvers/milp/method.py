@@ -51,6 +51,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status
@@ -160,8 +161,12 @@ def run(
         "time_limit_enforced": options.solver == "highs" or options.solver in SOLVER_OPTIONS,
     }
 
+    live = _Live(progress.tracker(options.objective), instance, options.objective)
+
     def finish(plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         extra["wall_time_s"] = budget.elapsed()
+        if plan is not None:
+            live.final(plan, bound, extra.get("idle_bound"))
         return MethodOutput(plan, status, bound, extra, status_objective=options.objective)
 
     unfit = packer.task_not_fitting()  # then no plan exists
@@ -183,6 +188,11 @@ def run(
         K = max(K, len(inc))
     extra["max_kits"] = K
     extra["upper_start"] = inc_obj
+    live.tracker.report(
+        live.seconds(inc_obj),
+        closed if options.objective == "makespan" else None,
+        stage=f"MILP ({options.solver})",
+    )
     if (
         inc is not None
         and inc_obj is not None
@@ -217,7 +227,7 @@ def run(
         return finish(plan, Status.FEASIBLE, bound)
     master = build(instance, K, upper, options.objective)
     extra["build_time_s"] = budget.elapsed()
-    loop = _Benders(instance, master, packer, budget, options, inc, inc_obj)
+    loop = _Benders(instance, master, packer, budget, options, inc, inc_obj, live)
     if options.tray == "auto":
         loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
@@ -285,6 +295,47 @@ def _makespan_bound(
     return bound
 
 
+class _Live:
+    """The run's live progress (:mod:`bilevel_kit.progress`) in seconds of its objective: the
+    master's objective is the makespan, or ``C - o_H m`` = human idle + ``sum h``."""
+
+    def __init__(self, tracker: progress.Tracker, instance: Instance, objective: str) -> None:
+        self.tracker = tracker
+        self.instance = instance
+        self.objective = objective
+        self.offset = 0.0
+        if objective == "human_idle":
+            self.offset = sum(instance.human_time(t.id) for t in instance.tasks)
+
+    def seconds(self, value: float | None) -> float | None:
+        return None if value is None else value - self.offset
+
+    def bound(self, dual: float | None) -> float | None:
+        """A solver's dual bound in seconds, less :data:`.solver.TOL` (it holds up to the
+        solver's tolerances: 39.0000000000025 for an optimum of 39)."""
+        return None if dual is None else self.seconds(dual - TOL * max(1.0, abs(dual)))
+
+    def model_values(
+        self, inc_obj: float | None, lower: float | None, stage: str | None = None
+    ) -> None:
+        """The incumbent's model objective and a master's proven bound (None: not known)."""
+        self.tracker.report(self.seconds(inc_obj), self.bound(lower), stage)
+
+    def on_bounds(self, primal: float | None, dual: float | None) -> None:
+        """A master's bounds while it runs: only the dual one counts (see the caller)."""
+        self.tracker.report(bound=self.bound(dual))
+
+    def final(self, plan: Plan, bound: float | None, idle_bound: float | None) -> None:
+        """The result's own numbers (the last report)."""
+        if not self.tracker.active:
+            return
+        tl = evaluate(self.instance, plan)
+        if self.objective == "makespan":
+            self.tracker.report(tl.makespan, bound)
+        else:
+            self.tracker.report(tl.human_idle, idle_bound)
+
+
 class _Benders:
     """The master <-> packing loop (module docstring): the incumbent ``inc`` (objective
     ``inc_obj``), the master's proven bound ``lower`` and the cuts seen so far."""
@@ -298,7 +349,9 @@ class _Benders:
         options: MilpOptions,
         inc: list[list[str]] | None,
         inc_obj: float | None,
+        live: _Live,
     ) -> None:
+        self.live = live
         self.instance = instance
         self.master = master
         self.packer = packer
@@ -325,6 +378,10 @@ class _Benders:
             self.iterations += 1
             if self.inc is not None:
                 set_start(self.master, self.instance, self.inc)
+            # the master's bound is a proof only while every cut is; its solutions are no plans
+            proof = self.cuts.unproven == 0
+            stage = f"MILP ({self.options.solver}), {self.master.n_cuts} cuts"
+            self.live.model_values(None, None, stage)
             info = run_solver(
                 self.master.model,
                 opt,
@@ -335,8 +392,11 @@ class _Benders:
                 objective=self.master.model.obj,
                 options=solver_options,
                 warmstart=self.inc is not None,
+                on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
             )
-            if not self.step(info):
+            go_on = self.step(info)
+            self.live.model_values(self.inc_obj, self.lower)
+            if not go_on:
                 break
         return info
 

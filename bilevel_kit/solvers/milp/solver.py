@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -121,16 +121,22 @@ def make_solver(name: str) -> Any:
     return opt
 
 
+#: Called with the solver's primal and dual bound (None: none yet) while it runs.
+OnBounds = Callable[[float | None, float | None], None]
+
+
 @dataclass(frozen=True)
 class _Request:
     """One solve: until the end of ``budget``, with this seed, log flag, extra solver
-    ``options`` and (``warmstart``) the variables' current values as a MIP start."""
+    ``options``, (``warmstart``) the variables' current values as a MIP start and
+    (``on_bounds``) a listener for the bounds while it runs (the HiGHS child only)."""
 
     budget: Budget
     seed: int
     log: bool
     options: Mapping[str, Any]
     warmstart: bool
+    on_bounds: OnBounds | None = None
 
 
 def run_solver(
@@ -144,16 +150,18 @@ def run_solver(
     objective: Any = None,
     options: Mapping[str, Any] | None = None,
     warmstart: bool = False,
+    on_bounds: OnBounds | None = None,
 ) -> SolveInfo:
     """Minimise ``model`` until the end of ``budget`` with a zero relative gap and load the
     best solution into its variables. ``warmstart``: the variables' current values are a MIP
     start (HiGHS completes a partial one). ``opt=None`` (``solver="highs"``) runs HiGHS in a
-    child process (module docstring).
+    child process (module docstring); ``on_bounds`` then hears its primal and dual bounds
+    while it runs (from a reader thread).
     """
     import pyomo.environ as pyo
 
     t0 = time.perf_counter()
-    req = _Request(budget, seed, log, dict(options or {}), warmstart)
+    req = _Request(budget, seed, log, dict(options or {}), warmstart, on_bounds)
     info = _run_highs_child(model, req) if opt is None else _run_pyomo(model, opt, name, req)
     if info.has_solution and objective is not None:
         info.objective = pyo.value(objective, exception=False)
@@ -250,18 +258,24 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
             start,
             repr(time.time()),  # the limit includes the child's start-up and model reading
         ]
+        pipe = _BoundsPipe(req.on_bounds) if req.on_bounds is not None else None
+        if pipe is not None:
+            argv.append(str(pipe.child_fd))
         proc = subprocess.Popen(
             argv,
             stdout=None if req.log else subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
             env=_child_env(),
+            pass_fds=() if pipe is None else (pipe.child_fd,),
             preexec_fn=(
                 functools.partial(_die_with_parent, os.getpid())
                 if sys.platform == "linux"
                 else None
             ),
         )
+        if pipe is not None:
+            pipe.start()
         try:  # the child never outlives this call: killed on a timeout, an error or a signal
             _, err = proc.communicate(timeout=max(1.0, left) + KILL_GRACE)
         except subprocess.TimeoutExpired:
@@ -270,6 +284,8 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
             if proc.poll() is None:
                 proc.kill()
                 proc.communicate()
+            if pipe is not None:
+                pipe.join()
         if proc.returncode != 0 or not os.path.exists(out):
             raise RuntimeError(f"HiGHS subprocess failed: {err.strip()[-2000:]}")
         with open(out) as f:
@@ -287,6 +303,47 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
         objective=_finite(res["objective"]),
         wall_time_s=0.0,
     )
+
+
+class _BoundsPipe:
+    """The pipe the HiGHS child writes its ``PRIMAL DUAL`` lines to, read by a thread that
+    passes them on (non-finite values as None)."""
+
+    def __init__(self, on_bounds: OnBounds) -> None:
+        import os
+
+        self.on_bounds = on_bounds
+        self.read_fd, self.child_fd = os.pipe()
+        self.thread: Any = None
+
+    def start(self) -> None:
+        """Close this process's copy of the write end (the child has its own), then read."""
+        import os
+        import threading
+
+        os.close(self.child_fd)
+        self.thread = threading.Thread(target=self._read, name="highs-bounds", daemon=True)
+        self.thread.start()
+
+    def _read(self) -> None:
+        listening = True
+        with open(self.read_fd) as lines:  # ends when the child exits
+            for line in lines:  # read to the end even if the listener failed: never block HiGHS
+                primal, _, dual = line.partition(" ")
+                try:
+                    if listening:
+                        self.on_bounds(_finite(primal), _finite(dual))
+                except Exception:  # a broken progress display must not break the solve
+                    listening = False
+
+    def join(self) -> None:
+        if self.thread is not None:
+            self.thread.join()
+        else:  # the child never started: close both ends here
+            import os
+
+            os.close(self.read_fd)
+            os.close(self.child_fd)
 
 
 def _takes_warmstart(opt: Any) -> bool:
