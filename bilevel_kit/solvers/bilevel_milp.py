@@ -95,7 +95,11 @@ Random instances of up to 6 tasks solve in well under a second.
 * ``solver``, ``lower``, ``candidates`` (convex kits within the tray area), ``columns`` (those
   that fit), ``multisets`` (kit values computed), ``binaries``, ``termination``;
 * ``start_objective`` and ``local_search_objective``: J of the warm-start plan before and
-  after :func:`local_search` (only with a warm start);
+  after :func:`local_search`, ``local_search_converged``: whether it reached a local optimum
+  within its share of the time (only with a warm start; if not, the start and so the MILP's
+  choice among plans of equal J depend on the machine's speed);
+* ``lower_level_cut``: kit values computed with a packing limit cut short by the deadline
+  (their layouts depend on the machine's speed; not memoised);
 * ``lower_level_s``, ``milp_s``, ``wall_time_s``: seconds spent;
 * ``reason`` when the run ends without a plan for a known reason.
 
@@ -252,6 +256,8 @@ class LowerLevel:
         self._reach = reach_grid(instance)
         self._values: dict[Multiset, KitValue] = {}
         self.time_s = 0.0
+        #: values computed with a packing limit cut by :attr:`deadline` (machine-speed dependent)
+        self.n_cut = 0
         #: perf_counter time after which packing calls get only what is left (None: no end);
         #: a value computed with a cut packing limit is not memoised
         self.deadline: float | None = None
@@ -314,6 +320,8 @@ class LowerLevel:
             val = KitValue(False, float("-inf"), (), "none")
         if not cut:
             self._values[key] = val
+        else:
+            self.n_cut += 1
         self.time_s += time.perf_counter() - t0
         return val
 
@@ -435,8 +443,11 @@ def local_search(
     deadline: float,
     *,
     signed: bool = False,
-) -> tuple[list[list[str]], float]:
-    """First-improvement hill climbing on J (a good MIP start lets the MILP prune early).
+) -> tuple[list[list[str]], float, bool]:
+    """First-improvement hill climbing on J (a good MIP start lets the MILP prune early);
+    returns the kits, their J and whether a local optimum was reached before ``deadline``
+    (else the start, hence possibly the MILP's choice among equal-J plans, depends on the
+    machine's speed).
 
     Moves: a task to the previous or next kit or into a new kit of its own just before or
     after its kit, merging or swapping two adjacent kits. A plan is kept only if every kit fits
@@ -485,7 +496,7 @@ def local_search(
             if v < best - 1e-9:
                 cur, best, improved = cand, v, True
                 break
-    return [list(human_order(instance, k)) for k in cur], best
+    return [list(human_order(instance, k)) for k in cur], best, not improved
 
 
 # ---------------------------------------------------------------------------------------------
@@ -762,6 +773,7 @@ def run(
 
     cols = build_columns(instance, kits, lower_level, budget.cut(MARGIN))
     extra.update(multisets=lower_level.n_values, lower_level_s=lower_level.time_s)
+    extra["lower_level_cut"] = lower_level.n_cut  # updated below: the plan's values may cut too
     if cols is None:
         extra["reason"] = "time limit reached while computing the kits' lower-level values"
         return finish(None, Status.UNKNOWN)
@@ -773,7 +785,7 @@ def run(
 
     start = None
     if warm_plan is not None:
-        start, start_j, ls_j = _warm_start(
+        start, start_j, ls_j, ls_converged = _warm_start(
             instance,
             warm_plan,
             lower_level,
@@ -782,7 +794,11 @@ def run(
             signed=options.signed,
             seed=seed,
         )
-        extra.update(start_objective=start_j, local_search_objective=ls_j)
+        extra.update(
+            start_objective=start_j,
+            local_search_objective=ls_j,
+            local_search_converged=ls_converged,
+        )
     t_milp = time.perf_counter()
     m, keys = _model(instance, cols, options.signed, weights)
     extra["binaries"] = len(keys)
@@ -813,6 +829,7 @@ def run(
         plan_objective_J_bound=bound,
         plan_objective_J_gap=None if bound is None else abs(value - bound) / max(1.0, abs(value)),
         makespan=evaluate(instance, plan).makespan,
+        lower_level_cut=lower_level.n_cut,
     )
     return finish(plan, Status.OPTIMAL if info.optimal else Status.FEASIBLE)
 
@@ -848,9 +865,10 @@ def _warm_start(
     budget: Budget,
     signed: bool,
     seed: int,
-) -> tuple[Plan, float, float]:
+) -> tuple[Plan, float, float, bool]:
     """The MIP start: ``warm_plan`` (``"greedy"``: greedy-ce's plan) improved by
-    :func:`local_search` in a tenth of the time left; with J before and after."""
+    :func:`local_search` in a tenth of the time left; with J before and after, and whether the
+    local search converged."""
     if isinstance(warm_plan, str):
         if warm_plan != "greedy":
             raise UsageError(f"warm_plan must be a Plan, 'greedy' or None, not {warm_plan!r}")
@@ -861,11 +879,11 @@ def _warm_start(
         gp = GreedyParams(ce=ce_params or CEParams())
         warm_plan = greedy_plan(instance, gp, seed)
     ls_until = budget.share(0.1)
-    kits_ls, j_ls = local_search(
+    kits_ls, j_ls, converged = local_search(
         instance, [k.tasks for k in warm_plan.kits], lower_level, ls_until, signed=signed
     )
     start_j = paper_objective(instance, warm_plan, lower_level, signed=signed)
-    return Plan(tuple(Kit(tuple(k)) for k in kits_ls)), start_j, j_ls
+    return Plan(tuple(Kit(tuple(k)) for k in kits_ls)), start_j, j_ls, converged
 
 
 def _warm(
