@@ -6,7 +6,6 @@ import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -33,8 +32,8 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
-def _milp_folders() -> set[str]:
-    return {p.name for p in Path(tempfile.gettempdir()).glob("bilevel_milp_*")}
+def _milp_folders(folder: Path) -> set[str]:
+    return {p.name for p in folder.glob("bilevel_milp_*")}
 
 
 def test_solve_milp_sigterm_kills_its_child_and_removes_its_folder(tmp_path, capsys):
@@ -42,9 +41,11 @@ def test_solve_milp_sigterm_kills_its_child_and_removes_its_folder(tmp_path, cap
     inst = tmp_path / "g.json"
     assert main(["generate", "intree", "--size", "60", "--seed", "1", "--out", str(inst)]) == 0
     capsys.readouterr()
-    before = _milp_folders()
+    private = tmp_path / "tmp"  # its own temporary folder: other processes' folders don't count
+    private.mkdir()
     root = str(Path(__file__).resolve().parents[2])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    env["TMPDIR"] = str(private)
     cmd = [sys.executable, "-m", "bilevel_kit.cli", "solve", str(inst), "-m", "milp"]
     proc = subprocess.Popen(
         [*cmd, "--time-limit", "30"],
@@ -67,7 +68,7 @@ def test_solve_milp_sigterm_kills_its_child_and_removes_its_folder(tmp_path, cap
         while time.monotonic() < deadline and any(_alive(k) for k in kids):
             time.sleep(0.1)
         assert not any(_alive(k) for k in kids), "HiGHS child survived its parent"
-        assert _milp_folders() <= before, "a /tmp/bilevel_milp_* folder was left behind"
+        assert not _milp_folders(private), "a bilevel_milp_* folder was left behind"
         assert "Traceback" not in err and "interrupted" in err
         assert proc.returncode == 130
     finally:
