@@ -84,6 +84,29 @@ class Timeline:
     human_work: float
     robot_work: float
 
+    @classmethod
+    def from_work(
+        cls,
+        kits: Sequence[KitTimes],
+        task_start: Mapping[str, float],
+        task_end: Mapping[str, float],
+        makespan: float,
+        human_work: float,
+        robot_work: float,
+    ) -> Timeline:
+        """A timeline whose idle times are the makespan less each side's work (the module
+        docstring); the evaluator and the simulator's log both build theirs this way."""
+        return cls(
+            tuple(kits),
+            dict(task_start),
+            dict(task_end),
+            makespan,
+            makespan - human_work,
+            makespan - robot_work,
+            human_work,
+            robot_work,
+        )
+
     @property
     def n_kits(self) -> int:
         return len(self.kits)
@@ -175,16 +198,13 @@ class TimelineBuilder:
 
     def timeline(self) -> Timeline:
         """The timeline of the kits appended so far."""
-        makespan = self.human_free
-        return Timeline(
-            kits=tuple(self.kits),
-            task_start=dict(self.task_start),
-            task_end=dict(self.task_end),
-            makespan=makespan,
-            human_idle=makespan - self.human_work,
-            robot_idle=makespan - self.robot_work,
-            human_work=self.human_work,
-            robot_work=self.robot_work,
+        return Timeline.from_work(
+            self.kits,
+            self.task_start,
+            self.task_end,
+            self.human_free,
+            self.human_work,
+            self.robot_work,
         )
 
 

@@ -14,7 +14,8 @@ work (:mod:`bilevel_kit.paths`). Heavy back-ends are imported inside the command
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from . import check, compare, generate, methods, pack, reach, repro, schema, simulate, solve
@@ -24,6 +25,7 @@ from .common import (
     EXIT_UNKNOWN,
     EXIT_USAGE,
     Parser,
+    options_epilog,
     run_command,
 )
 
@@ -67,6 +69,15 @@ COMMANDS: dict[str, Command] = {
 }
 
 
+def _param_epilog(command: Command) -> Callable[[], str] | None:
+    """The ``-p`` keys of every method (policy) after a command's help, built only when the
+    help is printed (``PARAM_USAGE``/``PARAM_POLICIES`` of the command module)."""
+    usage = getattr(command, "PARAM_USAGE", None)
+    if usage is None:
+        return None
+    return functools.partial(options_epilog, usage, getattr(command, "PARAM_POLICIES", False))
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
     from ..methods import REGISTRY
@@ -92,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
             name,
             help=command.HELP,
             description=command.DESCRIPTION,
-            lazy_epilog=getattr(command, "epilog", None),
+            lazy_epilog=_param_epilog(command),
         )
         command.add_arguments(p)
     return parser

@@ -15,7 +15,6 @@ from .common import (
     add_sweep_options,
     add_time_limit,
     instance_overrides,
-    options_epilog,
     param,
     sweep_exit,
     sweep_session,
@@ -33,9 +32,8 @@ DESCRIPTION = (
 )
 
 
-def epilog() -> str:
-    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
-    return options_epilog("-p METHOD:KEY=VALUE")
+#: How ``-p`` is spelled here; the help lists every method's keys after it.
+PARAM_USAGE = "-p METHOD:KEY=VALUE"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -4,6 +4,8 @@ the adaptive-pace study beyond the paper (see paper_repro/)."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import Any
 
 from .common import (
     EXIT_OK,
@@ -114,36 +116,30 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_sweep_options(p)
 
 
-def integers(text: str) -> tuple[int, ...]:
-    """``1,2,5``: one or more integers >= 1."""
+def _listed(text: str, cast: Callable[[str], float], what: str, low: str) -> tuple[Any, ...]:
+    """``text`` split on commas, each item cast and at least ``low`` (one message per error)."""
     values = []
     for item in filter(None, (s.strip() for s in text.split(","))):
         try:
-            v = int(item)
+            v = cast(item)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected integers, got {item!r}") from None
-        if v < 1:
-            raise argparse.ArgumentTypeError(f"expected integers >= 1, got {item!r}")
+            raise argparse.ArgumentTypeError(f"expected {what}, got {item!r}") from None
+        if not (v >= 1 if low == ">= 1" else 0 < v < float("inf")):
+            raise argparse.ArgumentTypeError(f"expected {what} {low}, got {item!r}")
         values.append(v)
     if not values:
-        raise argparse.ArgumentTypeError("expected at least one integer")
+        raise argparse.ArgumentTypeError(f"expected at least one {what[:-1]}")
     return tuple(values)
+
+
+def integers(text: str) -> tuple[int, ...]:
+    """``1,2,5``: one or more integers >= 1."""
+    return _listed(text, int, "integers", ">= 1")
 
 
 def numbers(text: str) -> tuple[float, ...]:
     """``30,60``: one or more finite numbers > 0."""
-    values = []
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        try:
-            v = float(item)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected numbers, got {item!r}") from None
-        if not 0 < v < float("inf"):
-            raise argparse.ArgumentTypeError(f"expected numbers > 0, got {item!r}")
-        values.append(v)
-    if not values:
-        raise argparse.ArgumentTypeError("expected at least one number")
-    return tuple(values)
+    return _listed(text, float, "numbers", "> 0")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -22,7 +22,6 @@ from .common import (
     float_map,
     instance_overrides,
     nonneg,
-    options_epilog,
     positive_int,
     sweep_exit,
     sweep_session,
@@ -42,9 +41,9 @@ SIM_COLUMNS = (
 CSV_COLUMNS = ("seed", "units", *SIM_COLUMNS, "human_work", "robot_work", "max_queue")
 
 
-def epilog() -> str:
-    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
-    return options_epilog("-p KEY=VALUE", policies=True)
+#: How ``-p`` is spelled here; the help lists every policy's keys after it.
+PARAM_USAGE = "-p KEY=VALUE"
+PARAM_POLICIES = True
 
 
 HELP = "shop-floor simulation (SimPy) of a kitting policy"

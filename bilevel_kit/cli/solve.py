@@ -16,7 +16,6 @@ from .common import (
     add_seed,
     add_time_limit,
     load_instance,
-    options_epilog,
     positive_int,
     print_violations,
 )
@@ -36,9 +35,8 @@ DESCRIPTION = (
 )
 
 
-def epilog() -> str:
-    """The ``-p`` keys, listed after the help (built only when the help is printed)."""
-    return options_epilog("-p KEY=VALUE")
+#: How ``-p`` is spelled here; the help lists every method's keys after it.
+PARAM_USAGE = "-p KEY=VALUE"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

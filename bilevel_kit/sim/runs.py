@@ -132,15 +132,13 @@ def _result(shop: ShopFloor, pol: Policy, seed: int) -> SimResult:
     unit_end = [0.0] * inst.units
     for t in inst.tasks:
         unit_end[t.unit - 1] = max(unit_end[t.unit - 1], shop.task_end[t.id])
-    timeline = Timeline(
-        kits=tuple(KitTimes(**kt) for kt in shop.kit_times),
-        task_start=shop.task_start,
-        task_end=shop.task_end,
-        makespan=makespan,
-        human_idle=makespan - shop.human_work,
-        robot_idle=makespan - shop.robot_work,
-        human_work=shop.human_work,
-        robot_work=shop.robot_work,
+    timeline = Timeline.from_work(
+        [KitTimes(**kt) for kt in shop.kit_times],
+        shop.task_start,
+        shop.task_end,
+        makespan,
+        shop.human_work,
+        shop.robot_work,
     )
     return SimResult(
         instance=inst,
