@@ -1,6 +1,7 @@
 """Reproduction of the paper's user study (Section V-A, Fig. 5 top) and Figure 6 (Section V-B).
 
-The entry points the CLI (``bilevel-kit repro user-study|fig6|horizon [--quick]``) calls::
+The entry points the CLI (``bilevel-kit repro user-study|fig6|horizon|adaptive [--quick]``)
+calls (``run_adaptive`` lives in :mod:`.adaptive`)::
 
     run_user_study(out_dir="out/repro/user_study", quick=False, seed=0, jobs=1) -> dict
     run_fig6(out_dir="out/repro/fig6", quick=False, reps=None, jobs=1,
@@ -42,37 +43,8 @@ from typing import Any
 from ..experiments.cells import run_cells_counted
 from ..sim import TimingModel
 from .calibration import Cohort, calibrate, condition_means, draw_cohort, study_params, study_runs
-from .common import (
-    CONDITIONS,
-    DEFAULT_FREE,
-    DEFAULT_INSTANCE,
-    DEFAULT_TARGETS,
-    FIG6_GRID,
-    FIG6_REPAIR,
-    FIG6_REPS,
-    FIG6_SUPPLIED,
-    FIG6_UNITS,
-    LABELS,
-    METRIC_LABELS,
-    METRICS,
-    OPT,
-    PAPER_ACTIVE,
-    PAPER_CI,
-    PAPER_F,
-    PAPER_MEANS,
-    PAPER_N,
-    QUICK_CE,
-    QUICK_MATS,
-    QUICK_MTTFS,
-    QUICK_REPS,
-    QUICK_UNITS,
-    SHORT,
-    SINGLE,
-    WHOLE,
-    load_instance,
-    paper_idle,
-    participant_seeds,
-)
+from .common import *  # noqa: F403 (the paper's numbers and helpers: common.__all__)
+from .common import __all__ as common_names
 from .fig6 import (
     Fig6Cell,
     calibrated_timing,
@@ -110,32 +82,7 @@ def run_cells_parallel(
 
 
 __all__ = [
-    "CONDITIONS",
-    "DEFAULT_FREE",
-    "DEFAULT_INSTANCE",
-    "DEFAULT_TARGETS",
-    "FIG6_GRID",
-    "FIG6_REPAIR",
-    "FIG6_REPS",
-    "FIG6_SUPPLIED",
-    "FIG6_UNITS",
-    "LABELS",
-    "METRICS",
-    "METRIC_LABELS",
-    "OPT",
-    "PAPER_ACTIVE",
-    "PAPER_CI",
-    "PAPER_F",
-    "PAPER_MEANS",
-    "PAPER_N",
-    "QUICK_CE",
-    "QUICK_MATS",
-    "QUICK_MTTFS",
-    "QUICK_REPS",
-    "QUICK_UNITS",
-    "SHORT",
-    "SINGLE",
-    "WHOLE",
+    *common_names,
     "Cohort",
     "Fig6Cell",
     "TimingModel",
@@ -150,10 +97,7 @@ __all__ = [
     "format_study_markdown",
     "horizon_cell",
     "inside_count",
-    "load_instance",
-    "paper_idle",
     "paper_numbers",
-    "participant_seeds",
     "plot_fig6",
     "plot_fig6_panel",
     "plot_horizon",

@@ -12,6 +12,39 @@ from ..errors import UsageError
 from ..instance import Instance, load
 from ..layout.cross_entropy import CEParams
 
+#: What ``bilevel_kit.repro`` re-exports from here.
+__all__ = [
+    "CONDITIONS",
+    "DEFAULT_FREE",
+    "DEFAULT_INSTANCE",
+    "DEFAULT_TARGETS",
+    "FIG6_GRID",
+    "FIG6_REPAIR",
+    "FIG6_REPS",
+    "FIG6_SUPPLIED",
+    "FIG6_UNITS",
+    "LABELS",
+    "METRICS",
+    "METRIC_LABELS",
+    "OPT",
+    "PAPER_ACTIVE",
+    "PAPER_CI",
+    "PAPER_F",
+    "PAPER_MEANS",
+    "PAPER_N",
+    "QUICK_CE",
+    "QUICK_MATS",
+    "QUICK_MTTFS",
+    "QUICK_REPS",
+    "QUICK_UNITS",
+    "SHORT",
+    "SINGLE",
+    "WHOLE",
+    "load_instance",
+    "paper_idle",
+    "participant_seeds",
+]
+
 #: The paper's table (the repository's copy; ``paper_repro`` lives next to it).
 DEFAULT_INSTANCE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
 
