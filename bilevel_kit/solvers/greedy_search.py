@@ -179,6 +179,10 @@ class PrefixSearch:
             for p in ps:
                 succ[p].append(j)
         self.succ = [tuple(s) for s in succ]
+        self.pred_set = [frozenset(p) for p in self.pred]
+        #: the precedence arcs (predecessor, task), for the epoch's available tasks at once
+        self._arc_pred = np.array([p for ps in self.pred for p in ps], dtype=np.int64)
+        self._arc_task = np.array([j for j, ps in enumerate(self.pred) for _ in ps], dtype=np.int64)
         self.part_matrix = part_matrix
         self.types = list(types)
         self.limits = limits
@@ -187,6 +191,11 @@ class PrefixSearch:
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
         self._sums = _SumTable.build(robot, instance.horizon - 1)
+        #: every sum of robot times is exact (multiples of 1/64 far below 2**53), so equal in
+        #: any summation order: the rest search may then memoise sums by set
+        self._exact_sums = bool(
+            np.all(robot * 64 == np.round(robot * 64)) and np.abs(robot).sum() * 64 < 2.0**52
+        )
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _children(
@@ -223,6 +232,24 @@ class PrefixSearch:
                     if start == len(s) or y > suffix_max[start]:
                         unlocked.add(y)
         return unlocked
+
+    def _unlocked_after(
+        self, unlocked: tuple[int, ...], seq: tuple[int, ...], y: int, undone: list[int]
+    ) -> tuple[int, ...]:
+        """:meth:`_unlocked` of ``seq`` (= parent + ``(y,)``) from the parent's: a child of the
+        parent stays one iff it is above ``y`` (the canonical order), and the successors of
+        ``y`` whose undone predecessors (``undone``: their count, -1 if done) are all in
+        ``seq`` are new children (``y`` comes last)."""
+        kept = [u for u in unlocked if u > y] if unlocked else []
+        new = [
+            z
+            for z in self.succ[y]
+            if undone[z] == 1
+            or (undone[z] > 1 and len(self.pred_set[z].intersection(seq)) == undone[z])
+        ]
+        if not new:
+            return tuple(kept)
+        return tuple(sorted([*kept, *new]))
 
     def _rest_sum_bounds(
         self, tasks: np.ndarray, m: int, ctx: _Epoch
@@ -310,8 +337,10 @@ class PrefixSearch:
         return anc
 
     def _levels(
-        self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
+        self, undone: list[int], length: int, ctx: _Epoch, avail: list[int]
     ) -> tuple[list[_Level], bool]:
+        """The closed prefix sets of sizes 1..``length`` (``undone``: undone predecessors per
+        task, -1 if done), and whether a level became a beam."""
         lim = self.limits
         avail_arr = np.array(avail, dtype=np.int64)
         parents: list[tuple[int, ...]] = [()]
@@ -319,6 +348,8 @@ class PrefixSearch:
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
         p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
+        #: per parent, its children that ``done`` alone does not make available (increasing)
+        p_unlocked: list[tuple[int, ...]] = [()]
         levels: list[_Level] = []
         total = 0
         beam = False
@@ -330,11 +361,10 @@ class PrefixSearch:
             child = avail_arr[col]
             extra_par: list[int] = []
             extra_child: list[int] = []
-            for a, seq in enumerate(parents):
-                if any(self.succ[x] for x in seq):
-                    for y in self._unlocked(seq, set(seq), done):
-                        extra_par.append(a)
-                        extra_child.append(y)
+            for a, unl in enumerate(p_unlocked):
+                for y in unl:
+                    extra_par.append(a)
+                    extra_child.append(y)
             if extra_par:
                 par = np.concatenate([par, np.array(extra_par, dtype=np.int64)])
                 child = np.concatenate([child, np.array(extra_child, dtype=np.int64)])
@@ -353,10 +383,16 @@ class PrefixSearch:
                 keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
-            seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
+            pairs = list(zip(par.tolist(), child.tolist(), strict=True))
+            seqs = [(*parents[a], y) for a, y in pairs]
             tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
             levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
+            if i < length:
+                p_unlocked = [
+                    self._unlocked_after(p_unlocked[a], seq, y, undone)
+                    for (a, y), seq in zip(pairs, seqs, strict=True)
+                ]
             parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
         return levels, beam
 
@@ -462,9 +498,8 @@ class PrefixSearch:
         known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        avail = [
-            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
-        ]
+        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
+        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
         anc = self._window(done, avail, length)
         window = np.array(sorted(anc), dtype=np.int64)
         order = np.lexsort((window, self.r[window]))
@@ -472,7 +507,7 @@ class PrefixSearch:
         high = window[order[::-1][:length]]
         self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
         ctx = _Epoch(human_remaining, available, signed, low, high)
-        levels, beam = self._levels(done, length, ctx, avail)
+        levels, beam = self._levels(np.where(done, -1, undone).tolist(), length, ctx, avail)
         self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
@@ -665,9 +700,24 @@ class _Rests:
         self.r = search.r
         self.vidx = tab.vidx
         self.signed = signed
-        self.pool = set(avail)
+        self.pool = frozenset(avail)
+        self.vlist: list[int] = tab.vidx.tolist()
+        #: R(core) by core when every sum of robot times is exact (then in any order)
+        self._core_sums: dict[frozenset[int], float] | None = {} if search._exact_sums else None
         self.anc = anc
         self.deep = sorted(y for y in anc if y not in self.pool)
+        #: the deep tasks whose need set (itself and its undone ancestors) has at most k tasks
+        #: (k = 0..len(avail)), and the deep descendants of each task: a deep task outside
+        #: both is never a candidate of :meth:`best`, since its need set stays larger than m
+        sizes = [len(anc[y]) + 1 for y in self.deep]
+        self.small = [
+            [y for y, z in zip(self.deep, sizes, strict=True) if z <= k]
+            for k in range(max(sizes, default=0) + 1)
+        ]
+        self.desc: dict[int, list[int]] = {}
+        for y in self.deep:
+            for a in anc[y]:
+                self.desc.setdefault(a, []).append(y)
         self.mult = np.bincount(tab.vidx[avail], minlength=len(tab.vals))
         self.by_value: dict[int, list[int]] = {}
         for t in avail:  # avail is sorted
@@ -730,12 +780,20 @@ class _Rests:
         ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form)."""
         pset = set(prefix)
         cands: list[tuple[int, frozenset[int]]] = []
-        for y in self.deep:
+        some = set(self.small[min(m, len(self.small) - 1)])
+        for x in prefix:
+            some.update(self.desc.get(x, ()))
+        for y in sorted(some):
             if y in pset:
                 continue
             need = (self.anc[y] - pset) | {y}
             if len(need) <= m:
                 cands.append((y, frozenset(need)))
+        sets = [c[1] for c in cands]
+        sizes = [len(c) for c in sets]
+        base: dict[int, int] = {}  # the prefix's available tasks by value
+        for t in pset & self.pool:
+            base[self.vlist[t]] = base.get(self.vlist[t], 0) + 1
         best_f = math.inf
         best_set: frozenset[int] | None = None
         best_free: tuple[int, ...] = ()
@@ -752,24 +810,38 @@ class _Rests:
             if cores > self.max_cores:
                 capped = True
                 break
-            removed: dict[int, int] = {}
-            for t in pset.union(core):
-                if t in self.pool:
-                    v = int(self.vidx[t])
-                    removed[v] = removed.get(v, 0) + 1
-            r_core = float(self.r[list(core)].sum()) if core else 0.0
+            removed = base
+            if core:
+                removed = dict(base)
+                for t in core & self.pool:
+                    removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
+            r_core = self._core_sum(core) if core else 0.0
             free = self._free(m - len(core), target - r_core, removed)
             if free is not None:
                 val = float(score(r_core + free[0]))
                 if val < best_f and val <= cutoff:
                     best_f, best_set, best_free = val, core, free[1]
-            for a in range(start, len(cands)):
-                grown = core | cands[a][1]
-                if len(grown) <= m and grown != core:
-                    stack.append((a + 1, grown))
+            room = m - len(core)
+            if room <= 0:  # every need set holds a task, so nothing grows the core
+                continue
+            for a in range(start, len(sets)):
+                if sizes[a] <= room or not sets[a].isdisjoint(core):
+                    grown = core | sets[a]
+                    if len(grown) <= m and grown != core:
+                        stack.append((a + 1, grown))
         if best_set is None:
             return math.inf, (), capped
         return best_f, self._order(pset, best_set, best_free), capped
+
+    def _core_sum(self, core: frozenset[int]) -> float:
+        """R(core): memoised per epoch when sums are exact in any order, else summed as
+        numpy sums the core's tasks in the set's iteration order (the same floats)."""
+        if self._core_sums is None:
+            return float(self.r[list(core)].sum())
+        hit = self._core_sums.get(core)
+        if hit is None:
+            hit = self._core_sums[core] = float(self.r[list(core)].sum())
+        return hit
 
     def _order(
         self, pset: set[int], core: frozenset[int], free: tuple[int, ...]
