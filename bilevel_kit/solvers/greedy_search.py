@@ -511,32 +511,27 @@ class PrefixSearch:
         self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
-        queue: list[tuple[float, int, int, int]] = []
-        fits_of: dict[tuple[int, int], float] = {}
+        fits_of: list[np.ndarray] = []  # per level: the fitness of each row (NaN: unknown)
+        parts: list[tuple[np.ndarray, ...]] = []
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            level_fit = np.full(len(lv.seqs), np.nan)
-            keys, inverse = np.unique(lv.counts, axis=0, return_inverse=True)
-            level_fits = np.ones(len(lv.seqs), dtype=bool)
+            keys, inverse = _unique_rows(lv.counts)
+            key_fit = np.full(len(keys), np.nan)
+            key_fits = np.ones(len(keys), dtype=bool)
             for u, row in enumerate(keys):
                 hit = cached(row) if cached is not None else None
                 if hit is not None:
-                    sel = inverse.reshape(-1) == u
-                    level_fit[sel] = hit[0]
-                    level_fits[sel] = hit[1]
+                    key_fit[u], key_fits[u] = hit
+            level_fit, level_fits = key_fit[inverse], key_fits[inverse]
             opt = self._optimistic(
                 li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, level_fit
             )
             known = ~np.isnan(level_fit)
-            rows = zip(opt.tolist(), known.tolist(), level_fits.tolist(), strict=True)
-            for k, (o, kn, ok) in enumerate(rows):
-                if not ok:
-                    continue
-                if kn:
-                    fits_of[li, k] = float(level_fit[k])
-                    self.stats.evaluated += 1
-                queue.append((o, int(kn), li, k))
-        heapq.heapify(queue)
+            self.stats.evaluated += int((known & level_fits).sum())
+            fits_of.append(level_fit)
+            rows = np.flatnonzero(level_fits)
+            parts.append((opt[rows], known[rows].astype(np.int64), np.full(len(rows), li), rows))
+        queue = _Frontier(*(np.concatenate([p[c] for p in parts]) for c in range(4)))
 
         def scorer(
             li: int, k: int, fit: float
@@ -568,8 +563,8 @@ class PrefixSearch:
             rests = _Rests(self, done, avail, anc, signed)
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
         incumbent = math.inf
-        while queue and queue[0][0] <= incumbent + TIE_TOL:
-            _, stage, li, k = heapq.heappop(queue)
+        while queue and queue.peek()[0] <= incumbent + TIE_TOL:
+            _, stage, li, k = queue.pop()
             i = li + 1
             lv = levels[li]
             if stage == 0:
@@ -577,7 +572,7 @@ class PrefixSearch:
                 if not fits:
                     continue
                 self.stats.evaluated += 1
-                fits_of[li, k] = fit0
+                fits_of[li][k] = fit0
                 bound = self._optimistic(
                     i,
                     length,
@@ -588,9 +583,9 @@ class PrefixSearch:
                     ctx,
                     np.array([fit0]),
                 )
-                heapq.heappush(queue, (float(bound[0]), 1, li, k))
+                queue.push((float(bound[0]), 1, li, k))
                 continue
-            fit = float(fits_of[li, k])
+            fit = float(fits_of[li][k])
             f, lower = scorer(li, k, fit)
             if i == length:
                 score = float(f(0.0))
@@ -630,6 +625,63 @@ class PrefixSearch:
             if best_key is None or key < best_key:
                 best_key, best = key, Choice(prefix, rest, score)
         return best
+
+
+def _unique_rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of a non-negative integer matrix and the index of each row's, as
+    ``np.unique(axis=0)`` (rows packed into one integer each when they fit 52 bits)."""
+    if len(counts) == 0 or counts.shape[1] == 0:
+        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        return keys, inverse.reshape(-1)
+    base = counts.max(axis=0).astype(np.float64) + 1.0
+    if float(np.prod(base)) >= 2.0**52:  # the radix below exact in floating point
+        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        return keys, inverse.reshape(-1)
+    radix = np.cumprod(np.concatenate([[1.0], base[:0:-1]]))[::-1].astype(np.int64)
+    _, first, inverse = np.unique(counts @ radix, return_index=True, return_inverse=True)
+    return counts[first], inverse.reshape(-1)
+
+
+class _Frontier:
+    """The best-first queue of :meth:`PrefixSearch.decide`: entries (bound, stage, level, row)
+    popped in increasing order, the initial ones sorted at once (numpy) and merged with a heap
+    of the later pushes; the same order as one heap of all (entries are distinct)."""
+
+    def __init__(self, bound: np.ndarray, stage: np.ndarray, level: np.ndarray, row: np.ndarray):
+        order = np.lexsort((row, level, stage, bound))
+        self._cols = [c[order] for c in (bound, stage, level, row)]
+        self._pos = 0
+        self._buf: list[tuple[float, int, int, int]] = []
+        self._next = 0
+        self._heap: list[tuple[float, int, int, int]] = []
+
+    def _static(self) -> tuple[float, int, int, int] | None:
+        if self._next == len(self._buf):  # convert the next block of sorted entries
+            a, b = self._pos, min(self._pos + 256, len(self._cols[0]))
+            if a == b:
+                return None
+            cols = [c[a:b].tolist() for c in self._cols]
+            self._buf, self._next, self._pos = list(zip(*cols, strict=True)), 0, b
+        return self._buf[self._next]
+
+    def __bool__(self) -> bool:
+        return bool(self._heap) or self._static() is not None
+
+    def peek(self) -> tuple[float, int, int, int]:
+        s = self._static()
+        if s is None or (self._heap and self._heap[0] < s):
+            return self._heap[0]
+        return s
+
+    def pop(self) -> tuple[float, int, int, int]:
+        s = self._static()
+        if s is None or (self._heap and self._heap[0] < s):
+            return heapq.heappop(self._heap)
+        self._next += 1
+        return s
+
+    def push(self, item: tuple[float, int, int, int]) -> None:
+        heapq.heappush(self._heap, item)
 
 
 @dataclass(frozen=True)
