@@ -190,6 +190,9 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
+        self._r_list: list[float] = robot.tolist()
+        #: undone predecessors of each task at the epoch (-1: done)
+        self._undone: list[int] = []
         self._sums = _SumTable.build(robot, instance.horizon - 1)
         #: every sum of robot times is exact (multiples of 1/64 far below 2**53), so equal in
         #: any summation order: the rest search may then memoise sums by set
@@ -198,48 +201,19 @@ class PrefixSearch:
         )
 
     # -- prefix sets ---------------------------------------------------------------------------
-    def _children(
-        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView, avail: list[int]
-    ) -> list[int]:
-        """Tasks y such that ``s + (y,)`` is the smallest topological order of its set, in
-        increasing order. ``avail``: tasks available given ``done`` alone (sorted)."""
-        out = avail[bisect.bisect_right(avail, max(s) if s else -1) :]
-        unlocked = self._unlocked(s, inset, done)
-        if unlocked:
-            return sorted([*out, *unlocked])
-        return out
-
-    def _unlocked(
-        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView
-    ) -> set[int]:
-        """The children of ``s`` (:meth:`_children`) that ``done`` alone does not make
-        available: successors of its tasks whose last predecessor in ``s`` comes after every
-        larger task of ``s``."""
-        unlocked: set[int] = set()
-        if s:
-            pos = {x: k for k, x in enumerate(s)}
-            suffix_max = list(s)
-            for k in range(len(s) - 2, -1, -1):
-                suffix_max[k] = max(suffix_max[k], suffix_max[k + 1])
-            for x in s:
-                for y in self.succ[x]:
-                    if y in inset or y in unlocked or done[y]:
-                        continue
-                    ps = self.pred[y]
-                    if not all(done[p] or p in inset for p in ps):
-                        continue
-                    start = 1 + max(pos[p] for p in ps if p in inset)
-                    if start == len(s) or y > suffix_max[start]:
-                        unlocked.add(y)
-        return unlocked
-
     def _unlocked_after(
         self, unlocked: tuple[int, ...], seq: tuple[int, ...], y: int, undone: list[int]
     ) -> tuple[int, ...]:
-        """:meth:`_unlocked` of ``seq`` (= parent + ``(y,)``) from the parent's: a child of the
-        parent stays one iff it is above ``y`` (the canonical order), and the successors of
-        ``y`` whose undone predecessors (``undone``: their count, -1 if done) are all in
-        ``seq`` are new children (``y`` comes last)."""
+        """The *unlocked children* of ``seq``, from those of its parent ``seq[:-1]``.
+
+        The children of a canonical sequence ``s`` (the smallest topological order of its
+        set) are the tasks ``z`` such that ``s + (z,)`` is canonical again: ``z`` available
+        given done and ``s``, and above every task of ``s`` after the last predecessor of
+        ``z`` in ``s``. Those available given done alone are the available tasks above
+        ``max(s)``; the others, the unlocked ones (increasing), are built here. With
+        ``seq = s + (y,)``: a child of ``s`` stays one iff it is above ``y``, and the
+        successors of ``y`` whose undone predecessors (``undone``: their count, < 0 for a task
+        done) all lie in ``seq`` are new children (``y`` comes last)."""
         kept = [u for u in unlocked if u > y] if unlocked else []
         new = [
             z
@@ -415,13 +389,18 @@ class PrefixSearch:
         rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
         are not looked for (the result is then ``(inf, ())``)."""
         base = set(prefix)
-        seen = _DoneView(done, base)
         base_avail = {y for y in avail if y not in base}
+        # undone predecessors of each task given done and the prefix (< 0: done or in it)
+        rel = list(self._undone)
+        for x in prefix:
+            rel[x] = -1
         for x in prefix:
             for y in self.succ[x]:
-                if not seen[y] and all(seen[p] for p in self.pred[y]):
+                rel[y] -= 1
+                if rel[y] == 0:
                     base_avail.add(y)
         ordered = sorted(base_avail)
+        rl = self._r_list
         rmin, rmax = self._r_range  # over the tasks not done (a superset of those left)
         best_f = math.inf
         best_q: tuple[int, ...] = ()
@@ -430,8 +409,10 @@ class PrefixSearch:
         capped = False
         seq: list[int] = []
 
-        def rec(total: float) -> bool:
-            """Depth-first in lexicographic order of canonical sequences; True stops."""
+        def rec(total: float, top: int, unlocked: tuple[int, ...]) -> bool:
+            """Depth-first in lexicographic order of canonical sequences; True stops.
+            ``top``: the largest task of ``seq``; ``unlocked``: its children outside
+            ``ordered`` (:meth:`_unlocked_after`, given done and the prefix)."""
             nonlocal best_f, best_q, nodes, capped
             k = len(seq)
             nodes += 1
@@ -444,11 +425,13 @@ class PrefixSearch:
                     return False
                 if lower > cutoff:
                     return False
-            s = tuple(seq)
-            kids = self._children(s, set(s), seen, ordered)
+            kids = ordered[bisect.bisect_right(ordered, top) :]
+            if unlocked:
+                kids = sorted([*kids, *unlocked])
             if not kids:
                 return False
             if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
+                s = tuple(seq)
                 vals = score(total + self.r[kids])
                 if threshold is not None:
                     hit = np.flatnonzero(vals <= threshold)
@@ -462,13 +445,14 @@ class PrefixSearch:
                 return False
             for y in kids:
                 seq.append(y)
-                stop = rec(total + float(self.r[y]))
+                grown = self._unlocked_after(unlocked, tuple(seq), y, rel)
+                stop = rec(total + rl[y], max(top, y), grown)
                 seq.pop()
                 if stop:
                     return True
             return False
 
-        rec(0.0)
+        rec(0.0, -1, ())
         return best_f, best_q, capped
 
     # -- the decision ----------------------------------------------------------------------------
@@ -507,7 +491,8 @@ class PrefixSearch:
         high = window[order[::-1][:length]]
         self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
         ctx = _Epoch(human_remaining, available, signed, low, high)
-        levels, beam = self._levels(np.where(done, -1, undone).tolist(), length, ctx, avail)
+        self._undone = np.where(done, -1, undone).tolist()
+        levels, beam = self._levels(self._undone, length, ctx, avail)
         self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
@@ -608,23 +593,46 @@ class PrefixSearch:
         if not found:
             return None
         fmin = min(x[0] for x in found)
-        best_key: tuple[tuple[int, ...], int] | None = None
-        best: Choice | None = None
-        for score, li, k, rest, fit in found:
-            if score > fmin + TIE_TOL:
-                continue
-            i = li + 1
-            prefix = levels[li].seqs[k]
-            if i < length:  # the smallest rest still within the tolerance of the minimum
-                f2, first, _ = self._rest(
-                    prefix, done, avail, length - i, *scorer(li, k, fit), fmin + TIE_TOL
-                )
-                if first:
-                    rest, score = first, f2
-            key = (prefix + rest, i)
-            if best_key is None or key < best_key:
-                best_key, best = key, Choice(prefix, rest, score)
-        return best
+        resolved: dict[int, tuple[tuple[int, ...], float]] = {}
+
+        def prefix_of(c: int) -> tuple[int, ...]:
+            return levels[found[c][1]].seqs[found[c][2]]
+
+        def resolve(c: int) -> tuple[tuple[int, ...], float]:
+            """The smallest rest of candidate ``c`` still within the tolerance of the minimum
+            (with its F); the rest found above if that search stops at its cap."""
+            if c not in resolved:
+                score, li, k, rest, fit = found[c]
+                i = li + 1
+                if i < length:
+                    f2, first, _ = self._rest(
+                        levels[li].seqs[k],
+                        done,
+                        avail,
+                        length - i,
+                        *scorer(li, k, fit),
+                        fmin + TIE_TOL,
+                    )
+                    if first:
+                        rest, score = first, f2
+                resolved[c] = (rest, score)
+            return resolved[c]
+
+        def smaller(a: int, b: int) -> bool:
+            """Key (prefix + rest, i) of ``a`` below that of ``b``; the rests are looked for
+            only when one prefix starts the other (else the prefixes decide)."""
+            pa, pb = prefix_of(a), prefix_of(b)
+            for x, y in zip(pa, pb, strict=False):
+                if x != y:
+                    return x < y
+            return (pa + resolve(a)[0], len(pa)) < (pb + resolve(b)[0], len(pb))
+
+        best = -1
+        for c, entry in enumerate(found):
+            if entry[0] <= fmin + TIE_TOL and (best < 0 or smaller(c, best)):
+                best = c
+        rest, score = resolve(best)
+        return Choice(prefix_of(best), rest, score)
 
 
 def _unique_rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
