@@ -236,17 +236,33 @@ class PrefixSearch:
         if m == 0:
             return np.zeros(n), np.zeros(n)
         out = []
-        rows = np.arange(n)
         for ids in (ctx.low_ids, ctx.high_ids):
             pos = np.full(len(self.r), -1, dtype=np.int64)
             pos[ids] = np.arange(len(ids))
-            keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
-            for c in range(tasks.shape[1]):
-                keep[rows, pos[tasks[:, c]]] = False
-            keep = keep[:, :-1]
-            chosen = keep & (np.cumsum(keep, axis=1) <= m)
-            out.append(chosen @ self.r[ids])
+            if not self._exact_sums:
+                out.append(self._first_outside(tasks, pos, ids, m))
+                continue
+            # sums exact in any order: rows without a task among ``ids`` take the first m
+            sums = np.full(n, self.r[ids[:m]].sum())
+            hit = np.flatnonzero((pos[tasks] >= 0).any(axis=1))
+            if hit.size:
+                sums[hit] = self._first_outside(tasks[hit], pos, ids, m)
+            out.append(sums)
         return out[0], out[1]
+
+    def _first_outside(
+        self, tasks: np.ndarray, pos: np.ndarray, ids: np.ndarray, m: int
+    ) -> np.ndarray:
+        """The robot sum of the first ``m`` of ``ids`` outside each row of ``tasks`` (``pos``:
+        the position of each task in ``ids``, -1 if none)."""
+        n = len(tasks)
+        rows = np.arange(n)
+        keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
+        for c in range(tasks.shape[1]):
+            keep[rows, pos[tasks[:, c]]] = False
+        keep = keep[:, :-1]
+        chosen = keep & (np.cumsum(keep, axis=1) <= m)
+        return np.asarray(chosen @ self.r[ids])
 
     def _optimistic(
         self,
@@ -354,7 +370,7 @@ class PrefixSearch:
                 beam = True
                 tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
                 opt = self._optimistic(i, length, tasks, robot, human, counts, ctx)
-                keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
+                keep = _smallest(opt, lim.beam_width)
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
             pairs = list(zip(par.tolist(), child.tolist(), strict=True))
@@ -363,8 +379,11 @@ class PrefixSearch:
             levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
             if i < length:
+                succ = self.succ
                 p_unlocked = [
                     self._unlocked_after(p_unlocked[a], seq, y, undone)
+                    if succ[y] or p_unlocked[a]
+                    else ()
                     for (a, y), seq in zip(pairs, seqs, strict=True)
                 ]
             parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
@@ -633,6 +652,20 @@ class PrefixSearch:
                 best = c
         rest, score = resolve(best)
         return Choice(prefix_of(best), rest, score)
+
+
+def _smallest(values: np.ndarray, k: int) -> np.ndarray:
+    """The indices (increasing) of the ``k`` smallest values, ties to the smaller index: the
+    first ``k`` of a stable sort, without sorting everything."""
+    n = len(values)
+    if n <= k:
+        return np.arange(n)
+    kth = values[np.argpartition(values, k - 1)[k - 1]]
+    if np.isnan(kth):  # NaNs sort last; keep the plain rule
+        return np.sort(np.lexsort((np.arange(n), values))[:k])
+    below = np.flatnonzero(values < kth)
+    ties = np.flatnonzero(values == kth)[: k - len(below)]
+    return np.sort(np.concatenate([below, ties]))
 
 
 def _unique_rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
