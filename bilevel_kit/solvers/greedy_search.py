@@ -123,27 +123,38 @@ def fitness_upper_bounds(
       disc of diameter ``min(w, h)`` about its centre, so two parts of type t are at least
       ``min(w, h) - 2 TOL`` apart.
     """
-    counts = np.asarray(counts, dtype=np.float64)
-    pts = [instance.part_types[t] for t in types]
-    short = np.array([min(p.width, p.height) for p in pts])
-    ex = np.array([short[k] / 2 if p.rotatable else p.width / 2 for k, p in enumerate(pts)])
-    ey = np.array([short[k] / 2 if p.rotatable else p.height / 2 for k, p in enumerate(pts)])
-    tray = instance.tray
-    slack = 1e-6
-    dx = np.maximum(tray.width - ex[:, None] - ex[None, :], 0.0) + slack
-    dy = np.maximum(tray.height - ey[:, None] - ey[None, :], 0.0) + slack
-    delta = np.hypot(dx, dy)
-    np.fill_diagonal(delta, 0.0)
-    pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, delta, counts)
-    n = counts.sum(axis=1)
-    same_pairs = (counts * (counts - 1) / 2).sum(axis=1)
-    diff_pairs = n * (n - 1) / 2 - same_pairs
-    lx = max(tray.width - 2 * float(ex.min()), 0.0) + slack if len(pts) else 0.0
-    ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
-    cut_bound = (lx + ly) * np.minimum(np.floor(n * n / 4), diff_pairs)
-    same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
-    d_same_lb = (counts * (counts - 1) / 2) @ same_gap
-    return np.minimum(pair_bound, cut_bound) - d_same_lb
+    return _FitnessBound(instance, types)(counts)
+
+
+class _FitnessBound:
+    """:func:`fitness_upper_bounds` with its geometry (independent of the counts) computed
+    once per instance."""
+
+    def __init__(self, instance: Instance, types: Sequence[str]) -> None:
+        pts = [instance.part_types[t] for t in types]
+        short = np.array([min(p.width, p.height) for p in pts])
+        ex = np.array([short[k] / 2 if p.rotatable else p.width / 2 for k, p in enumerate(pts)])
+        ey = np.array([short[k] / 2 if p.rotatable else p.height / 2 for k, p in enumerate(pts)])
+        tray = instance.tray
+        slack = 1e-6
+        dx = np.maximum(tray.width - ex[:, None] - ex[None, :], 0.0) + slack
+        dy = np.maximum(tray.height - ey[:, None] - ey[None, :], 0.0) + slack
+        self.delta = np.hypot(dx, dy)
+        np.fill_diagonal(self.delta, 0.0)
+        lx = max(tray.width - 2 * float(ex.min()), 0.0) + slack if len(pts) else 0.0
+        ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
+        self.cut_length = lx + ly
+        self.same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
+
+    def __call__(self, counts: np.ndarray) -> np.ndarray:
+        counts = np.asarray(counts, dtype=np.float64)
+        pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, self.delta, counts)
+        n = counts.sum(axis=1)
+        same_pairs = (counts * (counts - 1) / 2).sum(axis=1)
+        diff_pairs = n * (n - 1) / 2 - same_pairs
+        cut_bound = self.cut_length * np.minimum(np.floor(n * n / 4), diff_pairs)
+        d_same_lb = (counts * (counts - 1) / 2) @ self.same_gap
+        return np.asarray(np.minimum(pair_bound, cut_bound) - d_same_lb)
 
 
 @dataclass
@@ -190,6 +201,7 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
+        self._fitness_bound = _FitnessBound(instance, types)
         self._r_list: list[float] = robot.tolist()
         #: undone predecessors of each task at the epoch (-1: done)
         self._undone: list[int] = []
@@ -295,7 +307,7 @@ class PrefixSearch:
                 diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-        bound = fitness_upper_bounds(inst, self.types, counts)
+        bound = self._fitness_bound(counts)
         if fitness is not None:
             bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
