@@ -147,6 +147,15 @@ class _FitnessBound:
         self.same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
 
     def __call__(self, counts: np.ndarray) -> np.ndarray:
+        counts = np.asarray(counts)
+        if counts.shape[1] == 1 and counts.dtype.kind in "iu" and len(counts) > 64:
+            # one part type: every sum and product in the bound has one term, so the value
+            # of a row does not depend on the batch: compute it once per count
+            table = self._bounds(np.arange(int(counts.max()) + 1)[:, None])
+            return np.asarray(table[counts[:, 0]])
+        return self._bounds(counts)
+
+    def _bounds(self, counts: np.ndarray) -> np.ndarray:
         counts = np.asarray(counts, dtype=np.float64)
         pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, self.delta, counts)
         n = counts.sum(axis=1)
@@ -238,13 +247,14 @@ class PrefixSearch:
         return tuple(sorted([*kept, *new]))
 
     def _rest_sum_bounds(
-        self, tasks: np.ndarray, m: int, ctx: _Epoch
+        self, tasks: np.ndarray | _Children, m: int, ctx: _Epoch
     ) -> tuple[np.ndarray, np.ndarray]:
         """Bounds (lo, hi) of the rest's robot sum R(Q) (tasks only) of each prefix (rows of
         ``tasks``) for rests of ``m`` tasks: the ``m`` smallest and largest robot times of the
         window tasks (:meth:`_window`) outside the prefix. Every task of a rest is such a task,
         so these bound every rest's sum."""
-        n = len(tasks)
+        rows = tasks if isinstance(tasks, _Children) else _Children(tasks)
+        n = len(rows)
         if m == 0:
             return np.zeros(n), np.zeros(n)
         out = []
@@ -252,13 +262,13 @@ class PrefixSearch:
             pos = np.full(len(self.r), -1, dtype=np.int64)
             pos[ids] = np.arange(len(ids))
             if not self._exact_sums:
-                out.append(self._first_outside(tasks, pos, ids, m))
+                out.append(self._first_outside(rows.take(), pos, ids, m))
                 continue
             # sums exact in any order: rows without a task among ``ids`` take the first m
             sums = np.full(n, self.r[ids[:m]].sum())
-            hit = np.flatnonzero((pos[tasks] >= 0).any(axis=1))
+            hit = np.flatnonzero(rows.touches(pos >= 0))
             if hit.size:
-                sums[hit] = self._first_outside(tasks[hit], pos, ids, m)
+                sums[hit] = self._first_outside(rows.take(hit), pos, ids, m)
             out.append(sums)
         return out[0], out[1]
 
@@ -280,7 +290,7 @@ class PrefixSearch:
         self,
         i: int,
         length: int,
-        tasks: np.ndarray,
+        tasks: np.ndarray | _Children,
         robot: np.ndarray,
         human: np.ndarray,
         counts: np.ndarray,
@@ -380,8 +390,8 @@ class PrefixSearch:
             counts = p_counts[par] + self.part_matrix[child]
             if beam or total + n_kids > lim.max_prefix_sets:
                 beam = True
-                tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
-                opt = self._optimistic(i, length, tasks, robot, human, counts, ctx)
+                kids = _Children(p_tasks, par, child)
+                opt = self._optimistic(i, length, kids, robot, human, counts, ctx)
                 keep = _smallest(opt, lim.beam_width)
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
@@ -664,6 +674,35 @@ class PrefixSearch:
                 best = c
         rest, score = resolve(best)
         return Choice(prefix_of(best), rest, score)
+
+
+class _Children:
+    """Prefix rows (task indices) as parent rows plus one task each, built only where needed
+    (a beam level scores many children and keeps few)."""
+
+    def __init__(
+        self, parents: np.ndarray, par: np.ndarray | None = None, child: np.ndarray | None = None
+    ) -> None:
+        self.parents = parents
+        self.par = par
+        self.child = child
+
+    def __len__(self) -> int:
+        return len(self.parents) if self.par is None else len(self.par)
+
+    def take(self, rows: np.ndarray | None = None) -> np.ndarray:
+        """The task matrix of ``rows`` (all if None)."""
+        if self.par is None or self.child is None:
+            return self.parents if rows is None else self.parents[rows]
+        par, child = (self.par, self.child) if rows is None else (self.par[rows], self.child[rows])
+        return np.concatenate([self.parents[par], child[:, None]], axis=1)
+
+    def touches(self, marked: np.ndarray) -> np.ndarray:
+        """Whether each row holds a task with ``marked`` set."""
+        hit = marked[self.parents].any(axis=1)
+        if self.par is None or self.child is None:
+            return np.asarray(hit)
+        return np.asarray(hit[self.par] | marked[self.child])
 
 
 def _smallest(values: np.ndarray, k: int) -> np.ndarray:

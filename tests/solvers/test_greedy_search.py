@@ -225,3 +225,13 @@ def test_frontier_pops_in_heap_order():
             queue.push(new)
             heapq.heappush(heap, new)
     assert not queue
+
+
+def test_one_type_fitness_bound_by_count_is_the_rows(table):
+    """One part type: the bound is read from a table per count, equal to the row's own."""
+    types = ["foot"]
+    counts = np.random.default_rng(3).integers(0, 9, size=(500, 1))
+    batch = fitness_upper_bounds(table, types, counts)
+    rows = [fitness_upper_bounds(table, types, counts[k : k + 1])[0] for k in range(0, 500, 7)]
+    assert batch[::7].tolist() == rows
+    assert batch.max() == 0.0 and batch.min() < 0.0  # -D_same's bound, no cross pairs
