@@ -850,8 +850,8 @@ class _Rests:
         self.signed = signed
         self.pool = frozenset(avail)
         self.vlist: list[int] = tab.vidx.tolist()
-        #: every sum of robot times exact (then R(core) in any order)
-        self.exact = search._exact_sums
+        #: R(core) by core when every sum of robot times is exact (then in any order)
+        self._core_sums: dict[frozenset[int], float] | None = {} if search._exact_sums else None
         self.anc = anc
         self.deep = sorted(y for y in anc if y not in self.pool)
         #: the deep tasks whose need set (itself and its undone ancestors) has at most k tasks
@@ -938,57 +938,58 @@ class _Rests:
             if len(need) <= m:
                 cands.append((y, frozenset(need)))
         sets = [c[1] for c in cands]
+        sizes = [len(c) for c in sets]
         base: dict[int, int] = {}  # the prefix's available tasks by value
         for t in pset & self.pool:
             base[self.vlist[t]] = base.get(self.vlist[t], 0) + 1
-        # cores as bit masks over the tasks of the need sets (faster than sets); with sums
-        # inexact the frozensets go along, for R(core) summed in their iteration order
-        members = sorted(set().union(*sets))
-        bit = {t: k for k, t in enumerate(members)}
-        masks = [sum(1 << bit[t] for t in c) for c in sets]
-        exact = self.exact
-        rl = self.search._r_list
         best_f = math.inf
-        best_mask = -1
+        best_set: frozenset[int] | None = None
         best_free: tuple[int, ...] = ()
-        seen: set[int] = set()
-        stack: list[tuple[int, int, frozenset[int]]] = [(0, 0, frozenset())]
+        seen: set[frozenset[int]] = set()
+        stack: list[tuple[int, frozenset[int]]] = [(0, frozenset())]
         cores = 0
         capped = False
         while stack:
-            start, mask, core = stack.pop()
-            if mask in seen:
+            start, core = stack.pop()
+            if core in seen:
                 continue
-            seen.add(mask)
+            seen.add(core)
             cores += 1
             if cores > self.max_cores:
                 capped = True
                 break
             removed = base
-            r_core = 0.0
-            if mask:
+            if core:
                 removed = dict(base)
-                tasks = _members(mask, members)
-                for t in tasks:
-                    if t in self.pool:
-                        removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
-                r_core = sum(rl[t] for t in tasks) if exact else float(self.r[list(core)].sum())
-            size = mask.bit_count()
-            free = self._free(m - size, target - r_core, removed)
+                for t in core & self.pool:
+                    removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
+            r_core = self._core_sum(core) if core else 0.0
+            free = self._free(m - len(core), target - r_core, removed)
             if free is not None:
                 val = float(score(r_core + free[0]))
                 if val < best_f and val <= cutoff:
-                    best_f, best_mask, best_free = val, mask, free[1]
-            if size >= m:  # every need set holds a task, so nothing grows the core
+                    best_f, best_set, best_free = val, core, free[1]
+            room = m - len(core)
+            if room <= 0:  # every need set holds a task, so nothing grows the core
                 continue
-            for a in range(start, len(masks)):
-                grown = mask | masks[a]
-                if grown != mask and grown.bit_count() <= m:
-                    stack.append((a + 1, grown, core if exact else core | sets[a]))
-        if best_mask < 0:
+            for a in range(start, len(sets)):
+                if sizes[a] <= room or not sets[a].isdisjoint(core):
+                    grown = core | sets[a]
+                    if len(grown) <= m and grown != core:
+                        stack.append((a + 1, grown))
+        if best_set is None:
             return math.inf, (), capped
-        best_set = frozenset(_members(best_mask, members))
         return best_f, self._order(pset, best_set, best_free), capped
+
+    def _core_sum(self, core: frozenset[int]) -> float:
+        """R(core): memoised per epoch when sums are exact in any order, else summed as
+        numpy sums the core's tasks in the set's iteration order (the same floats)."""
+        if self._core_sums is None:
+            return float(self.r[list(core)].sum())
+        hit = self._core_sums.get(core)
+        if hit is None:
+            hit = self._core_sums[core] = float(self.r[list(core)].sum())
+        return hit
 
     def _order(
         self, pset: set[int], core: frozenset[int], free: tuple[int, ...]
@@ -1008,16 +1009,6 @@ class _Rests:
             out.append(y)
             left.discard(y)
         return tuple(out)
-
-
-def _members(mask: int, members: list[int]) -> list[int]:
-    """The tasks of a bit mask over ``members``."""
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(members[low.bit_length() - 1])
-        mask ^= low
-    return out
 
 
 class _DoneView:
