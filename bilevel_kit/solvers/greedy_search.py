@@ -624,8 +624,9 @@ class PrefixSearch:
                 continue
             if rests is not None:
                 target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+                floor = lower(-math.inf, math.inf) if self._prune and not signed else -math.inf
                 score, rest, capped = rests.best(
-                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target
+                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor
                 )
             else:
                 score, rest, capped = self._rest(
@@ -922,10 +923,13 @@ class _Rests:
         score: Callable[[Any], Any],
         cutoff: float,
         target: float,
+        floor: float = -math.inf,
     ) -> tuple[float, tuple[int, ...], bool]:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
-        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form)."""
+        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
+        ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
+        still enumerated, so the cap counts as without the floor."""
         pset = set(prefix)
         cands: list[tuple[int, frozenset[int]]] = []
         some = set(self.small[min(m, len(self.small) - 1)])
@@ -958,17 +962,18 @@ class _Rests:
             if cores > self.max_cores:
                 capped = True
                 break
-            removed = base
-            if core:
-                removed = dict(base)
-                for t in core & self.pool:
-                    removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
-            r_core = self._core_sum(core) if core else 0.0
-            free = self._free(m - len(core), target - r_core, removed)
-            if free is not None:
-                val = float(score(r_core + free[0]))
-                if val < best_f and val <= cutoff:
-                    best_f, best_set, best_free = val, core, free[1]
+            if best_f > floor:  # else no core can do strictly better: only count them
+                removed = base
+                if core:
+                    removed = dict(base)
+                    for t in core & self.pool:
+                        removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
+                r_core = self._core_sum(core) if core else 0.0
+                free = self._free(m - len(core), target - r_core, removed)
+                if free is not None:
+                    val = float(score(r_core + free[0]))
+                    if val < best_f and val <= cutoff:
+                        best_f, best_set, best_free = val, core, free[1]
             room = m - len(core)
             if room <= 0:  # every need set holds a task, so nothing grows the core
                 continue
