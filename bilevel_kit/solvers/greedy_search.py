@@ -123,27 +123,47 @@ def fitness_upper_bounds(
       disc of diameter ``min(w, h)`` about its centre, so two parts of type t are at least
       ``min(w, h) - 2 TOL`` apart.
     """
-    counts = np.asarray(counts, dtype=np.float64)
-    pts = [instance.part_types[t] for t in types]
-    short = np.array([min(p.width, p.height) for p in pts])
-    ex = np.array([short[k] / 2 if p.rotatable else p.width / 2 for k, p in enumerate(pts)])
-    ey = np.array([short[k] / 2 if p.rotatable else p.height / 2 for k, p in enumerate(pts)])
-    tray = instance.tray
-    slack = 1e-6
-    dx = np.maximum(tray.width - ex[:, None] - ex[None, :], 0.0) + slack
-    dy = np.maximum(tray.height - ey[:, None] - ey[None, :], 0.0) + slack
-    delta = np.hypot(dx, dy)
-    np.fill_diagonal(delta, 0.0)
-    pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, delta, counts)
-    n = counts.sum(axis=1)
-    same_pairs = (counts * (counts - 1) / 2).sum(axis=1)
-    diff_pairs = n * (n - 1) / 2 - same_pairs
-    lx = max(tray.width - 2 * float(ex.min()), 0.0) + slack if len(pts) else 0.0
-    ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
-    cut_bound = (lx + ly) * np.minimum(np.floor(n * n / 4), diff_pairs)
-    same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
-    d_same_lb = (counts * (counts - 1) / 2) @ same_gap
-    return np.minimum(pair_bound, cut_bound) - d_same_lb
+    return _FitnessBound(instance, types)(counts)
+
+
+class _FitnessBound:
+    """:func:`fitness_upper_bounds` with its geometry (independent of the counts) computed
+    once per instance."""
+
+    def __init__(self, instance: Instance, types: Sequence[str]) -> None:
+        pts = [instance.part_types[t] for t in types]
+        short = np.array([min(p.width, p.height) for p in pts])
+        ex = np.array([short[k] / 2 if p.rotatable else p.width / 2 for k, p in enumerate(pts)])
+        ey = np.array([short[k] / 2 if p.rotatable else p.height / 2 for k, p in enumerate(pts)])
+        tray = instance.tray
+        slack = 1e-6
+        dx = np.maximum(tray.width - ex[:, None] - ex[None, :], 0.0) + slack
+        dy = np.maximum(tray.height - ey[:, None] - ey[None, :], 0.0) + slack
+        self.delta = np.hypot(dx, dy)
+        np.fill_diagonal(self.delta, 0.0)
+        lx = max(tray.width - 2 * float(ex.min()), 0.0) + slack if len(pts) else 0.0
+        ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
+        self.cut_length = lx + ly
+        self.same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
+
+    def __call__(self, counts: np.ndarray) -> np.ndarray:
+        counts = np.asarray(counts)
+        if counts.shape[1] == 1 and counts.dtype.kind in "iu" and len(counts) > 64:
+            # one part type: every sum and product in the bound has one term, so the value
+            # of a row does not depend on the batch: compute it once per count
+            table = self._bounds(np.arange(int(counts.max()) + 1)[:, None])
+            return np.asarray(table[counts[:, 0]])
+        return self._bounds(counts)
+
+    def _bounds(self, counts: np.ndarray) -> np.ndarray:
+        counts = np.asarray(counts, dtype=np.float64)
+        pair_bound = 0.5 * np.einsum("kt,tu,ku->k", counts, self.delta, counts)
+        n = counts.sum(axis=1)
+        same_pairs = (counts * (counts - 1) / 2).sum(axis=1)
+        diff_pairs = n * (n - 1) / 2 - same_pairs
+        cut_bound = self.cut_length * np.minimum(np.floor(n * n / 4), diff_pairs)
+        d_same_lb = (counts * (counts - 1) / 2) @ self.same_gap
+        return np.asarray(np.minimum(pair_bound, cut_bound) - d_same_lb)
 
 
 @dataclass
@@ -179,6 +199,10 @@ class PrefixSearch:
             for p in ps:
                 succ[p].append(j)
         self.succ = [tuple(s) for s in succ]
+        self.pred_set = [frozenset(p) for p in self.pred]
+        #: the precedence arcs (predecessor, task), for the epoch's available tasks at once
+        self._arc_pred = np.array([p for ps in self.pred for p in ps], dtype=np.int64)
+        self._arc_task = np.array([j for j, ps in enumerate(self.pred) for _ in ps], dtype=np.int64)
         self.part_matrix = part_matrix
         self.types = list(types)
         self.limits = limits
@@ -186,72 +210,87 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._r_range = (0.0, 0.0)
+        self._fitness_bound = _FitnessBound(instance, types)
+        self._r_list: list[float] = robot.tolist()
+        #: undone predecessors of each task at the epoch (-1: done)
+        self._undone: list[int] = []
         self._sums = _SumTable.build(robot, instance.horizon - 1)
+        #: every sum of robot times is exact (multiples of 1/64 far below 2**53), so equal in
+        #: any summation order: the rest search may then memoise sums by set
+        self._exact_sums = bool(
+            np.all(robot * 64 == np.round(robot * 64)) and np.abs(robot).sum() * 64 < 2.0**52
+        )
 
     # -- prefix sets ---------------------------------------------------------------------------
-    def _children(
-        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView, avail: list[int]
-    ) -> list[int]:
-        """Tasks y such that ``s + (y,)`` is the smallest topological order of its set, in
-        increasing order. ``avail``: tasks available given ``done`` alone (sorted)."""
-        out = avail[bisect.bisect_right(avail, max(s) if s else -1) :]
-        unlocked = self._unlocked(s, inset, done)
-        if unlocked:
-            return sorted([*out, *unlocked])
-        return out
+    def _unlocked_after(
+        self, unlocked: tuple[int, ...], seq: tuple[int, ...], y: int, undone: list[int]
+    ) -> tuple[int, ...]:
+        """The *unlocked children* of ``seq``, from those of its parent ``seq[:-1]``.
 
-    def _unlocked(
-        self, s: tuple[int, ...], inset: set[int], done: np.ndarray | _DoneView
-    ) -> set[int]:
-        """The children of ``s`` (:meth:`_children`) that ``done`` alone does not make
-        available: successors of its tasks whose last predecessor in ``s`` comes after every
-        larger task of ``s``."""
-        unlocked: set[int] = set()
-        if s:
-            pos = {x: k for k, x in enumerate(s)}
-            suffix_max = list(s)
-            for k in range(len(s) - 2, -1, -1):
-                suffix_max[k] = max(suffix_max[k], suffix_max[k + 1])
-            for x in s:
-                for y in self.succ[x]:
-                    if y in inset or y in unlocked or done[y]:
-                        continue
-                    ps = self.pred[y]
-                    if not all(done[p] or p in inset for p in ps):
-                        continue
-                    start = 1 + max(pos[p] for p in ps if p in inset)
-                    if start == len(s) or y > suffix_max[start]:
-                        unlocked.add(y)
-        return unlocked
+        The children of a canonical sequence ``s`` (the smallest topological order of its
+        set) are the tasks ``z`` such that ``s + (z,)`` is canonical again: ``z`` available
+        given done and ``s``, and above every task of ``s`` after the last predecessor of
+        ``z`` in ``s``. Those available given done alone are the available tasks above
+        ``max(s)``; the others, the unlocked ones (increasing), are built here. With
+        ``seq = s + (y,)``: a child of ``s`` stays one iff it is above ``y``, and the
+        successors of ``y`` whose undone predecessors (``undone``: their count, < 0 for a task
+        done) all lie in ``seq`` are new children (``y`` comes last)."""
+        kept = [u for u in unlocked if u > y] if unlocked else []
+        new = [
+            z
+            for z in self.succ[y]
+            if undone[z] == 1
+            or (undone[z] > 1 and len(self.pred_set[z].intersection(seq)) == undone[z])
+        ]
+        if not new:
+            return tuple(kept)
+        return tuple(sorted([*kept, *new]))
 
     def _rest_sum_bounds(
-        self, tasks: np.ndarray, m: int, ctx: _Epoch
+        self, tasks: np.ndarray | _Children, m: int, ctx: _Epoch
     ) -> tuple[np.ndarray, np.ndarray]:
         """Bounds (lo, hi) of the rest's robot sum R(Q) (tasks only) of each prefix (rows of
         ``tasks``) for rests of ``m`` tasks: the ``m`` smallest and largest robot times of the
         window tasks (:meth:`_window`) outside the prefix. Every task of a rest is such a task,
         so these bound every rest's sum."""
-        n = len(tasks)
+        rows = tasks if isinstance(tasks, _Children) else _Children(tasks)
+        n = len(rows)
         if m == 0:
             return np.zeros(n), np.zeros(n)
         out = []
-        rows = np.arange(n)
         for ids in (ctx.low_ids, ctx.high_ids):
             pos = np.full(len(self.r), -1, dtype=np.int64)
             pos[ids] = np.arange(len(ids))
-            keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
-            for c in range(tasks.shape[1]):
-                keep[rows, pos[tasks[:, c]]] = False
-            keep = keep[:, :-1]
-            chosen = keep & (np.cumsum(keep, axis=1) <= m)
-            out.append(chosen @ self.r[ids])
+            if not self._exact_sums:
+                out.append(self._first_outside(rows.take(), pos, ids, m))
+                continue
+            # sums exact in any order: rows without a task among ``ids`` take the first m
+            sums = np.full(n, self.r[ids[:m]].sum())
+            hit = np.flatnonzero(rows.touches(pos >= 0))
+            if hit.size:
+                sums[hit] = self._first_outside(rows.take(hit), pos, ids, m)
+            out.append(sums)
         return out[0], out[1]
+
+    def _first_outside(
+        self, tasks: np.ndarray, pos: np.ndarray, ids: np.ndarray, m: int
+    ) -> np.ndarray:
+        """The robot sum of the first ``m`` of ``ids`` outside each row of ``tasks`` (``pos``:
+        the position of each task in ``ids``, -1 if none)."""
+        n = len(tasks)
+        rows = np.arange(n)
+        keep = np.ones((n, len(ids) + 1), dtype=bool)  # the last column catches misses
+        for c in range(tasks.shape[1]):
+            keep[rows, pos[tasks[:, c]]] = False
+        keep = keep[:, :-1]
+        chosen = keep & (np.cumsum(keep, axis=1) <= m)
+        return np.asarray(chosen @ self.r[ids])
 
     def _optimistic(
         self,
         i: int,
         length: int,
-        tasks: np.ndarray,
+        tasks: np.ndarray | _Children,
         robot: np.ndarray,
         human: np.ndarray,
         counts: np.ndarray,
@@ -278,7 +317,7 @@ class PrefixSearch:
                 diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-        bound = fitness_upper_bounds(inst, self.types, counts)
+        bound = self._fitness_bound(counts)
         if fitness is not None:
             bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
@@ -310,8 +349,10 @@ class PrefixSearch:
         return anc
 
     def _levels(
-        self, done: np.ndarray, length: int, ctx: _Epoch, avail: list[int]
+        self, undone: list[int], length: int, ctx: _Epoch, avail: list[int]
     ) -> tuple[list[_Level], bool]:
+        """The closed prefix sets of sizes 1..``length`` (``undone``: undone predecessors per
+        task, -1 if done), and whether a level became a beam."""
         lim = self.limits
         avail_arr = np.array(avail, dtype=np.int64)
         parents: list[tuple[int, ...]] = [()]
@@ -319,6 +360,8 @@ class PrefixSearch:
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
         p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
+        #: per parent, its children that ``done`` alone does not make available (increasing)
+        p_unlocked: list[tuple[int, ...]] = [()]
         levels: list[_Level] = []
         total = 0
         beam = False
@@ -326,15 +369,18 @@ class PrefixSearch:
             # children (module docstring: canonical sequences): the available tasks above the
             # parent's largest, at once, plus the tasks the parent unlocks (per parent)
             last = p_tasks.max(axis=1) if i > 1 else np.full(1, -1)
-            par, col = np.nonzero(avail_arr[None, :] > last[:, None])
-            child = avail_arr[col]
+            # per parent the available tasks from its first above ``last``, parent-major
+            starts = np.searchsorted(avail_arr, last, side="right")
+            n_per = len(avail_arr) - starts
+            par = np.repeat(np.arange(len(last)), n_per)
+            offset = np.arange(len(par)) - np.repeat(np.cumsum(n_per) - n_per, n_per)
+            child = avail_arr[np.repeat(starts, n_per) + offset]
             extra_par: list[int] = []
             extra_child: list[int] = []
-            for a, seq in enumerate(parents):
-                if any(self.succ[x] for x in seq):
-                    for y in self._unlocked(seq, set(seq), done):
-                        extra_par.append(a)
-                        extra_child.append(y)
+            for a, unl in enumerate(p_unlocked):
+                for y in unl:
+                    extra_par.append(a)
+                    extra_child.append(y)
             if extra_par:
                 par = np.concatenate([par, np.array(extra_par, dtype=np.int64)])
                 child = np.concatenate([child, np.array(extra_child, dtype=np.int64)])
@@ -348,15 +394,24 @@ class PrefixSearch:
             counts = p_counts[par] + self.part_matrix[child]
             if beam or total + n_kids > lim.max_prefix_sets:
                 beam = True
-                tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
-                opt = self._optimistic(i, length, tasks, robot, human, counts, ctx)
-                keep = np.sort(np.lexsort((np.arange(n_kids), opt))[: lim.beam_width])
+                kids = _Children(p_tasks, par, child)
+                opt = self._optimistic(i, length, kids, robot, human, counts, ctx)
+                keep = _smallest(opt, lim.beam_width)
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
-            seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
+            pairs = list(zip(par.tolist(), child.tolist(), strict=True))
+            seqs = [(*parents[a], y) for a, y in pairs]
             tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
             levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
+            if i < length:
+                succ = self.succ
+                p_unlocked = [
+                    self._unlocked_after(p_unlocked[a], seq, y, undone)
+                    if succ[y] or p_unlocked[a]
+                    else ()
+                    for (a, y), seq in zip(pairs, seqs, strict=True)
+                ]
             parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
         return levels, beam
 
@@ -379,13 +434,18 @@ class PrefixSearch:
         rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
         are not looked for (the result is then ``(inf, ())``)."""
         base = set(prefix)
-        seen = _DoneView(done, base)
         base_avail = {y for y in avail if y not in base}
+        # undone predecessors of each task given done and the prefix (< 0: done or in it)
+        rel = list(self._undone)
+        for x in prefix:
+            rel[x] = -1
         for x in prefix:
             for y in self.succ[x]:
-                if not seen[y] and all(seen[p] for p in self.pred[y]):
+                rel[y] -= 1
+                if rel[y] == 0:
                     base_avail.add(y)
         ordered = sorted(base_avail)
+        rl = self._r_list
         rmin, rmax = self._r_range  # over the tasks not done (a superset of those left)
         best_f = math.inf
         best_q: tuple[int, ...] = ()
@@ -394,8 +454,10 @@ class PrefixSearch:
         capped = False
         seq: list[int] = []
 
-        def rec(total: float) -> bool:
-            """Depth-first in lexicographic order of canonical sequences; True stops."""
+        def rec(total: float, top: int, unlocked: tuple[int, ...]) -> bool:
+            """Depth-first in lexicographic order of canonical sequences; True stops.
+            ``top``: the largest task of ``seq``; ``unlocked``: its children outside
+            ``ordered`` (:meth:`_unlocked_after`, given done and the prefix)."""
             nonlocal best_f, best_q, nodes, capped
             k = len(seq)
             nodes += 1
@@ -408,11 +470,13 @@ class PrefixSearch:
                     return False
                 if lower > cutoff:
                     return False
-            s = tuple(seq)
-            kids = self._children(s, set(s), seen, ordered)
+            kids = ordered[bisect.bisect_right(ordered, top) :]
+            if unlocked:
+                kids = sorted([*kids, *unlocked])
             if not kids:
                 return False
             if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
+                s = tuple(seq)
                 vals = score(total + self.r[kids])
                 if threshold is not None:
                     hit = np.flatnonzero(vals <= threshold)
@@ -426,13 +490,14 @@ class PrefixSearch:
                 return False
             for y in kids:
                 seq.append(y)
-                stop = rec(total + float(self.r[y]))
+                grown = self._unlocked_after(unlocked, tuple(seq), y, rel)
+                stop = rec(total + rl[y], max(top, y), grown)
                 seq.pop()
                 if stop:
                     return True
             return False
 
-        rec(0.0)
+        rec(0.0, -1, ())
         return best_f, best_q, capped
 
     # -- the decision ----------------------------------------------------------------------------
@@ -462,9 +527,8 @@ class PrefixSearch:
         known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        avail = [
-            j for j in range(len(self.r)) if not done[j] and all(done[p] for p in self.pred[j])
-        ]
+        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
+        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
         anc = self._window(done, avail, length)
         window = np.array(sorted(anc), dtype=np.int64)
         order = np.lexsort((window, self.r[window]))
@@ -472,36 +536,32 @@ class PrefixSearch:
         high = window[order[::-1][:length]]
         self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
         ctx = _Epoch(human_remaining, available, signed, low, high)
-        levels, beam = self._levels(done, length, ctx, avail)
+        self._undone = np.where(done, -1, undone).tolist()
+        levels, beam = self._levels(self._undone, length, ctx, avail)
         self.stats.beam_epochs += beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
-        queue: list[tuple[float, int, int, int]] = []
-        fits_of: dict[tuple[int, int], float] = {}
+        fits_of: list[np.ndarray] = []  # per level: the fitness of each row (NaN: unknown)
+        parts: list[tuple[np.ndarray, ...]] = []
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            level_fit = np.full(len(lv.seqs), np.nan)
-            keys, inverse = np.unique(lv.counts, axis=0, return_inverse=True)
-            level_fits = np.ones(len(lv.seqs), dtype=bool)
+            keys, inverse = _unique_rows(lv.counts)
+            key_fit = np.full(len(keys), np.nan)
+            key_fits = np.ones(len(keys), dtype=bool)
             for u, row in enumerate(keys):
                 hit = cached(row) if cached is not None else None
                 if hit is not None:
-                    sel = inverse.reshape(-1) == u
-                    level_fit[sel] = hit[0]
-                    level_fits[sel] = hit[1]
+                    key_fit[u], key_fits[u] = hit
+            level_fit, level_fits = key_fit[inverse], key_fits[inverse]
             opt = self._optimistic(
                 li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, level_fit
             )
             known = ~np.isnan(level_fit)
-            rows = zip(opt.tolist(), known.tolist(), level_fits.tolist(), strict=True)
-            for k, (o, kn, ok) in enumerate(rows):
-                if not ok:
-                    continue
-                if kn:
-                    fits_of[li, k] = float(level_fit[k])
-                    self.stats.evaluated += 1
-                queue.append((o, int(kn), li, k))
-        heapq.heapify(queue)
+            self.stats.evaluated += int((known & level_fits).sum())
+            fits_of.append(level_fit)
+            rows = np.flatnonzero(level_fits)
+            parts.append((opt[rows], known[rows].astype(np.int64), np.full(len(rows), li), rows))
+        queue = _Frontier(*(np.concatenate([p[c] for p in parts]) for c in range(4)))
 
         def scorer(
             li: int, k: int, fit: float
@@ -533,8 +593,8 @@ class PrefixSearch:
             rests = _Rests(self, done, avail, anc, signed)
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
         incumbent = math.inf
-        while queue and queue[0][0] <= incumbent + TIE_TOL:
-            _, stage, li, k = heapq.heappop(queue)
+        while queue and queue.peek()[0] <= incumbent + TIE_TOL:
+            _, stage, li, k = queue.pop()
             i = li + 1
             lv = levels[li]
             if stage == 0:
@@ -542,7 +602,7 @@ class PrefixSearch:
                 if not fits:
                     continue
                 self.stats.evaluated += 1
-                fits_of[li, k] = fit0
+                fits_of[li][k] = fit0
                 bound = self._optimistic(
                     i,
                     length,
@@ -553,9 +613,9 @@ class PrefixSearch:
                     ctx,
                     np.array([fit0]),
                 )
-                heapq.heappush(queue, (float(bound[0]), 1, li, k))
+                queue.push((float(bound[0]), 1, li, k))
                 continue
-            fit = float(fits_of[li, k])
+            fit = float(fits_of[li][k])
             f, lower = scorer(li, k, fit)
             if i == length:
                 score = float(f(0.0))
@@ -564,8 +624,9 @@ class PrefixSearch:
                 continue
             if rests is not None:
                 target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+                floor = lower(-math.inf, math.inf) if self._prune and not signed else -math.inf
                 score, rest, capped = rests.best(
-                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target
+                    lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor
                 )
             else:
                 score, rest, capped = self._rest(
@@ -578,23 +639,146 @@ class PrefixSearch:
         if not found:
             return None
         fmin = min(x[0] for x in found)
-        best_key: tuple[tuple[int, ...], int] | None = None
-        best: Choice | None = None
-        for score, li, k, rest, fit in found:
-            if score > fmin + TIE_TOL:
-                continue
-            i = li + 1
-            prefix = levels[li].seqs[k]
-            if i < length:  # the smallest rest still within the tolerance of the minimum
-                f2, first, _ = self._rest(
-                    prefix, done, avail, length - i, *scorer(li, k, fit), fmin + TIE_TOL
-                )
-                if first:
-                    rest, score = first, f2
-            key = (prefix + rest, i)
-            if best_key is None or key < best_key:
-                best_key, best = key, Choice(prefix, rest, score)
-        return best
+        resolved: dict[int, tuple[tuple[int, ...], float]] = {}
+
+        def prefix_of(c: int) -> tuple[int, ...]:
+            return levels[found[c][1]].seqs[found[c][2]]
+
+        def resolve(c: int) -> tuple[tuple[int, ...], float]:
+            """The smallest rest of candidate ``c`` still within the tolerance of the minimum
+            (with its F); the rest found above if that search stops at its cap."""
+            if c not in resolved:
+                score, li, k, rest, fit = found[c]
+                i = li + 1
+                if i < length:
+                    f2, first, _ = self._rest(
+                        levels[li].seqs[k],
+                        done,
+                        avail,
+                        length - i,
+                        *scorer(li, k, fit),
+                        fmin + TIE_TOL,
+                    )
+                    if first:
+                        rest, score = first, f2
+                resolved[c] = (rest, score)
+            return resolved[c]
+
+        def smaller(a: int, b: int) -> bool:
+            """Key (prefix + rest, i) of ``a`` below that of ``b``; the rests are looked for
+            only when one prefix starts the other (else the prefixes decide)."""
+            pa, pb = prefix_of(a), prefix_of(b)
+            for x, y in zip(pa, pb, strict=False):
+                if x != y:
+                    return x < y
+            return (pa + resolve(a)[0], len(pa)) < (pb + resolve(b)[0], len(pb))
+
+        best = -1
+        for c, entry in enumerate(found):
+            if entry[0] <= fmin + TIE_TOL and (best < 0 or smaller(c, best)):
+                best = c
+        rest, score = resolve(best)
+        return Choice(prefix_of(best), rest, score)
+
+
+class _Children:
+    """Prefix rows (task indices) as parent rows plus one task each, built only where needed
+    (a beam level scores many children and keeps few)."""
+
+    def __init__(
+        self, parents: np.ndarray, par: np.ndarray | None = None, child: np.ndarray | None = None
+    ) -> None:
+        self.parents = parents
+        self.par = par
+        self.child = child
+
+    def __len__(self) -> int:
+        return len(self.parents) if self.par is None else len(self.par)
+
+    def take(self, rows: np.ndarray | None = None) -> np.ndarray:
+        """The task matrix of ``rows`` (all if None)."""
+        if self.par is None or self.child is None:
+            return self.parents if rows is None else self.parents[rows]
+        par, child = (self.par, self.child) if rows is None else (self.par[rows], self.child[rows])
+        return np.concatenate([self.parents[par], child[:, None]], axis=1)
+
+    def touches(self, marked: np.ndarray) -> np.ndarray:
+        """Whether each row holds a task with ``marked`` set."""
+        hit = marked[self.parents].any(axis=1)
+        if self.par is None or self.child is None:
+            return np.asarray(hit)
+        return np.asarray(hit[self.par] | marked[self.child])
+
+
+def _smallest(values: np.ndarray, k: int) -> np.ndarray:
+    """The indices (increasing) of the ``k`` smallest values, ties to the smaller index: the
+    first ``k`` of a stable sort, without sorting everything."""
+    n = len(values)
+    if n <= k:
+        return np.arange(n)
+    kth = values[np.argpartition(values, k - 1)[k - 1]]
+    if np.isnan(kth):  # NaNs sort last; keep the plain rule
+        return np.sort(np.lexsort((np.arange(n), values))[:k])
+    below = np.flatnonzero(values < kth)
+    ties = np.flatnonzero(values == kth)[: k - len(below)]
+    return np.sort(np.concatenate([below, ties]))
+
+
+def _unique_rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of a non-negative integer matrix and the index of each row's, as
+    ``np.unique(axis=0)`` (rows packed into one integer each when they fit 52 bits)."""
+    if len(counts) == 0 or counts.shape[1] == 0:
+        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        return keys, inverse.reshape(-1)
+    base = counts.max(axis=0).astype(np.float64) + 1.0
+    if float(np.prod(base)) >= 2.0**52:  # the radix below exact in floating point
+        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        return keys, inverse.reshape(-1)
+    radix = np.cumprod(np.concatenate([[1.0], base[:0:-1]]))[::-1].astype(np.int64)
+    _, first, inverse = np.unique(counts @ radix, return_index=True, return_inverse=True)
+    return counts[first], inverse.reshape(-1)
+
+
+class _Frontier:
+    """The best-first queue of :meth:`PrefixSearch.decide`: entries (bound, stage, level, row)
+    popped in increasing order, the initial ones sorted at once (numpy) and merged with a heap
+    of the later pushes; the same order as one heap of all (entries are distinct)."""
+
+    def __init__(self, bound: np.ndarray, stage: np.ndarray, level: np.ndarray, row: np.ndarray):
+        order = np.lexsort((row, level, stage, bound))
+        self._cols = [c[order] for c in (bound, stage, level, row)]
+        self._pos = 0
+        self._buf: list[tuple[float, int, int, int]] = []
+        self._next = 0
+        self._heap: list[tuple[float, int, int, int]] = []
+
+    def _static(self) -> tuple[float, int, int, int] | None:
+        if self._next == len(self._buf):  # convert the next block of sorted entries
+            a, b = self._pos, min(self._pos + 256, len(self._cols[0]))
+            if a == b:
+                return None
+            cols = [c[a:b].tolist() for c in self._cols]
+            self._buf, self._next, self._pos = list(zip(*cols, strict=True)), 0, b
+        return self._buf[self._next]
+
+    def __bool__(self) -> bool:
+        return bool(self._heap) or self._static() is not None
+
+    def peek(self) -> tuple[float, int, int, int]:
+        s = self._static()
+        if s is None or (self._heap and self._heap[0] < s):
+            return self._heap[0]
+        return s
+
+    def pop(self) -> tuple[float, int, int, int]:
+        s = self._static()
+        if s is None or (self._heap and self._heap[0] < s):
+            return heapq.heappop(self._heap)
+        self._next += 1
+        return s
+
+    def push(self, item: tuple[float, int, int, int]) -> None:
+        heapq.heappush(self._heap, item)
 
 
 @dataclass(frozen=True)
@@ -665,9 +849,24 @@ class _Rests:
         self.r = search.r
         self.vidx = tab.vidx
         self.signed = signed
-        self.pool = set(avail)
+        self.pool = frozenset(avail)
+        self.vlist: list[int] = tab.vidx.tolist()
+        #: R(core) by core when every sum of robot times is exact (then in any order)
+        self._core_sums: dict[frozenset[int], float] | None = {} if search._exact_sums else None
         self.anc = anc
         self.deep = sorted(y for y in anc if y not in self.pool)
+        #: the deep tasks whose need set (itself and its undone ancestors) has at most k tasks
+        #: (k = 0..len(avail)), and the deep descendants of each task: a deep task outside
+        #: both is never a candidate of :meth:`best`, since its need set stays larger than m
+        sizes = [len(anc[y]) + 1 for y in self.deep]
+        self.small = [
+            [y for y, z in zip(self.deep, sizes, strict=True) if z <= k]
+            for k in range(max(sizes, default=0) + 1)
+        ]
+        self.desc: dict[int, list[int]] = {}
+        for y in self.deep:
+            for a in anc[y]:
+                self.desc.setdefault(a, []).append(y)
         self.mult = np.bincount(tab.vidx[avail], minlength=len(tab.vals))
         self.by_value: dict[int, list[int]] = {}
         for t in avail:  # avail is sorted
@@ -700,7 +899,7 @@ class _Rests:
             )
 
         n = len(sums)
-        j = 0 if target == -math.inf else int(np.searchsorted(sums, target))
+        j = 0 if target == -math.inf else int(sums.searchsorted(target))
         up = j
         while up < n and not ok(up):
             up += 1
@@ -724,18 +923,29 @@ class _Rests:
         score: Callable[[Any], Any],
         cutoff: float,
         target: float,
+        floor: float = -math.inf,
     ) -> tuple[float, tuple[int, ...], bool]:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
-        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form)."""
+        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
+        ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
+        still enumerated, so the cap counts as without the floor."""
         pset = set(prefix)
         cands: list[tuple[int, frozenset[int]]] = []
-        for y in self.deep:
+        some = set(self.small[min(m, len(self.small) - 1)])
+        for x in prefix:
+            some.update(self.desc.get(x, ()))
+        for y in sorted(some):
             if y in pset:
                 continue
             need = (self.anc[y] - pset) | {y}
             if len(need) <= m:
                 cands.append((y, frozenset(need)))
+        sets = [c[1] for c in cands]
+        sizes = [len(c) for c in sets]
+        base: dict[int, int] = {}  # the prefix's available tasks by value
+        for t in pset & self.pool:
+            base[self.vlist[t]] = base.get(self.vlist[t], 0) + 1
         best_f = math.inf
         best_set: frozenset[int] | None = None
         best_free: tuple[int, ...] = ()
@@ -752,24 +962,39 @@ class _Rests:
             if cores > self.max_cores:
                 capped = True
                 break
-            removed: dict[int, int] = {}
-            for t in pset.union(core):
-                if t in self.pool:
-                    v = int(self.vidx[t])
-                    removed[v] = removed.get(v, 0) + 1
-            r_core = float(self.r[list(core)].sum()) if core else 0.0
-            free = self._free(m - len(core), target - r_core, removed)
-            if free is not None:
-                val = float(score(r_core + free[0]))
-                if val < best_f and val <= cutoff:
-                    best_f, best_set, best_free = val, core, free[1]
-            for a in range(start, len(cands)):
-                grown = core | cands[a][1]
-                if len(grown) <= m and grown != core:
-                    stack.append((a + 1, grown))
+            if best_f > floor:  # else no core can do strictly better: only count them
+                removed = base
+                if core:
+                    removed = dict(base)
+                    for t in core & self.pool:
+                        removed[self.vlist[t]] = removed.get(self.vlist[t], 0) + 1
+                r_core = self._core_sum(core) if core else 0.0
+                free = self._free(m - len(core), target - r_core, removed)
+                if free is not None:
+                    val = float(score(r_core + free[0]))
+                    if val < best_f and val <= cutoff:
+                        best_f, best_set, best_free = val, core, free[1]
+            room = m - len(core)
+            if room <= 0:  # every need set holds a task, so nothing grows the core
+                continue
+            for a in range(start, len(sets)):
+                if sizes[a] <= room or not sets[a].isdisjoint(core):
+                    grown = core | sets[a]
+                    if len(grown) <= m and grown != core:
+                        stack.append((a + 1, grown))
         if best_set is None:
             return math.inf, (), capped
         return best_f, self._order(pset, best_set, best_free), capped
+
+    def _core_sum(self, core: frozenset[int]) -> float:
+        """R(core): memoised per epoch when sums are exact in any order, else summed as
+        numpy sums the core's tasks in the set's iteration order (the same floats)."""
+        if self._core_sums is None:
+            return float(self.r[list(core)].sum())
+        hit = self._core_sums.get(core)
+        if hit is None:
+            hit = self._core_sums[core] = float(self.r[list(core)].sum())
+        return hit
 
     def _order(
         self, pset: set[int], core: frozenset[int], free: tuple[int, ...]

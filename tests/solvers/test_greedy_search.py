@@ -3,6 +3,8 @@ enumeration of every sequence: same minimum F at every epoch, same kits, same pl
 
 from __future__ import annotations
 
+import heapq
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -13,7 +15,12 @@ from bilevel_kit.instance import Instance, from_dict
 from bilevel_kit.layout.cross_entropy import CEParams
 from bilevel_kit.plan import evaluate
 from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, GreedyParams, plan
-from bilevel_kit.solvers.greedy_search import fitness_upper_bounds
+from bilevel_kit.solvers.greedy_search import (
+    _Frontier,
+    _smallest,
+    _unique_rows,
+    fitness_upper_bounds,
+)
 
 TINY_CE = CEParams(samples=20, elite=5, max_iter=5)
 
@@ -152,3 +159,79 @@ def test_one_tray_h_rem_matches_the_timeline(table, stool):
                 tl = evaluate(inst, Plan(kits[:k]))
                 expected = max(0.0, tl.kits[-1].human_end - next_robot_start(inst, tl.kits))
             assert terms["h_rem"] == pytest.approx(expected, abs=1e-9)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(0, 3), st.integers(1, 4))
+def test_exact_sum_shortcuts_change_nothing(inst, seed, width):
+    """With robot times summing exactly, the search memoises and skips rest sums; with the
+    shortcuts off (as for times like 0.1 s) every number is the same, beam or not."""
+    runs = []
+    for shortcuts in (True, False):
+        params = GreedyParams(ce=TINY_CE, max_prefix_sets=4, beam_width=width)
+        policy = GreedyCEPolicy(inst, params, seed)
+        assert policy._search._exact_sums  # integer pick times
+        policy._search._exact_sums = shortcuts
+        kits = plan(inst, policy=policy).kits
+        runs.append((kits, [t["score"] for t in policy.stats.objective_terms], policy.stats))
+    (kits_a, scores_a, st_a), (kits_b, scores_b, st_b) = runs
+    assert kits_a == kits_b and scores_a == scores_b
+    assert (st_a.prefix_sets, st_a.evaluated, st_a.beam_epochs, st_a.ce_calls) == (
+        st_b.prefix_sets,
+        st_b.evaluated,
+        st_b.beam_epochs,
+        st_b.ce_calls,
+    )
+
+
+def test_smallest_is_the_stable_sorts_first_k():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n, k = int(rng.integers(1, 60)), int(rng.integers(1, 70))
+        values = rng.integers(0, 5, n).astype(float)  # many ties
+        values[rng.random(n) < 0.1] = -np.inf
+        want = np.sort(np.lexsort((np.arange(n), values))[:k])
+        assert _smallest(values, k).tolist() == want.tolist()
+
+
+def test_unique_rows_match_numpy():
+    rng = np.random.default_rng(1)
+    for big in (3, 2**40):  # packed keys, and rows too wide to pack
+        counts = rng.integers(0, 4, size=(300, 3))
+        counts[:, 0] *= big
+        keys, inverse = _unique_rows(counts)
+        want_keys, want_inverse = np.unique(counts, axis=0, return_inverse=True)
+        assert sorted(map(tuple, keys.tolist())) == sorted(map(tuple, want_keys.tolist()))
+        assert (keys[inverse] == counts).all() and len(keys) == len(want_keys)
+        assert len(want_inverse.reshape(-1)) == len(inverse)
+
+
+def test_frontier_pops_in_heap_order():
+    rng = np.random.default_rng(2)
+    bound = rng.integers(0, 20, 600).astype(float)
+    stage = rng.integers(0, 2, 600)
+    level, row = rng.integers(0, 4, 600), np.arange(600)
+    queue = _Frontier(bound, stage, level, row)
+    heap = list(zip(bound.tolist(), stage.tolist(), level.tolist(), row.tolist(), strict=True))
+    heapq.heapify(heap)
+    popped = 0
+    while heap:
+        assert queue.peek() == heap[0]
+        item = queue.pop()
+        assert item == heapq.heappop(heap)
+        popped += 1
+        if popped % 3 == 0:  # later pushes interleave with the presorted entries
+            new = (item[0] + float(rng.integers(0, 5)), 1, 9, popped)
+            queue.push(new)
+            heapq.heappush(heap, new)
+    assert not queue
+
+
+def test_one_type_fitness_bound_by_count_is_the_rows(table):
+    """One part type: the bound is read from a table per count, equal to the row's own."""
+    types = ["foot"]
+    counts = np.random.default_rng(3).integers(0, 9, size=(500, 1))
+    batch = fitness_upper_bounds(table, types, counts)
+    rows = [fitness_upper_bounds(table, types, counts[k : k + 1])[0] for k in range(0, 500, 7)]
+    assert batch[::7].tolist() == rows
+    assert batch.max() == 0.0 and batch.min() < 0.0  # -D_same's bound, no cross pairs
