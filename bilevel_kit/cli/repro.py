@@ -156,26 +156,25 @@ def _run(args: argparse.Namespace) -> int:
     default = f"out/repro/{args.experiment.replace('-', '_')}"
     check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
     out = args.out or default
+    run: dict[str, Any] = {"quick": args.quick, "jobs": args.jobs, "seed": args.seed}
+    grid = {"mats": args.mats, "mttfs": args.mttfs}  # the Figure 6 delay cells
     if args.experiment == "adaptive":
         from ..repro.adaptive import run_adaptive
 
-        res = run_adaptive(out, quick=args.quick, reps=args.reps, jobs=args.jobs, seed=args.seed)
+        res = run_adaptive(out, reps=args.reps, **run)
     elif args.experiment == "user-study":
-        res = repro.run_user_study(out, quick=args.quick, seed=args.seed, jobs=args.jobs)
+        res = repro.run_user_study(out, **run)
     elif args.experiment == "horizon":
         res = repro.run_horizon(
             out,
-            quick=args.quick,
-            jobs=args.jobs,
-            seed=args.seed,
             horizons=args.horizons,
             instances=args.instances,
             reference_time_limit=args.reference_time_limit,
             windows=args.windows,
-            mats=args.mats,
-            mttfs=args.mttfs,
             reps=args.reps,
             simulation=not args.no_simulation,
+            **grid,
+            **run,
         )
     else:
         policies = tuple(repro.CONDITIONS)
@@ -185,15 +184,12 @@ def _run(args: argparse.Namespace) -> int:
             options = {"time_limit": args.cpsat_time_limit}
         res = repro.run_fig6(
             out,
-            quick=args.quick,
             reps=args.reps,
-            jobs=args.jobs,
             delivery_time=args.delivery_time,
-            seed=args.seed,
             policies=policies,
             policy_options=options,
-            mats=args.mats,
-            mttfs=args.mttfs,
+            **grid,
+            **run,
         )
     md = res.get("files", {}).get("markdown")
     if md and Path(md).exists():
