@@ -101,9 +101,10 @@ HINT_SHARE = 0.3
 MIN_RUN = 0.05
 #: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
 MIN_HINT = 0.3
-#: Seconds per task a heuristic runs past its ``time_limit`` (greedy-ce finishes the remaining
-#: kits as single tasks: measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks;
-#: bench/results/scale.md); kept back from its share of the warm start.
+#: Seconds per task kept back from a heuristic's share of the warm start for its run past its
+#: own ``time_limit``. Measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks for greedy-ce before
+#: its incremental timeline, +0.5-1.4 s at 1,000 tasks since (bench/results/scale.md): now a
+#: conservative margin, kept because the scale benchmark's cpsat rows were measured with it.
 HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
 #: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
 #: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
