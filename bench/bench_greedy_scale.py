@@ -27,6 +27,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from bench_scale import wide_instance  # the same wide family as the scale benchmark
+
 ROOT = Path(__file__).resolve().parent.parent
 FAMILIES = ("table", "mixed", "intree", "series-parallel", "wide")
 
@@ -46,29 +48,6 @@ print(json.dumps({
                          "ce_calls", "time_limit_hit")},
 }))
 """
-
-
-def wide_instance(n: int, seed: int) -> dict[str, object]:
-    """n tasks without precedence, one part type, robot times given per task."""
-    import random
-
-    rng = random.Random(seed)
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"wide_n{n}_s{seed}",
-        "tray": {"width": 300.0, "height": 200.0},
-        "delivery_time": 2.0,
-        "part_types": [{"id": "part", "width": 40.0, "height": 30.0, "pick_time": 3.0}],
-        "tasks": [
-            {
-                "id": f"t{j}",
-                "parts": [{"type": "part", "count": rng.randint(1, 3)}],
-                "robot_time": float(rng.randint(3, 30)),
-                "human_time": {"mean": float(rng.randint(5, 40))},
-            }
-            for j in range(n)
-        ],
-    }
 
 
 def make_instance(family: str, size: int, path: Path) -> None:
