@@ -27,7 +27,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench_scale import wide_instance  # the same wide family as the scale benchmark
+from bench_scale import write_instance  # the scale benchmark's families
 
 ROOT = Path(__file__).resolve().parent.parent
 FAMILIES = ("table", "mixed", "intree", "series-parallel", "wide")
@@ -51,30 +51,9 @@ print(json.dumps({
 
 
 def make_instance(family: str, size: int, path: Path) -> None:
-    if family == "wide":
-        path.write_text(json.dumps(wide_instance(size, 1)))
-        return
-    arg = size
-    if family in ("table", "mixed"):
-        arg = max(1, size // (12 if family == "table" else 30))
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "bilevel_kit.cli",
-            "generate",
-            family,
-            "--size",
-            str(arg),
-            *([] if family in ("table", "mixed") else ["--seed", "1"]),
-            "--out",
-            str(path),
-        ],
-        check=True,
-        env=env,
-        capture_output=True,
-    )
+    # whole units as this benchmark has always sized them: size // 12 tables, size // 30 mixed
+    divisor = {"table": 12, "mixed": 30}.get(family)
+    write_instance(family, size if divisor is None else max(1, size // divisor), path)
 
 
 def run_case(family: str, size: int, timeout: float) -> dict[str, object]:

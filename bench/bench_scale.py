@@ -112,24 +112,22 @@ def johnson_instance(n: int, seed: int) -> dict[str, object]:
 
 
 def make_instance(family: str, size: int, path: Path) -> None:
+    write_instance(
+        family, max(1, round(size / PER_UNIT[family])) if family in PER_UNIT else size, path
+    )
+
+
+def write_instance(family: str, arg: int, path: Path) -> None:
+    """The instance of ``family`` with ``arg`` tasks (units for table and mixed) at ``path``:
+    ``wide`` built here, the others by ``bilevel-kit generate`` (``--seed 1`` for the random
+    families)."""
     if family == "wide":
-        path.write_text(json.dumps(wide_instance(size, 1)))
+        path.write_text(json.dumps(wide_instance(arg, 1)))
         return
-    arg = max(1, round(size / PER_UNIT[family])) if family in PER_UNIT else size
     seed = [] if family in PER_UNIT else ["--seed", "1"]
+    cmd = [sys.executable, "-m", "bilevel_kit.cli", "generate", family, "--size", str(arg)]
     subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "bilevel_kit.cli",
-            "generate",
-            family,
-            "--size",
-            str(arg),
-            *seed,
-            "--out",
-            str(path),
-        ],
+        [*cmd, *seed, "--out", str(path)],
         check=True,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
         capture_output=True,
