@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import part_types_and_tasks
 
 from bilevel_kit import check, load, solve
 from bilevel_kit.instance import from_dict
@@ -164,28 +165,8 @@ def test_signed_and_penalty_forms_run(stool):
 
 @st.composite
 def small_instances(draw):
-    n_types = draw(st.integers(1, 3))
-    types = [
-        {
-            "id": f"p{k}",
-            "width": draw(st.integers(5, 60)) * 1.0,
-            "height": draw(st.integers(5, 60)) * 1.0,
-            "pick_time": draw(st.integers(0, 9)) * 1.0,
-            "rotatable": draw(st.booleans()),
-        }
-        for k in range(n_types)
-    ]
-    n = draw(st.integers(1, 6))
-    tasks = []
-    for j in range(n):
-        parts = [
-            {"type": f"p{k}", "count": draw(st.integers(1, 2))}
-            for k in range(n_types)
-            if draw(st.booleans())
-        ]
-        tasks.append(
-            {"id": f"t{j}", "parts": parts, "human_time": {"mean": draw(st.integers(1, 30)) * 1.0}}
-        )
+    types, tasks = part_types_and_tasks(draw, max_side=60, max_tasks=6)
+    n = len(tasks)
     edges = [
         [f"t{a}", f"t{b}"]
         for a in range(n)

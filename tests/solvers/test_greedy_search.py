@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import part_types_and_tasks
 
 from bilevel_kit import check, solve
 from bilevel_kit.instance import Instance, from_dict
@@ -28,28 +29,8 @@ TINY_CE = CEParams(samples=20, elite=5, max_iter=5)
 @st.composite
 def enumerable_instances(draw: st.DrawFn) -> Instance:
     """Up to 10 tasks, random precedence, d, overheads, N in 1..5, trays None/1/2."""
-    n_types = draw(st.integers(1, 3))
-    types = [
-        {
-            "id": f"p{k}",
-            "width": draw(st.integers(5, 50)) * 1.0,
-            "height": draw(st.integers(5, 50)) * 1.0,
-            "pick_time": draw(st.integers(0, 9)) * 1.0,
-            "rotatable": draw(st.booleans()),
-        }
-        for k in range(n_types)
-    ]
-    n = draw(st.integers(1, 10))
-    tasks = []
-    for j in range(n):
-        parts = [
-            {"type": f"p{k}", "count": draw(st.integers(1, 2))}
-            for k in range(n_types)
-            if draw(st.booleans())
-        ]
-        tasks.append(
-            {"id": f"t{j}", "parts": parts, "human_time": {"mean": draw(st.integers(1, 30)) * 1.0}}
-        )
+    types, tasks = part_types_and_tasks(draw, max_side=50, max_tasks=10)
+    n = len(tasks)
     density = draw(st.integers(0, 6))
     edges = [
         [f"t{a}", f"t{b}"]
