@@ -1,7 +1,9 @@
-"""Hypothesis building blocks for small random instances (the greedy tests' strategies)."""
+"""Small random instances for tests: hypothesis building blocks (the greedy tests'
+strategies) and seeded instance documents with a binding tray (the exact solvers' tests)."""
 
 from __future__ import annotations
 
+import random
 from typing import Any
 
 from hypothesis import strategies as st
@@ -35,3 +37,44 @@ def part_types_and_tasks(
             {"id": f"t{j}", "parts": parts, "human_time": {"mean": draw(st.integers(1, 30)) * 1.0}}
         )
     return types, tasks
+
+
+def random_doc(
+    seed: int,
+    n: int | None = None,
+    *,
+    robot_share: float = 0.4,
+    robot_halves: tuple[int, int] = (1, 30),
+) -> dict[str, Any]:
+    """A small random instance: precedence DAG, d > 0, overheads, a tray that binds
+    geometrically (a 50 x 40 part and a 70 x 15 bar share a 100 x 60 tray only one way).
+    A share ``robot_share`` of the tasks get a robot time of ``robot_halves`` half-seconds."""
+    rng = random.Random(seed)
+    n = n or rng.randint(4, 6)
+    types = [
+        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
+        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
+        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
+    ]
+    tasks = []
+    for i in range(n):
+        kinds = rng.sample(["big", "bar", "sq"], rng.randint(1, 2))
+        task: dict[str, Any] = {
+            "id": f"t{i}",
+            "parts": [{"type": k, "count": rng.randint(1, 2) if k == "sq" else 1} for k in kinds],
+            "human_time": {"mean": rng.randint(2, 40) / 2},
+        }
+        if rng.random() < robot_share:
+            task["robot_time"] = rng.randint(*robot_halves) / 2
+        tasks.append(task)
+    prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
+    return {
+        "format": "bilevel-kit/1",
+        "name": f"rand{seed}",
+        "tray": {"width": 100.0, "height": 60.0},
+        "delivery_time": rng.randint(1, 16) / 2,
+        "kit_overhead": {"robot": rng.randint(1, 6) / 2, "human": rng.randint(1, 6) / 2},
+        "part_types": types,
+        "tasks": tasks,
+        "precedence": prec,
+    }

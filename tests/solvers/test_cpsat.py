@@ -8,6 +8,7 @@ from collections import Counter
 
 import pytest
 from brute import best_makespan, fits
+from strategies import random_doc
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
@@ -22,40 +23,6 @@ FAST = {"workers": 2, "time_limit": 20.0}
 # ---------------------------------------------------------------------------------------------
 # helpers
 # ---------------------------------------------------------------------------------------------
-
-
-def random_doc(seed: int, n: int | None = None) -> dict:
-    """A small random instance: precedence DAG, d > 0, overheads, a tray that binds
-    geometrically (a 50 x 40 part and a 70 x 15 bar share a 100 x 60 tray only one way)."""
-    rng = random.Random(seed)
-    n = n or rng.randint(4, 6)
-    types = [
-        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
-        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
-        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
-    ]
-    tasks = []
-    for i in range(n):
-        kinds = rng.sample(["big", "bar", "sq"], rng.randint(1, 2))
-        task = {
-            "id": f"t{i}",
-            "parts": [{"type": k, "count": rng.randint(1, 2) if k == "sq" else 1} for k in kinds],
-            "human_time": {"mean": rng.randint(2, 40) / 2},
-        }
-        if rng.random() < 0.4:
-            task["robot_time"] = rng.randint(1, 30) / 2
-        tasks.append(task)
-    prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"rand{seed}",
-        "tray": {"width": 100.0, "height": 60.0},
-        "delivery_time": rng.randint(1, 16) / 2,
-        "kit_overhead": {"robot": rng.randint(1, 6) / 2, "human": rng.randint(1, 6) / 2},
-        "part_types": types,
-        "tasks": tasks,
-        "precedence": prec,
-    }
 
 
 def brute_force(inst) -> tuple[float, Plan]:

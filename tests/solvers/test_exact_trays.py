@@ -13,6 +13,7 @@ import random
 import time
 
 import pytest
+import strategies
 from brute import best_makespan, segmentations
 from flowshop import blocking_makespan, flow_makespan, gilmore_gomory_order, johnson_order
 
@@ -60,38 +61,10 @@ def random_jobs(seed: int, n: int) -> tuple[list[float], list[float]]:
 
 
 def random_doc(seed: int, trays: int | None, n: int | None = None) -> dict:
-    """A small random instance: precedence DAG, d > 0, both overheads > 0, a tray that binds
-    geometrically (a 50 x 40 part and a 70 x 15 bar share a 100 x 60 tray only one way)."""
-    rng = random.Random(seed)
-    n = n or rng.randint(4, 6)
-    types = [
-        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
-        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
-        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
-    ]
-    tasks = []
-    for i in range(n):
-        kinds = rng.sample(["big", "bar", "sq"], rng.randint(1, 2))
-        task = {
-            "id": f"t{i}",
-            "parts": [{"type": k, "count": rng.randint(1, 2) if k == "sq" else 1} for k in kinds],
-            "human_time": {"mean": rng.randint(2, 40) / 2},
-        }
-        if rng.random() < 0.6:  # a busy robot, so that the tray rule binds
-            task["robot_time"] = rng.randint(10, 50) / 2
-        tasks.append(task)
-    prec = [[f"t{i}", f"t{j}"] for i in range(n) for j in range(i + 1, n) if rng.random() < 0.3]
-    doc = {
-        "format": "bilevel-kit/1",
-        "name": f"rand{seed}",
-        "tray": {"width": 100.0, "height": 60.0},
-        "delivery_time": rng.randint(1, 16) / 2,
-        "kit_overhead": {"robot": rng.randint(1, 6) / 2, "human": rng.randint(1, 6) / 2},
-        "part_types": types,
-        "tasks": tasks,
-        "precedence": prec,
-        "weights": {"W5": 0.01},
-    }
+    """The exact tests' random instance (tests/strategies.py) with a busy robot, so that the
+    tray rule binds, and ``trays`` kit trays."""
+    doc = strategies.random_doc(seed, n, robot_share=0.6, robot_halves=(10, 50))
+    doc["weights"] = {"W5": 0.01}
     if trays is not None:
         doc["trays"] = trays
     return doc
