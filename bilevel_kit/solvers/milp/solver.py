@@ -264,19 +264,24 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
         pipe = _BoundsPipe(req.on_bounds) if req.on_bounds is not None else None
         if pipe is not None:
             argv.append(str(pipe.child_fd))
-        proc = subprocess.Popen(
-            argv,
-            stdout=None if req.log else subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=_child_env(),
-            pass_fds=() if pipe is None else (pipe.child_fd,),
-            preexec_fn=(
-                functools.partial(_die_with_parent, os.getpid())
-                if sys.platform == "linux"
-                else None
-            ),
-        )
+        try:
+            proc = subprocess.Popen(
+                argv,
+                stdout=None if req.log else subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=_child_env(),
+                pass_fds=() if pipe is None else (pipe.child_fd,),
+                preexec_fn=(
+                    functools.partial(_die_with_parent, os.getpid())
+                    if sys.platform == "linux"
+                    else None
+                ),
+            )
+        except BaseException:
+            if pipe is not None:  # never started: close both ends of the pipe
+                pipe.join()
+            raise
         if pipe is not None:
             pipe.start()
         try:  # the child never outlives this call: killed on a timeout, an error or a signal
