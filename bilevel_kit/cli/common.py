@@ -207,6 +207,15 @@ def positive_int(text: str) -> int:
     return _checked(text, int, lambda v: v >= 1, "an integer >= 1")
 
 
+def listed(text: str, item: Callable[[str], N]) -> tuple[N, ...]:
+    """``a,b,c``: one or more comma-separated values, each parsed and checked by ``item`` (one
+    of the argument types here, e.g. :func:`positive_int`)."""
+    values = tuple(item(s.strip()) for s in text.split(",") if s.strip())
+    if not values:
+        raise argparse.ArgumentTypeError("expected at least one value")
+    return values
+
+
 # ---------------------------------------------------------------------------------------------
 # Shared options
 # ---------------------------------------------------------------------------------------------

@@ -4,8 +4,6 @@ the adaptive-pace study beyond the paper (see paper_repro/)."""
 from __future__ import annotations
 
 import argparse
-import math
-from collections.abc import Callable
 from typing import Any
 
 from .common import (
@@ -15,6 +13,7 @@ from .common import (
     add_seed,
     add_sweep_options,
     add_time_limit,
+    listed,
     positive,
     positive_int,
     sweep_exit,
@@ -117,32 +116,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_sweep_options(p)
 
 
-def _listed(
-    text: str, cast: Callable[[str], Any], what: str, rule: str, ok: Callable[[Any], bool]
-) -> tuple[Any, ...]:
-    """``text`` split on commas, each item ``cast`` and ``ok`` (``rule`` says how in errors)."""
-    values = []
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        try:
-            v = cast(item)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {what}, got {item!r}") from None
-        if not ok(v):
-            raise argparse.ArgumentTypeError(f"expected {what} {rule}, got {item!r}")
-        values.append(v)
-    if not values:
-        raise argparse.ArgumentTypeError(f"expected at least one {what[:-1]}")
-    return tuple(values)
-
-
 def integers(text: str) -> tuple[int, ...]:
     """``1,2,5``: one or more integers >= 1."""
-    return _listed(text, int, "integers", ">= 1", lambda v: v >= 1)
+    return listed(text, positive_int)
 
 
 def numbers(text: str) -> tuple[float, ...]:
     """``30,60``: one or more finite numbers > 0."""
-    return _listed(text, float, "numbers", "> 0", lambda v: 0 < v < math.inf)
+    return listed(text, positive)
 
 
 def run(args: argparse.Namespace) -> int:
