@@ -98,6 +98,8 @@ Random instances of up to 6 tasks solve in well under a second.
   after :func:`local_search`, ``local_search_converged``: whether it reached a local optimum
   within its share of the time (only with a warm start; if not, the start and so the MILP's
   choice among plans of equal J depend on the machine's speed);
+* ``incumbent``: ``milp`` (the MILP's solution) or ``warm start`` (the solver stopped without
+  returning one, e.g. killed past the time limit: the local-search plan it was started from);
 * ``lower_level_cut``: kit values computed with a packing limit cut short by the deadline
   (their layouts depend on the machine's speed; not memoised);
 * ``lower_level_s``, ``milp_s``, ``wall_time_s``: seconds spent;
@@ -113,8 +115,9 @@ its warm start (on the paper's table the full lower level takes about 55 s of a 
 from __future__ import annotations
 
 import itertools
+import math
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -821,9 +824,18 @@ def run(
         warmstart=start is not None,
     )
     extra.update(milp_s=time.perf_counter() - t_milp, termination=info.termination)
-    if not info.has_solution:
+    if info.has_solution:
+        plan = _solution_plan(instance, m, keys, cols, lower_level)
+        extra["incumbent"] = "milp"
+    elif (
+        start is not None and not info.infeasible and math.isfinite(extra["local_search_objective"])
+    ):
+        # the solver stopped without returning a solution (e.g. killed past the time limit):
+        # the MIP start it was given is still a plan whose every kit fits
+        plan = _with_layouts(instance, [k.tasks for k in start.kits], lower_level)
+        extra["incumbent"] = "warm start"
+    else:
         return finish(None, Status.INFEASIBLE if info.infeasible else Status.UNKNOWN)
-    plan = _solution_plan(instance, m, keys, cols, lower_level)
     value = paper_objective(instance, plan, lower_level, signed=options.signed)
     bound = info.bound
     if bound is not None and bound > value:
@@ -854,9 +866,16 @@ def _solution_plan(
     chosen = sorted(
         ((k, c) for c, k in keys if m.z[c, k].value is not None and m.z[c, k].value > 0.5)
     )
+    return _with_layouts(instance, [cols[c].tasks for _, c in chosen], lower_level)
+
+
+def _with_layouts(
+    instance: Instance, kits: Sequence[Collection[str]], lower_level: LowerLevel
+) -> Plan:
+    """``kits`` in delivery order, each in human order with its best known layout."""
     plan_kits = []
-    for _, c in chosen:
-        tasks = human_order(instance, cols[c].tasks)
+    for kit in kits:
+        tasks = human_order(instance, kit)
         plan_kits.append(Kit(tasks, lower_level.value(instance.kit_parts(tasks)).layout))
     return Plan(tuple(plan_kits))
 

@@ -267,3 +267,22 @@ def test_options_of_the_registered_method():
     assert "warm_plan" not in names and "ce_params" not in names  # Python-only arguments
     with pytest.raises(UsageError, match="lower"):
         kc.solve(load(TABLE.parent / "stool.json"), lower="magic", time_limit=5.0)
+
+
+def test_a_solver_stopped_without_a_solution_leaves_the_warm_start(monkeypatch):
+    """When HiGHS returns no solution (killed past the time limit), the result is the plan the
+    MILP was started from, checked and labelled, not 'unknown' without a plan."""
+    from bilevel_kit.solvers.milp.solver import SolveInfo
+
+    def killed(*args, **kwargs):
+        return SolveInfo("killed", False, False, False, None, None, 0.0)
+
+    monkeypatch.setattr(kc, "run_solver", killed)
+    inst = load(TABLE.parent / "stool.json")
+    out = kc.solve(inst, time_limit=30.0, lower="ce")
+    assert out.status == "feasible" and out.extra["incumbent"] == "warm start"
+    assert out.extra["termination"] == "killed" and out.extra["plan_objective_J_bound"] is None
+    assert check(inst, out.plan) == []
+    assert [k.tasks for k in out.plan.kits] == [("a1",), ("a2",), ("a3",)]
+    assert out.extra["plan_objective_J"] == pytest.approx(out.extra["local_search_objective"])
+    assert kc.solve(inst, time_limit=30.0, lower="ce", warm_plan=None).status == "unknown"
