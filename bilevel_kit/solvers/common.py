@@ -338,13 +338,17 @@ def quick_plan(
     order: Sequence[str] | None = None,
     target: float | None = None,
 ) -> list[list[str]] | None:
-    """A cheap feasible plan (an upper bound and a hint): ``order`` (default: the topological
-    order) cut into segments of a fixed size s (each split further until it fits), best s by
-    the evaluator; stops once the packer's budget has expired and a plan is known, or a plan
-    reaches ``target``."""
+    """A cheap feasible plan (an upper bound and a hint): the best of :func:`best_cut` of
+    ``order`` (default: the topological order; the optimal cut of that order with one tray)
+    and ``order`` cut into segments of a fixed size s (each split further until it fits), best
+    s by the evaluator; stops once the packer's budget has expired and a plan is known, or a
+    plan reaches ``target``."""
     packer = packer or Packer(instance, 0.2, Budget(10.0))
     order = topological_order(instance) if order is None else list(order)
     best: tuple[float, list[list[str]]] | None = None
+    cut = best_cut(instance, order, packer)
+    if cut is not None:
+        best = (evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in cut))).makespan, cut)
     for s in range(1, min(len(order), max_size) + 1):
         if best is not None and (
             packer.budget.expired() or (target is not None and best[0] <= target)
@@ -360,6 +364,21 @@ def quick_plan(
         if best is None or ms < best[0] - 1e-9:
             best = (ms, kits)
     return best[1] if best else None
+
+
+def best_cut(instance: Instance, order: Sequence[str], packer: Packer) -> list[list[str]] | None:
+    """The best cut of ``order`` into contiguous kits that fit the tray under the one-tray
+    recursion (:mod:`.segment`: exact with one tray, a candidate otherwise), with the
+    segments' fit decided by ``packer`` (an unknown verdict counts as not fitting); None if a
+    task does not fit or the packer's budget expires first."""
+    from .segment import fit_extents, one_tray_cut
+
+    if not order:
+        return None
+    ext = fit_extents(
+        len(order), lambda b, c: packer.fits(order[b:c]) is True, packer.budget.deadline
+    )
+    return None if ext is None else one_tray_cut(instance, order, ext)[1]
 
 
 def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | None:
