@@ -59,6 +59,11 @@ class Budget:
         """The same budget ending ``margin`` seconds earlier (time kept back for the end)."""
         return Budget(self.time_limit, start=self.start, deadline=self.deadline - margin)
 
+    def next(self, fraction: float) -> Budget:
+        """The next ``fraction`` of what is left (a quick step after slow set-up work, which
+        :meth:`head` would have eaten into)."""
+        return Budget(self.time_limit, start=self.start, deadline=self.share(fraction))
+
     def head(self, fraction: float) -> Budget:
         """The first ``fraction`` of the time limit (a quick first step), within the deadline."""
         end = min(self.deadline, self.start + fraction * self.time_limit)

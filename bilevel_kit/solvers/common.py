@@ -339,16 +339,24 @@ def quick_plan(
     target: float | None = None,
 ) -> list[list[str]] | None:
     """A cheap feasible plan (an upper bound and a hint): the best of :func:`best_cut` of
-    ``order`` (default: the topological order; the optimal cut of that order with one tray)
-    and ``order`` cut into segments of a fixed size s (each split further until it fits), best
-    s by the evaluator; stops once the packer's budget has expired and a plan is known, or a
-    plan reaches ``target``."""
+    ``order`` (default: the topological order) and ``order`` cut into segments of a fixed
+    size s (each split further until it fits), by the evaluator; stops once the packer's
+    budget has expired and a plan is known, or a plan reaches ``target``. With one tray the
+    cut comes first (it is the optimal cut of the order, so it beats every fixed size whose
+    segments it saw fit); otherwise it is tried last, with the time left."""
     packer = packer or Packer(instance, 0.2, Budget(10.0))
     order = topological_order(instance) if order is None else list(order)
     best: tuple[float, list[list[str]]] | None = None
-    cut = best_cut(instance, order, packer)
-    if cut is not None:
-        best = (evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in cut))).makespan, cut)
+
+    def consider(kits: list[list[str]]) -> None:
+        nonlocal best
+        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+        if best is None or ms < best[0] - 1e-9:
+            best = (ms, kits)
+
+    one_tray = instance.tray_limit == 1
+    if one_tray and (cut := best_cut(instance, order, packer)) is not None:
+        consider(cut)
     for s in range(1, min(len(order), max_size) + 1):
         if best is not None and (
             packer.budget.expired() or (target is not None and best[0] <= target)
@@ -360,24 +368,34 @@ def quick_plan(
             if parts is None:
                 return best[1] if best else None
             kits += parts
-        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
-        if best is None or ms < best[0] - 1e-9:
-            best = (ms, kits)
+        consider(kits)
+    if not one_tray and not packer.budget.expired() and (cut := best_cut(instance, order, packer)):
+        consider(cut)
     return best[1] if best else None
+
+
+#: Seconds each packing call of :func:`best_cut` may take: its calls probe ever longer
+#: segments, and a borderline one left undecided only ends that segment (the packing cache
+#: retries an unknown verdict when a later caller allows more time).
+CUT_PROBE_S = 0.05
 
 
 def best_cut(instance: Instance, order: Sequence[str], packer: Packer) -> list[list[str]] | None:
     """The best cut of ``order`` into contiguous kits that fit the tray under the one-tray
     recursion (:mod:`.segment`: exact with one tray, a candidate otherwise), with the
-    segments' fit decided by ``packer`` (an unknown verdict counts as not fitting); None if a
-    task does not fit or the packer's budget expires first."""
+    segments' fit decided by ``packer`` (an unknown verdict counts as not fitting; once the
+    packer's budget has expired the segments stop growing, so the cut may be coarser); None if
+    a task does not fit."""
     from .segment import fit_extents, one_tray_cut
 
     if not order:
         return None
-    ext = fit_extents(
-        len(order), lambda b, c: packer.fits(order[b:c]) is True, packer.budget.deadline
-    )
+    limit = min(packer.pack_tl, CUT_PROBE_S)
+
+    def fits(b: int, c: int) -> bool:
+        return packer.counts(instance.kit_parts(order[b:c]), limit)[0] is True
+
+    ext = fit_extents(len(order), fits, packer.budget.deadline)
     return None if ext is None else one_tray_cut(instance, order, ext)[1]
 
 

@@ -25,7 +25,8 @@ into contiguous kits that fit the tray is a shortest path over "last kit = [a, b
           C^* = \min_a\ f(a, n) + y_{[a,n)}.
 
 Fitting is monotone (a segment that does not fit stays unfit when it grows), so the longest
-fitting segment from each start is found with O(n) packing calls (two pointers), and the
+fitting segment from each start is found with O(n) packing calls (two pointers; past a
+deadline the segments stop growing, so the cut stays valid but may be coarser), and the
 recursion costs O(n L^2) for segments of at most L tasks, vectorised over one of the L's.
 With T != 1 trays the recursion is not the timeline: its cut is then only a candidate that the
 caller scores with :func:`bilevel_kit.plan.evaluate` like any other.
@@ -45,18 +46,19 @@ def fit_extents(
     n: int, fits: Callable[[int, int], bool], until: float | None = None
 ) -> list[int] | None:
     """``ext[b]``: the largest c such that the segment [b, c) fits (``fits(b, c)``), for
-    every start b; two pointers over a monotone predicate. None if a single task does not fit
-    or ``until`` (a ``time.perf_counter`` deadline) passes."""
+    every start b; two pointers over a monotone predicate ([b, c) fits when [b - 1, c) does,
+    so it is not asked again). Past ``until`` (a ``time.perf_counter`` deadline) no segment
+    grows any more: every listed segment still fits, but may be shorter than the longest.
+    None if a single task does not fit."""
     ext: list[int] = []
     c = 0
     for b in range(n):
-        c = max(c, b + 1)
-        if not fits(b, c):
-            return None
-        while c < n and fits(b, c + 1):
-            c += 1
-            if until is not None and time.perf_counter() > until:
+        if c <= b:
+            c = b + 1
+            if not fits(b, c):
                 return None
+        while c < n and (until is None or time.perf_counter() <= until) and fits(b, c + 1):
+            c += 1
         ext.append(c)
     return ext
 

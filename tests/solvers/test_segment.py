@@ -75,11 +75,21 @@ def test_fit_extents_two_pointers_equal_the_direct_scan() -> None:
 
         direct = [max(c for c in range(b + 1, n + 1) if fits(b, c)) for b in range(n)]
         assert fit_extents(n, fits) == direct
-    assert fit_extents(3, lambda b, c: b != 1) is None  # task 1 alone does not fit
+    assert fit_extents(3, lambda b, c: not b <= 1 < c) is None  # task 1 does not fit
 
 
-def test_fit_extents_stop_at_the_deadline() -> None:
-    assert fit_extents(5, lambda b, c: True, until=0.0) is None
+def test_fit_extents_stop_growing_at_the_deadline() -> None:
+    """Past the deadline only single tasks are asked (and segments inside a known fit are
+    kept): a valid, coarser extent instead of none."""
+    asked: list[tuple[int, int]] = []
+
+    def fits(b: int, c: int) -> bool:
+        asked.append((b, c))
+        return True
+
+    assert fit_extents(5, fits, until=0.0) == [1, 2, 3, 4, 5]
+    assert asked == [(b, b + 1) for b in range(5)]
+    assert fit_extents(4, lambda b, c: not b <= 2 < c, until=0.0) is None
 
 
 @pytest.mark.parametrize(("units", "makespan", "kits"), [(1, 435.085, 5), (2, 813.865, 6)])

@@ -177,8 +177,8 @@ def run(
     # incumbent, upper bound and the kit cap (only valid for plans at least as good)
     inc = None
     if options.objective == "makespan":  # optimal at once if it attains the closed-form bound
-        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.05)))
-    inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.head(0.1)))
+        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
+    inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
     upper = None
     K = instance.n_tasks
