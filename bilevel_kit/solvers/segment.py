@@ -81,8 +81,8 @@ def one_tray_cut(
     back = np.full((n + 1, span + 1), -1, dtype=np.int64)
     for c in range(1, ext[0] + 1):
         f[c, c] = o_r + d + pr[c] + o_h
+    lens = np.arange(1, span + 1)
     for b in range(1, n):
-        lens = np.arange(1, span + 1)
         starts = b - lens  # previous kit [a, b) with a = b - length
         ok = (starts >= 0) & np.isfinite(f[b, 1:])
         if not ok.any():
@@ -100,7 +100,6 @@ def one_tray_cut(
         better = best < f[cs, cs - b]
         f[cs[better], (cs - b)[better]] = best[better]
         back[cs[better], (cs - b)[better]] = a[::-1][arg[better]]
-    lens = np.arange(1, span + 1)
     a = n - lens
     ok = (a >= 0) & np.isfinite(f[n, 1:])
     totals = np.where(ok, f[n, 1:] + ph[n] - ph[np.maximum(a, 0)], np.inf)
