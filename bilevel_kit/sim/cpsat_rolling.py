@@ -26,7 +26,10 @@ within the limit). Online information enters the sub-problem as:
   (:func:`bilevel_kit.solvers.cpsat.solve`, docs/formulations.md), so the robot's wait
   overlaps the human's work and the other tasks' picking. The committed kit lists its tasks in
   that order (the simulator's robot picks in kit order). This is an estimate: the arrivals
-  are random, a release is their expectation.
+  are random, a release is their expectation. Waiting for parts leaves slack, so many plans
+  tie; when the window has releases, the next kits of the plan are merged into the first
+  while their tasks need nothing the stock lacks, the kit fits and the released makespan does
+  not grow (fewer kits: less overhead, fewer decisions).
 
 **Determinism.** Every CP-SAT solve is limited in deterministic units
 (``max_deterministic_time`` = ``deterministic_time``) with ``workers`` fixed (1: CP-SAT is then
@@ -41,9 +44,14 @@ baseline plan when that is worse (both evaluated with the releases). Decisions a
 on (window, rounded times, rounded releases, rounded ``h0``, hint): a pure function of that
 key, so the memo never changes an answer.
 
+**Window.** The first ``window`` remaining tasks (12), or the first ``supply_window`` (8) when
+one of them waits for parts: their releases are expectations, and planning further on them
+costs solve time for little (measured on the Figure 6 grid, paper_repro/README.md).
+
 Options (:class:`CPSATRollingOptions`, given as ``SimParams.policy_options`` or ``-p`` on the
-command line): ``window`` (12 tasks), ``deterministic_time`` (0.1 per solve, about 0.1 s),
-``time_limit`` (10 s per epoch, safety net), ``workers`` (1), ``tray`` ("benders").
+command line): ``window`` (12 tasks), ``supply_window`` (8), ``deterministic_time`` (0.1 per
+solve, about 0.1 s), ``time_limit`` (10 s per epoch, safety net), ``workers`` (1), ``tray``
+("benders").
 """
 
 from __future__ import annotations
@@ -69,6 +77,13 @@ class CPSATRollingOptions:
     """Options of the ``cpsat-rolling`` policy (see the module docstring)."""
 
     window: int = field(default=12, metadata={"help": "tasks re-planned per epoch", "min": 1})
+    supply_window: int = field(
+        default=8,
+        metadata={
+            "help": "tasks re-planned when a part is missing (at most window; 0: window)",
+            "min": 0,
+        },
+    )
     deterministic_time: float = field(
         default=0.1,
         metadata={"help": "CP-SAT deterministic time per solve (reproducible)", "min": 0.0},
@@ -120,11 +135,14 @@ class CPSATRollingPolicy:
         if not remaining:
             return None
         window = remaining[: self.options.window]
+        waits = self._waits(window, state)
+        if any(waits.values()) and self.options.supply_window:
+            # a prefix: its waits are the same (stock consumed in order)
+            window = window[: self.options.supply_window]
         times = {t: self.instance.robot_time(t) for t in window}
         h0 = max(0.0, state.human_remaining)
-        waits = self._waits(window, state)
         now = self._now(h0)
-        releases = {t: round(now + w, 3) for t, w in waits.items() if w > 0}
+        releases = {t: round(now + waits[t], 3) for t in window if waits[t] > 0}
         hint = self._warm_kits(window)
         key = (
             tuple(window),
@@ -271,7 +289,9 @@ class CPSATRollingPolicy:
             releases=rel,
         )
         self.solves += 1
-        plan = self._merge_first(sub, out.plan or hint, len(dummy), rel, back)
+        plan = out.plan or hint
+        if any(rel.values()):  # (else the model's plan as it is: no-delay decisions unchanged)
+            plan = self._merge_first(sub, plan, len(dummy), rel, back)
         kits = [tuple(back[t] for t in k.tasks) for k in plan.kits if _TOKEN not in k.tasks]
         first = self._layouts.kit(kits[0], f"cpsat-rolling {kits[0]}")
         return first, tuple(kits[1:])
@@ -280,8 +300,7 @@ class CPSATRollingPolicy:
         self, sub: Instance, plan: Plan, j: int, rel: dict[str, float], back: dict[str, str]
     ) -> Plan:
         """Merge the next kits into the first real kit (position ``j``) while their tasks
-        need no part the stock lacks, the kit fits and the released makespan does not grow:
-        among plans the window's model ranks equal, fewer kits save overheads and decisions
+        need no part the stock lacks, the kit fits and the released makespan does not grow
         (module docstring)."""
         from ..errors import KitDoesNotFit
         from ..solvers.cpsat import released_makespan
@@ -290,7 +309,7 @@ class CPSATRollingPolicy:
         order = dict(zip([t.id for t in sub.tasks], released(sub, rel), strict=True))
         kits = [k.tasks for k in plan.kits]
         best = released_makespan(sub, plan, rel)
-        while j + 1 < len(kits) and not any(t in rel for t in kits[j + 1]):
+        while j + 1 < len(kits) and not any(rel.get(t, 0.0) > 0 for t in kits[j + 1]):
             # a topological order: releases are monotone along precedence, kit j comes first
             tasks = tuple(sorted(kits[j] + kits[j + 1], key=order.__getitem__))
             cand = Plan(tuple(Kit(k) for k in (*kits[:j], tasks, *kits[j + 2 :])))

@@ -53,7 +53,7 @@ optimum); with o_H > 0 it trades makespan against the number of kits.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 from ...bounds import johnson_lines, min_kits
@@ -61,7 +61,7 @@ from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ..common import kit_positions, reduced_edges, relabel_chains
 from .context import Model
-from .scaling import Scaled, scaled_timeline
+from .scaling import Scaled, scaled_makespan, scaled_timeline
 
 
 def build(
@@ -234,40 +234,53 @@ RELEASE_BOUND_TASKS = 4
 
 
 def release_bound(instance: Instance, sc: Scaled) -> int:
-    r"""A lower bound on C from the release times (0 without): for a release value v, the set
-    J of tasks released at v or later is picked after v, so :math:`C \ge v - o_R + T^*(J)`
-    with :math:`T^*(J)` the least makespan of J's tasks alone from time 0 without releases and
-    without the tray's geometry (every kit of a plan restricted to J starts no later, and its
-    first kit's o_R may have been spent before v). :math:`T^*` is enumerated (precedence-
-    feasible orders x cut patterns) for sets of at most :data:`RELEASE_BOUND_TASKS` tasks."""
+    r"""A lower bound on C from the release times (0 without). For a release value v > 0 the
+    set J of tasks released at v or later (closed under successors: releases are raised to
+    the ancestors') is picked after v, so
+
+    * :math:`C \ge v - o_R + T^*(J)`, :math:`T^*(J)` the least makespan of J's tasks alone
+      from time 0 without releases and without the tray's geometry (every kit of a plan
+      restricted to J starts no later; its first kit's o_R may be spent before v), enumerated
+      (precedence-feasible orders x cut patterns) when J has at most
+      :data:`RELEASE_BOUND_TASKS` tasks;
+    * else the closed-form lines on J: :math:`C \ge v + \min_{src} r_i + d + o_H + \sum_J h`
+      (the first kit of J arrives, then the human does all of J) and :math:`C \ge v + \sum_J
+      r + d + o_H + \min_{snk} h_i` (the robot picks all of J, then the last kit's human)."""
     if not any(sc.rel):
         return 0
     from dataclasses import replace
 
     plain = replace(sc, rel=[])
-    anc = instance.ancestors
-    ids = [t.id for t in instance.tasks]
+    edges = [(instance.index[a], instance.index[b]) for a, b in reduced_edges(instance)]
     best = 0
-    for v in sorted(set(sc.rel), reverse=True):
-        late = [i for i in range(len(ids)) if sc.rel[i] >= v]
-        if len(late) > RELEASE_BOUND_TASKS or v <= 0:
-            break
-        least = None
-        for perm in itertools.permutations(late):
-            pos = {i: k for k, i in enumerate(perm)}
-            if any(pos.get(instance.index[a], -1) > pos[i] for i in perm for a in anc[ids[i]]):
-                continue
-            for mask in range(2 ** (len(perm) - 1)):
-                kits: list[list[int]] = [[perm[0]]]
-                for k in range(1, len(perm)):
-                    if mask >> (k - 1) & 1:
-                        kits.append([])
-                    kits[-1].append(perm[k])
-                c = scaled_timeline(plain, kits)[-1][2]
-                least = c if least is None else min(least, c)
-        if least is not None:
+    for v in sorted(set(sc.rel) - {0}):
+        late = [i for i in range(len(sc.rel)) if sc.rel[i] >= v]
+        if len(late) <= RELEASE_BOUND_TASKS:
+            least = min(scaled_makespan(plain, kits) for kits in _segmentations(late, edges))
             best = max(best, v - sc.o_r + least)
+            continue
+        inside = set(late)
+        src = [i for i in late if not any(b == i and a in inside for a, b in edges)]
+        snk = [i for i in late if not any(a == i for a, _ in edges)]
+        human = v + min(sc.r[i] for i in src) + sc.d + sc.o_h + sum(sc.h[i] for i in late)
+        robot = v + sum(sc.r[i] for i in late) + sc.d + sc.o_h + min(sc.h[i] for i in snk)
+        best = max(best, human, robot)
     return best
+
+
+def _segmentations(tasks: list[int], edges: list[tuple[int, int]]) -> Iterator[list[list[int]]]:
+    """Every precedence-feasible order of ``tasks`` cut into consecutive kits."""
+    for perm in itertools.permutations(tasks):
+        pos = {i: k for k, i in enumerate(perm)}
+        if any(a in pos and b in pos and pos[a] > pos[b] for a, b in edges):
+            continue
+        for mask in range(2 ** (len(perm) - 1)):
+            kits: list[list[int]] = [[perm[0]]]
+            for k in range(1, len(perm)):
+                if mask >> (k - 1) & 1:
+                    kits.append([])
+                kits[-1].append(perm[k])
+            yield kits
 
 
 def tray_wait(sc: Scaled) -> int:
