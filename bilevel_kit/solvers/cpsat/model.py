@@ -87,7 +87,8 @@ def build(
     start, arrive, end = _timeline(m, sc, x, used, K, upper)
     C = end[-1]
     m.add(_closed_form_bound(instance, sc, K) <= C)
-    m.add(release_bound(instance, sc) <= C)
+    if any(sc.rel):  # (without releases the model is unchanged)
+        m.add(release_bound(instance, sc) <= C)
     out = Model(m, K, x, used, arrive, end, C, start=start)
     _one_tray_bound(instance, sc, out)
     for c, slope in johnson_lines(sc.r, sc.h, sc.o_r + sc.d, sc.o_h):  # bound (d), m = sum u
