@@ -30,10 +30,10 @@ kit-count cap above stays valid (releases only delay: a plan of released makespa
 makespan <= U without them; U itself is evaluated with releases), the closed-form bounds too;
 the closed-form shortcuts (a plan attaining them is optimal) are off, the release bound of
 :func:`.model.release_bound` is added (an incumbent attaining it is optimal: no model is
-built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` is
-the plan's makespan without releases (:func:`bilevel_kit.plan.evaluate`),
-``extra['release_makespan']`` the model's (on the time grid), on which ``gap``, ``bound`` and
-``optimal`` are (all zero releases: the run without them, unchanged).
+built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` and ``upper_start`` are
+makespans without releases (:func:`bilevel_kit.plan.evaluate`), ``extra['release_makespan']``
+the model's (on the time grid), on which ``gap``, ``bound`` and ``optimal`` are (all zero
+releases: the run without them, unchanged).
 
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
