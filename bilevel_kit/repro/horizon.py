@@ -17,11 +17,11 @@ a :class:`~bilevel_kit.experiments.compare.CompareCell` run by the one cell runn
 study resumes where it stopped.
 
 **Part B, simulation.** The exact rolling policy ``cpsat-rolling`` with its ``window`` option
-against ``optimized`` (the paper's greedy policy, N = 5) in the same runs (common random
-numbers) on the Figure 6 setting (10 tables per run, the calibrated timing, one tray) at no
-supply delay and at Figure 6 delay cells: total time, the paper's idle time, kits and the
-planning time per decision. Each (delay cell, policy, window) is a
-:class:`~bilevel_kit.repro.fig6.Fig6Cell` of one policy.
+(the same window under supply delays: ``supply_window`` = ``window``) against ``optimized``
+(the paper's greedy policy, N = 5) in the same runs (common random numbers) on the Figure 6
+setting (10 tables per run, the calibrated timing, one tray) at no supply delay and at Figure 6
+delay cells: total time, the paper's idle time, kits and the planning time per decision. Each
+(delay cell, policy, window) is a :class:`~bilevel_kit.repro.fig6.Fig6Cell` of one policy.
 
 ``quick``: the same experiment on fewer points (the table and 2 units, fewer N and windows,
 one delay cell, one replication, a shorter reference limit, the quick calibration); every
@@ -404,7 +404,11 @@ def run_horizon(
             sim_cells.append(Fig6Cell(mat=mat, mttf=mttf, policies=(OPT,), **common))
             sim_cells += [
                 Fig6Cell(
-                    mat=mat, mttf=mttf, policies=(ROLLING,), policy_options={"window": w}, **common
+                    mat=mat,
+                    mttf=mttf,
+                    policies=(ROLLING,),
+                    policy_options={"window": w, "supply_window": w},
+                    **common,
                 )
                 for w in windows
             ]

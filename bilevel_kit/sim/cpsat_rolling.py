@@ -19,10 +19,17 @@ within the limit). Online information enters the sub-problem as:
   come back as the model's own timeline says, so the sub-model is exact. With T >= 2 trays
   the dummy's tray stands for the last delivered kit's and the older delivered kits' trays are
   taken as back: an optimistic approximation;
-* **parts not in stock**: each task's robot time is its parts' pick times plus the expected
-  wait for the parts the stock lacks (``SimState.expected_wait``), the stock being consumed by
-  the window's tasks in topological order. This is an estimate: waits are added to picking
-  time, not overlapped with it.
+* **parts not in stock**: a task whose parts the stock lacks gets a **release time**, the
+  expected wait until they are all there (``SimState.expected_wait``, the stock consumed by
+  the window's tasks in topological order), counted from the model's "now" (after the dummy
+  kit); the model does not pick it earlier and picks each kit in the order of release
+  (:func:`bilevel_kit.solvers.cpsat.solve`, docs/formulations.md), so the robot's wait
+  overlaps the human's work and the other tasks' picking. The committed kit lists its tasks in
+  that order (the simulator's robot picks in kit order). This is an estimate: the arrivals
+  are random, a release is their expectation. Waiting for parts leaves slack, so many plans
+  tie; when the window has releases, the next kits of the plan are merged into the first
+  while their tasks need nothing the stock lacks, the kit fits and the released makespan does
+  not grow (fewer kits: less overhead, fewer decisions).
 
 **Determinism.** Every CP-SAT solve is limited in deterministic units
 (``max_deterministic_time`` = ``deterministic_time``) with ``workers`` fixed (1: CP-SAT is then
@@ -33,12 +40,18 @@ not from the packing oracle's process-wide cache.
 
 **Warm start.** Each decision is hinted with the previous decision's plan minus the kit it
 committed (restricted to the window, the window's new tasks appended as single kits), or a
-baseline plan when that is worse. Decisions are memoised on (window, rounded times, rounded
-``h0``, hint): a pure function of that key, so the memo never changes an answer.
+baseline plan when that is worse (both evaluated with the releases). Decisions are memoised
+on (window, rounded times, rounded releases, rounded ``h0``, hint): a pure function of that
+key, so the memo never changes an answer.
+
+**Window.** The first ``window`` remaining tasks (12), or the first ``supply_window`` (8) when
+one of them waits for parts: their releases are expectations, and planning further on them
+costs solve time for little (measured on the Figure 6 grid, paper_repro/README.md).
 
 Options (:class:`CPSATRollingOptions`, given as ``SimParams.policy_options`` or ``-p`` on the
-command line): ``window`` (12 tasks), ``deterministic_time`` (0.1 per solve, about 0.1 s),
-``time_limit`` (10 s per epoch, safety net), ``workers`` (1), ``tray`` ("benders").
+command line): ``window`` (12 tasks), ``supply_window`` (8), ``deterministic_time`` (0.1 per
+solve, about 0.1 s), ``time_limit`` (10 s per epoch, safety net), ``workers`` (1), ``tray``
+("benders").
 """
 
 from __future__ import annotations
@@ -49,7 +62,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 from ..instance import Instance, document, from_dict, topological_order
-from ..plan import Kit
+from ..plan import Kit, Plan
 from .policies import LayoutCache
 from .state import SimState
 
@@ -64,6 +77,13 @@ class CPSATRollingOptions:
     """Options of the ``cpsat-rolling`` policy (see the module docstring)."""
 
     window: int = field(default=12, metadata={"help": "tasks re-planned per epoch", "min": 1})
+    supply_window: int = field(
+        default=8,
+        metadata={
+            "help": "tasks re-planned when a part is missing (at most window; 0: window)",
+            "min": 0,
+        },
+    )
     deterministic_time: float = field(
         default=0.1,
         metadata={"help": "CP-SAT deterministic time per solve (reproducible)", "min": 0.0},
@@ -115,19 +135,26 @@ class CPSATRollingPolicy:
         if not remaining:
             return None
         window = remaining[: self.options.window]
-        times = self._robot_times(window, state)
+        waits = self._waits(window, state)
+        if any(waits.values()) and self.options.supply_window:
+            # a prefix: its waits are the same (stock consumed in order)
+            window = window[: self.options.supply_window]
+        times = {t: self.instance.robot_time(t) for t in window}
         h0 = max(0.0, state.human_remaining)
+        now = self._now(h0)
+        releases = {t: round(now + waits[t], 3) for t in window if waits[t] > 0}
         hint = self._warm_kits(window)
         key = (
             tuple(window),
             tuple(round(times[t], 3) for t in window),
             tuple(round(self.human_time(t), 3) for t in window),
+            tuple(sorted(releases.items())),
             round(h0, 3),
             hint,
         )
         hit = self._memo.get(key)
         if hit is None:
-            hit = self._solve(window, times, h0, hint)
+            hit = self._solve(window, times, h0, hint, releases)
             self._memo[key] = hit
         kit, self._rest = hit
         return kit
@@ -142,8 +169,9 @@ class CPSATRollingPolicy:
         kits += [(t,) for t in window if t not in seen]
         return tuple(kits)
 
-    def _robot_times(self, window: list[str], state: SimState) -> dict[str, float]:
-        """Pick times plus the expected wait for missing parts, stock consumed in order."""
+    def _waits(self, window: list[str], state: SimState) -> dict[str, float]:
+        """The expected wait until each task's parts are all in stock, the stock consumed by
+        the window's tasks in order."""
         inst = self.instance
         used: dict[str, int] = {}
         out = {}
@@ -151,11 +179,24 @@ class CPSATRollingPolicy:
             wait = 0.0
             for ptype, n in inst.task_by_id[t].parts:
                 if ptype in state.supply:
-                    before = state.expected_wait(ptype, used.get(ptype, 0))
                     used[ptype] = used.get(ptype, 0) + n
-                    wait += state.expected_wait(ptype, used[ptype]) - before
-            out[t] = inst.robot_time(t) + wait
+                    wait = max(wait, state.expected_wait(ptype, used[ptype]))
+            out[t] = wait
         return out
+
+    def _now(self, h0: float) -> float:
+        """The model time of the current state: the first real kit's earliest robot start
+        (after the dummy kit, with one tray after its tray came back; module docstring)."""
+        inst = self.instance
+        if self._busy(h0) <= 0 or inst.reachability:
+            return 0.0
+        tray = inst.kit_overhead_human if inst.tray_limit == 1 else 0.0
+        return inst.kit_overhead_robot + inst.delivery_time + tray
+
+    def _busy(self, h0: float) -> float:
+        """The dummy task's human time (module docstring)."""
+        inst = self.instance
+        return h0 if inst.tray_limit == 1 else h0 - inst.kit_overhead_human
 
     def _sub_instance(self, window: list[str], times: dict[str, float], h0: float) -> Instance:
         inst = self.instance
@@ -184,7 +225,7 @@ class CPSATRollingPolicy:
             if a in set(window) and b in set(window)
         ]
         # one tray: the dummy kit holds it (module docstring), else it only shifts time
-        busy = h0 if inst.tray_limit == 1 else h0 - inst.kit_overhead_human
+        busy = self._busy(h0)
         if busy > 0 and not inst.reachability:  # (with reachability h0 is ignored)
             # a part filling the (whole-mm) tray: nothing else can share the dummy kit
             w, h = math.floor(inst.tray.width), math.floor(inst.tray.height)
@@ -221,17 +262,20 @@ class CPSATRollingPolicy:
         times: dict[str, float],
         h0: float,
         warm: tuple[tuple[str, ...], ...],
+        releases: dict[str, float],
     ) -> tuple[Kit, tuple[tuple[str, ...], ...]]:
         """The first kit of the window's plan and the plan's other kits (task ids)."""
-        from ..plan import Plan, evaluate
-        from ..solvers.cpsat import best_heuristic_plan, solve
+        from ..solvers.cpsat import best_heuristic_plan, released_makespan, solve
 
         sub = self._sub_instance(window, times, h0)
         back = {_sub_id(t): t for t in window}
+        rel = {_sub_id(t): v for t, v in releases.items()}
         dummy = (Kit((_TOKEN,)),) if _TOKEN in sub.task_by_id else ()
         hint = Plan(dummy + tuple(Kit(tuple(_sub_id(t) for t in k)) for k in warm))
         base, _ = best_heuristic_plan(sub, ("single-task", "whole-assembly"), self.seed)
-        if base is not None and evaluate(sub, base).makespan < evaluate(sub, hint).makespan:
+        if base is not None and released_makespan(sub, base, rel) < released_makespan(
+            sub, hint, rel
+        ):
             hint = base
         opts = self.options
         out = solve(
@@ -242,12 +286,42 @@ class CPSATRollingPolicy:
             tray=opts.tray,
             hint=hint,
             cpsat_params={"max_deterministic_time": opts.deterministic_time},
+            releases=rel,
         )
         self.solves += 1
         plan = out.plan or hint
+        if any(rel.values()):  # (else the model's plan as it is: no-delay decisions unchanged)
+            plan = self._merge_first(sub, plan, len(dummy), rel, back)
         kits = [tuple(back[t] for t in k.tasks) for k in plan.kits if _TOKEN not in k.tasks]
         first = self._layouts.kit(kits[0], f"cpsat-rolling {kits[0]}")
         return first, tuple(kits[1:])
+
+    def _merge_first(
+        self, sub: Instance, plan: Plan, j: int, rel: dict[str, float], back: dict[str, str]
+    ) -> Plan:
+        """Merge the next kits into the first real kit (position ``j``) while their tasks
+        need no part the stock lacks, the kit fits and the released makespan does not grow
+        (module docstring)."""
+        from ..errors import KitDoesNotFit
+        from ..solvers.cpsat import released_makespan
+        from ..solvers.cpsat.scaling import released
+
+        order = dict(zip([t.id for t in sub.tasks], released(sub, rel), strict=True))
+        kits = [k.tasks for k in plan.kits]
+        best = released_makespan(sub, plan, rel)
+        while j + 1 < len(kits) and not any(rel.get(t, 0.0) > 0 for t in kits[j + 1]):
+            # a topological order: releases are monotone along precedence, kit j comes first
+            tasks = tuple(sorted(kits[j] + kits[j + 1], key=order.__getitem__))
+            cand = Plan(tuple(Kit(k) for k in (*kits[:j], tasks, *kits[j + 2 :])))
+            if released_makespan(sub, cand, rel) > best + 1e-9:
+                break
+            try:
+                ids = tuple(back[t] for t in tasks)
+                self._layouts.kit(ids, f"cpsat-rolling {ids}")
+            except KitDoesNotFit:
+                break
+            kits = [k.tasks for k in cand.kits]
+        return Plan(tuple(Kit(k) for k in kits))
 
 
 def _sub_id(task: str) -> str:

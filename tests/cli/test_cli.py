@@ -423,6 +423,7 @@ def test_methods_name_describes_a_simulation_policy(capsys):
     assert lines[1] == "options (simulate --param KEY=VALUE):"
     assert [line.split()[0] for line in lines[2:]] == [
         "window",
+        "supply_window",
         "deterministic_time",
         "time_limit",
         "workers",

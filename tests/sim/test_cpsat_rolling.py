@@ -43,13 +43,14 @@ def test_under_supply_delays_kits_are_valid_and_waits_happen(table):
 
 
 @pytest.mark.parametrize(("trays", "busy"), [(1, 50.0), ("unlimited", 50.0 - 4.0)])
-def test_expected_waits_and_the_human_token(table, trays, busy):
+def test_expected_waits_are_releases_and_the_human_token(table, trays, busy):
     # one tray: the dummy kit holds it for the human's whole remaining time; unlimited trays:
     # it only shifts time, its o_H is added back by the sub-instance's kit overhead
     table = table.with_overrides(trays=trays)
     policy = make_policy("cpsat-rolling", table, params=SimParams())
     assert asdict(policy.options) == {
         "window": 12,
+        "supply_window": 8,
         "deterministic_time": 0.1,
         "time_limit": 10.0,
         "workers": 1,
@@ -66,10 +67,15 @@ def test_expected_waits_and_the_human_token(table, trays, busy):
         supply={"leg": Supply(mat=60.0)},
     )
     window = ["foot1", "conn1", "foot2", "top1"]
-    times = policy._robot_times(window, state)
-    # the first leg is in stock; the second arrives in 20 s expected
-    assert times["foot1"] == pytest.approx(table.robot_time("foot1"))
-    assert times["foot2"] == pytest.approx(table.robot_time("foot2") + 20.0)
+    waits = policy._waits(window, state)
+    # the first leg is in stock; the second arrives in 20 s expected: a release, counted from
+    # the model's "now" (after the dummy kit; with one tray after its tray came back)
+    assert waits == {"foot1": 0.0, "conn1": 0.0, "foot2": pytest.approx(20.0), "top1": 0.0}
+    tray = table.kit_overhead_human if trays == 1 else 0.0
+    now = table.kit_overhead_robot + table.delivery_time + tray
+    assert policy._now(50.0) == pytest.approx(now)
+    assert policy._now(0.0) == 0.0
+    times = {t: table.robot_time(t) for t in window}
     sub = policy._sub_instance(window, times, 50.0)
     assert sub.tasks[0].id == "__human_busy__"
     assert sub.task_by_id["__human_busy__"].human_mean == pytest.approx(busy)
@@ -141,3 +147,56 @@ def test_runs_are_identical_under_machine_load(table):
             p.kill()
             p.wait()
     assert loaded == quiet
+
+
+def _supply_state(arrival: float) -> SimState:
+    """One leg in stock, the next expected in ``arrival`` s, the human idle."""
+    from bilevel_kit.instance import Supply
+
+    return SimState(
+        time=0.0,
+        done=frozenset(),
+        human_remaining=0.0,
+        available={"leg": 1, "foot": 4, "connector": 4, "screw_short": 8, "screw_long": 8},
+        expected_arrival={"leg": arrival},
+        supply={"leg": Supply(mat=60.0)},
+    )
+
+
+def test_releases_enter_the_memo_key_and_order_the_committed_kit(table):
+    """Missing legs become releases of the later foot tasks (and, raised, of their chains):
+    the decision depends on them (memo key) and the committed kit lists its tasks in release
+    order (the robot picks in kit order)."""
+    policy = make_policy("cpsat-rolling", table, params=SimParams())
+    kits = {}
+    for arrival in (5.0, 400.0, 400.0):
+        policy.reset()
+        kits[arrival] = policy.decide(_supply_state(arrival))
+    assert len(policy._memo) == 2  # the repeated state is a memo hit
+    for arrival, kit in kits.items():
+        waits = policy._waits(policy._order[:12], _supply_state(arrival))
+        assert waits["foot1"] == 0.0 and waits["foot2"] == pytest.approx(arrival)
+        raised = [
+            max([waits[t]] + [waits[a] for a in table.ancestors[t] if a in waits])
+            for t in kit.tasks
+        ]
+        assert raised == sorted(raised), kit.tasks
+    # with the next leg 400 s away the robot does not start with a kit that waits for it
+    assert set(kits[400.0].tasks) <= {"foot1", "conn1", "top1"}
+    assert kits[400.0].tasks[0] == "foot1"
+
+
+def test_without_supply_the_window_model_is_solved_without_releases(table):
+    """No supply: no release reaches the sub-model, and zero releases decide exactly as no
+    releases (the no-delay decisions are the model's plan without releases, unchanged)."""
+    policy = make_policy("cpsat-rolling", table, params=SimParams())
+    state = SimState(time=0.0, done=frozenset(), human_remaining=30.0, available={})
+    window = policy._order[:12]
+    assert policy._waits(window, state) == dict.fromkeys(window, 0.0)
+    times = {t: table.robot_time(t) for t in window}
+    warm = policy._warm_kits(window)
+    none = policy._solve(window, times, 30.0, warm, {})
+    zeros = policy._solve(window, times, 30.0, warm, dict.fromkeys(window, 0.0))
+    assert none == zeros
+    kit = policy.decide(state)
+    assert (kit.tasks, policy._rest) == (none[0].tasks, none[1])

@@ -19,7 +19,7 @@ from .method import (
     run,
     solve,
 )
-from .scaling import Scaled, scale_times
+from .scaling import Scaled, released_makespan, scale_times
 
 __all__ = [
     "AUTO_EMBEDDED_MAX_RECTS",
@@ -31,6 +31,7 @@ __all__ = [
     "ScheduleOptions",
     "best_heuristic_plan",
     "cpsat",
+    "released_makespan",
     "run",
     "scale_times",
     "solve",

@@ -22,6 +22,19 @@ checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - 
 :math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U is added
 too.
 
+**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none): a
+task cannot be picked before its release (raised to its ancestors'); the model, its scaled
+timeline, the hint and U take them into account (:mod:`.scaling`, :mod:`.model`), each kit of
+the plan lists its tasks in release order (the robot's pick order the model assumes). The
+kit-count cap above stays valid (releases only delay: a plan of released makespan <= U has
+makespan <= U without them; U itself is evaluated with releases), the closed-form bounds too;
+the closed-form shortcuts (a plan attaining them is optimal) are off, the release bound of
+:func:`.model.release_bound` is added (an incumbent attaining it is optimal: no model is
+built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` and ``upper_start`` are
+makespans without releases (:func:`bilevel_kit.plan.evaluate`), ``extra['release_makespan']``
+the model's (on the time grid), on which ``gap``, ``bound`` and ``optimal`` are (all zero
+releases: the run without them, unchanged).
+
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
 
@@ -57,7 +70,7 @@ order with a non-overlapping layout. ``extra`` keys:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -66,7 +79,7 @@ from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import Instance
 from ...layout import cpsat_packing as packing
-from ...methods import REGISTRY, MethodOutput, Status
+from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget, check_model_memory, too_slow_to_build
@@ -82,7 +95,7 @@ from ..common import (
     reduced_edges,
 )
 from .context import MARGIN, Context, Model, State
-from .model import build, canonical, tray_wait
+from .model import build, canonical, release_bound, tray_wait
 from .scaling import scale_times, scaled_makespan, scaled_objective
 
 TrayMode = Literal["auto", "embedded", "benders"]
@@ -277,9 +290,11 @@ def solve(
     hint: Plan | None = None,
     log: bool = False,
     cpsat_params: dict[str, Any] | None = None,
+    releases: Mapping[str, float] | None = None,
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
-    method's), ``hint`` a plan to start from and ``cpsat_params`` extra CP-SAT parameters."""
+    method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters and
+    ``releases`` the release times (module docstring)."""
     params = {
         "workers": workers,
         "tray": tray,
@@ -291,7 +306,13 @@ def solve(
     }
     options = parse_options(ScheduleOptions, params, "cpsat")
     return run(
-        instance, options, seed=seed, time_limit=time_limit, hint=hint, cpsat_params=cpsat_params
+        instance,
+        options,
+        seed=seed,
+        time_limit=time_limit,
+        hint=hint,
+        cpsat_params=cpsat_params,
+        releases=releases,
     )
 
 
@@ -323,13 +344,17 @@ def run(
     time_limit: float | None = 60.0,
     hint: Plan | None = None,
     cpsat_params: dict[str, Any] | None = None,
+    releases: Mapping[str, float] | None = None,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
     docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
     budget = Budget(time_limit, keep_back=KEEP_BACK)
     from ortools.sat.python import cp_model
 
-    sc = scale_times(instance, options.time_resolution, options.refine_times)
+    try:
+        sc = scale_times(instance, options.time_resolution, options.refine_times, releases)
+    except ValueError as exc:
+        raise UsageError(f"cpsat: {exc}") from None
     pack_tl = pack_time_limit(budget)
     packer = Packer(instance, pack_tl, budget.cut(MARGIN), options.pack_resolution)
     report = _Report(
@@ -375,15 +400,21 @@ def run(
         max_kits=K,
         upper_start=None
         if incumbent is None
-        else evaluate(instance, _plan_of(instance, incumbent, None)).makespan,
+        else evaluate(instance, _plan_of(ctx, incumbent, None)).makespan,
     )
     start_ms = extra["upper_start"]
-    closed_done = start_ms is not None and start_ms <= best_bound(instance) + 1e-9
+    closed_done = (
+        start_ms is not None and start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
+    )
     if options.objective == "makespan" and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+    if upper is not None and sc.rel and upper <= release_bound(instance, sc):
+        # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
+        extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, upper, proven=True), report)
     cells = assignment_cells(instance, K)
     extra["model_cells"] = cells
     check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
@@ -463,7 +494,7 @@ def _incumbent(
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
             extra["hint_used"] = True
-    if ctx.objective == "makespan":
+    if ctx.objective == "makespan" and not any(ctx.sc.rel):  # (releases: not a bound of them)
         first = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.05), ctx.pack_res)
         qp = closed_form_plan(instance, first)
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
@@ -515,7 +546,7 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     """The plan of the run's best kits with its status and makespan bound in seconds."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
     assert state.kits is not None
-    plan = _plan_of(instance, state.kits, state.layouts, ctx.packer)
+    plan = _plan_of(ctx, state.kits, state.layouts, ctx.packer)
     real = evaluate(instance, plan)
     closed = best_bound(instance)
     lower = state.lower
@@ -523,7 +554,7 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     idle_bound = None
     if ctx.objective == "makespan":
         bound_s = closed if lower_s is None else max(closed, lower_s)
-        optimal = state.proven and (sc.exact or real.makespan <= bound_s + 1e-6)
+        optimal = state.proven and (sc.exact or (real.makespan <= bound_s + 1e-6 and not sc.rel))
     else:
         if lower is not None and sc.exact and mdl is not None:
             idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
@@ -544,19 +575,27 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
             incumbent=final, bound=bound_s if ctx.objective == "makespan" else idle_bound
         )
     extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
+    if sc.rel:  # the model's makespan is the released one (module docstring)
+        released = round(scaled_makespan(sc, state.kits) * sc.res, 9)
+        extra.update(release_makespan=released, gap=gap(released, bound_s) or 0.0)
     return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
 
 
 def _plan_of(
-    instance: Instance,
+    ctx: Context,
     kits: Sequence[Sequence[int]],
     layouts: Sequence[tuple[Placement, ...]] | None,
     packer: Packer | None = None,
 ) -> Plan:
-    """Kits of task indices -> a Plan (human order = topological order inside each kit)."""
+    """Kits of task indices -> a Plan (human order = topological order inside each kit; with
+    release times, sorted by release: the robot picks in that order, module docstring)."""
+    instance, rel = ctx.instance, ctx.sc.rel
     out = []
     for kk, kit in enumerate(kits):
         tasks = kit_order(instance, [instance.tasks[i].id for i in kit])
+        if rel:
+            idx = instance.index
+            tasks = tuple(sorted(tasks, key=lambda t: rel[idx[t]]))  # stable: topological
         layout: tuple[Placement, ...] = ()
         if layouts is not None:
             layout = layouts[kk]

@@ -19,18 +19,23 @@ first ``n - |descendants(i)|`` kits (every earlier kit needs a task that is not 
 
       R_k = o_R u_k + sum_i r_i x[i,k]          H_k = o_H u_k + sum_i h_i x[i,k]
       A_k = S_k + R_k + d u_k                   (arrival; the robot is busy during delivery)
+      A_k >= rel_i x[i,k] + sum_{j: rel_j >= rel_i} r_j x[j,k] + d u_k   (release times)
       S_k = A_{k-1}                             (k <= T, or unlimited trays)
       S_k >= A_{k-1},  S_k >= E_{k-T} - H_{k-T} + o_H u_k      (k > T: T trays)
       E_k >= A_k + H_k,  E_k >= E_{k-1} + H_k   (human end = max(arrival, previous end) + H_k)
       C = E_K
 
-  Unused kits sit at the end and add nothing; E_k and S_k only need ``>=``: every constraint
-  is monotone, so for fixed kits the least solution is the true timeline and the objective
-  pushes C down to it. The tray rule (docs/timeline.md: the robot starts kit k once the tray
-  of kit k - T is back, o_H after the human started that kit, at E_{k-T} - H_{k-T}) needs no
-  big-M: on a used kit it is the rule itself; on an unused kit k it reads ``S_k >= human
-  start of kit k - T``, which is at most the last used kit's end, and so are ``A_k = S_k``
-  and ``E_k`` (induction), so unused trailing kits cannot inflate C. The closed-form bounds
+  With release times (:mod:`.scaling`: task i is not picked before rel_i, releases raised to the
+  ancestors') the first line is ``A_k >= S_k + R_k + d u_k`` plus the release line per task i with
+  rel_i > 0: the robot picks a kit in the order of release, so its pick end is the one-machine
+  optimum with release dates (exact; without releases the model is the one above, unchanged). Unused
+  kits sit at the end and add nothing; E_k and S_k only need ``>=``: every constraint is monotone,
+  so for fixed kits the least solution is the true timeline and the objective pushes C down to it.
+  The tray rule (docs/timeline.md: the robot starts kit k once the tray of kit k - T is back, o_H
+  after the human started that kit, at E_{k-T} - H_{k-T}) needs no big-M: on a used kit it is the
+  rule itself; on an unused kit k it reads ``S_k >= human start of kit k - T``, which is at most the
+  last used kit's end, and so are ``A_k = S_k`` and ``E_k`` (induction), so unused trailing kits
+  cannot inflate C. The closed-form bounds
   of :mod:`bilevel_kit.bounds` on C are added on the scaled times (redundant, they help the
   search; with one tray also the one-tray robot bound with the model's own kit count), the
   flow-shop bound (d) as :math:`C \ge c_l + s_l \sum_k u_k` for the two lines of
@@ -48,7 +53,7 @@ optimum); with o_H > 0 it trades makespan against the number of kits.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 from ...bounds import johnson_lines, min_kits
@@ -56,7 +61,7 @@ from ...instance import Instance
 from ...layout import cpsat_packing as packing
 from ..common import kit_positions, reduced_edges, relabel_chains
 from .context import Model
-from .scaling import Scaled, scaled_timeline
+from .scaling import Scaled, scaled_makespan, scaled_timeline
 
 
 def build(
@@ -82,6 +87,8 @@ def build(
     start, arrive, end = _timeline(m, sc, x, used, K, upper)
     C = end[-1]
     m.add(_closed_form_bound(instance, sc, K) <= C)
+    if any(sc.rel):  # (without releases the model is unchanged)
+        m.add(release_bound(instance, sc) <= C)
     out = Model(m, K, x, used, arrive, end, C, start=start)
     _one_tray_bound(instance, sc, out)
     for c, slope in johnson_lines(sc.r, sc.h, sc.o_r + sc.d, sc.o_h):  # bound (d), m = sum u
@@ -147,7 +154,7 @@ def _timeline(
     """Robot start ``S_k`` (None where it is the previous arrival), arrival ``A_k`` and human
     end ``E_k`` of every kit position (module docstring)."""
     n = len(x)
-    hz = sum(sc.r) + sum(sc.h) + K * (sc.o_r + sc.o_h + sc.d)
+    hz = max(sc.rel, default=0) + sum(sc.r) + sum(sc.h) + K * (sc.o_r + sc.o_h + sc.d)
     if upper is not None:
         hz = min(hz, upper)
     trays = sc.trays
@@ -166,10 +173,10 @@ def _timeline(
             s = m.new_int_var(0, hz, f"S{k}")
             m.add(s >= prev)
             m.add(s >= end[k - trays] - human[k - trays] + sc.o_h * used[k])
-            m.add(a == s + R + sc.d * used[k])
+            _arrival(m, sc, x, k, a, s + R + sc.d * used[k], used[k])
         else:
             s = None
-            m.add(a == prev + R + sc.d * used[k])
+            _arrival(m, sc, x, k, a, prev + R + sc.d * used[k], used[k])
         m.add(e >= a + Hk)
         if k:
             m.add(e >= end[-1] + Hk)
@@ -178,6 +185,24 @@ def _timeline(
         end.append(e)
         human.append(Hk)
     return start, arrive, end
+
+
+def _arrival(
+    m: Any, sc: Scaled, x: list[dict[int, Any]], k: int, a: Any, least: Any, u: Any
+) -> None:
+    """``A_k = least`` (start + R_k + d); with release times ``A_k >= least`` and, per task i
+    released after 0, ``A_k >= rel_i x[i,k] + sum_{j: rel_j >= rel_i} r_j x[j,k] + d u_k``
+    (module docstring; implied by the first when i is not in kit k)."""
+    if not any(sc.rel):
+        m.add(a == least)
+        return
+    m.add(a >= least)
+    for i, xs in enumerate(x):
+        if sc.rel[i] > 0 and k in xs:
+            later = [
+                sc.r[j] * x[j][k] for j in range(len(x)) if k in x[j] and sc.rel[j] >= sc.rel[i]
+            ]
+            m.add(a >= sc.rel[i] * xs[k] + sum(later) + sc.d * u)
 
 
 def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
@@ -203,6 +228,60 @@ def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
         + min(sc.h[i] for i in range(n) if i not in has_succ)
     )
     return max(lb_human, lb_robot)
+
+
+#: The release bound enumerates the segmentations of at most this many late tasks.
+RELEASE_BOUND_TASKS = 4
+
+
+def release_bound(instance: Instance, sc: Scaled) -> int:
+    r"""A lower bound on C from the release times (0 without). For a release value v > 0 the
+    set J of tasks released at v or later (closed under successors: releases are raised to
+    the ancestors') is picked after v, so
+
+    * :math:`C \ge v - o_R + T^*(J)`, :math:`T^*(J)` the least makespan of J's tasks alone
+      from time 0 without releases and without the tray's geometry (every kit of a plan
+      restricted to J starts no later; its first kit's o_R may be spent before v), enumerated
+      (precedence-feasible orders x cut patterns) when J has at most
+      :data:`RELEASE_BOUND_TASKS` tasks;
+    * else the closed-form lines on J: :math:`C \ge v + \min_{src} r_i + d + o_H + \sum_J h`
+      (the first kit of J arrives, then the human does all of J) and :math:`C \ge v + \sum_J
+      r + d + o_H + \min_{snk} h_i` (the robot picks all of J, then the last kit's human)."""
+    if not any(sc.rel):
+        return 0
+    from dataclasses import replace
+
+    plain = replace(sc, rel=[])
+    edges = [(instance.index[a], instance.index[b]) for a, b in reduced_edges(instance)]
+    best = 0
+    for v in sorted(set(sc.rel) - {0}):
+        late = [i for i in range(len(sc.rel)) if sc.rel[i] >= v]
+        if len(late) <= RELEASE_BOUND_TASKS:
+            least = min(scaled_makespan(plain, kits) for kits in _segmentations(late, edges))
+            best = max(best, v - sc.o_r + least)
+            continue
+        inside = set(late)
+        src = [i for i in late if not any(b == i and a in inside for a, b in edges)]
+        snk = [i for i in late if not any(a == i for a, _ in edges)]
+        human = v + min(sc.r[i] for i in src) + sc.d + sc.o_h + sum(sc.h[i] for i in late)
+        robot = v + sum(sc.r[i] for i in late) + sc.d + sc.o_h + min(sc.h[i] for i in snk)
+        best = max(best, human, robot)
+    return best
+
+
+def _segmentations(tasks: list[int], edges: list[tuple[int, int]]) -> Iterator[list[list[int]]]:
+    """Every precedence-feasible order of ``tasks`` cut into consecutive kits."""
+    for perm in itertools.permutations(tasks):
+        pos = {i: k for k, i in enumerate(perm)}
+        if any(a in pos and b in pos and pos[a] > pos[b] for a, b in edges):
+            continue
+        for mask in range(2 ** (len(perm) - 1)):
+            kits: list[list[int]] = [[perm[0]]]
+            for k in range(1, len(perm)):
+                if mask >> (k - 1) & 1:
+                    kits.append([])
+                kits[-1].append(perm[k])
+            yield kits
 
 
 def tray_wait(sc: Scaled) -> int:
