@@ -65,7 +65,7 @@ import numpy as np
 
 from .. import geometry
 from ..instance import Instance
-from . import upper_level
+from . import _rest_kernel, upper_level
 
 FloatOrArray = TypeVar("FloatOrArray", float, np.ndarray)
 
@@ -832,7 +832,9 @@ class _Rests:
     outside :math:`A`, of total size at most :math:`m`) of :math:`R(C)` plus the sum of
     :math:`m - |C|` free tasks closest to the target (or least, in the signed form), read
     from the sorted multiset sums of :class:`_SumTable` (skipping multisets that use more
-    tasks of a value than are left). Exact: every rest is some (core, free multiset)."""
+    tasks of a value than are left). Exact: every rest is some (core, free multiset).
+    When every sum of robot times is exact, the loop over cores runs compiled
+    (:mod:`bilevel_kit.solvers._rest_kernel`, the same cores, order and sums)."""
 
     def __init__(
         self,
@@ -875,6 +877,61 @@ class _Rests:
         #: k -> (combos, ranks, sums) of the multisets the epoch's available tasks can give
         self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.max_cores = search.limits.max_rest_nodes
+        #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays
+        self._kernel = _rest_kernel.kernel() if search._exact_sums else None
+        self._window_size = len(anc)
+        self._epoch: tuple[np.ndarray, ...] = ()
+        self._packed: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        if self._kernel is not None:
+            self._epoch = self._epoch_arrays(sizes, avail)
+
+    def _epoch_arrays(self, sizes: list[int], avail: list[int]) -> tuple[np.ndarray, ...]:
+        """The epoch's data as arrays for :func:`_rest_kernel.best_cores`."""
+        n = len(self.r)
+        where = {y: p for p, y in enumerate(self.deep)}
+        anc_ptr = np.cumsum([0, *(len(self.anc[y]) for y in self.deep)])
+        anc_idx = [a for y in self.deep for a in self.anc[y]]
+        desc_ptr = np.cumsum([0, *(len(self.desc.get(t, ())) for t in range(n))])
+        desc_idx = [where[y] for t in range(n) for y in self.desc.get(t, ())]
+        value = np.full(n, -1, dtype=np.int64)
+        value[avail] = self.vidx[avail]
+        return (
+            np.array(self.deep, dtype=np.int64),
+            np.array(sizes, dtype=np.int64),
+            anc_ptr.astype(np.int64),
+            np.array(anc_idx, dtype=np.int64),
+            desc_ptr.astype(np.int64),
+            np.array(desc_idx, dtype=np.int64),
+            value,
+            np.asarray(self.r, dtype=np.float64),
+            self.mult.astype(np.int64),
+            np.zeros(n, dtype=np.int64),
+        )
+
+    def _packed_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The tables of :meth:`_table` for every k as one array each (offsets by k, combos
+        and ranks padded to the largest k, sums), for the compiled loop."""
+        if self._packed is None:
+            kmax = max(self._tab.tables)
+            parts = [self._table(k) for k in range(1, kmax + 1)]
+            ptr = np.cumsum([0, 0, *(len(p[2]) for p in parts)]).astype(np.int64)
+            combos = np.zeros((int(ptr[-1]), kmax), dtype=np.int64)
+            ranks = np.zeros((int(ptr[-1]), kmax), dtype=np.int64)
+            for k, (c, q, _) in enumerate(parts, start=1):
+                combos[ptr[k] : ptr[k + 1], :k] = c
+                ranks[ptr[k] : ptr[k + 1], :k] = q
+            sums = np.concatenate([p[2] for p in parts]).astype(np.float64)
+            self._packed = (ptr, combos, ranks, sums)
+        return self._packed
+
+    def _table(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(combos, ranks, sums) of the multisets of ``k`` values the epoch's available tasks
+        can give (built on first use)."""
+        if k not in self.tables:
+            combos, rank, sums = self._tab.tables[k]
+            keep = (rank < self.mult[combos]).all(axis=1)
+            self.tables[k] = (combos[keep], rank[keep], sums[keep])
+        return self.tables[k]
 
     def _free(
         self, k: int, target: float, removed: dict[int, int]
@@ -883,11 +940,7 @@ class _Rests:
         sum if ``target`` is -inf), none of them beyond what ``removed`` leaves."""
         if k == 0:
             return 0.0, ()
-        if k not in self.tables:  # built on first use
-            combos, rank, sums = self._tab.tables[k]
-            keep = (rank < self.mult[combos]).all(axis=1)
-            self.tables[k] = (combos[keep], rank[keep], sums[keep])
-        combos, ranks, sums = self.tables[k]
+        combos, ranks, sums = self._table(k)
         mult = self.mult
 
         def ok(j: int) -> bool:
@@ -930,6 +983,8 @@ class _Rests:
         ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
         ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
         still enumerated, so the cap counts as without the floor."""
+        if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
+            return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         cands: list[tuple[int, frozenset[int]]] = []
         some = set(self.small[min(m, len(self.small) - 1)])
@@ -985,6 +1040,32 @@ class _Rests:
         if best_set is None:
             return math.inf, (), capped
         return best_f, self._order(pset, best_set, best_free), capped
+
+    def _best_compiled(
+        self,
+        prefix: tuple[int, ...],
+        m: int,
+        score: Callable[[Any], Any],
+        cutoff: float,
+        target: float,
+    ) -> tuple[float, tuple[int, ...], bool]:
+        """:meth:`best` by :func:`_rest_kernel.best_cores` (the same cores in the same order,
+        the same sums): every core's F at once, the first of least F at most ``cutoff``."""
+        assert self._kernel is not None
+        tables = self._packed_tables()
+        prefix_arr = np.array(prefix, dtype=np.int64)
+        _, capped, sums, rows, members = self._kernel(
+            prefix_arr, m, self.max_cores, float(target), self._epoch, tables
+        )
+        val = np.asarray(score(sums), dtype=np.float64)
+        ok = np.flatnonzero(val <= cutoff)  # NaN (no free multiset) never is
+        if not ok.size:
+            return math.inf, (), bool(capped)
+        best = int(ok[np.argmin(val[ok])])  # the first of least F, as the loop keeps it
+        tasks = [t for t in members[best].tolist() if t >= 0]
+        k = m - len(tasks)
+        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
+        return float(val[best]), self._order(set(prefix), frozenset(tasks), free), bool(capped)
 
     def _core_sum(self, core: frozenset[int]) -> float:
         """R(core): memoised per epoch when sums are exact in any order, else summed as

@@ -216,3 +216,26 @@ def test_one_type_fitness_bound_by_count_is_the_rows(table):
     rows = [fitness_upper_bounds(table, types, counts[k : k + 1])[0] for k in range(0, 500, 7)]
     assert batch[::7].tolist() == rows
     assert batch.max() == 0.0 and batch.min() < 0.0  # -D_same's bound, no cross pairs
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(0, 3), st.integers(1, 30), st.booleans())
+def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
+    """The compiled core loop of the rest search (exact sums) against the Python loop: the
+    same kits, scores and counters, also when the rest search stops at its cap."""
+    from bilevel_kit.solvers import _rest_kernel
+
+    if _rest_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    runs = []
+    for compiled in (True, False):
+        with pytest.MonkeyPatch.context() as mp:
+            if not compiled:
+                mp.setattr(_rest_kernel, "kernel", lambda: None)
+            params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+            policy = GreedyCEPolicy(inst, params, seed)
+            kits = plan(inst, policy=policy).kits
+        st_ = policy.stats
+        scores = [t["score"] for t in st_.objective_terms]
+        runs.append((kits, scores, st_.prefix_sets, st_.evaluated, st_.rest_capped, st_.ce_calls))
+    assert runs[0] == runs[1]
