@@ -57,8 +57,9 @@ import bisect
 import heapq
 import itertools
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import numpy as np
@@ -192,7 +193,11 @@ class PrefixSearch:
     ) -> None:
         self.instance = instance
         self.r = robot
-        self.h = human
+        self._h = human
+        #: what a decision computes from ``done`` alone (:class:`_EpochData`), by (done, N,
+        #: signed), least recently used first; emptied when the human times change
+        self._epochs: OrderedDict[tuple[bytes, int, bool], _EpochData] = OrderedDict()
+        self._epoch_rows = 0
         self.pred = [tuple(sorted(p)) for p in pred]
         succ: list[list[int]] = [[] for _ in pred]
         for j, ps in enumerate(self.pred):
@@ -220,6 +225,17 @@ class PrefixSearch:
         self._exact_sums = bool(
             np.all(robot * 64 == np.round(robot * 64)) and np.abs(robot).sum() * 64 < 2.0**52
         )
+
+    @property
+    def h(self) -> np.ndarray:
+        """Human time of each task (terms (5)-(6)); setting it forgets the cached epochs."""
+        return self._h
+
+    @h.setter
+    def h(self, human: np.ndarray) -> None:
+        self._h = human
+        self._epochs.clear()
+        self._epoch_rows = 0
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _unlocked_after(
@@ -296,28 +312,29 @@ class PrefixSearch:
         counts: np.ndarray,
         ctx: _Epoch,
         fitness: np.ndarray | None = None,
+        parts: _BoundParts | None = None,
     ) -> np.ndarray:
         r"""Lower bounds of F over the rests of prefixes of size ``i`` (module docstring):
         term (6) at its least over :math:`R(Q) \in [lo, hi]` (:meth:`_rest_sum_bounds`), the
-        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None."""
+        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None.
+        ``parts``: :meth:`_bound_parts` of the same rows, if already computed."""
         if not self._prune:
             return np.full(len(robot), -math.inf)
+        lo, hi, bound = parts or self._bound_parts(i, length, tasks, counts, ctx)
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
         diff5 = d + o_r + robot - ctx.human_remaining
         h_kit = o_h + human
-        if i == length:
+        if lo is None or hi is None:  # i == length: no rest
             diff6 = d + 0.0 - h_kit
             if not ctx.signed:
                 diff6 = np.abs(diff6)
         else:
-            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
             diff6 = d + (o_r + lo) - h_kit
             if not ctx.signed:
                 diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-        bound = self._fitness_bound(counts)
         if fitness is not None:
             bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
@@ -328,6 +345,47 @@ class PrefixSearch:
             fitness=bound,
             unavailable=ctx.unavailable(counts),
         )
+
+    def _bound_parts(
+        self, i: int, length: int, tasks: np.ndarray | _Children, counts: np.ndarray, ctx: _Epoch
+    ) -> _BoundParts:
+        """What :meth:`_optimistic` needs besides H_rem, the parts at hand and known
+        fitnesses: the bounds (lo, hi) of the rest's robot sum (None if ``i == length``) and
+        the fitness bound of each row."""
+        lo = hi = None
+        if i < length:
+            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
+        return lo, hi, self._fitness_bound(counts)
+
+    def _epoch(self, done: np.ndarray, length: int, signed: bool) -> _EpochData:
+        """The data of a decision that depends on ``done`` alone (not on H_rem, the parts at
+        hand or the fitnesses known), from the cache if the same epoch was seen before (the
+        simulator meets the same ``done`` in run after run). Epochs whose levels became a
+        beam (chosen with H_rem) are not kept."""
+        key = (done.tobytes(), length, signed)
+        hit = self._epochs.get(key)
+        if hit is not None:
+            self._epochs.move_to_end(key)
+            return hit
+        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
+        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
+        anc = self._window(done, avail, length)
+        window = np.array(sorted(anc), dtype=np.int64)
+        order = np.lexsort((window, self.r[window]))
+        low = window[order[:length]]
+        high = window[order[::-1][:length]]
+        r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
+        undone_list: list[int] = np.where(done, -1, undone).tolist()
+        return _EpochData(avail, anc, low, high, r_range, undone_list)
+
+    def _keep_epoch(self, key: tuple[bytes, int, bool], data: _EpochData) -> None:
+        """Cache an epoch, forgetting the least recently used beyond :data:`EPOCH_CACHE_ROWS`
+        prefix sets in all."""
+        self._epochs[key] = data
+        self._epoch_rows += data.rows
+        while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
+            _, old = self._epochs.popitem(last=False)
+            self._epoch_rows -= old.rows
 
     def _window(self, done: np.ndarray, avail: list[int], length: int) -> dict[int, frozenset[int]]:
         """The tasks with at most ``length - 1`` undone ancestors (sorted): only they can be in
@@ -527,25 +585,33 @@ class PrefixSearch:
         known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
-        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
-        anc = self._window(done, avail, length)
-        window = np.array(sorted(anc), dtype=np.int64)
-        order = np.lexsort((window, self.r[window]))
-        low = window[order[:length]]
-        high = window[order[::-1][:length]]
-        self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
-        ctx = _Epoch(human_remaining, available, signed, low, high)
-        self._undone = np.where(done, -1, undone).tolist()
-        levels, beam = self._levels(self._undone, length, ctx, avail)
-        self.stats.beam_epochs += beam
+        ep = self._epoch(done, length, signed)
+        avail, anc = ep.avail, ep.anc
+        self._r_range = ep.r_range
+        self._undone = ep.undone
+        ctx = _Epoch(human_remaining, available, signed, ep.low, ep.high)
+        if ep.levels is None:  # a new epoch: its prefix sets, row keys and bounds
+            levels, beam = self._levels(self._undone, length, ctx, avail)
+            ep.levels, ep.beam = levels, beam
+            ep.unique = [_unique_rows(lv.counts) for lv in levels]
+            ep.parts = [
+                self._bound_parts(li + 1, length, lv.tasks, lv.counts, ctx)
+                for li, lv in enumerate(levels)
+            ]
+            if self._sums is not None and length > 1:
+                ep.rests = _Rests(self, done, avail, anc, signed)
+            if not beam:
+                ep.rows = sum(len(lv.seqs) for lv in levels)
+                self._keep_epoch((done.tobytes(), length, signed), ep)
+        levels = ep.levels
+        self.stats.beam_epochs += ep.beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
         fits_of: list[np.ndarray] = []  # per level: the fitness of each row (NaN: unknown)
         parts: list[tuple[np.ndarray, ...]] = []
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            keys, inverse = _unique_rows(lv.counts)
+            keys, inverse = ep.unique[li]
             key_fit = np.full(len(keys), np.nan)
             key_fits = np.ones(len(keys), dtype=bool)
             for u, row in enumerate(keys):
@@ -554,7 +620,15 @@ class PrefixSearch:
                     key_fit[u], key_fits[u] = hit
             level_fit, level_fits = key_fit[inverse], key_fits[inverse]
             opt = self._optimistic(
-                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, level_fit
+                li + 1,
+                length,
+                lv.tasks,
+                lv.robot,
+                lv.human,
+                lv.counts,
+                ctx,
+                level_fit,
+                ep.parts[li],
             )
             known = ~np.isnan(level_fit)
             self.stats.evaluated += int((known & level_fits).sum())
@@ -588,9 +662,7 @@ class PrefixSearch:
 
             return f, lower
 
-        rests = None
-        if self._sums is not None and length > 1:
-            rests = _Rests(self, done, avail, anc, signed)
+        rests = ep.rests
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
         incumbent = math.inf
         while queue and queue.peek()[0] <= incumbent + TIE_TOL:
@@ -1108,6 +1180,34 @@ class _DoneView:
 
     def __getitem__(self, j: int) -> bool:
         return bool(self.done[j]) or j in self.base
+
+
+#: (lo, hi, fitness bound) of prefix rows (:meth:`PrefixSearch._bound_parts`).
+_BoundParts = tuple[np.ndarray | None, np.ndarray | None, np.ndarray]
+
+#: Prefix sets the decision's epoch cache holds at most (in all its epochs).
+EPOCH_CACHE_ROWS = 50_000
+
+
+@dataclass
+class _EpochData:
+    """What a decision computes from ``done`` alone (:meth:`PrefixSearch._epoch`): the
+    available tasks, the window (undone ancestors of each window task), the window tasks of
+    least and greatest robot times and their range, undone predecessors per task; then the
+    levels of prefix sets with their distinct count rows and bounds, and the rest search."""
+
+    avail: list[int]
+    anc: dict[int, frozenset[int]]
+    low: np.ndarray
+    high: np.ndarray
+    r_range: tuple[float, float]
+    undone: list[int]
+    levels: list[_Level] | None = None
+    beam: bool = False
+    unique: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    parts: list[_BoundParts] = field(default_factory=list)
+    rests: _Rests | None = None
+    rows: int = 0
 
 
 @dataclass
