@@ -380,7 +380,7 @@ class PrefixSearch:
 
     def _keep_epoch(self, key: tuple[bytes, int, bool], data: _EpochData) -> None:
         """Cache an epoch, forgetting the least recently used beyond :data:`EPOCH_CACHE_ROWS`
-        prefix sets in all."""
+        rows in all (an epoch's prefix sets plus one per task, for its per-task arrays)."""
         self._epochs[key] = data
         self._epoch_rows += data.rows
         while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
@@ -601,7 +601,7 @@ class PrefixSearch:
             if self._sums is not None and length > 1:
                 ep.rests = _Rests(self, done, avail, anc, signed)
             if not beam:
-                ep.rows = sum(len(lv.seqs) for lv in levels)
+                ep.rows = sum(len(lv.seqs) for lv in levels) + len(self.r)
                 self._keep_epoch((done.tobytes(), length, signed), ep)
         levels = ep.levels
         self.stats.beam_epochs += ep.beam
@@ -1185,7 +1185,7 @@ class _DoneView:
 #: (lo, hi, fitness bound) of prefix rows (:meth:`PrefixSearch._bound_parts`).
 _BoundParts = tuple[np.ndarray | None, np.ndarray | None, np.ndarray]
 
-#: Prefix sets the decision's epoch cache holds at most (in all its epochs).
+#: Size of the decision's epoch cache: prefix sets plus tasks (per epoch), in all its epochs.
 EPOCH_CACHE_ROWS = 50_000
 
 
@@ -1207,6 +1207,7 @@ class _EpochData:
     unique: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
     parts: list[_BoundParts] = field(default_factory=list)
     rests: _Rests | None = None
+    #: its size in the cache (:meth:`PrefixSearch._keep_epoch`)
     rows: int = 0
 
 

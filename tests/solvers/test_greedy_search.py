@@ -239,3 +239,34 @@ def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
         scores = [t["score"] for t in st_.objective_terms]
         runs.append((kits, scores, st_.prefix_sets, st_.evaluated, st_.rest_capped, st_.ce_calls))
     assert runs[0] == runs[1]
+
+
+def test_epoch_cache_gives_the_decisions_of_a_fresh_search(table):
+    """Epochs met again (the simulator's runs) reuse what was computed from ``done`` alone:
+    the same kits and scores as a policy that never saw them, at other H_rem, parts at hand
+    and human times (changing those empties the cache)."""
+    from bilevel_kit.solvers.greedy_ce import PolicyState
+
+    inst = table.with_overrides(units=2)
+    params = GreedyParams(ce=TINY_CE)
+    warm = GreedyCEPolicy(inst, params, 0)
+    kits = plan(inst, policy=warm).kits
+    states, done = [], frozenset()
+    for k, kit in enumerate(kits):
+        parts = {"leg": k % 3, "foot": 1} if k % 2 else None
+        states.append(PolicyState(done, 7.0 * k, parts))
+        done = done | frozenset(kit.tasks)
+    assert warm._search._epochs  # the plan's epochs are cached
+    for scale in (None, 1.3):
+        if scale is not None:
+            warm.set_human_scale(scale)
+            assert not warm._search._epochs
+        for _ in range(1 if scale is None else 2):  # (with the scale: fill, then reuse)
+            for state in states:
+                cold = GreedyCEPolicy(inst, params, 0)
+                if scale is not None:
+                    cold.set_human_scale(scale)
+                assert warm.decide(state) == cold.decide(state)
+                scores = [p.stats.objective_terms[-1]["score"] for p in (warm, cold)]
+                assert scores[0] == scores[1]
+        assert len(warm._search._epochs) == len(states)
