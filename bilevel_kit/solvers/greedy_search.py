@@ -949,8 +949,9 @@ class _Rests:
         #: k -> (combos, ranks, sums) of the multisets the epoch's available tasks can give
         self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.max_cores = search.limits.max_rest_nodes
-        #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays
-        self._kernel = _rest_kernel.kernel() if search._exact_sums else None
+        #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays;
+        #: without deep tasks the only core is the empty one, the Python loop is quicker
+        self._kernel = _rest_kernel.kernel() if search._exact_sums and self.deep else None
         self._window_size = len(anc)
         self._epoch: tuple[np.ndarray, ...] = ()
         self._packed: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
