@@ -198,6 +198,9 @@ class PrefixSearch:
         #: signed), least recently used first; emptied when the human times change
         self._epochs: OrderedDict[tuple[bytes, int, bool], _EpochData] = OrderedDict()
         self._epoch_rows = 0
+        #: the rest search's packed sum tables by available tasks per value (capped at the
+        #: largest k), shared by the epochs (:meth:`_Rests._packed_tables`)
+        self._packed: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
         self.pred = [tuple(sorted(p)) for p in pred]
         succ: list[list[int]] = [[] for _ in pred]
         for j, ps in enumerate(self.pred):
@@ -889,6 +892,9 @@ class _SumTable:
         return cls(vals, vidx.reshape(-1), tables)
 
 
+#: Deep tasks from which an epoch's rest search runs compiled (both loops give the same).
+MIN_DEEP_COMPILED = 1
+
 #: Largest sum table (multisets over all k) :class:`_SumTable` builds.
 MAX_SUM_COMBOS = 300_000
 
@@ -950,8 +956,10 @@ class _Rests:
         self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.max_cores = search.limits.max_rest_nodes
         #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays;
-        #: without deep tasks the only core is the empty one, the Python loop is quicker
-        self._kernel = _rest_kernel.kernel() if search._exact_sums and self.deep else None
+        #: without deep tasks the only core is the empty one: the Python loop is quicker
+        self._kernel = None
+        if search._exact_sums and len(self.deep) >= MIN_DEEP_COMPILED:
+            self._kernel = _rest_kernel.kernel()
         self._window_size = len(anc)
         self._epoch: tuple[np.ndarray, ...] = ()
         self._packed: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -964,8 +972,11 @@ class _Rests:
         where = {y: p for p, y in enumerate(self.deep)}
         anc_ptr = np.cumsum([0, *(len(self.anc[y]) for y in self.deep)])
         anc_idx = [a for y in self.deep for a in self.anc[y]]
-        desc_ptr = np.cumsum([0, *(len(self.desc.get(t, ())) for t in range(n))])
-        desc_idx = [where[y] for t in range(n) for y in self.desc.get(t, ())]
+        desc_len = np.zeros(n + 1, dtype=np.int64)  # only the tasks with deep descendants
+        for t, ys in self.desc.items():
+            desc_len[t + 1] = len(ys)
+        desc_ptr = np.cumsum(desc_len)
+        desc_idx = [where[y] for t in sorted(self.desc) for y in self.desc[t]]
         value = np.full(n, -1, dtype=np.int64)
         value[avail] = self.vidx[avail]
         return (
@@ -983,9 +994,16 @@ class _Rests:
 
     def _packed_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The tables of :meth:`_table` for every k as one array each (offsets by k, combos
-        and ranks padded to the largest k, sums), for the compiled loop."""
+        and ranks padded to the largest k, sums), for the compiled loop. They depend on the
+        available tasks per value only up to the largest k (a rank is below it), so epochs
+        share them (:attr:`PrefixSearch._packed`)."""
         if self._packed is None:
             kmax = max(self._tab.tables)
+            shared = self.search._packed
+            key = np.minimum(self.mult, kmax).tobytes()
+            self._packed = shared.get(key)
+            if self._packed is not None:
+                return self._packed
             parts = [self._table(k) for k in range(1, kmax + 1)]
             ptr = np.cumsum([0, 0, *(len(p[2]) for p in parts)]).astype(np.int64)
             combos = np.zeros((int(ptr[-1]), kmax), dtype=np.int64)
@@ -995,6 +1013,9 @@ class _Rests:
                 ranks[ptr[k] : ptr[k + 1], :k] = q
             sums = np.concatenate([p[2] for p in parts]).astype(np.float64)
             self._packed = (ptr, combos, ranks, sums)
+            if len(shared) >= 64:
+                shared.clear()
+            shared[key] = self._packed
         return self._packed
 
     def _table(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -223,13 +223,14 @@ def test_one_type_fitness_bound_by_count_is_the_rows(table):
 def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
     """The compiled core loop of the rest search (exact sums) against the Python loop: the
     same kits, scores and counters, also when the rest search stops at its cap."""
-    from bilevel_kit.solvers import _rest_kernel
+    from bilevel_kit.solvers import _rest_kernel, greedy_search
 
     if _rest_kernel.kernel() is None:
         pytest.skip("numba is not available")
     runs = []
     for compiled in (True, False):
         with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
             if not compiled:
                 mp.setattr(_rest_kernel, "kernel", lambda: None)
             params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
@@ -270,3 +271,33 @@ def test_epoch_cache_gives_the_decisions_of_a_fresh_search(table):
                 scores = [p.stats.objective_terms[-1]["score"] for p in (warm, cold)]
                 assert scores[0] == scores[1]
         assert len(warm._search._epochs) == len(states)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_rest"),
+    [("intree", 60, 2000), ("intree", 40, 7), ("series-parallel", 60, 30)],
+)
+def test_compiled_rest_search_on_generated_graphs(family, size, max_rest):
+    """The compiled core loop against the Python loop where windows hold many deep tasks
+    (generated in-trees and series-parallel graphs), also with the rest search capped."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.solvers import _rest_kernel, greedy_search
+
+    if _rest_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    inst = from_dict(generate(family, size, seed=1))
+    runs = []
+    for compiled in (True, False):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)
+            if not compiled:
+                mp.setattr(_rest_kernel, "kernel", lambda: None)
+            params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest)
+            policy = GreedyCEPolicy(inst, params, 0)
+            kits = plan(inst, policy=policy).kits
+        st_ = policy.stats
+        scores = [t["score"] for t in st_.objective_terms]
+        runs.append(
+            (kits, scores, st_.prefix_sets, st_.evaluated, st_.rest_capped, st_.beam_epochs)
+        )
+    assert runs[0] == runs[1]
