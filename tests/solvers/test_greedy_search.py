@@ -218,11 +218,9 @@ def test_one_type_fitness_bound_by_count_is_the_rows(table):
     assert batch.max() == 0.0 and batch.min() < 0.0  # -D_same's bound, no cross pairs
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(enumerable_instances(), st.integers(0, 3), st.integers(1, 30), st.booleans())
-def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
-    """The compiled core loop of the rest search (exact sums) against the Python loop: the
-    same kits, scores and counters, also when the rest search stops at its cap."""
+def _compiled_and_python_runs(inst: Instance, params: GreedyParams, seed: int) -> list[tuple]:
+    """A plan with the rest search's compiled core loop wherever it can run, and with the
+    Python loop: (kits, scores, counters) of each."""
     from bilevel_kit.solvers import _rest_kernel, greedy_search
 
     if _rest_kernel.kernel() is None:
@@ -233,12 +231,22 @@ def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
             mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
             if not compiled:
                 mp.setattr(_rest_kernel, "kernel", lambda: None)
-            params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
             policy = GreedyCEPolicy(inst, params, seed)
             kits = plan(inst, policy=policy).kits
         st_ = policy.stats
         scores = [t["score"] for t in st_.objective_terms]
-        runs.append((kits, scores, st_.prefix_sets, st_.evaluated, st_.rest_capped, st_.ce_calls))
+        counters = (st_.prefix_sets, st_.evaluated, st_.beam_epochs, st_.rest_capped, st_.ce_calls)
+        runs.append((kits, scores, counters))
+    return runs
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(0, 3), st.integers(1, 30), st.booleans())
+def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
+    """The compiled core loop of the rest search (exact sums) against the Python loop: the
+    same kits, scores and counters, also when the rest search stops at its cap."""
+    params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+    runs = _compiled_and_python_runs(inst, params, seed)
     assert runs[0] == runs[1]
 
 
@@ -281,23 +289,7 @@ def test_compiled_rest_search_on_generated_graphs(family, size, max_rest):
     """The compiled core loop against the Python loop where windows hold many deep tasks
     (generated in-trees and series-parallel graphs), also with the rest search capped."""
     from bilevel_kit.generate import generate
-    from bilevel_kit.solvers import _rest_kernel, greedy_search
 
-    if _rest_kernel.kernel() is None:
-        pytest.skip("numba is not available")
     inst = from_dict(generate(family, size, seed=1))
-    runs = []
-    for compiled in (True, False):
-        with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)
-            if not compiled:
-                mp.setattr(_rest_kernel, "kernel", lambda: None)
-            params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest)
-            policy = GreedyCEPolicy(inst, params, 0)
-            kits = plan(inst, policy=policy).kits
-        st_ = policy.stats
-        scores = [t["score"] for t in st_.objective_terms]
-        runs.append(
-            (kits, scores, st_.prefix_sets, st_.evaluated, st_.rest_capped, st_.beam_epochs)
-        )
+    runs = _compiled_and_python_runs(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest), 0)
     assert runs[0] == runs[1]
