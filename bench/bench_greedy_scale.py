@@ -6,7 +6,9 @@ since ``generate`` has no such family). Sizes are tasks (units for ``table``/``m
 12 tasks per table unit, the size is divided accordingly). Each case runs in a fresh
 subprocess under ``/usr/bin/time -f "%e %M"`` (wall seconds and peak resident set of the
 child, also when it is stopped at the per-case time cap ``--timeout``); ``wall_s`` is the
-solve alone (without imports and loading), ``process_s`` the whole child. The growth exponent
+solve alone (without imports and loading), ``cpu_s`` its process CPU time (less sensitive to
+a busy machine), ``process_s`` the whole child. ``--code`` runs another checkout's package (a
+before/after comparison with the same script). The growth exponent
 of each family is the least-squares slope of log(wall_s) on log(tasks) over the finished cases.
 The CPU's load average at the start of each case is recorded (the machine may be shared).
 
@@ -37,12 +39,13 @@ import json, sys, time, resource
 sys.path.insert(0, sys.argv[1])
 from bilevel_kit import load, solve
 inst = load(sys.argv[2])
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 res = solve(inst, "greedy-ce", seed=0, check=True)
-wall = time.perf_counter() - t0
+wall, cpu = time.perf_counter() - t0, time.process_time() - c0
 e = res.extra
 print(json.dumps({
-    "tasks": inst.n_tasks, "wall_s": round(wall, 3), "makespan": res.objective,
+    "tasks": inst.n_tasks, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
+    "makespan": res.objective,
     "kits": len(res.plan.kits), "valid": e["violations"] == [],
     **{k: e[k] for k in ("prefix_sets", "evaluated", "beam_epochs", "rest_capped",
                          "ce_calls", "time_limit_hit")},
@@ -56,7 +59,7 @@ def make_instance(family: str, size: int, path: Path) -> None:
     write_instance(family, size if divisor is None else max(1, size // divisor), path)
 
 
-def run_case(family: str, size: int, timeout: float) -> dict[str, object]:
+def run_case(family: str, size: int, timeout: float, code: Path = ROOT) -> dict[str, object]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "inst.json"
         make_instance(family, size, path)
@@ -64,7 +67,7 @@ def run_case(family: str, size: int, timeout: float) -> dict[str, object]:
         timing = Path(tmp) / "time.txt"
         load = round(os.getloadavg()[0], 2)
         cmd = ["/usr/bin/time", "-f", "%e %M", "-o", str(timing)]
-        cmd += ["timeout", str(timeout), sys.executable, "-c", CHILD, str(ROOT), str(path)]
+        cmd += ["timeout", str(timeout), sys.executable, "-c", CHILD, str(code), str(path)]
         out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
         lines = timing.read_text().split("\n") if timing.exists() else []
         rows = [ln.split() for ln in lines if ln and ln[0].isdigit()]
@@ -102,12 +105,18 @@ def main() -> None:
     ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
     ap.add_argument("--timeout", type=float, default=120.0)
     ap.add_argument("--out", type=Path, default=ROOT / "bench/results/greedy_scale.csv")
+    ap.add_argument(
+        "--code",
+        type=Path,
+        default=ROOT,
+        help="checkout whose bilevel_kit runs (e.g. a worktree of an older commit)",
+    )
     args = ap.parse_args()
     rows: list[dict[str, object]] = []
     for fam in args.families:
         fam_rows = []
         for size in sorted(args.sizes):  # increasing sizes: ru_maxrss grows with them
-            row = run_case(fam, size, args.timeout)
+            row = run_case(fam, size, args.timeout, args.code)
             print(row, flush=True)
             fam_rows.append(row)
         k = slope(fam_rows)

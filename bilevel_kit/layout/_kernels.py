@@ -30,7 +30,8 @@ import numpy as np
 ENV_DISABLE = "BILEVEL_KIT_NO_NUMBA"
 
 
-def _disabled() -> bool:
+def disabled() -> bool:
+    """Whether the environment forces the numpy path (read at every call)."""
     return os.environ.get(ENV_DISABLE, "") not in ("", "0")
 
 
@@ -291,7 +292,7 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     that the CE block calls the compiled scorer and Cholesky factorisation. The environment
     variable is read at every call."""
     global _JITTED, _score_samples, _cholesky_into, _ce_block
-    if _disabled():
+    if disabled():
         return None
     if _JITTED is None:
         try:

@@ -57,15 +57,16 @@ import bisect
 import heapq
 import itertools
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import numpy as np
 
 from .. import geometry
 from ..instance import Instance
-from . import upper_level
+from . import _rest_kernel, upper_level
 
 FloatOrArray = TypeVar("FloatOrArray", float, np.ndarray)
 
@@ -192,7 +193,14 @@ class PrefixSearch:
     ) -> None:
         self.instance = instance
         self.r = robot
-        self.h = human
+        self._h = human
+        #: what a decision computes from ``done`` alone (:class:`_EpochData`), by (done, N,
+        #: signed), least recently used first; emptied when the human times change
+        self._epochs: OrderedDict[tuple[bytes, int, bool], _EpochData] = OrderedDict()
+        self._epoch_rows = 0
+        #: the rest search's packed sum tables by available tasks per value (capped at the
+        #: largest k), shared by the epochs (:meth:`_Rests._packed_tables`)
+        self._packed: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
         self.pred = [tuple(sorted(p)) for p in pred]
         succ: list[list[int]] = [[] for _ in pred]
         for j, ps in enumerate(self.pred):
@@ -220,6 +228,17 @@ class PrefixSearch:
         self._exact_sums = bool(
             np.all(robot * 64 == np.round(robot * 64)) and np.abs(robot).sum() * 64 < 2.0**52
         )
+
+    @property
+    def h(self) -> np.ndarray:
+        """Human time of each task (terms (5)-(6)); setting it forgets the cached epochs."""
+        return self._h
+
+    @h.setter
+    def h(self, human: np.ndarray) -> None:
+        self._h = human
+        self._epochs.clear()
+        self._epoch_rows = 0
 
     # -- prefix sets ---------------------------------------------------------------------------
     def _unlocked_after(
@@ -296,28 +315,29 @@ class PrefixSearch:
         counts: np.ndarray,
         ctx: _Epoch,
         fitness: np.ndarray | None = None,
+        parts: _BoundParts | None = None,
     ) -> np.ndarray:
         r"""Lower bounds of F over the rests of prefixes of size ``i`` (module docstring):
         term (6) at its least over :math:`R(Q) \in [lo, hi]` (:meth:`_rest_sum_bounds`), the
-        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None."""
+        fitness at its bound :func:`fitness_upper_bounds` where ``fitness`` is NaN or None.
+        ``parts``: :meth:`_bound_parts` of the same rows, if already computed."""
         if not self._prune:
             return np.full(len(robot), -math.inf)
+        lo, hi, bound = parts or self._bound_parts(i, length, tasks, counts, ctx)
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
         diff5 = d + o_r + robot - ctx.human_remaining
         h_kit = o_h + human
-        if i == length:
+        if lo is None or hi is None:  # i == length: no rest
             diff6 = d + 0.0 - h_kit
             if not ctx.signed:
                 diff6 = np.abs(diff6)
         else:
-            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
             diff6 = d + (o_r + lo) - h_kit
             if not ctx.signed:
                 diff6 = np.maximum(np.maximum(diff6, -(d + (o_r + hi) - h_kit)), 0.0)
         if not ctx.signed:
             diff5 = np.abs(diff5)
-        bound = self._fitness_bound(counts)
         if fitness is not None:
             bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
@@ -328,6 +348,47 @@ class PrefixSearch:
             fitness=bound,
             unavailable=ctx.unavailable(counts),
         )
+
+    def _bound_parts(
+        self, i: int, length: int, tasks: np.ndarray | _Children, counts: np.ndarray, ctx: _Epoch
+    ) -> _BoundParts:
+        """What :meth:`_optimistic` needs besides H_rem, the parts at hand and known
+        fitnesses: the bounds (lo, hi) of the rest's robot sum (None if ``i == length``) and
+        the fitness bound of each row."""
+        lo = hi = None
+        if i < length:
+            lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
+        return lo, hi, self._fitness_bound(counts)
+
+    def _epoch(self, done: np.ndarray, length: int, signed: bool) -> _EpochData:
+        """The data of a decision that depends on ``done`` alone (not on H_rem, the parts at
+        hand or the fitnesses known), from the cache if the same epoch was seen before (the
+        simulator meets the same ``done`` in run after run). Epochs whose levels became a
+        beam (chosen with H_rem) are not kept."""
+        key = (done.tobytes(), length, signed)
+        hit = self._epochs.get(key)
+        if hit is not None:
+            self._epochs.move_to_end(key)
+            return hit
+        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
+        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
+        anc = self._window(done, avail, length)
+        window = np.array(sorted(anc), dtype=np.int64)
+        order = np.lexsort((window, self.r[window]))
+        low = window[order[:length]]
+        high = window[order[::-1][:length]]
+        r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
+        undone_list: list[int] = np.where(done, -1, undone).tolist()
+        return _EpochData(avail, anc, low, high, r_range, undone_list)
+
+    def _keep_epoch(self, key: tuple[bytes, int, bool], data: _EpochData) -> None:
+        """Cache an epoch, forgetting the least recently used beyond :data:`EPOCH_CACHE_ROWS`
+        rows in all (an epoch's prefix sets plus one per task, for its per-task arrays)."""
+        self._epochs[key] = data
+        self._epoch_rows += data.rows
+        while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
+            _, old = self._epochs.popitem(last=False)
+            self._epoch_rows -= old.rows
 
     def _window(self, done: np.ndarray, avail: list[int], length: int) -> dict[int, frozenset[int]]:
         """The tasks with at most ``length - 1`` undone ancestors (sorted): only they can be in
@@ -527,25 +588,33 @@ class PrefixSearch:
         known fitnesses give exact stage-1 bounds from the start."""
         inst = self.instance
         d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        undone = np.bincount(self._arc_task[~done[self._arc_pred]], minlength=len(self.r))
-        avail: list[int] = np.flatnonzero((undone == 0) & ~done).tolist()
-        anc = self._window(done, avail, length)
-        window = np.array(sorted(anc), dtype=np.int64)
-        order = np.lexsort((window, self.r[window]))
-        low = window[order[:length]]
-        high = window[order[::-1][:length]]
-        self._r_range = (float(self.r[low[0]]), float(self.r[high[0]]))
-        ctx = _Epoch(human_remaining, available, signed, low, high)
-        self._undone = np.where(done, -1, undone).tolist()
-        levels, beam = self._levels(self._undone, length, ctx, avail)
-        self.stats.beam_epochs += beam
+        ep = self._epoch(done, length, signed)
+        avail, anc = ep.avail, ep.anc
+        self._r_range = ep.r_range
+        self._undone = ep.undone
+        ctx = _Epoch(human_remaining, available, signed, ep.low, ep.high)
+        if ep.levels is None:  # a new epoch: its prefix sets, row keys and bounds
+            levels, beam = self._levels(self._undone, length, ctx, avail)
+            ep.levels, ep.beam = levels, beam
+            ep.unique = [_unique_rows(lv.counts) for lv in levels]
+            ep.parts = [
+                self._bound_parts(li + 1, length, lv.tasks, lv.counts, ctx)
+                for li, lv in enumerate(levels)
+            ]
+            if self._sums is not None and length > 1:
+                ep.rests = _Rests(self, done, avail, anc, signed)
+            if not beam:
+                ep.rows = sum(len(lv.seqs) for lv in levels) + len(self.r)
+                self._keep_epoch((done.tobytes(), length, signed), ep)
+        levels = ep.levels
+        self.stats.beam_epochs += ep.beam
         # Best-first: (bound, stage, level, row); stage 0 holds the optimistic score (fitness
         # bounded), stage 1 the bound with the prefix's own fitness (only the rest unknown).
         fits_of: list[np.ndarray] = []  # per level: the fitness of each row (NaN: unknown)
         parts: list[tuple[np.ndarray, ...]] = []
         for li, lv in enumerate(levels):
             self.stats.prefix_sets += len(lv.seqs)
-            keys, inverse = _unique_rows(lv.counts)
+            keys, inverse = ep.unique[li]
             key_fit = np.full(len(keys), np.nan)
             key_fits = np.ones(len(keys), dtype=bool)
             for u, row in enumerate(keys):
@@ -554,7 +623,15 @@ class PrefixSearch:
                     key_fit[u], key_fits[u] = hit
             level_fit, level_fits = key_fit[inverse], key_fits[inverse]
             opt = self._optimistic(
-                li + 1, length, lv.tasks, lv.robot, lv.human, lv.counts, ctx, level_fit
+                li + 1,
+                length,
+                lv.tasks,
+                lv.robot,
+                lv.human,
+                lv.counts,
+                ctx,
+                level_fit,
+                ep.parts[li],
             )
             known = ~np.isnan(level_fit)
             self.stats.evaluated += int((known & level_fits).sum())
@@ -588,9 +665,7 @@ class PrefixSearch:
 
             return f, lower
 
-        rests = None
-        if self._sums is not None and length > 1:
-            rests = _Rests(self, done, avail, anc, signed)
+        rests = ep.rests
         found: list[tuple[float, int, int, tuple[int, ...], float]] = []
         incumbent = math.inf
         while queue and queue.peek()[0] <= incumbent + TIE_TOL:
@@ -817,6 +892,9 @@ class _SumTable:
         return cls(vals, vidx.reshape(-1), tables)
 
 
+#: Deep tasks from which an epoch's rest search runs compiled (both loops give the same).
+MIN_DEEP_COMPILED = 1
+
 #: Largest sum table (multisets over all k) :class:`_SumTable` builds.
 MAX_SUM_COMBOS = 300_000
 
@@ -832,7 +910,9 @@ class _Rests:
     outside :math:`A`, of total size at most :math:`m`) of :math:`R(C)` plus the sum of
     :math:`m - |C|` free tasks closest to the target (or least, in the signed form), read
     from the sorted multiset sums of :class:`_SumTable` (skipping multisets that use more
-    tasks of a value than are left). Exact: every rest is some (core, free multiset)."""
+    tasks of a value than are left). Exact: every rest is some (core, free multiset).
+    When every sum of robot times is exact, the loop over cores runs compiled
+    (:mod:`bilevel_kit.solvers._rest_kernel`, the same cores, order and sums)."""
 
     def __init__(
         self,
@@ -875,6 +955,77 @@ class _Rests:
         #: k -> (combos, ranks, sums) of the multisets the epoch's available tasks can give
         self.tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.max_cores = search.limits.max_rest_nodes
+        #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays;
+        #: without deep tasks the only core is the empty one: the Python loop is quicker
+        self._kernel = None
+        if search._exact_sums and len(self.deep) >= MIN_DEEP_COMPILED:
+            self._kernel = _rest_kernel.kernel()
+        self._window_size = len(anc)
+        self._epoch: tuple[np.ndarray, ...] = ()
+        self._packed: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        if self._kernel is not None:
+            self._epoch = self._epoch_arrays(sizes, avail)
+
+    def _epoch_arrays(self, sizes: list[int], avail: list[int]) -> tuple[np.ndarray, ...]:
+        """The epoch's data as arrays for :func:`_rest_kernel.best_cores`."""
+        n = len(self.r)
+        where = {y: p for p, y in enumerate(self.deep)}
+        anc_ptr = np.cumsum([0, *(len(self.anc[y]) for y in self.deep)])
+        anc_idx = [a for y in self.deep for a in self.anc[y]]
+        desc_len = np.zeros(n + 1, dtype=np.int64)  # only the tasks with deep descendants
+        for t, ys in self.desc.items():
+            desc_len[t + 1] = len(ys)
+        desc_ptr = np.cumsum(desc_len)
+        desc_idx = [where[y] for t in sorted(self.desc) for y in self.desc[t]]
+        value = np.full(n, -1, dtype=np.int64)
+        value[avail] = self.vidx[avail]
+        return (
+            np.array(self.deep, dtype=np.int64),
+            np.array(sizes, dtype=np.int64),
+            anc_ptr.astype(np.int64),
+            np.array(anc_idx, dtype=np.int64),
+            desc_ptr.astype(np.int64),
+            np.array(desc_idx, dtype=np.int64),
+            value,
+            np.asarray(self.r, dtype=np.float64),
+            self.mult.astype(np.int64),
+            np.zeros(n, dtype=np.int64),
+        )
+
+    def _packed_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The tables of :meth:`_table` for every k as one array each (offsets by k, combos
+        and ranks padded to the largest k, sums), for the compiled loop. They depend on the
+        available tasks per value only up to the largest k (a rank is below it), so epochs
+        share them (:attr:`PrefixSearch._packed`)."""
+        if self._packed is None:
+            kmax = max(self._tab.tables)
+            shared = self.search._packed
+            key = np.minimum(self.mult, kmax).tobytes()
+            self._packed = shared.get(key)
+            if self._packed is not None:
+                return self._packed
+            parts = [self._table(k) for k in range(1, kmax + 1)]
+            ptr = np.cumsum([0, 0, *(len(p[2]) for p in parts)]).astype(np.int64)
+            combos = np.zeros((int(ptr[-1]), kmax), dtype=np.int64)
+            ranks = np.zeros((int(ptr[-1]), kmax), dtype=np.int64)
+            for k, (c, q, _) in enumerate(parts, start=1):
+                combos[ptr[k] : ptr[k + 1], :k] = c
+                ranks[ptr[k] : ptr[k + 1], :k] = q
+            sums = np.concatenate([p[2] for p in parts]).astype(np.float64)
+            self._packed = (ptr, combos, ranks, sums)
+            if len(shared) >= 64:
+                shared.clear()
+            shared[key] = self._packed
+        return self._packed
+
+    def _table(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(combos, ranks, sums) of the multisets of ``k`` values the epoch's available tasks
+        can give (built on first use)."""
+        if k not in self.tables:
+            combos, rank, sums = self._tab.tables[k]
+            keep = (rank < self.mult[combos]).all(axis=1)
+            self.tables[k] = (combos[keep], rank[keep], sums[keep])
+        return self.tables[k]
 
     def _free(
         self, k: int, target: float, removed: dict[int, int]
@@ -883,11 +1034,7 @@ class _Rests:
         sum if ``target`` is -inf), none of them beyond what ``removed`` leaves."""
         if k == 0:
             return 0.0, ()
-        if k not in self.tables:  # built on first use
-            combos, rank, sums = self._tab.tables[k]
-            keep = (rank < self.mult[combos]).all(axis=1)
-            self.tables[k] = (combos[keep], rank[keep], sums[keep])
-        combos, ranks, sums = self.tables[k]
+        combos, ranks, sums = self._table(k)
         mult = self.mult
 
         def ok(j: int) -> bool:
@@ -930,6 +1077,8 @@ class _Rests:
         ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
         ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
         still enumerated, so the cap counts as without the floor."""
+        if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
+            return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         cands: list[tuple[int, frozenset[int]]] = []
         some = set(self.small[min(m, len(self.small) - 1)])
@@ -986,6 +1135,32 @@ class _Rests:
             return math.inf, (), capped
         return best_f, self._order(pset, best_set, best_free), capped
 
+    def _best_compiled(
+        self,
+        prefix: tuple[int, ...],
+        m: int,
+        score: Callable[[Any], Any],
+        cutoff: float,
+        target: float,
+    ) -> tuple[float, tuple[int, ...], bool]:
+        """:meth:`best` by :func:`_rest_kernel.best_cores` (the same cores in the same order,
+        the same sums): every core's F at once, the first of least F at most ``cutoff``."""
+        assert self._kernel is not None
+        tables = self._packed_tables()
+        prefix_arr = np.array(prefix, dtype=np.int64)
+        _, capped, sums, rows, members = self._kernel(
+            prefix_arr, m, self.max_cores, float(target), self._epoch, tables
+        )
+        val = np.asarray(score(sums), dtype=np.float64)
+        ok = np.flatnonzero(val <= cutoff)  # NaN (no free multiset) never is
+        if not ok.size:
+            return math.inf, (), bool(capped)
+        best = int(ok[np.argmin(val[ok])])  # the first of least F, as the loop keeps it
+        tasks = [t for t in members[best].tolist() if t >= 0]
+        k = m - len(tasks)
+        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
+        return float(val[best]), self._order(set(prefix), frozenset(tasks), free), bool(capped)
+
     def _core_sum(self, core: frozenset[int]) -> float:
         """R(core): memoised per epoch when sums are exact in any order, else summed as
         numpy sums the core's tasks in the set's iteration order (the same floats)."""
@@ -1027,6 +1202,35 @@ class _DoneView:
 
     def __getitem__(self, j: int) -> bool:
         return bool(self.done[j]) or j in self.base
+
+
+#: (lo, hi, fitness bound) of prefix rows (:meth:`PrefixSearch._bound_parts`).
+_BoundParts = tuple[np.ndarray | None, np.ndarray | None, np.ndarray]
+
+#: Size of the decision's epoch cache: prefix sets plus tasks (per epoch), in all its epochs.
+EPOCH_CACHE_ROWS = 50_000
+
+
+@dataclass
+class _EpochData:
+    """What a decision computes from ``done`` alone (:meth:`PrefixSearch._epoch`): the
+    available tasks, the window (undone ancestors of each window task), the window tasks of
+    least and greatest robot times and their range, undone predecessors per task; then the
+    levels of prefix sets with their distinct count rows and bounds, and the rest search."""
+
+    avail: list[int]
+    anc: dict[int, frozenset[int]]
+    low: np.ndarray
+    high: np.ndarray
+    r_range: tuple[float, float]
+    undone: list[int]
+    levels: list[_Level] | None = None
+    beam: bool = False
+    unique: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    parts: list[_BoundParts] = field(default_factory=list)
+    rests: _Rests | None = None
+    #: its size in the cache (:meth:`PrefixSearch._keep_epoch`)
+    rows: int = 0
 
 
 @dataclass

@@ -216,3 +216,80 @@ def test_one_type_fitness_bound_by_count_is_the_rows(table):
     rows = [fitness_upper_bounds(table, types, counts[k : k + 1])[0] for k in range(0, 500, 7)]
     assert batch[::7].tolist() == rows
     assert batch.max() == 0.0 and batch.min() < 0.0  # -D_same's bound, no cross pairs
+
+
+def _compiled_and_python_runs(inst: Instance, params: GreedyParams, seed: int) -> list[tuple]:
+    """A plan with the rest search's compiled core loop wherever it can run, and with the
+    Python loop: (kits, scores, counters) of each."""
+    from bilevel_kit.solvers import _rest_kernel, greedy_search
+
+    if _rest_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    runs = []
+    for compiled in (True, False):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+            if not compiled:
+                mp.setattr(_rest_kernel, "kernel", lambda: None)
+            policy = GreedyCEPolicy(inst, params, seed)
+            kits = plan(inst, policy=policy).kits
+        st_ = policy.stats
+        scores = [t["score"] for t in st_.objective_terms]
+        counters = (st_.prefix_sets, st_.evaluated, st_.beam_epochs, st_.rest_capped, st_.ce_calls)
+        runs.append((kits, scores, counters))
+    return runs
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(0, 3), st.integers(1, 30), st.booleans())
+def test_compiled_rest_search_changes_nothing(inst, seed, max_rest, signed):
+    """The compiled core loop of the rest search (exact sums) against the Python loop: the
+    same kits, scores and counters, also when the rest search stops at its cap."""
+    params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+    runs = _compiled_and_python_runs(inst, params, seed)
+    assert runs[0] == runs[1]
+
+
+def test_epoch_cache_gives_the_decisions_of_a_fresh_search(table):
+    """Epochs met again (the simulator's runs) reuse what was computed from ``done`` alone:
+    the same kits and scores as a policy that never saw them, at other H_rem, parts at hand
+    and human times (changing those empties the cache)."""
+    from bilevel_kit.solvers.greedy_ce import PolicyState
+
+    inst = table.with_overrides(units=2)
+    params = GreedyParams(ce=TINY_CE)
+    warm = GreedyCEPolicy(inst, params, 0)
+    kits = plan(inst, policy=warm).kits
+    states, done = [], frozenset()
+    for k, kit in enumerate(kits):
+        parts = {"leg": k % 3, "foot": 1} if k % 2 else None
+        states.append(PolicyState(done, 7.0 * k, parts))
+        done = done | frozenset(kit.tasks)
+    assert warm._search._epochs  # the plan's epochs are cached
+    for scale in (None, 1.3):
+        if scale is not None:
+            warm.set_human_scale(scale)
+            assert not warm._search._epochs
+        for _ in range(1 if scale is None else 2):  # (with the scale: fill, then reuse)
+            for state in states:
+                cold = GreedyCEPolicy(inst, params, 0)
+                if scale is not None:
+                    cold.set_human_scale(scale)
+                assert warm.decide(state) == cold.decide(state)
+                scores = [p.stats.objective_terms[-1]["score"] for p in (warm, cold)]
+                assert scores[0] == scores[1]
+        assert len(warm._search._epochs) == len(states)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_rest"),
+    [("intree", 60, 2000), ("intree", 40, 7), ("series-parallel", 60, 30)],
+)
+def test_compiled_rest_search_on_generated_graphs(family, size, max_rest):
+    """The compiled core loop against the Python loop where windows hold many deep tasks
+    (generated in-trees and series-parallel graphs), also with the rest search capped."""
+    from bilevel_kit.generate import generate
+
+    inst = from_dict(generate(family, size, seed=1))
+    runs = _compiled_and_python_runs(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest), 0)
+    assert runs[0] == runs[1]
