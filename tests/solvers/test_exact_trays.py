@@ -98,12 +98,13 @@ def test_one_tray_one_task_per_kit_is_the_blocking_flow_shop(seed, n):
     assert ref >= flow_makespan(a, b, johnson_order(a, b))
 
 
-def test_cpsat_bound_and_plan_bracket_the_blocking_optimum_on_ten_jobs():
-    """Ten jobs are beyond a quick proof for the CP-SAT model (the MILP proves them below);
+@pytest.mark.parametrize(("seed", "n"), [(2, 10), (0, 12), (1, 12)])
+def test_cpsat_bound_and_plan_bracket_the_blocking_optimum(seed, n):
+    """10-12 jobs are beyond a quick proof for the CP-SAT model (the MILP proves them below);
     within 5 s its bound and its plan must still bracket the Gilmore-Gomory optimum."""
     from bilevel_kit.solvers import cpsat as cs
 
-    a, b = random_jobs(2, 10)
+    a, b = random_jobs(seed, n)
     ref = blocking_makespan(a, b, gilmore_gomory_order(a, b))
     inst = from_dict(flow_doc(a, b, 1))
     out = cs.solve(inst, time_limit=5.0, tray="benders")
