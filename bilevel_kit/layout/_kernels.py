@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -285,6 +286,18 @@ def _ce_block(
 _JITTED: tuple[ScoreKernel, Callable[..., int]] | None = None
 
 
+def njit() -> Callable[[Callable[..., Any]], Any] | None:
+    """``numba.njit(cache=True, nogil=True)``, the one way the package compiles a kernel, or
+    None when numba is disabled or not installed."""
+    if disabled():
+        return None
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.njit(cache=True, nogil=True)
+
+
 def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     """numba-compiled (scorer, CE block), or None when numba is disabled or missing.
 
@@ -295,11 +308,9 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     if disabled():
         return None
     if _JITTED is None:
-        try:
-            import numba
-        except ImportError:
+        jit = njit()
+        if jit is None:
             return None
-        jit = numba.njit(cache=True, nogil=True)
         _score_samples = jit(_score_samples)
         _cholesky_into = jit(_cholesky_into)
         _ce_block = jit(_ce_block)

@@ -227,11 +227,9 @@ def kernel() -> Callable[..., tuple[int, bool, np.ndarray, np.ndarray, np.ndarra
     if _kernels.disabled():
         return None
     if _JITTED is None:
-        try:
-            import numba
-        except ImportError:
+        jit = _kernels.njit()
+        if jit is None:
             return None
-        jit = numba.njit(cache=True, nogil=True)
         _lower_bound = jit(_lower_bound)
         _fits = jit(_fits)
         _JITTED = jit(best_cores)
