@@ -96,10 +96,9 @@ def one_tray_cut(
         # first minimiser in increasing a: reverse the rows (lengths run from short to long)
         rows = vals[::-1]
         arg = rows.argmin(axis=0)
-        best = rows[arg, np.arange(len(cs))]
-        better = best < f[cs, cs - b]
-        f[cs[better], (cs - b)[better]] = best[better]
-        back[cs[better], (cs - b)[better]] = a[::-1][arg[better]]
+        # the state (last kit [b, c)) is reached from start b only: set once, here
+        f[cs, cs - b] = rows[arg, np.arange(len(cs))]
+        back[cs, cs - b] = a[::-1][arg]
     a = n - lens
     ok = (a >= 0) & np.isfinite(f[n, 1:])
     totals = np.where(ok, f[n, 1:] + ph[n] - ph[np.maximum(a, 0)], np.inf)
