@@ -39,7 +39,9 @@ def _milp_folders(folder: Path) -> set[str]:
 def test_solve_milp_sigterm_kills_its_child_and_removes_its_folder(tmp_path, capsys):
     pytest.importorskip("highspy")
     inst = tmp_path / "g.json"
-    assert main(["generate", "intree", "--size", "60", "--seed", "1", "--out", str(inst)]) == 0
+    # ten table units with one tray: the MILP needs its whole budget (an easy instance
+    # could be proven optimal before the signal arrives, and the test would race)
+    assert main(["generate", "table", "--size", "10", "--out", str(inst)]) == 0
     capsys.readouterr()
     private = tmp_path / "tmp"  # its own temporary folder: other processes' folders don't count
     private.mkdir()
@@ -62,6 +64,7 @@ def test_solve_milp_sigterm_kills_its_child_and_removes_its_folder(tmp_path, cap
             kids = _children(proc.pid)
         assert kids, "the HiGHS child never started"
         time.sleep(1.0)
+        assert proc.poll() is None, "the solve finished before the signal: use a harder instance"
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=5)
         deadline = time.monotonic() + 3
