@@ -211,6 +211,12 @@ class PrefixSearch:
         #: the precedence arcs (predecessor, task), for the epoch's available tasks at once
         self._arc_pred = np.array([p for ps in self.pred for p in ps], dtype=np.int64)
         self._arc_task = np.array([j for j, ps in enumerate(self.pred) for _ in ps], dtype=np.int64)
+        #: the arcs as sorted keys ``pred * n + task`` (membership of many arcs at once)
+        self._arc_keys = np.sort(self._arc_pred * len(self.pred) + self._arc_task)
+        #: the successors of every task, flat (CSR: task x's are ``_succ_flat[start:start+deg]``)
+        self._succ_deg = np.array([len(s) for s in self.succ], dtype=np.int64)
+        self._succ_start = np.cumsum(self._succ_deg) - self._succ_deg
+        self._succ_flat = np.array([z for s in self.succ for z in s], dtype=np.int64)
         self.part_matrix = part_matrix
         self.types = list(types)
         self.limits = limits
@@ -264,6 +270,55 @@ class PrefixSearch:
         if not new:
             return tuple(kept)
         return tuple(sorted([*kept, *new]))
+
+    def _unlocked_rows(
+        self,
+        p_unl: np.ndarray,
+        par: np.ndarray,
+        child: np.ndarray,
+        tasks: np.ndarray,
+        undone: np.ndarray,
+    ) -> np.ndarray:
+        """:meth:`_unlocked_after` for every row of a level at once.
+
+        ``p_unl``: the parents' unlocked children, one row per parent, increasing and padded
+        with ``n`` (the number of tasks, above every task); row k of the level is parent
+        ``par[k]`` followed by ``child[k]`` (its tasks: ``tasks[k]``). Returns the rows'
+        unlocked children in the same padded form: the parent's above ``child[k]``, and the
+        successors z of ``child[k]`` whose undone predecessors (``undone[z]``) all lie in
+        ``tasks[k]``."""
+        n = len(self.r)
+        k_rows = len(child)
+        kept = p_unl[par]
+        kr, kc = np.nonzero((kept < n) & (kept > child[:, None]))
+        rows_out = [kr]
+        vals_out = [kept[kr, kc]]
+        deg = self._succ_deg[child]
+        rows = np.repeat(np.arange(k_rows), deg)
+        if rows.size:
+            offset = np.arange(rows.size) - np.repeat(np.cumsum(deg) - deg, deg)
+            z = self._succ_flat[np.repeat(self._succ_start[child], deg) + offset]
+            need = undone[z]
+            ok = need == 1
+            multi = np.flatnonzero(need > 1)
+            if multi.size:  # count the arcs (task of the row) -> z
+                keys = tasks[rows[multi]] * n + z[multi, None]
+                arcs = self._arc_keys
+                pos = np.minimum(np.searchsorted(arcs, keys), len(arcs) - 1)
+                ok[multi] = (arcs[pos] == keys).sum(axis=1) == need[multi]
+            rows_out.append(rows[ok])
+            vals_out.append(z[ok])
+        all_rows = np.concatenate(rows_out)
+        all_vals = np.concatenate(vals_out)
+        if all_rows.size == 0:
+            return np.full((k_rows, 0), n, dtype=np.int64)
+        order = np.lexsort((all_vals, all_rows))
+        all_rows, all_vals = all_rows[order], all_vals[order]
+        count = np.bincount(all_rows, minlength=k_rows)
+        col = np.arange(all_rows.size) - np.repeat(np.cumsum(count) - count, count)
+        out = np.full((k_rows, int(count.max())), n, dtype=np.int64)
+        out[all_rows, col] = all_vals
+        return out
 
     def _rest_sum_bounds(
         self, tasks: np.ndarray | _Children, m: int, ctx: _Epoch
@@ -421,8 +476,10 @@ class PrefixSearch:
         p_robot = np.zeros(1)
         p_human = np.zeros(1)
         p_counts = np.zeros((1, len(self.types)), dtype=np.int64)
-        #: per parent, its children that ``done`` alone does not make available (increasing)
-        p_unlocked: list[tuple[int, ...]] = [()]
+        #: per parent, its children that ``done`` alone does not make available (increasing,
+        #: padded with n: :meth:`_unlocked_rows`)
+        p_unl = np.zeros((1, 0), dtype=np.int64)
+        undone_arr = np.array(undone, dtype=np.int64)
         levels: list[_Level] = []
         total = 0
         beam = False
@@ -436,15 +493,10 @@ class PrefixSearch:
             par = np.repeat(np.arange(len(last)), n_per)
             offset = np.arange(len(par)) - np.repeat(np.cumsum(n_per) - n_per, n_per)
             child = avail_arr[np.repeat(starts, n_per) + offset]
-            extra_par: list[int] = []
-            extra_child: list[int] = []
-            for a, unl in enumerate(p_unlocked):
-                for y in unl:
-                    extra_par.append(a)
-                    extra_child.append(y)
-            if extra_par:
-                par = np.concatenate([par, np.array(extra_par, dtype=np.int64)])
-                child = np.concatenate([child, np.array(extra_child, dtype=np.int64)])
+            extra_par, extra_col = np.nonzero(p_unl < len(self.r))
+            if extra_par.size:
+                par = np.concatenate([par, extra_par])
+                child = np.concatenate([child, p_unl[extra_par, extra_col]])
                 order = np.lexsort((child, par))
                 par, child = par[order], child[order]
             n_kids = len(child)
@@ -466,13 +518,7 @@ class PrefixSearch:
             levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
             if i < length:
-                succ = self.succ
-                p_unlocked = [
-                    self._unlocked_after(p_unlocked[a], seq, y, undone)
-                    if succ[y] or p_unlocked[a]
-                    else ()
-                    for (a, y), seq in zip(pairs, seqs, strict=True)
-                ]
+                p_unl = self._unlocked_rows(p_unl, par, child, tasks, undone_arr)
             parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, robot, human, counts
         return levels, beam
 

@@ -293,3 +293,32 @@ def test_compiled_rest_search_on_generated_graphs(family, size, max_rest):
     inst = from_dict(generate(family, size, seed=1))
     runs = _compiled_and_python_runs(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest), 0)
     assert runs[0] == runs[1]
+
+
+@pytest.mark.parametrize(("family", "size"), [("intree", 60), ("series-parallel", 60)])
+def test_unlocked_rows_are_the_per_row_rule(family, size, table, monkeypatch):
+    """The level-at-once unlocked children (numpy) equal :meth:`_unlocked_after` row by row,
+    on graphs where prefixes unlock many tasks (in-trees: joins with several predecessors)."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.solvers.greedy_search import PrefixSearch
+
+    original = PrefixSearch._unlocked_rows
+    checked = [0, 0]  # rows, rows with unlocked children
+
+    def spy(self, p_unl, par, child, tasks, undone):
+        out = original(self, p_unl, par, child, tasks, undone)
+        n = len(self.r)
+        assert out.shape[0] == len(child) and (out.shape[1] == 0 or (out < n).any(axis=0).all())
+        for k in range(len(child)):
+            parent = tuple(int(u) for u in p_unl[par[k]] if u < n)
+            want = self._unlocked_after(parent, tuple(tasks[k].tolist()), int(child[k]), undone)
+            assert tuple(int(u) for u in out[k] if u < n) == want
+            checked[1] += bool(want)
+        checked[0] += len(child)
+        return out
+
+    monkeypatch.setattr(PrefixSearch, "_unlocked_rows", spy)
+    for inst in (from_dict(generate(family, size, seed=1)), table):
+        res = solve(inst, "greedy-ce", seed=0, samples=20, elite=5, max_iter=5)
+        assert check(inst, res.plan) == []
+    assert checked[0] > 1000 and checked[1] > 100
