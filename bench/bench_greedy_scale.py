@@ -15,6 +15,7 @@ The CPU's load average at the start of each case is recorded (the machine may be
 Writes bench/results/greedy_scale.csv. Usage:
 python bench/bench_greedy_scale.py [--sizes 12 60 120 500 1000] [--families ...]
 [--timeout 120] [--out bench/results/greedy_scale.csv]
+[--against OTHER_CHECKOUT --rounds 3]  (before/after, alternating case by case)
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import csv
 import json
 import math
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -99,6 +101,37 @@ def slope(rows: list[dict[str, object]]) -> float:
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / den if den else math.nan
 
 
+def side_by_side(args: argparse.Namespace) -> None:
+    """Before/after on a shared machine: the two checkouts alternate case by case, so both
+    see the same load; the medians are printed, every run is written."""
+    rows: list[dict[str, object]] = []
+    for rep in range(args.rounds):
+        for fam in args.families:
+            for size in sorted(args.sizes):
+                for code, path in (("against", args.against), ("this", args.code)):
+                    row = {"code": code, "rep": rep, **run_case(fam, size, args.timeout, path)}
+                    print(row, flush=True)
+                    rows.append(row)
+    for fam in args.families:
+        for size in sorted(args.sizes):
+            med = {
+                code: statistics.median(
+                    float(r["cpu_s"])
+                    for r in rows
+                    if r["family"] == fam and r["size"] == size and r["code"] == code
+                )
+                for code in ("against", "this")
+            }
+            print(f"{fam} {size}: cpu s {med['against']:.3f} (against) -> {med['this']:.3f}")
+    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    with args.out.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"wrote {args.out}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[12, 60, 120, 500, 1000])
@@ -111,7 +144,17 @@ def main() -> None:
         default=ROOT,
         help="checkout whose bilevel_kit runs (e.g. a worktree of an older commit)",
     )
+    ap.add_argument(
+        "--against",
+        type=Path,
+        help="another checkout: run every case alternately with it and with --code, "
+        "--rounds times, and write one row per run (column code: 'this' or 'against')",
+    )
+    ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args()
+    if args.against is not None:
+        side_by_side(args)
+        return
     rows: list[dict[str, object]] = []
     for fam in args.families:
         fam_rows = []
