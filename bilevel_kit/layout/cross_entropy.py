@@ -591,7 +591,12 @@ def _assess(
 
 
 def _push_apart(
-    kit: _Kit, x: np.ndarray, y: np.ndarray, theta: np.ndarray, rounds: int = 200
+    kit: _Kit,
+    x: np.ndarray,
+    y: np.ndarray,
+    theta: np.ndarray,
+    rounds: int = 200,
+    compiled: bool = True,
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Separate overlapping bounding boxes by moving both parts of each overlapping pair half
     the overlap (plus 1e-5 mm) apart along the axis of smaller overlap, then clipping to the
@@ -600,6 +605,11 @@ def _push_apart(
     ex, ey = _extents64(kit, theta)
     x, y = x.copy(), y.copy()
     i, j = kit.pairs.i, kit.pairs.j
+    kernel = _kernels.push_apart_kernel() if compiled else None
+    if kernel is not None:  # the same floats, compiled (tests/layout/test_kernels.py)
+        W, H = float(kit.tray.width), float(kit.tray.height)
+        ok = kernel(x, y, ex, ey, i.astype(np.int64), j.astype(np.int64), W, H, rounds)
+        return (x, y) if ok else None
     margin = 1e-5
     for _ in range(rounds):
         dx = x[i] - x[j]
