@@ -164,6 +164,51 @@ def _rotated_extents32(
             ey[s] = asn * hw + ac * hh
 
 
+def _uniform_pairs(raw: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:  # pragma: no cover
+    """Two 24-bit float32 uniforms from each 64-bit word of ``raw``: ``x = 1 - u0`` (bits
+    63-40; exact, in (0, 1]) and ``t = u1`` (bits 39-16), as
+    :func:`bilevel_kit.layout.cross_entropy._standard_normal` computes them with numpy."""
+    scale = np.float32(2.0**-24)
+    one = np.float32(1.0)
+    for k in range(raw.size):
+        b = raw[k]
+        x[k] = one - np.float32(b >> np.uint64(40)) * scale
+        t[k] = np.float32((b >> np.uint64(16)) & np.uint64(0xFFFFFF)) * scale
+
+
+def _box_muller(log_x: np.ndarray, t: np.ndarray, z: np.ndarray) -> None:  # pragma: no cover
+    """Box-Muller's normals ``z[0] = r cos(2 pi t)``, ``z[1] = r sin(2 pi t)`` with
+    ``r = sqrt(-2 log x)``, the sine and cosine from the polynomials of
+    :func:`_rotated_extents32` (reduced by quarter turns, signs by quadrant), so that the loop
+    vectorises."""
+    half = np.float32(0.5)
+    four = np.float32(4.0)
+    quarter = np.float32(0.25)
+    two_pi = np.float32(2.0 * np.pi)
+    minus_two = np.float32(-2.0)
+    one = np.float32(1.0)
+    s1 = np.float32(-1.9515295891e-4)
+    s2 = np.float32(8.3321608736e-3)
+    s3 = np.float32(-1.6666654611e-1)
+    c1 = np.float32(2.443315711809948e-5)
+    c2 = np.float32(-1.388731625493765e-3)
+    c3 = np.float32(4.166664568298827e-2)
+    for k in range(t.size):
+        r = np.sqrt(minus_two * log_x[k])
+        q = np.floor(t[k] * four + half)  # 0..4; 4 is a full turn
+        a = (t[k] - q * quarter) * two_pi  # exact difference, then |a| <= pi / 4
+        w = a * a
+        sn = ((s1 * w + s2) * w + s3) * w * a + a
+        c = (((c1 * w + c2) * w + c3) * w * w - half * w) + one
+        q1 = q == np.float32(1.0)
+        q2 = q == np.float32(2.0)
+        q3 = q == np.float32(3.0)
+        cos_t = -sn if q1 else (-c if q2 else (sn if q3 else c))
+        sin_t = c if q1 else (-sn if q2 else (-c if q3 else sn))
+        z[0, k] = r * cos_t
+        z[1, k] = r * sin_t
+
+
 def _cholesky_into(a: np.ndarray, floor: float, out: np.ndarray) -> bool:  # pragma: no cover
     """Lower Cholesky factor of ``a + floor * I`` into ``out`` (any float dtype); False if
     ``a + floor * I`` is not positive definite.
@@ -415,7 +460,7 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     that the CE block calls the compiled scorer and Cholesky factorisation. The environment
     variable is read at every call."""
     global _JITTED, _score_samples, _rotated_extents32, _cholesky_into, _ce_block
-    global _push_apart_loop
+    global _push_apart_loop, _uniform_pairs, _box_muller
     if disabled():
         return None
     if _JITTED is None:
@@ -427,6 +472,8 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
         _cholesky_into = jit(_cholesky_into)
         _ce_block = jit(_ce_block)
         _push_apart_loop = jit(_push_apart_loop)
+        _uniform_pairs = jit(_uniform_pairs)
+        _box_muller = jit(_box_muller)
         _JITTED = (_score_samples, _ce_block)
     return _JITTED
 
@@ -441,6 +488,11 @@ def ce_block_kernel() -> Callable[..., int] | None:
     """The compiled CE iterations (:func:`_ce_block`), or None (numpy path)."""
     got = _compiled()
     return None if got is None else got[1]
+
+
+def normal_kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
+    """The compiled (:func:`_uniform_pairs`, :func:`_box_muller`), or None (numpy path)."""
+    return None if _compiled() is None else (_uniform_pairs, _box_muller)
 
 
 def push_apart_kernel() -> Callable[..., bool] | None:

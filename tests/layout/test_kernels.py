@@ -193,3 +193,32 @@ def test_float32_extents_polynomial_is_accurate() -> None:
     # float32 rounding of the angle itself (|angle| <= 720: 3e-5 degrees) bounds the error
     assert np.abs(ex[0] - (c * 76.2 + s * 6.35)).max() < 2.5e-5
     assert np.abs(ey[0] - (s * 76.2 + c * 6.35)).max() < 2.5e-5
+
+
+@needs_numba
+def test_compiled_normals_equal_the_numpy_path() -> None:
+    """The float32 normals of a CE pool: the same 24-bit uniforms from the generator's raw
+    words, Box-Muller with polynomial (compiled) or numpy's sine and cosine; both standard
+    normal (Kolmogorov-Smirnov, moments) and equal to float32 rounding."""
+    from scipy import stats
+
+    from bilevel_kit.layout.cross_entropy import _standard_normal
+
+    raw = np.random.default_rng(11).bit_generator.random_raw(1000)
+    x, t = np.empty(1000, dtype=np.float32), np.empty(1000, dtype=np.float32)
+    uniform_pairs, _ = _kernels.normal_kernels()  # type: ignore[misc]
+    uniform_pairs(raw, x, t)
+    assert np.array_equal(x, 1 - (raw >> np.uint64(40)).astype(np.float32) / 2**24)
+    assert np.array_equal(t, ((raw >> np.uint64(16)) % 2**24).astype(np.float32) / 2**24)
+
+    fast = _standard_normal(np.random.default_rng(5), (336, 501), np.float32)
+    slow = _standard_normal(np.random.default_rng(5), (336, 501), np.float32, compiled=False)
+    assert fast.shape == slow.shape == (336, 501) and fast.dtype == np.float32
+    assert np.abs(fast - slow).max() < 1e-5
+    assert abs(float(fast.mean())) < 0.005 and abs(float(fast.std()) - 1.0) < 0.005
+    assert stats.kstest(fast.ravel(), "norm").pvalue > 0.01
+    assert 4.5 < float(np.abs(fast).max()) < 5.8  # 24-bit uniforms cap the tails at ~5.8
+    # a second draw continues the generator's stream (no reuse of words)
+    gen = np.random.default_rng(5)
+    _standard_normal(gen, (336, 501), np.float32)
+    assert not np.array_equal(_standard_normal(gen, (336, 501), np.float32), fast)
