@@ -101,6 +101,17 @@ def slope(rows: list[dict[str, object]]) -> float:
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / den if den else math.nan
 
 
+def write_csv(rows: list[dict[str, object]], path: Path) -> None:
+    """Every row's fields (a failed case has fewer), the first row's first."""
+    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"wrote {path}")
+
+
 def side_by_side(args: argparse.Namespace) -> None:
     """Before/after on a shared machine: the two checkouts alternate case by case, so both
     see the same load; the medians are printed, every run is written."""
@@ -123,13 +134,7 @@ def side_by_side(args: argparse.Namespace) -> None:
                 for code in ("against", "this")
             }
             print(f"{fam} {size}: cpu s {med['against']:.3f} (against) -> {med['this']:.3f}")
-    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    with args.out.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {args.out}")
+    write_csv(rows, args.out)
 
 
 def main() -> None:
@@ -166,13 +171,7 @@ def main() -> None:
         for row in fam_rows:
             row["time_exponent"] = round(k, 2) if math.isfinite(k) else ""
         rows.extend(fam_rows)
-    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    with args.out.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {args.out}")
+    write_csv(rows, args.out)
 
 
 if __name__ == "__main__":

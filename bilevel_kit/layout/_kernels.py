@@ -113,6 +113,24 @@ def _score_samples(
         cost[s] += w6f * z[s]
 
 
+#: Cephes' float32 minimax polynomials of sine and cosine on [-pi/4, pi/4] (about 1 ulp).
+_SIN = (np.float32(-1.9515295891e-4), np.float32(8.3321608736e-3), np.float32(-1.6666654611e-1))
+_COS = (
+    np.float32(2.443315711809948e-5),
+    np.float32(-1.388731625493765e-3),
+    np.float32(4.166664568298827e-2),
+)
+
+
+def _sin_cos_small(a: np.float32) -> tuple[np.float32, np.float32]:  # pragma: no cover
+    """(sin a, cos a) in float32 for ``|a| <= pi/4`` by :data:`_SIN`/:data:`_COS`: plain
+    arithmetic, so loops calling it vectorise (the C library's ``sinf``/``cosf`` do not)."""
+    w = a * a
+    sn = ((_SIN[0] * w + _SIN[1]) * w + _SIN[2]) * w * a + a
+    c = (((_COS[0] * w + _COS[1]) * w + _COS[2]) * w * w - np.float32(0.5) * w) + np.float32(1.0)
+    return sn, c
+
+
 def _rotated_extents32(
     X: np.ndarray,
     n: int,
@@ -132,17 +150,10 @@ def _rotated_extents32(
     ``cos r`` to about 1 ulp; ``|cos t|`` and ``|sin t|`` are those of r, swapped when q is
     odd."""
     S = X.shape[1]
-    one = np.float32(1.0)
     half = np.float32(0.5)
     two = np.float32(2.0)
     ninety = np.float32(90.0)
     inv90 = np.float32(1.0 / 90.0)
-    s1 = np.float32(-1.9515295891e-4)
-    s2 = np.float32(8.3321608736e-3)
-    s3 = np.float32(-1.6666654611e-1)
-    c1 = np.float32(2.443315711809948e-5)
-    c2 = np.float32(-1.388731625493765e-3)
-    c3 = np.float32(4.166664568298827e-2)
     for k in range(rot_idx.size):
         row = rot_idx[k]
         hw = half_w[k]
@@ -153,10 +164,8 @@ def _rotated_extents32(
         for s in range(S):
             a = th[s]
             q = np.floor(a * inv90 + half)
-            r = (a - q * ninety) * deg
-            z = r * r
-            sn = abs(((s1 * z + s2) * z + s3) * z * r + r)
-            c = abs((((c1 * z + c2) * z + c3) * z * z - half * z) + one)
+            sn, c = _sin_cos_small((a - q * ninety) * deg)
+            sn, c = abs(sn), abs(c)
             odd = q - two * np.floor(q * half) != np.float32(0.0)
             ac = sn if odd else c
             asn = c if odd else sn
@@ -179,27 +188,17 @@ def _uniform_pairs(raw: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:  # pr
 def _box_muller(log_x: np.ndarray, t: np.ndarray, z: np.ndarray) -> None:  # pragma: no cover
     """Box-Muller's normals ``z[0] = r cos(2 pi t)``, ``z[1] = r sin(2 pi t)`` with
     ``r = sqrt(-2 log x)``, the sine and cosine from the polynomials of
-    :func:`_rotated_extents32` (reduced by quarter turns, signs by quadrant), so that the loop
+    :func:`_sin_cos_small` (reduced by quarter turns, signs by quadrant), so that the loop
     vectorises."""
     half = np.float32(0.5)
     four = np.float32(4.0)
     quarter = np.float32(0.25)
     two_pi = np.float32(2.0 * np.pi)
     minus_two = np.float32(-2.0)
-    one = np.float32(1.0)
-    s1 = np.float32(-1.9515295891e-4)
-    s2 = np.float32(8.3321608736e-3)
-    s3 = np.float32(-1.6666654611e-1)
-    c1 = np.float32(2.443315711809948e-5)
-    c2 = np.float32(-1.388731625493765e-3)
-    c3 = np.float32(4.166664568298827e-2)
     for k in range(t.size):
         r = np.sqrt(minus_two * log_x[k])
         q = np.floor(t[k] * four + half)  # 0..4; 4 is a full turn
-        a = (t[k] - q * quarter) * two_pi  # exact difference, then |a| <= pi / 4
-        w = a * a
-        sn = ((s1 * w + s2) * w + s3) * w * a + a
-        c = (((c1 * w + c2) * w + c3) * w * w - half * w) + one
+        sn, c = _sin_cos_small((t[k] - q * quarter) * two_pi)  # exact difference first
         q1 = q == np.float32(1.0)
         q2 = q == np.float32(2.0)
         q3 = q == np.float32(3.0)
@@ -459,7 +458,7 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     Built on first use: the module's functions are replaced by their compiled versions, so
     that the CE block calls the compiled scorer and Cholesky factorisation. The environment
     variable is read at every call."""
-    global _JITTED, _score_samples, _rotated_extents32, _cholesky_into, _ce_block
+    global _JITTED, _score_samples, _sin_cos_small, _rotated_extents32, _cholesky_into, _ce_block
     global _push_apart_loop, _uniform_pairs, _box_muller
     if disabled():
         return None
@@ -467,6 +466,7 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
         jit = njit()
         if jit is None:
             return None
+        _sin_cos_small = jit(_sin_cos_small)
         _rotated_extents32 = jit(_rotated_extents32)
         _score_samples = jit(_score_samples)
         _cholesky_into = jit(_cholesky_into)
