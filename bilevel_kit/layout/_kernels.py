@@ -10,9 +10,12 @@ kernel first computes the rotated boxes' half-extents and projects the centres i
 
 The arithmetic is the numpy path's, operation by operation (no fast-math, so no reassociation
 and no fused multiply-add); only the order in which the pair terms are summed differs (pair
-by pair here, ``np.einsum``'s blocking there) and the float32 ``cos``/``sin`` may differ in
-the last bit, so scores agree to float32 rounding and a ranking can differ only between
-samples whose scores are within that rounding (tests/layout/test_kernels.py compares both).
+by pair here, ``np.einsum``'s blocking there) and, in float32, ``cos``/``sin`` come from a
+polynomial the compiler vectorises (:func:`_sin_cos_small`, about 1 ulp from numpy's), so
+scores agree to float32 rounding and a ranking can differ only between samples whose scores
+are within that rounding (tests/layout/test_kernels.py compares both). The CE's float32
+normals are transformed here too (:func:`_uniform_pairs`, :func:`_box_muller`) from the
+generator's raw words, which numpy draws, so both paths use the same random stream.
 
 numba is imported on first use, not at import time (it takes about a second). Set the
 environment variable ``BILEVEL_KIT_NO_NUMBA=1`` to force the numpy path (also used when numba
