@@ -255,7 +255,7 @@ def _standard_normal(
 
     float64: ``Generator.standard_normal``. float32: Box-Muller on two 24-bit uniforms per
     64-bit word of ``gen``'s bit generator (``random_raw``; 24-bit uniforms cut the tails at
-    ~5.8 sd, harmless for ranking samples), about 4x faster here than numpy's float32 uniforms
+    ~5.8 sd, harmless for ranking samples), about 2x faster here than numpy's float32 uniforms
     and ufuncs: ``1 - u0`` is exact, its ``log`` is numpy's vectorised float32 ``log``, and
     the rest runs in one compiled loop (:func:`bilevel_kit.layout._kernels._box_muller`,
     polynomial sine and cosine) when numba is available. The numpy path uses numpy's ``cos``
