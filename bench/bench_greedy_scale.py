@@ -21,7 +21,6 @@ python bench/bench_greedy_scale.py [--sizes 12 60 120 500 1000] [--families ...]
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -32,6 +31,7 @@ import tempfile
 from pathlib import Path
 
 from bench_scale import write_instance  # the scale benchmark's families
+from benchio import write_rows
 
 ROOT = Path(__file__).resolve().parent.parent
 FAMILIES = ("table", "mixed", "intree", "series-parallel", "wide")
@@ -101,17 +101,6 @@ def slope(rows: list[dict[str, object]]) -> float:
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / den if den else math.nan
 
 
-def write_csv(rows: list[dict[str, object]], path: Path) -> None:
-    """Every row's fields (a failed case has fewer), the first row's first."""
-    fields = sorted({k for r in rows for k in r}, key=lambda k: (k not in rows[0], k))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {path}")
-
-
 def side_by_side(args: argparse.Namespace) -> None:
     """Before/after on a shared machine: the two checkouts alternate case by case, so both
     see the same load; the medians are printed, every run is written."""
@@ -134,7 +123,7 @@ def side_by_side(args: argparse.Namespace) -> None:
                 for code in ("against", "this")
             }
             print(f"{fam} {size}: cpu s {med['against']:.3f} (against) -> {med['this']:.3f}")
-    write_csv(rows, args.out)
+    print(f"wrote {write_rows(args.out, rows)}")
 
 
 def main() -> None:
@@ -171,7 +160,7 @@ def main() -> None:
         for row in fam_rows:
             row["time_exponent"] = round(k, 2) if math.isfinite(k) else ""
         rows.extend(fam_rows)
-    write_csv(rows, args.out)
+    print(f"wrote {write_rows(args.out, rows)}")
 
 
 if __name__ == "__main__":

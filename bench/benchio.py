@@ -9,11 +9,15 @@ from typing import Any
 
 
 def write_rows(path: str | Path, rows: Sequence[Mapping[str, Any]]) -> Path:
-    """``rows`` as CSV (header: the first row's keys), the folder made if needed."""
+    """``rows`` as CSV, the folder made if needed. Header: the first row's keys, then (sorted)
+    the keys only later rows have (a failed case may carry other fields than a finished one;
+    its missing cells stay empty)."""
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
+    first = list(rows[0])
+    extra = sorted({k for r in rows for k in r} - set(first))
     with open(out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(fh, fieldnames=first + extra)
         writer.writeheader()
         writer.writerows(rows)
     return out
