@@ -296,7 +296,7 @@ class PrefixSearch:
         deg = self._succ_deg[child]
         rows = np.repeat(np.arange(k_rows), deg)
         if rows.size:
-            offset = np.arange(rows.size) - np.repeat(np.cumsum(deg) - deg, deg)
+            offset = _ragged_positions(deg)
             z = self._succ_flat[np.repeat(self._succ_start[child], deg) + offset]
             need = undone[z]
             ok = need == 1
@@ -315,7 +315,7 @@ class PrefixSearch:
         order = np.lexsort((all_vals, all_rows))
         all_rows, all_vals = all_rows[order], all_vals[order]
         count = np.bincount(all_rows, minlength=k_rows)
-        col = np.arange(all_rows.size) - np.repeat(np.cumsum(count) - count, count)
+        col = _ragged_positions(count)
         out = np.full((k_rows, int(count.max())), n, dtype=np.int64)
         out[all_rows, col] = all_vals
         return out
@@ -491,7 +491,7 @@ class PrefixSearch:
             starts = np.searchsorted(avail_arr, last, side="right")
             n_per = len(avail_arr) - starts
             par = np.repeat(np.arange(len(last)), n_per)
-            offset = np.arange(len(par)) - np.repeat(np.cumsum(n_per) - n_per, n_per)
+            offset = _ragged_positions(n_per)
             child = avail_arr[np.repeat(starts, n_per) + offset]
             extra_par, extra_col = np.nonzero(p_unl < len(self.r))
             if extra_par.size:
@@ -512,8 +512,7 @@ class PrefixSearch:
                 keep = _smallest(opt, lim.beam_width)
                 par, child = par[keep], child[keep]
                 robot, human, counts = robot[keep], human[keep], counts[keep]
-            pairs = list(zip(par.tolist(), child.tolist(), strict=True))
-            seqs = [(*parents[a], y) for a, y in pairs]
+            seqs = [(*parents[a], y) for a, y in zip(par.tolist(), child.tolist(), strict=True)]
             tasks = np.concatenate([p_tasks[par], child[:, None]], axis=1)
             levels.append(_Level(seqs, tasks, robot, human, counts))
             total += len(seqs)
@@ -829,6 +828,12 @@ class _Children:
         if self.par is None or self.child is None:
             return np.asarray(hit)
         return np.asarray(hit[self.par] | marked[self.child])
+
+
+def _ragged_positions(sizes: np.ndarray) -> np.ndarray:
+    """For groups of ``sizes`` laid out one after another, each element's position in its
+    group: ``[0, 1, .., sizes[0] - 1, 0, 1, .., sizes[1] - 1, ...]``."""
+    return np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
 
 
 def _smallest(values: np.ndarray, k: int) -> np.ndarray:
