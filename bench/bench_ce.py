@@ -6,9 +6,9 @@ at most 100 iterations.
 
 For each seed it times one ``arrange`` call, then the evaluation alone of the same number of
 samples (``iterations`` batches of 200, drawn beforehand) with the scorer ``arrange`` uses:
-the compiled kernel of :mod:`bilevel_kit.layout._kernels` (rotated box extents, projection,
+the compiled kernel of :mod:`bilevel_kit.heuristics._kernels` (rotated box extents, projection,
 score in one pass) or, with ``scoring=numpy`` (``BILEVEL_KIT_NO_NUMBA=1``), rotated box
-extents plus :class:`bilevel_kit.layout.fitness.PairScorer`, in the same precision. The ratio
+extents plus :class:`bilevel_kit.fitness.PairScorer`, in the same precision. The ratio
 of the medians says how much the CE loop (sampling, refit, the exact final check) costs on
 top of scoring; ``ratio_solve_to_numpy_eval`` compares with the numpy scoring of the same
 samples. ``*_cpu_ms`` columns are process CPU time (less sensitive to a busy machine than the
@@ -40,10 +40,10 @@ sys.path.insert(0, str(ROOT))
 
 import math  # noqa: E402
 
+from bilevel_kit.fitness import PairScorer, PairTable, half_extents  # noqa: E402
+from bilevel_kit.heuristics import _kernels  # noqa: E402
+from bilevel_kit.heuristics.cross_entropy import CEParams, arrange  # noqa: E402
 from bilevel_kit.instance import Instance, from_dict  # noqa: E402
-from bilevel_kit.layout import _kernels  # noqa: E402
-from bilevel_kit.layout.cross_entropy import CEParams, arrange  # noqa: E402
-from bilevel_kit.layout.fitness import PairScorer, PairTable, half_extents  # noqa: E402
 
 PARTS = {"leg": 4, "foot": 4, "connector": 4, "screw_long": 8, "screw_short": 8}
 SIZES = {

@@ -17,7 +17,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 from benchio import write_rows
 
 from bilevel_kit import check, load
-from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, plan
+from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, plan
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -4,7 +4,7 @@
    at ``--time-limit``, default 120 s; the packing cache is cleared before every solve), with
    the ratio MILP time / CP-SAT time per instance. Writes bench/results/milp.csv.
 2. ``--bilevel``: the exact optimum J* of the paper's whole-plan objective on the 12-task table
-   (:mod:`bilevel_kit.solvers.bilevel_milp`) next to J of greedy-ce's plan under the same kit
+   (:mod:`bilevel_kit.models.bilevel_milp`) next to J of greedy-ce's plan under the same kit
    values. Writes bench/results/bilevel_milp.csv.
 
 Run: PYTHONPATH=. python bench/bench_milp.py [--time-limit 120] [--units 1,2,5] [--bilevel]
@@ -19,10 +19,10 @@ from pathlib import Path
 from typing import Any
 
 from bilevel_kit.instance import load
-from bilevel_kit.layout import cpsat_packing
+from bilevel_kit.models import cpsat as cs
+from bilevel_kit.models import milp as ms
+from bilevel_kit.models import packing as cpsat_packing
 from bilevel_kit.plan import evaluate
-from bilevel_kit.solvers import cpsat as cs
-from bilevel_kit.solvers import milp as ms
 from bilevel_kit.validate import check
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -79,8 +79,8 @@ def bench_schedule(units: list[int], time_limit: float, seed: int) -> list[dict[
 
 
 def bench_bilevel(time_limit: float, seed: int) -> list[dict[str, Any]]:
-    from bilevel_kit.solvers import bilevel_milp as kc
-    from bilevel_kit.solvers.greedy_ce import greedy_ce
+    from bilevel_kit.heuristics.greedy_ce import greedy_ce
+    from bilevel_kit.models import bilevel_milp as kc
 
     inst = load(ROOT / "instances" / "hrc_table.json")
     rows = []

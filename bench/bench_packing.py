@@ -6,7 +6,7 @@ Every (instance, solver) pair runs in its own process, killed at the time limit 
 
 * ``plain``: fixed-size intervals (two optional ones per orientation for rotatable parts) and
   one ``add_no_overlap_2d``, CP-SAT's default parameters: the reference point of issue 13;
-* ``pack``: :func:`bilevel_kit.layout.cpsat_packing.pack` (``objective="feasible"``), the
+* ``pack``: :func:`bilevel_kit.models.packing.pack` (``objective="feasible"``), the
   model behind ``bilevel-kit pack``.
 
 A ``feasible`` answer is checked on its layout (inside the tray, no overlap), so it is never
@@ -86,7 +86,7 @@ def plain(W: int, H: int, sizes: Sizes, T: float, workers: int, seed: int) -> di
 
 def packed(W: int, H: int, sizes: Sizes, T: float, workers: int, seed: int) -> dict[str, Any]:
     from bilevel_kit.instance import PartType, Tray
-    from bilevel_kit.layout.cpsat_packing import pack
+    from bilevel_kit.models.packing import pack
 
     items = [
         (

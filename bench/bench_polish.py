@@ -36,11 +36,11 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bilevel_kit import check, load  # noqa: E402
+from bilevel_kit.heuristics.convex import exactly_valid, polish  # noqa: E402
+from bilevel_kit.heuristics.cross_entropy import Arrangement, arrange  # noqa: E402
+from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, plan  # noqa: E402
 from bilevel_kit.instance import Instance  # noqa: E402
-from bilevel_kit.layout.convex import exactly_valid, polish  # noqa: E402
-from bilevel_kit.layout.cross_entropy import Arrangement, arrange  # noqa: E402
 from bilevel_kit.plan import Placement  # noqa: E402
-from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, plan  # noqa: E402
 
 FIELDS = [
     "group",
@@ -100,7 +100,7 @@ def greedy_rows(inst: Instance, reps: int, w6: float) -> list[dict]:
                 seen_cand.add(arr.layout)
                 rows.append(measure(inst, "candidates", arr.layout, w6))
         # The polished plan must pass the checker too (tasks unchanged, layouts replaced).
-        from bilevel_kit.layout.convex import polish_plan
+        from bilevel_kit.heuristics.convex import polish_plan
 
         polished, _ = polish_plan(inst, p, w6)
         assert check(inst, polished) == []

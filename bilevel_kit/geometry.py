@@ -4,7 +4,7 @@ The checker and every solver's final answer use these functions: a separating-ax
 overlap, corner containment for the tray, and exact intersection areas by convex clipping.
 :func:`layout_violations` is the one layout-validity test built on them: the checker
 (:mod:`bilevel_kit.validate`) reports its findings, the layout searches
-(:mod:`bilevel_kit.layout.cross_entropy`, :mod:`bilevel_kit.layout.convex`) accept a layout
+(:mod:`bilevel_kit.heuristics.cross_entropy`, :mod:`bilevel_kit.heuristics.convex`) accept a layout
 only when :func:`exactly_valid` says so, so no solver can call valid what the checker rejects.
 """
 

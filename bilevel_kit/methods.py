@@ -230,37 +230,37 @@ def solve(
 
 register(
     "single-task",
-    "bilevel_kit.solvers.baselines:single_task",
+    "bilevel_kit.heuristics.baselines:single_task",
     "paper baseline: one kit per task, deterministic topological order",
     "bilevel_kit.options:NoOptions",
 )
 register(
     "whole-assembly",
-    "bilevel_kit.solvers.baselines:whole_assembly",
+    "bilevel_kit.heuristics.baselines:whole_assembly",
     "paper baseline: one kit per product unit",
     "bilevel_kit.options:NoOptions",
 )
 register(
     "greedy-ce",
-    "bilevel_kit.solvers.greedy_ce:greedy_ce",
+    "bilevel_kit.heuristics.greedy_ce:greedy_ce",
     "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
-    "bilevel_kit.solvers.greedy_ce:GreedyCEOptions",
+    "bilevel_kit.heuristics.greedy_ce:GreedyCEOptions",
 )
 register(
     "cpsat",
-    "bilevel_kit.solvers.cpsat.method:cpsat",
+    "bilevel_kit.models.cpsat.method:cpsat",
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
-    "bilevel_kit.solvers.cpsat.method:CpsatOptions",
+    "bilevel_kit.models.cpsat.method:CpsatOptions",
 )
 register(
     "milp",
-    "bilevel_kit.solvers.milp.method:milp",
+    "bilevel_kit.models.milp.method:milp",
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
-    "bilevel_kit.solvers.milp.method:MilpOptions",
+    "bilevel_kit.models.milp.method:MilpOptions",
 )
 register(
     "bilevel-milp",
-    "bilevel_kit.solvers.bilevel_milp:bilevel_milp",
+    "bilevel_kit.models.bilevel_milp:bilevel_milp",
     "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
-    "bilevel_kit.solvers.bilevel_milp:BilevelMilpOptions",
+    "bilevel_kit.models.bilevel_milp:BilevelMilpOptions",
 )

@@ -1,5 +1,5 @@
 """Stand-alone pack files for ``bilevel-kit pack``: a tray and items, no tasks; and the layout
-file ``bilevel-kit pack --out`` writes (both formats in docs/formats.md).
+file ``bilevel-kit pack --out`` writes (its ``format`` tag; both formats in docs/formats.md).
 
 Format: ``{"tray": {"width": W, "height": H}, "items": [{"id", "width", "height", "count",
 "rotatable"}]}`` (mm; ``count`` default 1, ``rotatable`` default true). Loading validates with a
@@ -8,16 +8,12 @@ JSON Schema and raises :class:`~bilevel_kit.errors.InstanceError` naming the fil
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from .errors import InstanceError
 from .instance import MAX_LENGTH, Instance, PartType, Tray, check_lengths
 from .jsonio import read_json, validate_document
-
-if TYPE_CHECKING:
-    from .layout.cpsat_packing import PackResult
 
 #: The ``format`` tag of layout files.
 LAYOUT_FORMAT = "bilevel-kit-layout/1"
@@ -99,31 +95,3 @@ def load(path: str | Path) -> tuple[Instance, dict[str, int]]:
         source=src,
     )
     return inst, counts
-
-
-def layout_document(
-    result: PackResult,
-    *,
-    file: str,
-    tasks: Sequence[str],
-    objective: str,
-    resolution: float,
-    tray: Tray,
-) -> dict[str, Any]:
-    """The layout file of one packing: what was packed (``file``, ``tasks``), how (objective,
-    grid resolution), the answer (status, L1 surrogate, bound, true fitness, wall time) and
-    the placements; JSON-serialisable."""
-    return {
-        "format": LAYOUT_FORMAT,
-        "file": file,
-        "tasks": list(tasks),
-        "status": result.status,
-        "objective": objective,
-        "resolution": resolution,
-        "wall_time_s": result.wall_time_s,
-        "surrogate_objective": result.surrogate_objective,
-        "bound": result.bound,
-        "true_fitness": result.true_fitness,
-        "tray": {"width": tray.width, "height": tray.height},
-        "layout": [p.to_dict() for p in result.layout or ()],
-    }

@@ -352,7 +352,7 @@ def kit_fitness(instance: Instance, kit: Kit) -> float | None:
     kit's layout, None without one."""
     if not kit.layout:
         return None
-    from .layout.fitness import layout_fitness
+    from .fitness import layout_fitness
 
     return layout_fitness(kit.layout, instance.weights["W6"])
 
@@ -589,7 +589,7 @@ def plot_convergence(
     """Best kit fitness (mm, bigger is better; docs/errata.md) per cross-entropy iteration
     (iterations numbered from 1). Call it again on the same Axes to overlay several runs;
     non-finite scores leave gaps. ``converged=False`` (the run's ``converged`` flag,
-    :class:`bilevel_kit.layout.cross_entropy.Arrangement`) marks the last point: the run met the
+    :class:`bilevel_kit.heuristics.cross_entropy.Arrangement`) marks the last point: the run met the
     iteration cap while still improving by more than its stopping tolerance."""
     from matplotlib.ticker import MaxNLocator
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Iterator
 
-from bilevel_kit.layout import cpsat_packing as pk
+from bilevel_kit.models import packing as pk
 from bilevel_kit.plan import Kit, Plan, evaluate
 
 _FITS: dict = {}

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 from .common import (
     EXIT_NO_GRID_LAYOUT,
@@ -20,7 +21,8 @@ from .common import (
 NO_GRID_LAYOUT = "no_grid_layout"
 
 if TYPE_CHECKING:
-    from ..instance import Instance
+    from ..instance import Instance, Tray
+    from ..models.packing import PackResult
 
 HELP = "place parts on the tray with CP-SAT (fits? best layout?)"
 DESCRIPTION = (
@@ -81,8 +83,8 @@ def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], li
 
 def run(args: argparse.Namespace) -> int:
     instance, counts, tasks = _read_target(args)
-    from ..layout.cpsat_packing import pack
-    from ..layout.shelf import kit_items
+    from ..heuristics.shelf import kit_items
+    from ..models.packing import pack
     from ..reachability import reach_grid
 
     res = pack(
@@ -118,7 +120,6 @@ def run(args: argparse.Namespace) -> int:
         import json
 
         from ..atomic import write_text
-        from ..packfile import layout_document
 
         doc = layout_document(
             res,
@@ -141,3 +142,33 @@ def run(args: argparse.Namespace) -> int:
     if status == NO_GRID_LAYOUT:
         return EXIT_NO_GRID_LAYOUT
     return EXIT_UNKNOWN if status == "unknown" else EXIT_OK
+
+
+def layout_document(
+    result: PackResult,
+    *,
+    file: str,
+    tasks: Sequence[str],
+    objective: str,
+    resolution: float,
+    tray: Tray,
+) -> dict[str, Any]:
+    """The layout file of one packing: what was packed (``file``, ``tasks``), how (objective,
+    grid resolution), the answer (status, L1 surrogate, bound, true fitness, wall time) and
+    the placements; JSON-serialisable."""
+    from ..packfile import LAYOUT_FORMAT
+
+    return {
+        "format": LAYOUT_FORMAT,
+        "file": file,
+        "tasks": list(tasks),
+        "status": result.status,
+        "objective": objective,
+        "resolution": resolution,
+        "wall_time_s": result.wall_time_s,
+        "surrogate_objective": result.surrogate_objective,
+        "bound": result.bound,
+        "true_fitness": result.true_fitness,
+        "tray": {"width": tray.width, "height": tray.height},
+        "layout": [p.to_dict() for p in result.layout or ()],
+    }

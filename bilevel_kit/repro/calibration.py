@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance
-from ..layout.cross_entropy import CEParams
 from ..sim import Policy, SimParams, TimingModel, effective_instance, make_policy, run
 from ..sim.timing import WithinSubjectModel
 from .common import (

@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import UsageError
+from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
-from ..layout.cross_entropy import CEParams
 
 #: What ``bilevel_kit.repro`` re-exports from here.
 __all__ = [

@@ -24,8 +24,8 @@ from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import is_failed, run_cells_counted, write_json
 from ..experiments.tables import markdown_lines, write_csv
+from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
-from ..layout.cross_entropy import CEParams
 from ..options import NoOptions
 from ..plots import save_figure
 from ..sim import POLICIES, SimParams, TimingModel, replicate

@@ -2,7 +2,7 @@
 
 The paper names its limited horizon as a limitation ("with more compute power or longer
 planning times, our approach can generate more optimal kits", Section VI). With exact optima,
-an exact greedy decision (:mod:`bilevel_kit.solvers.greedy_search`) and the simulator the
+an exact greedy decision (:mod:`bilevel_kit.heuristics.greedy_search`) and the simulator the
 toolkit can say how much.
 
 **Part A, planning.** ``greedy-ce`` with ``horizon = N`` (the paper's N, Section IV-A) for
@@ -169,8 +169,8 @@ def _warm_up(instance: str) -> None:
     costs about a second that is no part of any plan's planning time)."""
     if _WARM:
         return
+    from ..heuristics.cross_entropy import CEParams, arrange
     from ..instance import load
-    from ..layout.cross_entropy import CEParams, arrange
 
     inst = load(instance)
     arrange(

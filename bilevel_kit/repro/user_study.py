@@ -22,8 +22,8 @@ from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import is_failed, run_cells, write_json
 from ..experiments.tables import write_csv
+from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance
-from ..layout.cross_entropy import CEParams
 from ..plots import save_figure
 from ..sim import SimParams, SimulationError, TimingModel
 from ..sim.timing import WithinSubjectModel

@@ -2,7 +2,7 @@
 
 At each decision epoch the robot takes the first ``window`` remaining tasks in the
 deterministic topological order (a set closed under predecessors), solves their segmentation
-and scheduling with the exact CP-SAT model (:func:`bilevel_kit.solvers.cpsat.solve`, under the
+and scheduling with the exact CP-SAT model (:func:`bilevel_kit.models.cpsat.solve`, under the
 instance's tray limit) and commits the first kit of the optimum (or of the best plan found
 within the limit). Online information enters the sub-problem as:
 
@@ -23,7 +23,7 @@ within the limit). Online information enters the sub-problem as:
   expected wait until they are all there (``SimState.expected_wait``, the stock consumed by
   the window's tasks in topological order), counted from the model's "now" (after the dummy
   kit); the model does not pick it earlier and picks each kit in the order of release
-  (:func:`bilevel_kit.solvers.cpsat.solve`, docs/formulations.md), so the robot's wait
+  (:func:`bilevel_kit.models.cpsat.solve`, docs/formulations.md), so the robot's wait
   overlaps the human's work and the other tasks' picking. The committed kit lists its tasks in
   that order (the simulator's robot picks in kit order). This is an estimate: the arrivals
   are random, a release is their expectation. Waiting for parts leaves slack, so many plans
@@ -265,7 +265,7 @@ class CPSATRollingPolicy:
         releases: dict[str, float],
     ) -> tuple[Kit, tuple[tuple[str, ...], ...]]:
         """The first kit of the window's plan and the plan's other kits (task ids)."""
-        from ..solvers.cpsat import best_heuristic_plan, released_makespan, solve
+        from ..models.cpsat import best_heuristic_plan, released_makespan, solve
 
         sub = self._sub_instance(window, times, h0)
         back = {_sub_id(t): t for t in window}
@@ -303,8 +303,8 @@ class CPSATRollingPolicy:
         need no part the stock lacks, the kit fits and the released makespan does not grow
         (module docstring)."""
         from ..errors import KitDoesNotFit
-        from ..solvers.cpsat import released_makespan
-        from ..solvers.cpsat.scaling import released
+        from ..models.cpsat import released_makespan
+        from ..models.cpsat.scaling import released
 
         order = dict(zip([t.id for t in sub.tasks], released(sub, rel), strict=True))
         kits = [k.tasks for k in plan.kits]

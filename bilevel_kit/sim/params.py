@@ -13,8 +13,8 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from ..errors import InstanceError, UsageError
+from ..heuristics.cross_entropy import CEParams
 from ..instance import DEFAULT_REPAIR_TIME, Instance, Supply, parse_trays
-from ..layout.cross_entropy import CEParams
 from .timing import TimingModel
 
 PICK_ORDERS = ("kit", "available-first")

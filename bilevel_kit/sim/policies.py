@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, ClassVar
 
+from ..heuristics.baselines import packed_kit
+from ..heuristics.cross_entropy import CEParams
+from ..heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, GreedyStats
 from ..instance import Instance, topological_order
-from ..layout.cross_entropy import CEParams
 from ..options import NO_OPTIONS, NoOptions
 from ..plan import Kit
-from ..solvers.baselines import packed_kit
-from ..solvers.greedy_ce import GreedyCEPolicy, GreedyParams, GreedyStats
 from .state import SimState
 
 if TYPE_CHECKING:

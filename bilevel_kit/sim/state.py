@@ -18,9 +18,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
 
+from ..heuristics.greedy_ce import PolicyState
 from ..instance import Instance, Supply
 from ..plan import Kit
-from ..solvers.greedy_ce import PolicyState
 
 #: Stock reported for part types without a supply process (they never run out).
 UNLIMITED = 10**9

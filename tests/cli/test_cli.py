@@ -329,7 +329,7 @@ def test_methods_name_lists_options_with_type_default_and_meaning(capsys, monkey
     module.DemoOptions = DemoOptions
     monkeypatch.setitem(sys.modules, "demo_options", module)
     spec = MethodSpec(
-        "demo", "bilevel_kit.solvers.baselines:single_task", "a demo", "demo_options:DemoOptions"
+        "demo", "bilevel_kit.heuristics.baselines:single_task", "a demo", "demo_options:DemoOptions"
     )
     monkeypatch.setitem(REGISTRY, spec.name, spec)
     code, text, _ = run(capsys, "methods", "demo")

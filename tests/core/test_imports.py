@@ -1,4 +1,4 @@
-"""The package's import graph: no cycles, and arrows only point down (docs/problem.md layout).
+"""The package's import graph: no cycles, and arrows only point down (docs/extending.md).
 
 Every module of ``bilevel_kit`` is parsed with ``ast`` (imports inside functions count too);
 relative imports are resolved, and ``from pkg import name`` where ``name`` is a submodule is an
@@ -19,10 +19,33 @@ import pytest
 PKG = "bilevel_kit"
 ROOT = Path(__file__).resolve().parents[2] / PKG
 
-#: Core modules: the data model, evaluator and checker, options and errors.
-CORE = ("instance", "plan", "validate", "bounds", "options", "errors", "geometry", "atomic")
-#: What neither the core nor ``layout`` may import.
-UPPER = ("solvers", "sim", "repro", "experiments", "cli")
+#: The core (docs/extending.md#the-house): the data model, evaluator, checker, bounds, kit
+#: fitness, registry, options, errors and I/O, at the package root. Everything both method
+#: rooms share lives here.
+CORE = (
+    "instance",
+    "plan",
+    "validate",
+    "bounds",
+    "geometry",
+    "fitness",
+    "reachability",
+    "methods",
+    "options",
+    "errors",
+    "atomic",
+    "jsonio",
+    "paths",
+    "progress",
+    "style",
+    "solution",
+    "packfile",
+    "_native",
+)
+#: The rooms above the core, bottom to top; a room imports only the core, ``sawyer`` and rooms
+#: below it (``heuristics`` never imports ``models``: models may start from a heuristic plan,
+#: never the reverse).
+ROOMS = ("heuristics", "models", "generate", "plots", "sim", "experiments", "repro", "cli")
 
 
 def _modules() -> dict[str, Path]:
@@ -152,10 +175,23 @@ def _under(name: str, top: str) -> bool:
     return name == full or name.startswith(full + ".")
 
 
+def _room(name: str) -> str:
+    """The room a module lives in: its top-level folder or module below ``bilevel_kit``."""
+    return name.split(".")[1] if "." in name else "__init__"
+
+
+def test_every_module_is_in_a_known_room():
+    """A new module must be placed deliberately: in the core list or one of the rooms."""
+    known = {*CORE, *ROOMS, "sawyer", "__init__", "__main__"}
+    assert sorted({_room(m) for m in MODULES} - known) == []
+
+
 def test_the_walker_sees_function_level_and_submodule_imports():
     assert f"{PKG}.sim.policies" in GRAPH[f"{PKG}.sim"]  # from .policies import ...
     assert f"{PKG}.instance" in GRAPH[f"{PKG}.plan"] or f"{PKG}.instance" in GRAPH[f"{PKG}.bounds"]
-    assert any(d.startswith(f"{PKG}.solvers") for d in GRAPH[f"{PKG}.sim.cpsat_rolling"])
+    assert any(d.startswith(f"{PKG}.models") for d in GRAPH[f"{PKG}.sim.cpsat_rolling"])
+    # a function-level import (greedy-ce's lazy convex polish) is an edge too
+    assert f"{PKG}.heuristics.convex" in GRAPH[f"{PKG}.heuristics.greedy_ce"]
 
 
 def test_no_import_cycles():
@@ -163,13 +199,39 @@ def test_no_import_cycles():
     assert not loops, "import cycles:\n" + "\n".join(loops)
 
 
-@pytest.mark.parametrize("top", ["layout", *CORE])
-def test_lower_levels_do_not_import_upper_ones(top):
-    bad = sorted(
+def _imports_into(sources: tuple[str, ...], targets: tuple[str, ...]) -> list[str]:
+    return sorted(
         f"{m} -> {d}"
         for m, deps in GRAPH.items()
-        if _under(m, top)
+        if any(_under(m, s) for s in sources)
         for d in deps
-        if any(_under(d, u) for u in UPPER)
+        if any(_under(d, t) for t in targets)
     )
-    assert not bad, "upward imports:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("top", [*CORE, "sawyer"])
+def test_the_core_imports_no_room(top):
+    bad = _imports_into((top,), ROOMS)
+    assert not bad, "the core reaches into a room:\n" + "\n".join(bad)
+
+
+def test_heuristics_never_import_models():
+    bad = _imports_into(("heuristics",), ("models",))
+    assert not bad, "heuristics -> models:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("i", range(len(ROOMS)))
+def test_rooms_import_only_downwards(i):
+    bad = _imports_into((ROOMS[i],), ROOMS[i + 1 :])
+    assert not bad, f"{ROOMS[i]} imports a room above it:\n" + "\n".join(bad)
+
+
+def test_the_rules_can_fail():
+    """The checker itself: a made-up upward edge is reported (so a green run means something)."""
+    GRAPH[f"{PKG}.heuristics.shelf"].add(f"{PKG}.models.packing")
+    try:
+        assert _imports_into(("heuristics",), ("models",)) == [
+            f"{PKG}.heuristics.shelf -> {PKG}.models.packing"
+        ]
+    finally:
+        GRAPH[f"{PKG}.heuristics.shelf"].discard(f"{PKG}.models.packing")

@@ -454,7 +454,7 @@ def test_tray_labels_skip_or_abbreviate_small_parts(inst):
 
 
 def test_tray_titles_give_kit_fitness(inst):
-    from bilevel_kit.layout.fitness import layout_fitness
+    from bilevel_kit.fitness import layout_fitness
 
     ax = plots.plot_tray(inst, PLAN.kits[0])
     f = layout_fitness(PLAN.kits[0].layout, inst.weights["W6"])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bilevel_kit import Kit, KitTimes, Placement, Plan, check, evaluate
-from bilevel_kit.solvers.baselines import single_task, whole_assembly
+from bilevel_kit.heuristics.baselines import single_task, whole_assembly
 
 
 @pytest.fixture
@@ -53,7 +53,7 @@ def test_precedence_across_kits(tiny, valid):
 
 
 def test_precedence_inside_kit(tiny):
-    from bilevel_kit.solvers.baselines import packed_kit
+    from bilevel_kit.heuristics.baselines import packed_kit
 
     kit = packed_kit(tiny, ["t3", "t1", "t2"], "k")
     v = check(tiny, Plan((kit,)))
@@ -168,9 +168,9 @@ def test_one_layout_test_for_checker_and_layout_searches():
     """geometry.layout_violations (box pre-filter) finds exactly what testing every pair finds,
     and cross-entropy's and the convex polish's acceptance gates agree with it."""
     from bilevel_kit import geometry
+    from bilevel_kit.heuristics import convex
+    from bilevel_kit.heuristics.cross_entropy import _exactly_valid
     from bilevel_kit.instance import Tray
-    from bilevel_kit.layout import convex
-    from bilevel_kit.layout.cross_entropy import _exactly_valid
 
     rng = np.random.default_rng(7)
     seen = set()

@@ -10,7 +10,9 @@ import pytest
 
 from bilevel_kit import Plan, check, evaluate
 from bilevel_kit.errors import UsageError
-from bilevel_kit.layout.cross_entropy import CEParams
+from bilevel_kit.heuristics.cross_entropy import CEParams
+from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams
+from bilevel_kit.heuristics.greedy_ce import plan as greedy_plan
 from bilevel_kit.plan import Kit, next_robot_start, tray_back
 from bilevel_kit.sim import (
     POLICIES,
@@ -26,8 +28,6 @@ from bilevel_kit.sim import (
     run,
     simulate,
 )
-from bilevel_kit.solvers.greedy_ce import GreedyCEPolicy, GreedyParams
-from bilevel_kit.solvers.greedy_ce import plan as greedy_plan
 
 CE = CEParams(samples=60, elite=10, max_iter=30)
 DET = SimParams(timing=TimingModel.deterministic(), ce=CE)

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from bilevel_kit.layout.cross_entropy import CEParams
+from bilevel_kit.heuristics.cross_entropy import CEParams
 from bilevel_kit.sim import SimParams, replicate
 
 CE = CEParams(samples=60, elite=10, max_iter=30)

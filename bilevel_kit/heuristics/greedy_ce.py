@@ -1,0 +1,587 @@
+"""The paper's upper level: greedy rolling-horizon task segmentation (Section IV-A, Eqs. 3-7).
+
+At each decision epoch (the robot is free to start the next kit) the policy enumerates the
+precedence-feasible partial sequences ``K`` of the remaining tasks of length
+``L = min(N, remaining)`` and every split ``i in 1..L``, scores each pair with
+
+.. math::
+
+    F(K, i) = W_1 \\sum_j (1 - \\text{allowed}(K_j))                      \\quad (3)
+            - W_2\\, i                                                       \\quad (4)
+            + W_3\\, |d + R(K_{1:i}) - H_{rem}|                              \\quad (5)
+            + W_4\\, |d + R(K_{i+1:L}) - H(K_{1:i})|                         \\quad (6)
+            - W_5\\, \\text{kit\\_fitness}(P(K_{1:i}))                       \\quad (7)
+            + W_7 \\sum_{p \\in P(K_{1:i})} U(p)                              \\quad (V\\text{-B})
+
+and commits the minimiser's prefix ``T_{t+1} = K_{1:i}`` as the next kit. The terms are
+computed by :mod:`bilevel_kit.heuristics.upper_level` (the one implementation of F).
+
+Decisions taken where the paper is silent (docs/errata.md):
+
+* Terms (5) and (6) use absolute differences (``signed=True`` restores the printed form).
+* Precedence is a hard constraint: only feasible ``K`` are enumerated, so term (3) is 0
+  (``precedence="penalty"`` enumerates every sequence and adds ``W1`` per violation).
+* ``R(.)`` and ``H(.)`` of a kit include the per-kit overheads ``o_R``/``o_H`` of the
+  instance, matching the timeline evaluator.
+* ``H_rem``, the paper's ``duration^H(T_t)``, is the human's remaining time on the current
+  kit when the robot starts the next one (0 for the first kit), computed with the one
+  timeline evaluator; online, the simulator passes it in the :class:`PolicyState`.
+* A prefix whose parts cannot be laid out (CE and the packer fallback both fail) is not a
+  candidate. ``kit_fitness`` is memoised by the multiset of parts, so each distinct kit is
+  arranged once per plan; each multiset gets its own seed derived from (seed, multiset), so a
+  kit's layout does not depend on the order in which kits are considered.
+* Ties are broken deterministically: the first minimum in enumeration order (sequences in
+  depth-first order of the tasks' file positions, then increasing ``i``), with a tolerance of
+  1e-9 on the score.
+
+Options (:class:`GreedyCEOptions`, validated centrally): ``horizon`` (N), ``signed``,
+``precedence``, ``polish`` (convex polish of every CE layout, :mod:`bilevel_kit.heuristics.convex`),
+the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entropy.CEParams` field.
+``time_limit`` is accepted for the common interface; the heuristic has none.
+
+``extra`` of the registered method ``greedy-ce``:
+
+* ``epochs``: decision epochs (= kits); ``sequences``: partial sequences enumerated, summed
+  over epochs; ``candidates``: (K, i) pairs with a layout, summed over epochs;
+* ``ce_calls``: CE runs (distinct part multisets); ``fitness_cache_hits``: look-ups served
+  from the memo; ``kits_not_fitting``: multisets without a valid layout;
+* ``epoch_F_sum``: the sum over epochs of the chosen pair's F. Not a whole-plan objective:
+  term (6) looks at the hypothetical window rest, not the kit that really came next
+  (bilevel-milp's J, :mod:`bilevel_kit.models.bilevel_milp`, is the plan's objective);
+* ``kit_terms``: per kit, ``score`` (its F), ``i``, ``fitness``, ``d_same``, ``d_diff``,
+  ``z`` (mm^2), ``n_parts``, ``ce_iterations``, ``ce_converged``, ``layout_source`` and
+  ``trace`` (best CE fitness per iteration) of its layout.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import KitDoesNotFit, UsageError
+from ..instance import Instance
+from ..methods import MethodOutput, Status
+from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
+from . import upper_level
+from .cross_entropy import Arrangement, CEParams, arrange
+from .greedy_search import PrefixSearch, SearchLimits, SearchStats, available_vector
+
+#: Refuse to enumerate more than this many partial sequences at one epoch.
+MAX_SEQUENCES = 2_000_000
+
+
+@dataclass(frozen=True)
+class GreedyParams:
+    """Options of ``greedy-ce``; ``None`` means "the instance's value"."""
+
+    horizon: int | None = None
+    weights: Mapping[str, float] | None = None
+    signed: bool = False
+    precedence: str = "hard"  # "hard" | "penalty"
+    #: "exact": the search over prefix sets (:mod:`.greedy_search`); "enumerate": every
+    #: sequence (the penalty form always enumerates).
+    decision: str = "exact"
+    max_prefix_sets: int = SearchLimits.max_prefix_sets
+    beam_width: int = SearchLimits.beam_width
+    max_rest_nodes: int = SearchLimits.max_rest_nodes
+    ce: CEParams = field(default_factory=CEParams)
+    #: Polish every CE layout with the convex-concave SOCP of models/convex_layout.py.
+    polish: bool = False
+
+
+_WEIGHT_NAMES = ("W1", "W2", "W3", "W4", "W5", "W6", "W7")
+
+
+@dataclass(frozen=True)
+class GreedyCEOptions:
+    """The options of ``greedy-ce`` as the command line gives them (flat); ``None`` means the
+    instance's value. The CE fields mirror :class:`CEParams` (same names and defaults)."""
+
+    horizon: int | None = field(
+        default=None, metadata={"help": "rolling horizon N, tasks per window", "min": 1}
+    )
+    signed: bool = field(
+        default=False, metadata={"help": "terms (5)-(6) signed as printed, not absolute"}
+    )
+    precedence: Literal["hard", "penalty"] = field(
+        default="hard",
+        metadata={"help": "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"},
+    )
+    decision: Literal["exact", "enumerate"] = field(
+        default="exact",
+        metadata={
+            "help": "hard precedence: exact search over prefix sets, or enumerate every sequence"
+        },
+    )
+    max_prefix_sets: int = field(
+        default=SearchLimits.max_prefix_sets,
+        metadata={"help": "prefix sets per epoch beyond which the search is a beam", "min": 1},
+    )
+    beam_width: int = field(
+        default=SearchLimits.beam_width,
+        metadata={"help": "prefix sets kept per size once the search is a beam", "min": 1},
+    )
+    max_rest_nodes: int = field(
+        default=SearchLimits.max_rest_nodes,
+        metadata={"help": "search nodes per window-rest search (then the best so far)", "min": 1},
+    )
+    polish: bool = field(
+        default=False, metadata={"help": "polish every CE layout with the convex SOCP"}
+    )
+    W1: float | None = field(
+        default=None,
+        metadata={"help": "weight of term (3), per task whose predecessors are not kitted"},
+    )
+    W2: float | None = field(
+        default=None, metadata={"help": "weight of term (4), reward per task in the kit"}
+    )
+    W3: float | None = field(
+        default=None, metadata={"help": "weight of term (5), |d + R(kit) - H_rem|, per s"}
+    )
+    W4: float | None = field(
+        default=None, metadata={"help": "weight of term (6), |d + R(rest) - H(kit)|, per s"}
+    )
+    W5: float | None = field(
+        default=None, metadata={"help": "weight of term (7), reward per mm of kit fitness"}
+    )
+    W6: float | None = field(
+        default=None,
+        metadata={"help": "weight of the overlap area Z (mm^2) in the kit fitness (Eq. 11)"},
+    )
+    W7: float | None = field(
+        default=None,
+        metadata={"help": "weight of the W7 term (Sec. V-B), per part not yet available"},
+    )
+    samples: int = field(default=200, metadata={"help": "CE samples per iteration", "min": 2})
+    elite: int = field(
+        default=30,
+        metadata={
+            "help": "CE elite samples the mean and covariance are refitted to (<= samples)",
+            "min": 2,
+        },
+    )
+    max_iter: int = field(default=100, metadata={"help": "CE iteration cap", "min": 1})
+    tol: float = field(
+        default=1e-4,
+        metadata={"help": "CE convergence: relative change of the elite threshold (unitless)"},
+    )
+    patience: int = field(
+        default=10, metadata={"help": "CE convergence: iterations within tol", "min": 1}
+    )
+    init_sd_frac: float = field(
+        default=0.25,
+        metadata={"help": "CE initial sd of x, y as a fraction of the tray side (> 0)"},
+    )
+    init_sd_theta: float = field(
+        default=30.0, metadata={"help": "CE initial sd of the angles, degrees", "min": 0.0}
+    )
+    min_sd: float = field(
+        default=0.5,
+        metadata={"help": "CE floor of the sd (> 0): mm for positions, degrees for angles"},
+    )
+    out_weight: float | None = field(
+        default=None, metadata={"help": "CE penalty per mm of tray overhang (none: automatic)"}
+    )
+    precision: Literal["float32", "float64"] = field(
+        default="float32", metadata={"help": "CE precision of sample scoring (results are float64)"}
+    )
+    repair: bool = field(
+        default=True,
+        metadata={"help": "push overlapping CE candidates apart before rejecting them"},
+    )
+    restart_sd_scale: float = field(
+        default=0.1,
+        metadata={"help": "CE sd of a run from a given layout, relative to a random start"},
+    )
+    mirrored: bool = field(
+        default=True, metadata={"help": "CE mirrored (antithetic) sampling: mu + L z and mu - L z"}
+    )
+    smoothing: float = field(
+        default=1.0, metadata={"help": "CE mean update smoothing, in (0, 1]", "max": 1.0}
+    )
+    cov_smoothing: float = field(
+        default=0.3, metadata={"help": "CE covariance update smoothing, in (0, 1]", "max": 1.0}
+    )
+
+    def __post_init__(self) -> None:
+        try:
+            self.ce_params()
+        except UsageError as exc:  # parse_options names the method and turns this into one
+            raise ValueError(str(exc)) from None
+
+    def ce_params(self) -> CEParams:
+        """The cross-entropy fields as :class:`CEParams`."""
+        return CEParams(**{f.name: getattr(self, f.name) for f in fields(CEParams)})
+
+    def to_params(self) -> GreedyParams:
+        """The same options as the policy's :class:`GreedyParams`."""
+        weights = {w: getattr(self, w) for w in _WEIGHT_NAMES if getattr(self, w) is not None}
+        return GreedyParams(
+            horizon=self.horizon,
+            weights=weights or None,
+            signed=self.signed,
+            precedence=self.precedence,
+            decision=self.decision,
+            max_prefix_sets=self.max_prefix_sets,
+            beam_width=self.beam_width,
+            max_rest_nodes=self.max_rest_nodes,
+            ce=self.ce_params(),
+            polish=self.polish,
+        )
+
+
+#: Every option at its default.
+DEFAULT_OPTIONS = GreedyCEOptions()
+
+
+@dataclass(frozen=True)
+class PolicyState:
+    """What the robot knows at a decision epoch.
+
+    ``done``: tasks already kitted (delivered or committed); ``human_remaining``: seconds the
+    human still needs for the kit in hand (0 if idle); ``available``: parts of each type the
+    robot has right now (``None``: everything is available, W7 is then inactive).
+    """
+
+    done: frozenset[str] = frozenset()
+    human_remaining: float = 0.0
+    available: Mapping[str, int] | None = None
+
+
+@dataclass
+class GreedyStats(SearchStats):
+    """The policy's counters; the prefix search's (:class:`SearchStats`: closed prefix sets
+    scored, prefixes evaluated with their layout, beam epochs, capped window-rest searches)
+    are copied from it after each exact decision."""
+
+    epochs: int = 0
+    sequences: int = 0
+    candidates: int = 0
+    ce_calls: int = 0
+    fitness_cache_hits: int = 0
+    kits_not_fitting: int = 0
+    #: True once ``time_limit`` ran out (the remaining kits are single tasks)
+    time_limit_hit: bool = False
+    objective_terms: list[dict[str, Any]] = field(default_factory=list)
+
+
+class GreedyCEPolicy:
+    """The paper's bilevel heuristic as an online policy: ``decide(state) -> next Kit``."""
+
+    def __init__(
+        self, instance: Instance, params: GreedyParams | None = None, seed: int = 0
+    ) -> None:
+        self.params = params or GreedyParams()
+        self.instance = instance.with_overrides(
+            horizon=self.params.horizon, weights=self.params.weights
+        )
+        if self.params.precedence not in ("hard", "penalty"):
+            raise UsageError(
+                f"precedence must be 'hard' or 'penalty', got {self.params.precedence!r}"
+            )
+        if self.params.decision not in ("exact", "enumerate"):
+            raise UsageError(
+                f"decision must be 'exact' or 'enumerate', got {self.params.decision!r}"
+            )
+        self.seed = int(seed)
+        self.stats = GreedyStats()
+        self._arrangements: dict[tuple[tuple[str, int], ...], Arrangement] = {}
+        #: (fitness, fits) by the bytes of a count row over ``_types`` (the same memo, keyed
+        #: for the decision's hot path)
+        self._fit_memo: dict[bytes, tuple[float, bool]] = {}
+        inst = self.instance
+        self._ids = [t.id for t in inst.tasks]
+        self._r = np.array([inst.robot_time(t) for t in self._ids])
+        self._h_mean = np.array([inst.human_time(t) for t in self._ids])
+        self._h = self._h_mean
+        self._pred = [frozenset(inst.index[p] for p in inst.predecessors[t]) for t in self._ids]
+        self._types = sorted(inst.part_types)
+        col = {t: k for k, t in enumerate(self._types)}
+        #: parts of each task as a count vector over the sorted part types
+        self._part_matrix = np.zeros((len(self._ids), len(self._types)), dtype=np.int64)
+        for j, tid in enumerate(self._ids):
+            for t, n in inst.task_by_id[tid].parts:
+                self._part_matrix[j, col[t]] += n
+        limits = SearchLimits(
+            self.params.max_prefix_sets, self.params.beam_width, self.params.max_rest_nodes
+        )
+        self._search = PrefixSearch(
+            inst, self._r, self._h, self._pred, self._part_matrix, self._types, limits
+        )
+        #: ``time.perf_counter()`` after which decisions are single tasks (None: no limit)
+        self.deadline: float | None = None
+
+    def set_human_scale(self, scale: float | np.ndarray) -> None:
+        """Plan the next decisions with every task's human time ``H`` (terms (5)-(6)) the
+        instance's mean times ``scale`` (one factor, or one per task in instance order); 1
+        restores the means exactly. The adaptive policies' estimate of the participant's pace
+        (docs/simulation.md); the per-kit ``o_H`` is not scaled, layouts do not depend on it."""
+        self._h = self._h_mean * scale
+        self._search.h = self._h
+
+    # -- lower level, memoised ---------------------------------------------------------------
+    def arrangement(self, counts: Mapping[str, int]) -> Arrangement:
+        """The CE arrangement of a part multiset (computed once per multiset)."""
+        key = tuple(sorted((t, int(n)) for t, n in counts.items() if n))
+        hit = self._arrangements.get(key)
+        if hit is not None:
+            self.stats.fitness_cache_hits += 1
+            return hit
+        code = [self._types.index(t) * 1000 + n for t, n in key]
+        rng = np.random.default_rng(np.random.SeedSequence([self.seed, *code]))
+        self.stats.ce_calls += 1
+        arr = arrange(
+            self.instance, dict(key), rng=rng, params=self.params.ce, w6=self.instance.weights["W6"]
+        )
+        if not arr.fits:
+            self.stats.kits_not_fitting += 1
+        elif self.params.polish:
+            from .convex import polish_arrangement
+
+            arr = polish_arrangement(self.instance, arr, self.instance.weights["W6"])
+        self._arrangements[key] = arr
+        return arr
+
+    # -- upper level ---------------------------------------------------------------------------
+    def _sequences(self, done: set[int], length: int) -> Iterator[tuple[int, ...]]:
+        """Depth-first, in file order: feasible sequences (or all, in the penalty form)."""
+        n = len(self._ids)
+        hard = self.params.precedence == "hard"
+        seq: list[int] = []
+        used = set(done)
+
+        def rec() -> Iterator[tuple[int, ...]]:
+            if len(seq) == length:
+                yield tuple(seq)
+                return
+            for j in range(n):
+                if j in used or (hard and not self._pred[j] <= used):
+                    continue
+                seq.append(j)
+                used.add(j)
+                yield from rec()
+                used.discard(j)
+                seq.pop()
+
+        return rec()
+
+    def _fitness(self, row: np.ndarray) -> tuple[float, bool]:
+        """(fitness, fits) of a count row over the sorted part types (CE run if new)."""
+        hit = self._cached_fitness(row)
+        if hit is not None:
+            return hit
+        arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
+        self._fit_memo[np.asarray(row, dtype=np.int64).tobytes()] = (arr.fitness, arr.fits)
+        return arr.fitness, arr.fits
+
+    def _cached_fitness(self, row: np.ndarray) -> tuple[float, bool] | None:
+        """(fitness, fits) of a count row if its multiset was arranged already (a memo hit,
+        counted as in :meth:`arrangement`), else None."""
+        hit = self._fit_memo.get(np.asarray(row, dtype=np.int64).tobytes())
+        if hit is not None:
+            self.stats.fitness_cache_hits += 1
+        return hit
+
+    def _enumerate(
+        self, state: PolicyState, done: set[int], length: int
+    ) -> tuple[list[int], float]:
+        """Every (K, i) scored at once (the penalty form, and ``decision="enumerate"``)."""
+        inst = self.instance
+        remaining = len(self._ids) - len(done)
+        if math.perm(remaining, length) > MAX_SEQUENCES and self.params.precedence != "hard":
+            raise UsageError(
+                f"{math.perm(remaining, length)} sequences to enumerate in the "
+                "penalty form; lower the horizon"
+            )
+        seqs = np.array(list(self._sequences(done, length)), dtype=np.int64)
+        if len(seqs) > MAX_SEQUENCES:
+            raise UsageError(f"{len(seqs)} partial sequences at one epoch; lower the horizon")
+        self.stats.sequences += len(seqs)
+        # Terms (3)-(6) of every (K, i), then the lower level: one arrangement per distinct
+        # prefix part multiset (term 7 and the W7 term).
+        violations = None
+        if self.params.precedence == "penalty":
+            violations = upper_level.precedence_violations(seqs, done, self._pred)[:, None]
+        diff5, diff6 = upper_level.window_balance(
+            self._r[seqs],
+            self._h[seqs],
+            delivery=inst.delivery_time,
+            human_remaining=state.human_remaining,
+            overhead_robot=inst.kit_overhead_robot,
+            overhead_human=inst.kit_overhead_human,
+            signed=self.params.signed,
+        )
+        counts = np.cumsum(self._part_matrix[seqs], axis=1).reshape(-1, len(self._types))
+        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        inverse = inverse.reshape(len(seqs), length)
+        fit = np.empty(len(keys))
+        fits = np.empty(len(keys), dtype=bool)
+        for k, row in enumerate(keys):
+            fit[k], fits[k] = self._fitness(row)
+        unavailable = None
+        avail = available_vector(state.available, self._types)
+        if avail is not None:
+            unavailable = upper_level.unavailable_parts(keys, avail)[inverse]
+        score = upper_level.objective(
+            inst.weights,
+            n_tasks=np.arange(1, length + 1)[None, :],
+            diff5=diff5,
+            diff6=diff6,
+            fitness=fit[inverse],
+            violations=violations,
+            unavailable=unavailable,
+        ).reshape(-1)
+        score[~fits[inverse.reshape(-1)]] = np.inf
+        self.stats.candidates += int(np.isfinite(score).sum())
+        if not np.isfinite(score).any():
+            return [], math.inf
+        # first minimum in enumeration order (row-major: sequence, then split), tolerance 1e-9
+        flat = int(np.flatnonzero(score <= score.min() + 1e-9)[0])
+        s, col = divmod(flat, length)
+        return seqs[s, : col + 1].tolist(), float(score[flat])
+
+    def _exact(self, state: PolicyState, done: set[int], length: int) -> tuple[list[int], float]:
+        """The search over closed prefix sets (:mod:`.greedy_search`): same minimum, same kit."""
+        mask = np.zeros(len(self._ids), dtype=bool)
+        mask[list(done)] = True
+        search = self._search
+        before = (search.stats.evaluated, search.stats.prefix_sets)
+        choice = search.decide(
+            mask,
+            length,
+            state.human_remaining,
+            available_vector(state.available, self._types),
+            self._fitness,
+            self.params.signed,
+            self._cached_fitness,
+        )
+        st = search.stats
+        self.stats.candidates += st.evaluated - before[0]
+        for f in fields(SearchStats):
+            setattr(self.stats, f.name, getattr(st, f.name))
+        if choice is None:
+            return [], math.inf
+        return list(choice.prefix), choice.score
+
+    def _cheap(self, done: set[int]) -> tuple[list[int], float | None]:
+        """After the time limit: the first available task (file order) alone, if it fits."""
+        for j in range(len(self._ids)):
+            if j not in done and self._pred[j] <= done:
+                if self._fitness(self._part_matrix[j])[1]:
+                    return [j], None
+                break
+        return [], math.inf
+
+    def decide(self, state: PolicyState) -> Kit | None:
+        """The next kit (tasks in the human's order, with its CE layout); None when all done."""
+        inst = self.instance
+        done = {inst.index[t] for t in state.done}
+        remaining = len(self._ids) - len(done)
+        if remaining == 0:
+            return None
+        length = min(inst.horizon, remaining)
+        self.stats.epochs += 1
+        best_score: float | None
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            self.stats.time_limit_hit = True
+            prefix, best_score = self._cheap(done)
+        elif self.params.precedence == "penalty" or self.params.decision == "enumerate":
+            prefix, best_score = self._enumerate(state, done, length)
+        else:
+            prefix, best_score = self._exact(state, done, length)
+        if not prefix:
+            raise KitDoesNotFit(
+                f"{inst.source}: no next kit fits the tray: every candidate "
+                f"prefix of the remaining {remaining} tasks failed to lay out"
+            )
+        row = self._part_matrix[prefix].sum(axis=0)
+        arr = self.arrangement(dict(zip(self._types, row.tolist(), strict=True)))
+        self.stats.objective_terms.append(
+            {
+                "score": best_score,
+                "i": len(prefix),
+                "h_rem": state.human_remaining,
+                "fitness": arr.fitness,
+                "d_same": arr.d_same,
+                "d_diff": arr.d_diff,
+                "z": arr.z,
+                "n_parts": len(arr.layout),
+                "ce_iterations": arr.iterations,
+                "ce_converged": arr.converged,
+                "layout_source": arr.source,
+                "trace": list(arr.trace),
+            }
+        )
+        return Kit(tuple(self._ids[j] for j in prefix), arr.layout)
+
+
+def plan(
+    instance: Instance,
+    params: GreedyParams | None = None,
+    seed: int = 0,
+    policy: GreedyCEPolicy | None = None,
+) -> Plan:
+    """Offline plan with expected times: call the policy at each epoch until all tasks are kitted.
+
+    An epoch is the moment the robot can start the next kit: the last kit has arrived and a
+    tray is back (:func:`bilevel_kit.plan.next_robot_start`, the tray rule of
+    docs/timeline.md). ``H_rem`` is the human's work left then, ``human_end - now >= 0``
+    (with unlimited trays ``now`` is the last arrival), from the one timeline evaluator.
+    """
+    policy = policy or GreedyCEPolicy(instance, params, seed)
+    kits: list[Kit] = []
+    done: set[str] = set()
+    timeline = TimelineBuilder(policy.instance)
+    while len(done) < instance.n_tasks:
+        remaining = 0.0
+        if kits:
+            now = next_robot_start(policy.instance, timeline.kits)
+            remaining = max(0.0, timeline.human_free - now)
+        kit = policy.decide(PolicyState(frozenset(done), remaining))
+        assert kit is not None
+        kits.append(kit)
+        timeline.append(kit)
+        done.update(kit.tasks)
+    return Plan(tuple(kits))
+
+
+def greedy_ce(
+    instance: Instance,
+    options: GreedyCEOptions = DEFAULT_OPTIONS,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``greedy-ce``: the paper's bilevel heuristic (options and ``extra``
+    in the module docstring). Past ``time_limit`` seconds the remaining kits are single tasks
+    (``extra["time_limit_hit"]``)."""
+    params = options.to_params()
+    policy = GreedyCEPolicy(instance, params, seed)
+    if time_limit is not None:
+        policy.deadline = time.perf_counter() + time_limit
+    result = plan(instance, params, seed, policy)
+    st = policy.stats
+    extra = {
+        "epochs": st.epochs,
+        "decision": "enumerate"
+        if params.precedence == "penalty" or params.decision == "enumerate"
+        else "exact",
+        "sequences": st.sequences,
+        "prefix_sets": st.prefix_sets,
+        "evaluated": st.evaluated,
+        "beam_epochs": st.beam_epochs,
+        "rest_capped": st.rest_capped,
+        "time_limit_hit": st.time_limit_hit,
+        "candidates": st.candidates,
+        "ce_calls": st.ce_calls,
+        "fitness_cache_hits": st.fitness_cache_hits,
+        "kits_not_fitting": st.kits_not_fitting,
+        "epoch_F_sum": sum(float(t["score"]) for t in st.objective_terms if t["score"] is not None),
+        "kit_terms": st.objective_terms,
+    }
+    return MethodOutput(result, Status.FEASIBLE, None, extra)

@@ -1,0 +1,415 @@
+"""Pieces both exact schedule models share (CP-SAT and the MILP).
+
+The transitive reduction of the precedence graph, the human's order inside a kit, groups of
+interchangeable precedence chains (for symmetry breaking), the kit positions a task can take,
+the packing oracle under a run's time budget, the no-good cuts of the Benders loops, a cheap
+feasible plan that gives an upper bound and a warm start, and the ``extra`` entries of a plan
+(docs/formulations.md).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from typing import Any, TypeVar
+
+from ..instance import Instance, topological_order
+from ..plan import Kit, Placement, Plan, Timeline, evaluate
+from . import packing
+from .budget import Budget
+
+T = TypeVar("T")
+
+
+def reduced_edges(instance: Instance) -> list[tuple[str, str]]:
+    """The transitive reduction of the precedence graph (same order relation, fewer edges)."""
+    anc, pred = instance.ancestors, instance.predecessors
+    out = []
+    for a, b in dict.fromkeys(instance.precedence):
+        if not any(a in anc[c] for c in pred[b] if c != a):
+            out.append((a, b))
+    return out
+
+
+def chain_groups_idx(
+    n: int, edges: Sequence[tuple[int, int]], sig: Sequence[Any]
+) -> list[list[list[int]]]:
+    """Groups (>= 2) of interchangeable precedence chains in the reduced graph.
+
+    A chain follows links a -> b where a has exactly one successor and b exactly one
+    predecessor. Two chains with equal task signatures, equal predecessors of the head and
+    equal successors of the tail can be swapped: an automorphism of the whole problem.
+    """
+    succ: list[list[int]] = [[] for _ in range(n)]
+    pred: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges:
+        succ[a].append(b)
+        pred[b].append(a)
+
+    def linked(a: int, b: int) -> bool:
+        return len(succ[a]) == 1 and len(pred[b]) == 1 and succ[a][0] == b
+
+    groups: dict[Any, list[list[int]]] = {}
+    for v in range(n):
+        if len(pred[v]) == 1 and linked(pred[v][0], v):
+            continue  # not a head
+        chain = [v]
+        while len(succ[chain[-1]]) == 1 and linked(chain[-1], succ[chain[-1]][0]):
+            chain.append(succ[chain[-1]][0])
+        key = (frozenset(pred[v]), frozenset(succ[chain[-1]]), tuple(sig[c] for c in chain))
+        groups.setdefault(key, []).append(chain)
+    return [sorted(g) for g in groups.values() if len(g) >= 2]
+
+
+def chain_groups(instance: Instance) -> list[list[list[str]]]:
+    """:func:`chain_groups_idx` on task ids; a task's signature is (robot time, human time,
+    parts), so swapping two chains of a group changes nothing."""
+    ids = [t.id for t in instance.tasks]
+    idx = instance.index
+    edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
+    sig = [
+        (
+            instance.robot_time(t),
+            instance.human_time(t),
+            tuple(sorted(instance.task_by_id[t].parts)),
+        )
+        for t in ids
+    ]
+    return [
+        [[ids[i] for i in chain] for chain in g] for g in chain_groups_idx(len(ids), edges, sig)
+    ]
+
+
+def relabel_chains(pos: Mapping[T, int], groups: Iterable[Sequence[Sequence[T]]]) -> dict[T, int]:
+    """The kit of every task (``pos``) once the interchangeable chains of each group (listed
+    in task order, as :func:`chain_groups_idx` gives them) are relabelled so that their kit
+    vectors are in lexicographic order: the exact models' symmetry breaking. Kit contents stay
+    the same multisets."""
+    new = dict(pos)
+    for group in groups:
+        vectors = sorted(tuple(pos[t] for t in chain) for chain in group)
+        for chain, vec in zip(group, vectors, strict=True):
+            for t, k in zip(chain, vec, strict=True):
+                new[t] = k
+    return new
+
+
+def kit_order(instance: Instance, tasks: Collection[str]) -> tuple[str, ...]:
+    """A topological order of a kit's tasks (ties by file order): the human's order."""
+    members = set(tasks)
+    anc = instance.ancestors
+    left = sorted(members, key=instance.index.__getitem__)
+    out: list[str] = []
+    done: set[str] = set()
+    while left:
+        for t in left:
+            if all(a in done for a in anc[t] if a in members):
+                out.append(t)
+                done.add(t)
+                left.remove(t)
+                break
+        else:  # pragma: no cover - impossible for an acyclic graph
+            raise ValueError("cycle inside a kit")
+    return tuple(out)
+
+
+def kit_positions(instance: Instance, K: int) -> list[int]:
+    """How many of the K kit positions each task (in ``instance.tasks`` order) can take: task i
+    is in one of the first ``n - |descendants(i)|`` kits, since every later kit needs a task."""
+    n = instance.n_tasks
+    n_desc = dict.fromkeys(instance.task_by_id, 0)
+    for t in instance.tasks:
+        for a in instance.ancestors[t.id]:
+            n_desc[a] += 1
+    return [min(K, n - n_desc[t.id]) for t in instance.tasks]
+
+
+def assignment_cells(instance: Instance, K: int) -> int:
+    """Number of (task, kit position) variables of the exact models with K positions
+    (:func:`kit_positions`); their models grow with it."""
+    return sum(kit_positions(instance, K))
+
+
+def plan_extra(
+    plan: Plan, real: Timeline, bound: float, closed: float, model_bound: float | None
+) -> dict[str, Any]:
+    """The ``extra`` entries of an exact model's plan (``real``: its timeline): the gap to the
+    makespan ``bound``, makespan, human idle, kit count, the closed-form bound and the model's
+    own bound."""
+    from ..methods import gap
+
+    return {
+        "gap": gap(real.makespan, bound) or 0.0,
+        "makespan": real.makespan,
+        "human_idle": real.human_idle,
+        "n_kits": len(plan.kits),
+        "bound_closed_form": closed,
+        "bound_model": model_bound,
+    }
+
+
+def pack_time_limit(budget: Budget) -> float:
+    """Seconds one packing call may take: 5 % of the time limit, within [0.2, 2] s."""
+    return max(0.2, min(2.0, 0.05 * budget.time_limit))
+
+
+class Packer:
+    """The packing oracle under the run's budget: every call gets at most ``pack_tl``
+    seconds and never more than what is left."""
+
+    def __init__(
+        self, instance: Instance, pack_tl: float, budget: Budget, resolution: float = 1.0
+    ) -> None:
+        from ..reachability import reach_grid
+
+        self.instance = instance
+        self.res = resolution
+        self.pack_tl = pack_tl
+        self.budget = budget
+        self.reach = reach_grid(instance)
+
+    def _tl(self, limit: float | None = None) -> float:
+        limit = self.pack_tl if limit is None else limit
+        return max(0.02, min(limit, self.budget.remaining()))
+
+    def counts(
+        self, counts: Mapping[str, int], limit: float | None = None
+    ) -> tuple[bool | None, Any]:
+        return packing.fit_counts(
+            self.instance.tray,
+            self.instance.part_types,
+            dict(counts),
+            time_limit=self._tl(limit),
+            resolution=self.res,
+            reach=self.reach,
+        )
+
+    def fits(self, tasks: Sequence[str]) -> bool | None:
+        return self.counts(dict(self.instance.kit_parts(tasks)))[0]
+
+    def task_not_fitting(self) -> str | None:
+        """A task whose parts alone provably do not fit the tray (then no plan exists); stops
+        (None) once the budget has expired."""
+        for t in self.instance.tasks:
+            if self.budget.expired():
+                return None
+            if self.fits([t.id]) is False:
+                return t.id
+        return None
+
+    def split(self, kit: Sequence[str]) -> list[list[str]] | None:
+        """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
+        single task does not fit (or is unknown)."""
+        out: list[list[str]] = []
+        cur: list[str] = []
+        for t in kit:
+            if cur and self.fits([*cur, t]):
+                cur.append(t)
+                continue
+            if cur:
+                out.append(cur)
+            if not self.fits([t]):
+                return None
+            cur = [t]
+        if cur:
+            out.append(cur)
+        return out
+
+    def minimal_nofit(self, counts: Mapping[str, int], until: float) -> dict[str, int]:
+        """Deletion filter: drop parts (smallest types first) while the rest provably does not
+        fit; stops early at ``until`` (a larger non-fitting multiset is still a valid cut)."""
+        cur = {k: n for k, n in counts.items() if n > 0}
+        for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
+            while cur.get(t, 0) > 0 and time.perf_counter() < until:
+                trial = dict(cur)
+                trial[t] -= 1
+                if trial[t] == 0:
+                    del trial[t]
+                if not trial or self.counts(trial)[0] is not False:
+                    break
+                cur = trial
+        return cur
+
+    def layout(self, tasks: Sequence[str]) -> tuple[Placement, ...] | None:
+        """The oracle's layout of a kit, else the shelf packer's (when reachability is not
+        enforced: the shelf packer ignores it), else None."""
+        from ..heuristics.shelf import shelf_pack
+
+        ok, typed = self.counts(self.instance.kit_parts(tasks))
+        if ok and typed is not None:
+            return packing.typed_to_placements(self.instance, tasks, typed)
+        if self.reach is not None:
+            return None
+        items = [
+            (f"{t}:{p}:{j}", self.instance.part_types[p])
+            for t in tasks
+            for p, n in self.instance.task_by_id[t].parts
+            for j in range(1, n + 1)
+        ]
+        return shelf_pack(self.instance.tray, items)
+
+
+class NoGoodCuts:
+    """The cuts of a logic-based Benders loop (``cpsat`` and ``milp``): a part multiset that
+    does not fit is cut from every kit by ``add``, once; shrunk first to a minimal non-fitting
+    multiset when the misfit is proven. A cut from a packing that timed out is unproven (a
+    heuristic: after one, the master's bound is no proof); ``unproven`` counts them."""
+
+    def __init__(
+        self,
+        packer: Packer,
+        budget: Budget,
+        margin: float,
+        add: Callable[[dict[str, int]], None],
+    ) -> None:
+        self.packer = packer
+        self.budget = budget
+        self.margin = margin
+        self.add = add
+        self.seen: set[frozenset[tuple[str, int]]] = set()
+        self.unproven = 0
+
+    def cut(self, counts: Mapping[str, int], proven: bool) -> bool:
+        """Cut ``counts`` (shrunk when ``proven``) unless the same cut was added before."""
+        mini = (
+            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, self.margin))
+            if proven
+            else dict(counts)
+        )
+        key = frozenset(mini.items())
+        if key in self.seen:
+            return False
+        self.seen.add(key)
+        self.add(mini)
+        return True
+
+    def cut_kits(self, kits: Iterable[Mapping[str, int]], verdicts: Iterable[bool | None]) -> int:
+        """Cut the part multisets of the kits that do not fit (verdict False) or may not (None,
+        unproven); how many cuts are new."""
+        new = 0
+        for counts, ok in zip(kits, verdicts, strict=True):
+            if ok is not True:
+                added = self.cut(counts, ok is False)
+                new += added
+                self.unproven += int(added and ok is None)
+        return new
+
+    def seed_pairs(self) -> None:
+        """Cut every pair of tasks (distinct part multisets) that does not fit together, while
+        a tenth of the time left lasts."""
+        instance = self.packer.instance
+        seed_until = self.budget.share(0.1, self.margin)
+        reps = list(
+            {frozenset(instance.kit_parts([t.id]).items()): t.id for t in instance.tasks}.values()
+        )
+        for a, b in itertools.combinations_with_replacement(reps, 2):
+            if time.perf_counter() > seed_until:
+                break
+            counts = instance.kit_parts([a, b])
+            if self.packer.counts(counts)[0] is False:
+                self.cut(counts, True)
+
+
+def johnson_topological_order(instance: Instance) -> list[str]:
+    """A topological order that takes, among the ready tasks, the first in Johnson's order of
+    the jobs (r_i, h_i) (:func:`bilevel_kit.bounds.johnson_order`): without precedence it is
+    Johnson's order, whose single-task kits attain the flow-shop bound when d = 0 and there
+    are no overheads."""
+    from ..bounds import johnson_order
+
+    ids = [t.id for t in instance.tasks]
+    rank = {
+        ids[j]: k
+        for k, j in enumerate(
+            johnson_order(
+                [instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids]
+            )
+        )
+    }
+    return topological_order(instance, rank)
+
+
+def quick_plan(
+    instance: Instance,
+    packer: Packer | None = None,
+    *,
+    max_size: int = 40,
+    order: Sequence[str] | None = None,
+    target: float | None = None,
+) -> list[list[str]] | None:
+    """A cheap feasible plan (an upper bound and a hint): the best of :func:`best_cut` of
+    ``order`` (default: the topological order) and ``order`` cut into segments of a fixed
+    size s (each split further until it fits), by the evaluator; stops once the packer's
+    budget has expired and a plan is known, or a plan reaches ``target``. With one tray the
+    cut comes first (it is the optimal cut of the order, so it beats every fixed size whose
+    segments it saw fit); otherwise it is tried last, with the time left."""
+    packer = packer or Packer(instance, 0.2, Budget(10.0))
+    order = topological_order(instance) if order is None else list(order)
+    best: tuple[float, list[list[str]]] | None = None
+
+    def consider(kits: list[list[str]]) -> None:
+        nonlocal best
+        ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+        if best is None or ms < best[0] - 1e-9:
+            best = (ms, kits)
+
+    one_tray = instance.tray_limit == 1
+    if one_tray and (cut := best_cut(instance, order, packer)) is not None:
+        consider(cut)
+    for s in range(1, min(len(order), max_size) + 1):
+        if best is not None and (
+            packer.budget.expired() or (target is not None and best[0] <= target)
+        ):
+            break
+        kits: list[list[str]] = []
+        for a in range(0, len(order), s):
+            parts = packer.split(list(kit_order(instance, order[a : a + s])))
+            if parts is None:
+                return best[1] if best else None
+            kits += parts
+        consider(kits)
+    if not one_tray and not packer.budget.expired() and (cut := best_cut(instance, order, packer)):
+        consider(cut)
+    return best[1] if best else None
+
+
+#: Seconds each packing call of :func:`best_cut` may take: its calls probe ever longer
+#: segments, and a borderline one left undecided only ends that segment (the packing cache
+#: retries an unknown verdict when a later caller allows more time).
+CUT_PROBE_S = 0.05
+
+
+def best_cut(instance: Instance, order: Sequence[str], packer: Packer) -> list[list[str]] | None:
+    """The best cut of ``order`` into contiguous kits that fit the tray under the one-tray
+    recursion (:mod:`.segment`: exact with one tray, a candidate otherwise), with the
+    segments' fit decided by ``packer`` (an unknown verdict counts as not fitting; once the
+    packer's budget has expired the segments stop growing, so the cut may be coarser); None if
+    a task does not fit."""
+    from .segment import fit_extents, one_tray_cut
+
+    if not order:
+        return None
+    limit = min(packer.pack_tl, CUT_PROBE_S)
+
+    def fits(b: int, c: int) -> bool:
+        return packer.counts(instance.kit_parts(order[b:c]), limit)[0] is True
+
+    ext = fit_extents(len(order), fits, packer.budget.deadline)
+    return None if ext is None else one_tray_cut(instance, order, ext)[1]
+
+
+def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | None:
+    """The quick plan on the Johnson-priority order (:func:`johnson_topological_order`) when
+    it attains the closed-form bound :func:`bilevel_kit.bounds.best_bound`, which proves it
+    optimal (e.g. Johnson's special case); else None."""
+    from ..bounds import best_bound
+
+    bound = best_bound(instance)
+    kits = quick_plan(
+        instance, packer, order=johnson_topological_order(instance), target=bound + 1e-9
+    )
+    if kits is None:
+        return None
+    ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    return kits if ms <= bound + 1e-9 else None

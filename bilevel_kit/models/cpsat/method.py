@@ -1,0 +1,607 @@
+r"""The registered method ``cpsat``: the exact whole-horizon schedule with CP-SAT.
+
+It minimises makespan (or human idle) over all segmentations and orders (the model:
+:mod:`.model`, docs/formulations.md; the timeline: docs/timeline.md), warm-started from the
+best heuristic plan (:func:`best_heuristic_plan`, option ``hint``).
+
+**Tray mode.** ``embedded`` puts the rectangles into the model, ``benders`` checks the kits
+of master solutions with the packing oracle and cuts those that do not fit (:mod:`.tray`,
+:mod:`.benders`). ``auto`` uses ``embedded`` when the number of optional (part, kit)
+rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
+kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
+enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
+with Benders on a loaded machine), else ``benders``. Embedded models run with
+:data:`~bilevel_kit.models.packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
+"optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
+the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
+every plan. Times are scaled to integers (:mod:`.scaling`).
+
+**Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
+checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
+\min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
+:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U is added
+too.
+
+**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none): a
+task cannot be picked before its release (raised to its ancestors'); the model, its scaled
+timeline, the hint and U take them into account (:mod:`.scaling`, :mod:`.model`), each kit of
+the plan lists its tasks in release order (the robot's pick order the model assumes). The
+kit-count cap above stays valid (releases only delay: a plan of released makespan <= U has
+makespan <= U without them; U itself is evaluated with releases), the closed-form bounds too;
+the closed-form shortcuts (a plan attaining them is optimal) are off, the release bound of
+:func:`.model.release_bound` is added (an incumbent attaining it is optimal: no model is
+built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` and ``upper_start`` are
+makespans without releases (:func:`bilevel_kit.plan.evaluate`), ``extra['release_makespan']``
+the model's (on the time grid), on which ``gap``, ``bound`` and ``optimal`` are (all zero
+releases: the run without them, unchanged).
+
+**Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
+scaled timeline (:mod:`.scaling`) and of every hint.
+
+**Time.** ``time_limit`` (default 60 s) covers everything, the warm start and packing
+included: the warm start's heuristics share :data:`HINT_SHARE` (30 %) of it (greedy-ce gets
+what is left of that share as its own ``time_limit``), the model run gets the rest; 1 % of the
+run's limit and 0.15 s are kept back (CP-SAT stops a little after its own limit on large
+models). A model whose size exceeds the memory limit is refused (:mod:`..budget`).
+
+**Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
+never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
+order with a non-overlapping layout. ``extra`` keys:
+
+* ``time_resolution``, ``times_exact``: the time grid (s) and whether it is exact;
+* ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
+  of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
+  chains), ``hint_used`` (the given plan was a valid start);
+* ``benders_iterations``, ``unproven_cuts`` (Benders only), ``cuts``, ``cpsat_status``,
+  ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
+* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
+  ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
+  scaled times); ``idle_bound`` for ``objective="human_idle"``;
+* ``reason`` when the run ends without a plan, or without a model, for a known reason;
+* ``model_cells``: the model's task x kit variables (its size; a model whose estimated memory
+  exceeds :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is refused with a
+  ``UsageError``, one that cannot be built within half the time left is not built:
+  ``cpsat_status`` ``NOT_BUILT``, the incumbent is returned);
+* ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (then no model is built: it is optimal);
+* ``hint_method``: the heuristic whose plan was the hint, ``hint_time_s`` the warm start's
+  time (registered method only; ``wall_time_s`` then includes it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ... import progress
+from ...bounds import best_bound, min_kits
+from ...errors import UsageError
+from ...instance import Instance
+from ...methods import REGISTRY, MethodOutput, Status, gap
+from ...options import parse_options
+from ...plan import Kit, Placement, Plan, evaluate
+from .. import packing
+from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..common import (
+    Packer,
+    assignment_cells,
+    chain_groups_idx,
+    closed_form_plan,
+    kit_order,
+    pack_time_limit,
+    plan_extra,
+    quick_plan,
+    reduced_edges,
+)
+from .context import MARGIN, Context, Model, State
+from .model import build, canonical, release_bound, tray_wait
+from .scaling import scale_times, scaled_makespan, scaled_objective
+
+TrayMode = Literal["auto", "embedded", "benders"]
+Objective = Literal["makespan", "human_idle"]
+TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
+OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
+AUTO_EMBEDDED_MAX_RECTS = 300
+#: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
+KEEP_BACK = 0.01
+#: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
+HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
+#: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
+HINT_SHARE = 0.3
+#: The least time (s) a step is given even when the budget is spent (it returns at once).
+MIN_RUN = 0.05
+#: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
+MIN_HINT = 0.3
+#: Seconds per task kept back from a heuristic's share of the warm start for its run past its
+#: own ``time_limit``. Measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks for greedy-ce before
+#: its incremental timeline, +0.5-1.4 s at 1,000 tasks since (bench/results/scale.md): now a
+#: conservative margin, kept because the scale benchmark's cpsat rows were measured with it.
+HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
+#: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
+#: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
+BYTES_PER_CELL = 6_000
+#: Build time per task x kit variable (measured: 90-120 us on in-trees of 60-500 tasks).
+BUILD_S_PER_CELL = 150e-6
+#: CP-SAT overruns its own limit on large models (presolve): 5.5 s at 247,000 variables.
+OVERRUN_S_PER_CELL = 25e-6
+
+
+def _positive(owner: object, *names: str) -> None:
+    for name in names:
+        value = getattr(owner, name)
+        if not value > 0:
+            raise ValueError(f"option {name!r}: must be > 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class ScheduleOptions:
+    """The CP-SAT model's options (the Python :func:`solve` takes these as keywords)."""
+
+    workers: int = field(default=2, metadata={"help": "CP-SAT worker threads", "min": 1})
+    tray: TrayMode = field(
+        default="auto",
+        metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
+    )
+    objective: Objective = field(
+        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+    )
+    time_resolution: float = field(
+        default=0.1, metadata={"help": "time grid in s (> 0), refined when times are not exact"}
+    )
+    refine_times: bool = field(
+        default=True, metadata={"help": "refine the time grid until every time is exact"}
+    )
+    pack_resolution: float = field(
+        default=1.0, metadata={"help": "packing grid in mm (> 0); part sizes are rounded up"}
+    )
+    log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
+
+    def __post_init__(self) -> None:
+        _positive(self, "time_resolution", "pack_resolution")
+
+
+@dataclass(frozen=True)
+class CpsatOptions(ScheduleOptions):
+    """Options of the registered method ``cpsat``."""
+
+    hint: str = field(
+        default="auto",
+        metadata={
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), "
+            "a method name, or none"
+        },
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.hint not in ("auto", "none") and self.hint not in REGISTRY:
+            raise ValueError(
+                f"option 'hint': unknown method {self.hint!r}; choose auto, none or one of "
+                f"{', '.join(REGISTRY)}"
+            )
+
+
+# ---------------------------------------------------------------------------------------------
+# The registered method and the warm start
+# ---------------------------------------------------------------------------------------------
+
+
+def cpsat(
+    instance: Instance,
+    options: CpsatOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
+    (module docstring)."""
+    budget = Budget(time_limit)
+    plan: Plan | None = None
+    source = None
+    hint_tl = HINT_SHARE * budget.time_limit
+    live = progress.tracker(options.objective)
+    live.report(bound=_closed_bound(instance, options.objective), stage="warm start")
+    if options.objective == "makespan" and _closed_form_optimal(instance, budget):
+        pass  # the run proves a quick plan optimal at once: no warm start needed
+    elif options.hint == "auto":
+        plan, source = best_heuristic_plan(instance, seed=seed, time_limit=hint_tl)
+    elif options.hint != "none":
+        plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed, time_limit=hint_tl)
+        if source is None:
+            raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
+    if plan is not None and live.active:
+        tl = evaluate(instance, plan)
+        live.report(incumbent=tl.makespan if options.objective == "makespan" else tl.human_idle)
+    rest = max(MIN_RUN, budget.remaining())
+    out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
+    out.extra["hint_method"] = source
+    out.extra["hint_time_s"] = budget.elapsed() - out.extra.get("wall_time_s", 0.0)
+    out.extra["wall_time_s"] = budget.elapsed()
+    return out
+
+
+def _closed_bound(instance: Instance, objective: str) -> float | None:
+    """The closed-form bound on ``objective`` (:mod:`bilevel_kit.bounds`; none for idle)."""
+    return best_bound(instance) if objective == "makespan" else None
+
+
+def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
+    """Does a quick plan attain the closed-form bound (then :func:`run` ends at once)?"""
+    packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
+    return closed_form_plan(instance, packer) is not None
+
+
+def best_heuristic_plan(
+    instance: Instance,
+    methods: Sequence[str] = HINT_METHODS,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> tuple[Plan | None, str | None]:
+    """The plan of lowest makespan among heuristic methods (a warm start for exact models);
+    methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
+    all: each gets what is left of it, and once it is spent the remaining methods are
+    skipped (unless no plan is known yet)."""
+    import time
+
+    from ...errors import BilevelKitError
+    from ...methods import get_method
+
+    end = None if time_limit is None else time.perf_counter() + time_limit
+    best: tuple[float, Plan, str] | None = None
+    for name in methods:
+        left = None if end is None else end - time.perf_counter()
+        if left is not None and left <= 0 and best is not None:
+            break
+        if left is not None:  # keep back the method's overrun past its own limit
+            left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
+            if left <= MIN_HINT and best is not None:
+                continue
+        try:
+            spec = get_method(name)
+            fn = spec.load()
+            tl = None if left is None else max(MIN_RUN, left)
+            if spec.options:
+                out = fn(instance, spec.parse({}), seed=seed, time_limit=tl)
+            else:
+                out = fn(instance, seed=seed)
+        except BilevelKitError:
+            continue
+        if out.plan is None:
+            continue
+        ms = evaluate(instance, out.plan).makespan
+        if best is None or ms < best[0]:
+            best = (ms, out.plan, name)
+    return (best[1], best[2]) if best else (None, None)
+
+
+def solve(
+    instance: Instance,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    workers: int = 2,
+    tray: str = "auto",
+    objective: str = "makespan",
+    time_resolution: float = 0.1,
+    refine_times: bool = True,
+    pack_resolution: float = 1.0,
+    hint: Plan | None = None,
+    log: bool = False,
+    cpsat_params: dict[str, Any] | None = None,
+    releases: Mapping[str, float] | None = None,
+) -> MethodOutput:
+    """The Python entry: :func:`run` with the options as keywords (validated like the
+    method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters and
+    ``releases`` the release times (module docstring)."""
+    params = {
+        "workers": workers,
+        "tray": tray,
+        "objective": objective,
+        "time_resolution": time_resolution,
+        "refine_times": refine_times,
+        "pack_resolution": pack_resolution,
+        "log": log,
+    }
+    options = parse_options(ScheduleOptions, params, "cpsat")
+    return run(
+        instance,
+        options,
+        seed=seed,
+        time_limit=time_limit,
+        hint=hint,
+        cpsat_params=cpsat_params,
+        releases=releases,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# One run
+# ---------------------------------------------------------------------------------------------
+
+
+class _Report:
+    """The run's ``extra`` and how the run ends (packing solves and wall time added)."""
+
+    def __init__(self, budget: Budget, extra: dict[str, Any]) -> None:
+        self.budget = budget
+        self.extra = extra
+        self.solves_before = sum(c.solves for c in packing._CACHES.values())
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        extra = self.extra
+        extra["pack_solves"] = sum(c.solves for c in packing._CACHES.values()) - self.solves_before
+        extra["wall_time_s"] = self.budget.elapsed()
+        return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
+
+
+def run(
+    instance: Instance,
+    options: ScheduleOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    hint: Plan | None = None,
+    cpsat_params: dict[str, Any] | None = None,
+    releases: Mapping[str, float] | None = None,
+) -> MethodOutput:
+    """Minimise makespan (or human idle) over all segmentations and orders (module
+    docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
+    budget = Budget(time_limit, keep_back=KEEP_BACK)
+    from ortools.sat.python import cp_model
+
+    try:
+        sc = scale_times(instance, options.time_resolution, options.refine_times, releases)
+    except ValueError as exc:
+        raise UsageError(f"cpsat: {exc}") from None
+    pack_tl = pack_time_limit(budget)
+    packer = Packer(instance, pack_tl, budget.cut(MARGIN), options.pack_resolution)
+    report = _Report(
+        budget,
+        {
+            "time_resolution": sc.res,
+            "times_exact": sc.exact,
+            "objective": options.objective,
+            "benders_iterations": 0,
+            "cuts": 0,
+            "hint_used": False,
+        },
+    )
+    extra = report.extra
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return report.finish(None, Status.INFEASIBLE, None)
+
+    n = instance.n_tasks
+    sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
+    groups = chain_groups_idx(n, _edges(instance), sig)
+    extra["symmetric_chains"] = sum(len(g) for g in groups)
+    ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+
+    incumbent = _incumbent(ctx, hint, pack_tl, extra)
+    tracker = progress.tracker(options.objective)
+    live = None
+    if tracker.active:
+        from .live import Live
+
+        ctx.live = live = Live(ctx, tracker)
+        tracker.report(bound=_closed_bound(instance, options.objective), stage="CP-SAT")
+        if incumbent is not None:
+            tracker.report(incumbent=live.real(incumbent))
+    upper = None
+    if incumbent is not None and options.objective == "makespan":
+        upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
+    K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
+    mode = _tray_mode(instance, options.tray, K)
+    extra.update(
+        tray_mode=mode,
+        max_kits=K,
+        upper_start=None
+        if incumbent is None
+        else evaluate(instance, _plan_of(ctx, incumbent, None)).makespan,
+    )
+    start_ms = extra["upper_start"]
+    closed_done = (
+        start_ms is not None and start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
+    )
+    if options.objective == "makespan" and closed_done:
+        # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+    if upper is not None and sc.rel and upper <= release_bound(instance, sc):
+        # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
+        extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, upper, proven=True), report)
+    cells = assignment_cells(instance, K)
+    extra["model_cells"] = cells
+    check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
+    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
+        extra.update(
+            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
+            "within the time limit; the incumbent is returned",
+            build_time_s=0.0,
+            cpsat_status="NOT_BUILT",
+            cuts=0,
+        )
+        if incumbent is None:
+            return report.finish(None, Status.UNKNOWN, best_bound(instance))
+        return _conclude(ctx, None, State(incumbent, upper), report)
+    mdl = build(
+        instance,
+        sc,
+        K=K,
+        upper=upper,
+        embedded=mode == "embedded",
+        objective=options.objective,
+        pack_res=options.pack_resolution,
+        groups=groups,
+    )
+    extra["build_time_s"] = budget.elapsed()
+    ctx.budget = budget.cut(cells * OVERRUN_S_PER_CELL)  # CP-SAT's overrun, kept back
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = max(1, options.workers)
+    solver.parameters.random_seed = seed
+    solver.parameters.log_search_progress = options.log
+    for key, value in (cpsat_params or {}).items():
+        setattr(solver.parameters, key, value)
+    if live is not None:
+        live.mdl = mdl
+        ctx.callback = live.attach(solver, solutions_are_plans=mode == "embedded")
+    state = _search(ctx, mdl, solver, mode, incumbent)
+    extra.update(state.info)
+    extra["cpsat_status"] = state.status_name
+    extra["cuts"] = mdl.n_cuts
+    if state.kits is None:
+        if state.infeasible:
+            return report.finish(None, Status.INFEASIBLE, None)
+        return report.finish(None, Status.UNKNOWN, best_bound(instance))
+    return _conclude(ctx, mdl, state, report)
+
+
+def _edges(instance: Instance) -> list[tuple[int, int]]:
+    idx = instance.index
+    return [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
+
+
+def _search(
+    ctx: Context, mdl: Model, solver: Any, mode: str, incumbent: list[list[int]] | None
+) -> State:
+    """The embedded solve or the Benders loop."""
+    if mode == "embedded":
+        from .embedded import run_embedded
+
+        for key, value in packing.SAFE_NO_OVERLAP_2D.items():
+            setattr(solver.parameters, key, value)
+        return run_embedded(ctx, mdl, solver, incumbent)
+    from .benders import run_benders
+
+    return run_benders(ctx, mdl, solver, incumbent)
+
+
+def _incumbent(
+    ctx: Context, hint: Plan | None, pack_tl: float, extra: dict[str, Any]
+) -> list[list[int]] | None:
+    """The better of the hint (if its kits fit) and a quick plan, in canonical chain order."""
+    instance, packer = ctx.instance, ctx.packer
+    ids = ctx.ids
+    idx = instance.index
+    candidates: list[list[list[int]]] = []
+    if hint is not None and sorted(hint.task_order) == sorted(ids):
+        hk = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
+        if all(packer.fits([ids[i] for i in k]) for k in hk):
+            candidates.append(hk)
+            extra["hint_used"] = True
+    if ctx.objective == "makespan" and not any(ctx.sc.rel):  # (releases: not a bound of them)
+        first = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.05), ctx.pack_res)
+        qp = closed_form_plan(instance, first)
+        if qp is not None:  # optimal by the closed-form bound: the run ends at once
+            return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
+    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    qp = quick_plan(instance, quick)
+    if qp is not None:
+        candidates.append([[idx[t] for t in k] for k in qp])
+    if not candidates:
+        return None
+    best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
+    return canonical(best, ctx.groups)
+
+
+def _kit_cap(ctx: Context, upper: int | None) -> int:
+    """The largest kit count of a plan with scaled makespan <= ``upper`` (module docstring)."""
+    sc = ctx.sc
+    n = len(sc.r)
+    K = n
+    if upper is None:
+        return K
+    edges = _edges(ctx.instance)
+    has_pred = {b for _, b in edges}
+    has_succ = {a for a, _ in edges}
+    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
+    if sc.o_r + sc.d + w > 0:
+        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
+        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
+    if sc.o_h > 0:
+        slack = (
+            upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
+        )
+        K = min(K, max(1, slack // sc.o_h))
+    return K
+
+
+def _tray_mode(instance: Instance, tray: str, K: int) -> str:
+    """``tray`` with ``auto`` resolved (module docstring)."""
+    if tray != "auto":
+        return tray
+    n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
+    small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
+    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
+    # (bench/results/cpsat_trays.csv)
+    return "embedded" if small and instance.tray_limit is None else "benders"
+
+
+def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
+    """The plan of the run's best kits with its status and makespan bound in seconds."""
+    instance, sc, extra = ctx.instance, ctx.sc, report.extra
+    assert state.kits is not None
+    plan = _plan_of(ctx, state.kits, state.layouts, ctx.packer)
+    real = evaluate(instance, plan)
+    closed = best_bound(instance)
+    lower = state.lower
+    lower_s = None if lower is None else round(lower * sc.res, 9)  # a multiple of res >= 1e-4
+    idle_bound = None
+    if ctx.objective == "makespan":
+        bound_s = closed if lower_s is None else max(closed, lower_s)
+        optimal = state.proven and (sc.exact or (real.makespan <= bound_s + 1e-6 and not sc.rel))
+    else:
+        if lower is not None and sc.exact and mdl is not None:
+            idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
+        w_min = (
+            sum(instance.human_time(i) for i in ctx.ids)
+            + min_kits(instance) * instance.kit_overhead_human
+        )
+        bound_s = closed if idle_bound is None else max(closed, idle_bound + w_min)
+        optimal = state.proven and sc.exact
+        extra["idle_bound"] = idle_bound
+    missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
+    if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
+        extra["reason"] = "no layout for some kit within the time limit"
+        return report.finish(None, Status.UNKNOWN, bound_s)
+    if ctx.live is not None:  # the final numbers, as the result reports them
+        final = real.makespan if ctx.objective == "makespan" else real.human_idle
+        ctx.live.tracker.report(
+            incumbent=final, bound=bound_s if ctx.objective == "makespan" else idle_bound
+        )
+    extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
+    if sc.rel:  # the model's makespan is the released one (module docstring)
+        released = round(scaled_makespan(sc, state.kits) * sc.res, 9)
+        extra.update(release_makespan=released, gap=gap(released, bound_s) or 0.0)
+    return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
+
+
+def _plan_of(
+    ctx: Context,
+    kits: Sequence[Sequence[int]],
+    layouts: Sequence[tuple[Placement, ...]] | None,
+    packer: Packer | None = None,
+) -> Plan:
+    """Kits of task indices -> a Plan (human order = topological order inside each kit; with
+    release times, sorted by release: the robot picks in that order, module docstring)."""
+    instance, rel = ctx.instance, ctx.sc.rel
+    out = []
+    for kk, kit in enumerate(kits):
+        tasks = kit_order(instance, [instance.tasks[i].id for i in kit])
+        if rel:
+            idx = instance.index
+            tasks = tuple(sorted(tasks, key=lambda t: rel[idx[t]]))  # stable: topological
+        layout: tuple[Placement, ...] = ()
+        if layouts is not None:
+            layout = layouts[kk]
+        elif packer is not None:
+            ok, typed = packer.counts(dict(instance.kit_parts(tasks)))
+            if ok and typed is not None:
+                layout = packing.typed_to_placements(instance, tasks, typed)
+        out.append(Kit(tasks, layout))
+    return Plan(tuple(out))

@@ -1,0 +1,167 @@
+"""Integer times for the CP-SAT schedule model, and the timeline on them.
+
+CP-SAT works on integers, so times become multiples of ``time_resolution`` s (default 0.1 s).
+When the instance's times are not multiples of it, the grid is refined to the coarsest divisor
+``time_resolution / q`` (q in :data:`REFINE`, down to 1/1000) on which all of them are exact;
+if none exists the times are rounded *down*. Makespan is non-decreasing in every duration (a
+max-plus expression, docs/timeline.md), so with rounded-down times the model's optimum and bound
+are lower bounds for the real instance: the reported bound stays valid. The reported makespan is
+always recomputed by :func:`bilevel_kit.plan.evaluate` on the real times, and ``optimal`` is
+claimed only when the model is exact or that makespan meets the bound.
+
+**Release times** (optional, docs/formulations.md): task i cannot be picked before
+``rel_i``; releases are first raised to their ancestors' (the robot picks a kit's tasks in a
+topological order, so a task waits for its predecessors' parts too), then scaled like the
+other times (rounded down when not on the grid, which keeps every bound valid). Within a kit
+the robot picks in the order of release (a topological order, releases being monotone along
+precedence), so the kit's pick end is ``max(S + o_R + sum r, max_i (rel_i + sum_{j: rel_j >=
+rel_i} r_j))`` (the optimum of one machine with release dates); all zero: the timeline
+without releases.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from ...instance import Instance
+from ...plan import Plan, evaluate
+from .. import packing
+
+#: Divisors tried to make every time an exact multiple of the time grid.
+REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
+
+
+@dataclass
+class Scaled:
+    """Integer times ``value_s = round_or_floor(value / res)`` (``exact``: rounding is exact).
+
+    ``r``, ``h``: robot and human time of each task (file order); ``d`` delivery; ``o_r``,
+    ``o_h`` the per-kit overheads; ``trays`` the binding tray limit
+    (:attr:`~bilevel_kit.instance.Instance.tray_limit`, None: unlimited); ``rel`` the release
+    time of each task, raised to its ancestors' (empty: no releases, module docstring).
+    """
+
+    res: float
+    exact: bool
+    r: list[int]
+    h: list[int]
+    d: int
+    o_r: int
+    o_h: int
+    trays: int | None = None
+    rel: list[int] = field(default_factory=list)
+
+
+def scale_times(
+    instance: Instance,
+    resolution: float,
+    refine: bool = True,
+    releases: Mapping[str, float] | None = None,
+) -> Scaled:
+    """Integer times on the coarsest exact grid ``resolution / q`` of the durations (else
+    floored at ``resolution``); ``releases`` (task id -> s, missing: 0) are scaled on that grid
+    (``exact`` also needs them on it); see the module docstring."""
+    ids = [t.id for t in instance.tasks]
+    values = (
+        [instance.robot_time(i) for i in ids]
+        + [instance.human_time(i) for i in ids]
+        + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
+    )
+    res, exact = resolution, False
+    for q in REFINE if refine else (1,):
+        cand = resolution / q
+        if packing.is_grid_exact(values, cand):
+            res, exact = cand, True
+            break
+
+    rel = released(instance, releases)
+    if any(rel):
+        exact = exact and packing.is_grid_exact(rel, res)
+
+    def sc(v: float) -> int:
+        return round(v / res) if exact else math.floor(v / res + 1e-9)
+
+    return Scaled(
+        res=res,
+        exact=exact,
+        r=[sc(instance.robot_time(i)) for i in ids],
+        h=[sc(instance.human_time(i)) for i in ids],
+        d=sc(instance.delivery_time),
+        o_r=sc(instance.kit_overhead_robot),
+        o_h=sc(instance.kit_overhead_human),
+        trays=instance.tray_limit,
+        rel=[sc(v) for v in rel] if any(rel) else [],
+    )
+
+
+def released(instance: Instance, releases: Mapping[str, float] | None) -> list[float]:
+    """Each task's release (file order) raised to its ancestors' (module docstring)."""
+    if not releases:
+        return [0.0] * instance.n_tasks
+    unknown = sorted(set(releases) - set(instance.index))
+    if unknown:
+        raise ValueError(f"releases of unknown tasks {unknown[:3]}")
+    bad = [t for t, v in releases.items() if not (math.isfinite(v) and v >= 0)]
+    if bad:
+        raise ValueError(f"releases must be finite and >= 0, not for {sorted(bad)[:3]}")
+    anc = instance.ancestors
+    return [
+        max([releases.get(t.id, 0.0)] + [releases.get(a, 0.0) for a in anc[t.id]])
+        for t in instance.tasks
+    ]
+
+
+def pick_end(sc: Scaled, start: int, kit: Sequence[int]) -> int:
+    """When the robot has picked a used kit that it starts at ``start`` (module docstring)."""
+    end = start + sc.o_r + sum(sc.r[i] for i in kit)
+    if sc.rel:
+        for i in kit:
+            if sc.rel[i] > start:
+                end = max(end, sc.rel[i] + sum(sc.r[j] for j in kit if sc.rel[j] >= sc.rel[i]))
+    return end
+
+
+def scaled_timeline(sc: Scaled, kits: Sequence[Sequence[int]]) -> list[tuple[int, int, int]]:
+    """Robot start, arrival and human end of every kit position on scaled times, with the tray
+    rule (docs/timeline.md); empty kits (unused trailing positions) take no time and need no
+    tray, which is exactly the least solution of the model's constraints on them."""
+    out: list[tuple[int, int, int]] = []
+    hs: list[int] = []  # human starts
+    arrive = end = 0
+    for k, kit in enumerate(kits):
+        used = bool(kit)
+        start = arrive
+        if sc.trays is not None and k >= sc.trays:
+            start = max(start, hs[k - sc.trays] + sc.o_h * used)
+        arrive = pick_end(sc, start, kit) + sc.d if used else start
+        hk = sc.o_h + sum(sc.h[i] for i in kit) if used else 0
+        hs.append(max(arrive, end))
+        end = hs[-1] + hk
+        out.append((start, arrive, end))
+    return out
+
+
+def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
+    """The timeline of docs/timeline.md on scaled integer times (kits of task indices)."""
+    tl = scaled_timeline(sc, kits)
+    return tl[-1][2] if tl else 0
+
+
+def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) -> int:
+    """Scaled objective of a plan: makespan, or human idle without its constant -sum h."""
+    c = scaled_makespan(sc, kits)
+    return c if objective == "makespan" else c - sc.o_h * len(kits)
+
+
+def released_makespan(
+    instance: Instance, plan: Plan, releases: Mapping[str, float], resolution: float = 0.1
+) -> float:
+    """A plan's makespan with release times (module docstring), on the time grid of
+    ``resolution`` (refined); without releases exactly :func:`bilevel_kit.plan.evaluate`'s."""
+    if not any(releases.values()):
+        return evaluate(instance, plan).makespan
+    sc = scale_times(instance, resolution, True, releases)
+    idx = instance.index
+    return scaled_makespan(sc, [[idx[t] for t in k.tasks] for k in plan.kits]) * sc.res

@@ -1,0 +1,464 @@
+r"""The registered method ``milp``: the exact whole-horizon schedule as a Pyomo MILP.
+
+The same problem as :mod:`bilevel_kit.models.cpsat` (docs/timeline.md,
+docs/formulations.md), written as a position-based batching MILP (:mod:`.model`) so that an
+LP-based branch and bound (HiGHS by default, any Pyomo solver by name, :mod:`.solver`)
+cross-checks the CP-SAT model. It shares only the packing oracle with it.
+
+**Tray (logic-based Benders).** The master holds the area relaxation. Each kit of an
+incumbent is checked with the memoised packing oracle :func:`..packing.fit_counts`; a
+part multiset M that provably does not fit is shrunk by a deletion filter to a minimal
+non-fitting one and cut from **every** kit (:func:`.model.add_cut`). The master is re-solved
+until its optimum packs (then it is optimal for the full problem) or the time is up; kits that
+do not fit are split greedily to keep an incumbent. ``tray="auto"`` first seeds cuts for every
+pair of tasks that does not fit; ``"benders"`` starts from the area relaxation alone. "Fits"
+means what the oracle means: an axis-aligned layout on its grid, the same notion as the CP-SAT
+model. The incumbent (the quick plan, then the best packable plan) is the MIP start.
+
+**Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
+master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
+half the time left is not built (the quick plan is returned), and one over the memory limit
+is refused (:mod:`..budget`).
+
+**Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
+bound on the makespan in seconds (the master's best bound when every cut is proven, never below
+the closed-form bounds). ``extra`` keys:
+
+* ``solver``, ``objective``, ``tray_mode``, ``time_limit_enforced`` (the solver's time limit is
+  known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
+  ``build_time_s``, ``wall_time_s``;
+* ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
+  bound of :mod:`bilevel_kit.bounds` (no model is built: it is optimal);
+* ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``termination`` (the last
+  master solve's), ``master_time_s`` (its wall time);
+* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
+  ``bound_model`` (the master's bound, or None); ``idle_bound`` for
+  ``objective="human_idle"``;
+* ``reason`` when the run ends without a plan, or without a model, for a known reason;
+* ``model_cells``: the model's task x kit variables (a model whose estimated memory exceeds
+  :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is refused with a ``UsageError``; one that
+  cannot be built within half the time left is not built: ``termination`` ``not_built``,
+  the quick plan is returned).
+
+On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
+needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ... import progress
+from ...bounds import best_bound, min_kits
+from ...instance import Instance
+from ...methods import MethodOutput, Status
+from ...options import parse_options
+from ...plan import Kit, Plan, evaluate
+from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..common import (
+    NoGoodCuts,
+    Packer,
+    assignment_cells,
+    closed_form_plan,
+    pack_time_limit,
+    plan_extra,
+    quick_plan,
+)
+from .model import (
+    Master,
+    add_cut,
+    build,
+    extract,
+    human_order,
+    kit_cap,
+    objective_value,
+    set_start,
+)
+from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
+
+TRAY_MODES: tuple[str, ...] = ("auto", "benders")
+OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+#: Seconds kept back from the time limit for extraction and the final layouts.
+MARGIN = 0.2
+#: Peak memory per task x kit variable of the Pyomo model (measured 5-9 kB on in-trees of
+#: 60-120 tasks; HiGHS runs in a child process); bench/results/scale.md.
+BYTES_PER_CELL = 12_000
+#: Time per task x kit variable to build the Pyomo model (measured 0.7-0.8 ms) and write it
+#: for the HiGHS child (about 1.3 ms more: 7 s for 5,263 variables on a loaded machine).
+BUILD_S_PER_CELL = 2.5e-3
+
+
+@dataclass(frozen=True)
+class MilpOptions:
+    """Options of the registered method ``milp``."""
+
+    solver: str = field(
+        default="highs",
+        metadata={
+            "help": "highs (HiGHS in a child process) or any Pyomo solver name "
+            "(cbc, glpk, gurobi, scip ...)"
+        },
+    )
+    objective: Literal["makespan", "human_idle"] = field(
+        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+    )
+    tray: Literal["auto", "benders"] = field(
+        default="auto",
+        metadata={"help": "auto: seed cuts for task pairs that do not fit; benders: area only"},
+    )
+    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+
+
+def solve(
+    instance: Instance,
+    *,
+    seed: int = 0,
+    time_limit: float | None = 60.0,
+    solver: str = "highs",
+    objective: str = "makespan",
+    tray: str = "auto",
+    log: bool = False,
+    solver_options: Mapping[str, Any] | None = None,
+) -> MethodOutput:
+    """The Python entry: :func:`run` with the options as keywords (validated like the
+    method's); ``solver_options`` are passed to the solver."""
+    params = {"solver": solver, "objective": objective, "tray": tray, "log": log}
+    options = parse_options(MilpOptions, params, "milp")
+    return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
+
+
+def run(
+    instance: Instance,
+    options: MilpOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+    solver_options: Mapping[str, Any] | None = None,
+) -> MethodOutput:
+    """Minimise makespan (or human idle) over all segmentations and orders with a MILP; the
+    registered method ``milp`` (no time limit: the budget's default, 60 s).
+
+    Returns the result of the module docstring: ``bound`` is a proven lower bound on the
+    makespan in seconds, every kit has a topological human order and a non-overlapping layout
+    from the packing oracle.
+    """
+    budget = Budget(time_limit)
+    ensure_ortools()
+    opt = make_solver(options.solver)
+    closed = best_bound(instance)
+    pack_tl = pack_time_limit(budget)
+    packer = Packer(instance, pack_tl, budget.cut(MARGIN))
+    extra: dict[str, Any] = {
+        "solver": options.solver,
+        "objective": options.objective,
+        "tray_mode": options.tray,
+        "iterations": 0,
+        "cuts": 0,
+        "unproven_cuts": 0,
+        "time_limit_enforced": options.solver == "highs" or options.solver in SOLVER_OPTIONS,
+    }
+
+    live = _Live(progress.tracker(options.objective), instance, options.objective)
+
+    def finish(plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        extra["wall_time_s"] = budget.elapsed()
+        if plan is not None:
+            live.final(plan, bound, extra.get("idle_bound"))
+        return MethodOutput(plan, status, bound, extra, status_objective=options.objective)
+
+    unfit = packer.task_not_fitting()  # then no plan exists
+    if unfit is not None:
+        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return finish(None, Status.INFEASIBLE, None)
+
+    # incumbent, upper bound and the kit cap (only valid for plans at least as good)
+    inc = None
+    if options.objective == "makespan":  # optimal at once if it attains the closed-form bound
+        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
+    inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
+    inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
+    upper = None
+    K = instance.n_tasks
+    if inc is not None and inc_obj is not None and options.objective == "makespan":
+        upper = inc_obj
+        K = min(K, kit_cap(instance, upper))
+        K = max(K, len(inc))
+    extra["max_kits"] = K
+    extra["upper_start"] = inc_obj
+    live.tracker.report(
+        live.seconds(inc_obj),
+        closed if options.objective == "makespan" else None,
+        stage=f"MILP ({options.solver})",
+    )
+    if (
+        inc is not None
+        and inc_obj is not None
+        and options.objective == "makespan"
+        and inc_obj <= closed + TOL
+    ):
+        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        extra.update(build_time_s=0.0, termination="closed_form_bound")
+        plan = _with_layouts(instance, inc, packer, extra)
+        if plan is None:
+            return finish(None, Status.UNKNOWN, closed)
+        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
+        return finish(plan, Status.OPTIMAL, bound)
+
+    cells = assignment_cells(instance, K)
+    extra["model_cells"] = cells
+    check_model_memory(
+        "milp", cells, BYTES_PER_CELL, f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
+    )
+    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
+        extra.update(
+            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
+            "within the time limit; the quick plan is returned",
+            build_time_s=0.0,
+            termination="not_built",
+        )
+        plan = None if inc is None else _with_layouts(instance, inc, packer, extra)
+        if plan is None:
+            return finish(None, Status.UNKNOWN, closed)
+        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
+        return finish(plan, Status.FEASIBLE, bound)
+    master = build(instance, K, upper, options.objective)
+    extra["build_time_s"] = budget.elapsed()
+    loop = _Benders(instance, master, packer, budget, options, inc, inc_obj, live)
+    if options.tray == "auto":
+        loop.cuts.seed_pairs()
+    info = loop.run(opt, seed, solver_options)
+    extra.update(
+        iterations=loop.iterations,
+        cuts=master.n_cuts,
+        unproven_cuts=loop.cuts.unproven,
+        termination=None if info is None else info.termination,
+        master_time_s=None if info is None else info.wall_time_s,
+    )
+    if loop.inc is None:
+        if loop.infeasible:
+            return finish(None, Status.INFEASIBLE, None)
+        return finish(None, Status.UNKNOWN, closed)
+    plan = _with_layouts(instance, loop.inc, packer, extra)
+    if plan is None:
+        return finish(None, Status.UNKNOWN, closed)
+    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
+    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
+
+
+#: The registered method ``milp`` (module docstring) is :func:`run`.
+milp = run
+
+
+def _with_layouts(
+    instance: Instance, kits: list[list[str]], packer: Packer, extra: dict[str, Any]
+) -> Plan | None:
+    """The plan of ``kits`` in human order with the oracle's layouts; None (and a ``reason``)
+    when some kit has none within the time limit."""
+    kits_out = []
+    for kit in kits:
+        tasks = human_order(instance, kit)
+        layout = packer.layout(tasks)
+        if layout is None and instance.kit_parts(tasks):
+            extra["reason"] = "no layout for some kit within the time limit"
+            return None
+        kits_out.append(Kit(tasks, layout or ()))
+    return Plan(tuple(kits_out))
+
+
+def _makespan_bound(
+    instance: Instance,
+    plan: Plan,
+    closed: float,
+    lower: float | None,
+    objective: str,
+    extra: dict[str, Any],
+) -> float:
+    """The proven makespan bound in seconds from the closed-form bound and the master's bound
+    ``lower`` on its own objective; fills the plan's entries of ``extra``."""
+    real = evaluate(instance, plan)
+    if objective == "makespan":
+        bound = closed if lower is None else max(closed, lower)
+    else:
+        w_min = sum(instance.human_time(t.id) for t in instance.tasks)
+        idle_lb = None if lower is None else lower - w_min
+        extra["idle_bound"] = idle_lb
+        bound = closed
+        if lower is not None:  # C = idle + sum h + o_H m >= idle_lb + sum h + o_H m_min
+            bound = max(closed, lower + instance.kit_overhead_human * min_kits(instance))
+    if bound > real.makespan:  # only float noise of the solver can do this
+        bound = real.makespan
+    extra.update(plan_extra(plan, real, bound, closed, lower))
+    return bound
+
+
+class _Live:
+    """The run's live progress (:mod:`bilevel_kit.progress`) in seconds of its objective: the
+    master's objective is the makespan, or ``C - o_H m`` = human idle + ``sum h``."""
+
+    def __init__(self, tracker: progress.Tracker, instance: Instance, objective: str) -> None:
+        self.tracker = tracker
+        self.instance = instance
+        self.objective = objective
+        self.offset = 0.0
+        if objective == "human_idle":
+            self.offset = sum(instance.human_time(t.id) for t in instance.tasks)
+
+    def seconds(self, value: float | None) -> float | None:
+        return None if value is None else value - self.offset
+
+    def bound(self, dual: float | None) -> float | None:
+        """A solver's dual bound in seconds, less :data:`.solver.TOL` (it holds up to the
+        solver's tolerances: 39.0000000000025 for an optimum of 39)."""
+        return None if dual is None else self.seconds(dual - TOL * max(1.0, abs(dual)))
+
+    def model_values(
+        self, inc_obj: float | None, lower: float | None, stage: str | None = None
+    ) -> None:
+        """The incumbent's model objective and a master's proven bound (None: not known)."""
+        self.tracker.report(self.seconds(inc_obj), self.bound(lower), stage)
+
+    def on_bounds(self, primal: float | None, dual: float | None) -> None:
+        """A master's bounds while it runs: only the dual one counts (see the caller)."""
+        self.tracker.report(bound=self.bound(dual))
+
+    def final(self, plan: Plan, bound: float | None, idle_bound: float | None) -> None:
+        """The result's own numbers (the last report)."""
+        if not self.tracker.active:
+            return
+        tl = evaluate(self.instance, plan)
+        if self.objective == "makespan":
+            self.tracker.report(tl.makespan, bound)
+        else:
+            self.tracker.report(tl.human_idle, idle_bound)
+
+
+class _Benders:
+    """The master <-> packing loop (module docstring): the incumbent ``inc`` (objective
+    ``inc_obj``), the master's proven bound ``lower`` and the cuts seen so far."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        master: Master,
+        packer: Packer,
+        budget: Budget,
+        options: MilpOptions,
+        inc: list[list[str]] | None,
+        inc_obj: float | None,
+        live: _Live,
+    ) -> None:
+        self.live = live
+        self.instance = instance
+        self.master = master
+        self.packer = packer
+        self.budget = budget
+        self.options = options
+        self.inc = inc
+        self.inc_obj = inc_obj
+        self.cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
+        self.lower: float | None = None
+        self.proven = False
+        self.infeasible = False
+        self.iterations = 0
+
+    def left(self) -> float:
+        return self.budget.remaining(MARGIN)
+
+    def run(
+        self, opt: Any, seed: int, solver_options: Mapping[str, Any] | None
+    ) -> SolveInfo | None:
+        """Solve the master until its solution packs, it is proven or the time is up; the
+        last solve's info."""
+        info: SolveInfo | None = None
+        while self.left() > 0.05:
+            self.iterations += 1
+            if self.inc is not None:
+                set_start(self.master, self.instance, self.inc)
+            # the master's bound is a proof only while every cut is; its solutions are no plans
+            proof = self.cuts.unproven == 0
+            stage = f"MILP ({self.options.solver}), {self.master.n_cuts} cuts"
+            self.live.model_values(None, None, stage)
+            info = run_solver(
+                self.master.model,
+                opt,
+                self.options.solver,
+                budget=self.budget.cut(MARGIN),
+                seed=seed,
+                log=self.options.log,
+                objective=self.master.model.obj,
+                options=solver_options,
+                warmstart=self.inc is not None,
+                on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
+            )
+            go_on = self.step(info)
+            self.live.model_values(self.inc_obj, self.lower)
+            if not go_on:
+                break
+        return info
+
+    def step(self, info: SolveInfo) -> bool:
+        """Use one master solution; False when the loop is done."""
+        instance, objective = self.instance, self.options.objective
+        if info.infeasible:
+            # the master holds C <= U: without unproven cuts the incumbent is optimal
+            if self.cuts.unproven == 0:
+                if self.inc is not None:
+                    self.proven, self.lower = True, self.inc_obj
+                else:
+                    self.infeasible = True
+            return False
+        if self.cuts.unproven == 0 and info.bound is not None:
+            self.lower = info.bound if self.lower is None else max(self.lower, info.bound)
+        if not info.has_solution:
+            return False
+        kits = extract(self.master)
+        verdicts = self.verdicts(kits)
+        if all(v is True for v in verdicts):
+            obj = objective_value(instance, kits, objective)
+            if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
+                self.inc, self.inc_obj = kits, obj
+            self.proven = info.optimal and self.cuts.unproven == 0
+            return False  # optimal, or the master ran out of time on a packable incumbent
+        if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
+            return False
+        new = self.cuts.cut_kits(map(instance.kit_parts, kits), verdicts)
+        if self.left() > 0:
+            self.repair(kits)
+        inc_obj, lower = self.inc_obj, self.lower
+        if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
+            self.proven = True
+            return False
+        return bool(new)  # nothing new to cut: only possible with unknown packings
+
+    def verdicts(self, kits: list[list[str]]) -> list[bool | None]:
+        """Does each kit fit (None: unknown within the packing time limit)?"""
+        out: list[bool | None] = []
+        pack_tl = self.packer.pack_tl
+        for kit in kits:
+            if self.left() <= 0:  # out of time: the rest stays unknown
+                out.append(None)
+                continue
+            counts = self.instance.kit_parts(kit)
+            ok = self.packer.counts(counts)[0]
+            if ok is None:  # a hard packing: one more try with a longer limit
+                ok = self.packer.counts(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))[0]
+            out.append(ok)
+        return out
+
+    def repair(self, kits: list[list[str]]) -> None:
+        """Split the kits that do not fit; keep the result if it beats the incumbent."""
+        repaired: list[list[str]] = []
+        for kit in kits:
+            parts = self.packer.split(human_order(self.instance, kit))
+            if parts is None:
+                repaired = []
+                break
+            repaired += parts
+        if repaired:
+            obj = objective_value(self.instance, repaired, self.options.objective)
+            if self.inc_obj is None or obj < self.inc_obj - TOL * max(1.0, abs(obj)):
+                self.inc, self.inc_obj = repaired, obj

@@ -1,0 +1,394 @@
+r"""The MILP schedule model (docs/formulations.md), a position-based batching MILP in Pyomo.
+
+**Variables.** Kit positions k = 0..K-1. ``x[i,k]`` = task i is in kit k (only for
+:math:`k < n - |\mathrm{desc}(i)|`, since every earlier kit needs a task that is not a
+descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k (continuous).
+
+**Constraints.**
+
+* assignment :math:`\sum_k x_{ik} = 1`; linking :math:`x_{ik} \le u_k \le \sum_i x_{ik}`;
+  symmetry :math:`u_{k+1} \le u_k` (used kits first), :math:`\sum_k u_k \ge m_{\min}` (area);
+* precedence, for every edge a -> b of the transitive reduction, in the disaggregated form
+  :math:`\sum_{k' \le k} x_{b k'} \le \sum_{k' \le k} x_{a k'}` for all k (it implies
+  :math:`\sum_k k\,x_{ak} \le \sum_k k\,x_{bk}` and has a stronger LP relaxation);
+  inside a kit the human follows a topological order, which the returned plan lists;
+* interchangeable precedence chains (same task data, same predecessors of the head and
+  successors of the tail, e.g. the legs of one table) have lexicographically ordered kit
+  vectors :math:`(p_{c_1}, .., p_{c_L})` (relabelling the chains maps any plan to one that
+  satisfies it), written as one linear inequality: positions are < K, so lex order is the order
+  of :math:`\sum_j K^{L-j} p_{c_j}` (a prefix of the chain when :math:`K^{L-1} > 10^6`); the
+  heads' order is also added in the disaggregated form;
+* the timeline of docs/timeline.md, exactly::
+
+      R_k = o_R u_k + sum_i r_i x[i,k]        H_k = o_H u_k + sum_i h_i x[i,k]
+      A_k = sum_{k' <= k} (R_k' + d u_k')     (arrival; the robot is busy while delivering)
+      E_k >= A_k + H_k,   E_k >= E_{k-1} + H_k,   C = E_{K-1}
+
+  An unused kit has R = H = 0 and adds no d and no overhead, so it adds no time; E only
+  needs ``>=`` because the objective pushes C down to the max. With T trays (the instance's
+  tray limit) the robot start of kit k > T is a variable ``S_k`` and the arrivals become
+  :math:`A_k = S_k + R_k + d u_k` with
+
+      S_k >= A_{k-1},   S_k >= E_{k-T} - H_{k-T} + o_H u_k
+
+  (docs/timeline.md: the tray of kit k - T is back o_H after the human started it, at
+  E - H). Every constraint is monotone, so the least solution is the true timeline; the
+  ``o_H u_k`` term replaces a big-M: on an unused kit the bound is the human start of kit
+  k - T, at most the last used kit's end, so unused trailing kits cannot inflate C. No big-M
+  is needed here; the variable bound
+  :math:`E_k \le M = \sum_i (r_i + h_i) + K (o_R + o_H + d)` (a schedule without any
+  overlap, valid for every number of trays) is derived from the data, and ``C <= U`` with U
+  the makespan of a quick feasible plan;
+* the closed-form bounds of :mod:`bilevel_kit.bounds` on C, also with the model's own kit count
+  :math:`m = \sum_k u_k` in place of :math:`m_{\min}` (redundant, they lift the LP bound;
+  with one tray the robot bound includes the wait :math:`(m - 1) o_H` for the tray), among
+  them the flow-shop bound (d) as the two lines :math:`C \ge c_l + s_l m` of
+  :func:`bilevel_kit.bounds.johnson_lines` (Johnson's makespan of the tasks and m overhead
+  jobs; exact on the Johnson special case: d = 0, no overheads, no precedence);
+* the tray's area relaxation :math:`\sum_i a_i x_{ik} \le W H` (areas on the packing grid of
+  :mod:`~bilevel_kit.models.packing`, sizes rounded up, tray down) and the no-good cuts
+  of :func:`add_cut`: :math:`\bigvee_t c_{tk} \le M_t - 1` with
+  :math:`c_{tk} = \sum_i n_{it} x_{ik}` the number of parts of type t in kit k, linearised
+  with one binary :math:`\lambda_{tkc}` per (type, kit, threshold) as
+  :math:`c_{tk} \le (c - 1) + (N_t - c + 1)(1 - \lambda_{tkc})` (big-M :math:`N_t - c + 1`
+  from the total count :math:`N_t` of type t) and :math:`\sum_{t \in M} \lambda_{t k M_t}
+  \ge 1`. Every super-multiset of M fails too, so no feasible plan is cut off.
+
+**Objective.** ``makespan``: minimise C. ``human_idle``: minimise
+:math:`C - o_H \sum_k u_k` (= human idle + the constant :math:`\sum_i h_i`).
+
+The incumbent is passed to the solver as a MIP start (:func:`set_start`), after relabelling
+its chains into the lexicographic order the model requires (:func:`canonical_kits`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
+from ...instance import Instance, topological_order
+from ...plan import Kit, Plan, evaluate
+from .. import packing
+from ..common import chain_groups, kit_order, kit_positions, reduced_edges, relabel_chains
+from .solver import TOL
+
+human_order = kit_order  # the human's order inside a kit (one definition: common.py)
+
+
+def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective: str) -> float:
+    """The model's objective of a plan: makespan, or makespan - o_H * kits."""
+    c = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    return c if objective == "makespan" else c - instance.kit_overhead_human * len(kits)
+
+
+@dataclass
+class Master:
+    """The Pyomo model with what the Benders loop needs: ``x`` (task, kit) -> binary,
+    ``counts`` (type, kit) -> part-count expression, ``total`` parts per type and ``lam`` the
+    cut binaries (type, kit, threshold)."""
+
+    model: Any
+    K: int
+    ids: list[str]
+    x: dict[tuple[int, int], Any]
+    counts: dict[tuple[str, int], Any] = field(default_factory=dict)
+    total: dict[str, int] = field(default_factory=dict)
+    lam: dict[tuple[str, int, int], Any] = field(default_factory=dict)
+    n_cuts: int = 0
+
+
+@dataclass
+class _Data:
+    """Instance data the builder needs: times, the kit range ``ub[i]`` of each task, the
+    (task, kit) keys of ``x`` and the tasks that may sit in each kit."""
+
+    ids: list[str]
+    idx: dict[str, int]
+    r: list[float]
+    h: list[float]
+    d: float
+    o_r: float
+    o_h: float
+    ub: list[int]
+    keys: list[tuple[int, int]]
+    at_k: list[list[int]]
+
+    @classmethod
+    def of(cls, instance: Instance, K: int) -> _Data:
+        ids = [t.id for t in instance.tasks]
+        ub = kit_positions(instance, K)
+        keys = [(i, k) for i in range(len(ids)) for k in range(ub[i])]
+        at_k: list[list[int]] = [[] for _ in range(K)]
+        for i, k in keys:
+            at_k[k].append(i)
+        return cls(
+            ids=ids,
+            idx=instance.index,
+            r=[instance.robot_time(t) for t in ids],
+            h=[instance.human_time(t) for t in ids],
+            d=instance.delivery_time,
+            o_r=instance.kit_overhead_robot,
+            o_h=instance.kit_overhead_human,
+            ub=ub,
+            keys=keys,
+            at_k=at_k,
+        )
+
+
+def build(instance: Instance, K: int, upper: float | None, objective: str) -> Master:
+    """The master model of the module docstring with K kit positions (``upper``: C <= U)."""
+    import pyomo.environ as pyo
+
+    data = _Data.of(instance, K)
+    m = pyo.ConcreteModel(name="milp_schedule")
+    m.x = pyo.Var(data.keys, domain=pyo.Binary)
+    m.u = pyo.Var(range(K), domain=pyo.Binary)
+    big_m = sum(data.r) + sum(data.h) + K * (data.o_r + data.o_h + data.d)  # no overlap at all
+    m.E = pyo.Var(range(K), bounds=(0.0, big_m))
+    m.u[0].fix(1)
+    m.cons = pyo.ConstraintList()
+    _assignment(m, instance, data, K)
+    _precedence(m, instance, data, K)
+    _timeline(m, instance, data, K, upper, objective)
+    master = Master(m, K, data.ids, {key: m.x[key] for key in data.keys})
+    _tray(master, instance, data)
+    return master
+
+
+def _assignment(m: Any, instance: Instance, data: _Data, K: int) -> None:
+    """Every task in one kit; used kits first, at least ``m_min`` of them."""
+    add = m.cons.add
+    for i in range(len(data.ids)):
+        add(sum(m.x[i, k] for k in range(data.ub[i])) == 1)
+    for k in range(K):
+        for i in data.at_k[k]:
+            add(m.x[i, k] <= m.u[k])
+        add(m.u[k] <= sum(m.x[i, k] for i in data.at_k[k]))
+        if k:
+            add(m.u[k] <= m.u[k - 1])
+    add(sum(m.u[k] for k in range(K)) >= min(K, min_kits(instance)))
+
+
+def _precedence(m: Any, instance: Instance, data: _Data, K: int) -> None:
+    """Precedence and the chains' symmetry breaking (module docstring)."""
+    add = m.cons.add
+    idx, ub = data.idx, data.ub
+
+    def before(a: int, b: int) -> None:
+        # disaggregated: y_b(k) <= y_a(k) with y_i(k) = sum_{k' <= k} x[i,k']
+        for k in range(min(ub[a], ub[b]) - 1):
+            add(sum(m.x[b, q] for q in range(k + 1)) <= sum(m.x[a, q] for q in range(k + 1)))
+
+    for a_id, b_id in reduced_edges(instance):
+        before(idx[a_id], idx[b_id])
+
+    # symmetry: interchangeable chains in lexicographic order of their kit vectors, as one
+    # linear inequality (positions < K, so lex order = order of sum_j K^(L-1-j) p_{c_j}),
+    # plus the heads' order in the disaggregated (LP-stronger) form
+    def pos(i: int) -> Any:
+        return sum(k * m.x[i, k] for k in range(1, ub[i]))
+
+    for group in chain_groups(instance):
+        chains = sorted([idx[t] for t in c] for c in group)
+        length = len(chains[0])
+        while length > 1 and K ** (length - 1) > 1e6:  # a lex prefix is valid too
+            length -= 1
+        for c1, c2 in itertools.pairwise(chains):
+            add(sum(K ** (length - 1 - j) * (pos(c1[j]) - pos(c2[j])) for j in range(length)) <= 0)
+            before(c1[0], c2[0])
+
+
+def _timeline(
+    m: Any, instance: Instance, data: _Data, K: int, upper: float | None, objective: str
+) -> None:
+    """The timeline, the closed-form bounds on C, ``C <= U`` and the objective."""
+    import pyomo.environ as pyo
+
+    add = m.cons.add
+    r, h, d, o_r, o_h = data.r, data.h, data.d, data.o_r, data.o_h
+    trays = instance.tray_limit
+    if trays is not None and trays < K:
+        m.S = pyo.Var(range(trays, K), bounds=(0.0, m.E[0].ub))  # robot starts (tray rule)
+    arrive: Any = 0.0
+    human: list[Any] = []
+    for k in range(K):
+        R = o_r * m.u[k] + sum(r[i] * m.x[i, k] for i in data.at_k[k])
+        Hk = o_h * m.u[k] + sum(h[i] * m.x[i, k] for i in data.at_k[k])
+        if trays is not None and k >= trays:
+            # the tray of kit k - T is back o_H after its human start E - H (docs/timeline.md)
+            add(m.S[k] >= arrive)
+            add(m.S[k] >= m.E[k - trays] - human[k - trays] + o_h * m.u[k])
+            arrive = m.S[k]
+        arrive = arrive + R + d * m.u[k]
+        add(m.E[k] >= arrive + Hk)
+        if k:
+            add(m.E[k] >= m.E[k - 1] + Hk)
+        human.append(Hk)
+    cmax = m.E[K - 1]
+    lb = lower_bounds(instance)
+    add(cmax >= max(lb["human"], lb["robot"], lb["flow"]))
+    # the same bounds with the model's own kit count m = sum_k u_k (valid for integer plans:
+    # the last kit holds a sink, the first a source; see :mod:`bilevel_kit.bounds`)
+    ids, n = data.ids, len(data.ids)
+    has_pred = {b for _, b in instance.precedence}
+    has_succ = {a for a, _ in instance.precedence}
+    n_used = sum(m.u[k] for k in range(K))
+    w = tray_wait(instance)  # one tray: the robot waits o_H per kit after the first
+    add(
+        cmax
+        >= sum(r)
+        + (o_r + d + w) * n_used
+        - w
+        + o_h
+        + min(h[i] for i in range(n) if ids[i] not in has_succ)
+    )
+    add(
+        cmax
+        >= min(r[i] for i in range(n) if ids[i] not in has_pred) + o_r + d + sum(h) + o_h * n_used
+    )
+    # the flow-shop bound (d) of :mod:`bilevel_kit.bounds` with the model's own kit count
+    for c, slope in johnson_lines(r, h, o_r + d, o_h):
+        add(cmax >= c + slope * n_used)
+    if upper is not None:
+        add(cmax <= upper)
+    if objective == "makespan":
+        m.obj = pyo.Objective(expr=cmax, sense=pyo.minimize)
+    else:
+        m.obj = pyo.Objective(expr=cmax - o_h * sum(m.u[k] for k in range(K)), sense=pyo.minimize)
+
+
+def _tray(master: Master, instance: Instance, data: _Data) -> None:
+    """The area relaxation on the packing grid (the oracle's notion of "fits") and the part
+    counts per (type, kit) that the cuts use."""
+    m, K = master.model, master.K
+    tray = instance.tray
+    W = packing.grid_down(tray.width, 1.0)
+    H = packing.grid_down(tray.height, 1.0)
+    garea = {
+        p.id: packing.grid_up(p.width, 1.0) * packing.grid_up(p.height, 1.0)
+        for p in instance.part_types.values()
+    }
+    area = [sum(garea[p] * c for p, c in t.parts) for t in instance.tasks]
+    if sum(area) > W * H:
+        for k in range(K):
+            terms = [area[i] * m.x[i, k] for i in data.at_k[k] if area[i]]
+            if terms:
+                m.cons.add(sum(terms) <= W * H)
+    master.total = dict(instance.kit_parts(data.ids))
+    for t in instance.part_types:
+        for k in range(K):
+            terms = [
+                c * m.x[i, k] for i in data.at_k[k] for q, c in instance.tasks[i].parts if q == t
+            ]
+            if terms:
+                master.counts[(t, k)] = sum(terms)
+
+
+def add_cut(master: Master, counts: Mapping[str, int]) -> None:
+    """Forbid the multiset ``counts`` (and every super-multiset) in every kit."""
+    import pyomo.environ as pyo
+
+    m = master.model
+    for k in range(master.K):
+        lits: list[Any] = []
+        for t, c in counts.items():
+            expr = master.counts.get((t, k))
+            if expr is None:
+                lits = []
+                break  # kit k can never hold a part of type t: the cut holds there
+            key = (t, k, c)
+            if key not in master.lam:
+                name = f"lam_{len(master.lam)}"
+                var = pyo.Var(domain=pyo.Binary)
+                m.add_component(name, var)
+                m.cons.add(expr <= (c - 1) + (master.total[t] - c + 1) * (1 - var))
+                master.lam[key] = var
+            lits.append(master.lam[key])
+        if lits:
+            m.cons.add(sum(lits) >= 1)
+    master.n_cuts += 1
+
+
+def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
+    """Load a plan into the master's variables (a MIP start); its kits are put into the
+    canonical chain order first, so the start satisfies the symmetry constraints."""
+    m = master.model
+    if len(kits) > master.K:
+        return
+    kits = canonical_kits(instance, kits)
+    where = {t: k for k, kit in enumerate(kits) for t in kit}
+    for (i, k), v in master.x.items():
+        v.set_value(float(where[master.ids[i]] == k), skip_validation=True)
+    tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
+    end = arrive = 0.0
+    starts: list[float] = []  # human starts (of an unused kit: its end)
+    trays = instance.tray_limit
+    for k in range(master.K):
+        if k < len(kits):
+            kt = tl.kits[k]
+            start, arrive, end = kt.robot_start, kt.arrive, kt.human_end
+            starts.append(kt.human_start)
+        else:  # the least values of the constraints on an unused kit (module docstring)
+            start = arrive
+            if trays is not None and k >= trays:
+                start = max(start, starts[k - trays])
+            arrive = start
+            starts.append(max(arrive, end))
+            end = starts[-1]
+        if k:
+            m.u[k].set_value(float(k < len(kits)), skip_validation=True)
+        m.E[k].set_value(end, skip_validation=True)
+        if trays is not None and k >= trays:
+            m.S[k].set_value(start, skip_validation=True)
+    for (t, k, c), var in master.lam.items():
+        have = instance.kit_parts(kits[k]).get(t, 0) if k < len(kits) else 0
+        var.set_value(float(have <= c - 1), skip_validation=True)
+
+
+def canonical_kits(instance: Instance, kits: Sequence[Sequence[str]]) -> list[list[str]]:
+    """Relabel interchangeable chains so that their kit vectors are in lexicographic order
+    (what the model's symmetry constraints require); kit contents stay the same multisets."""
+    new = relabel_chains({t: k for k, kit in enumerate(kits) for t in kit}, chain_groups(instance))
+    out: list[list[str]] = [[] for _ in kits]
+    for t in topological_order(instance):
+        out[new[t]].append(t)
+    return out
+
+
+def extract(master: Master) -> list[list[str]]:
+    kits: dict[int, list[str]] = {}
+    for (i, k), v in master.x.items():
+        if v.value is not None and v.value > 0.5:
+            kits.setdefault(k, []).append(master.ids[i])
+    return [kits[k] for k in sorted(kits)]
+
+
+def kit_cap(instance: Instance, upper: float) -> int:
+    """Largest kit count m of a plan with makespan <= U, from the closed-form bounds with m:
+
+    .. math:: m (o_R + d + w) \\le U - \\sum r - o_H + w - \\min_{snk} h,\\qquad
+              m\\, o_H \\le U - \\min_{src} r - o_R - d - \\sum h
+
+    (w = o_H with one tray, else 0: :func:`bilevel_kit.bounds.tray_wait`).
+    """
+    ids = [t.id for t in instance.tasks]
+    n = len(ids)
+    has_pred = {b for _, b in instance.precedence}
+    has_succ = {a for a, _ in instance.precedence}
+    r = {t: instance.robot_time(t) for t in ids}
+    h = {t: instance.human_time(t) for t in ids}
+    d, o_r, o_h = instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human
+    cap = n
+    eps = TOL * max(1.0, upper)
+    w = tray_wait(instance)
+    if o_r + d + w > 0:
+        slack = upper - sum(r.values()) - o_h + w - min(h[t] for t in ids if t not in has_succ)
+        cap = min(cap, max(1, math.floor((slack + eps) / (o_r + d + w))))
+    if o_h > 0:
+        slack = upper - min(r[t] for t in ids if t not in has_pred) - o_r - d - sum(h.values())
+        cap = min(cap, max(1, math.floor((slack + eps) / o_h)))
+    return cap

@@ -1,0 +1,682 @@
+r"""Tray packing with CP-SAT: does a kit fit, and which layout is the most usable.
+
+**Grid.** Lengths are mapped to integers at ``resolution`` mm (default 1 mm). Part sizes are
+rounded *up* and the tray *down*, so a grid-feasible layout is truly non-overlapping and inside
+the tray: each part is drawn centred in its (possibly slightly larger) grid cell. When every
+size is a multiple of the resolution the grid is exact: integer sizes admit an integer-position
+packing whenever any packing exists (bottom-left compaction), so "infeasible" is then a proof
+for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution": every
+infeasible answer records in ``extra["proof"]`` whether it is a proof (an exact grid without
+reachability, or a reason that holds at true sizes: a part larger than the tray, or more part
+area than tray area). ``bilevel-kit pack`` reports the others as "no layout on this grid".
+
+**Model.** Every part has a lower-left corner (x, y). A rotatable, non-square part has two
+optional rectangles, one per orientation (0 and 90 degrees), whose presence literals are
+``not rot`` and ``rot``; the end variable of each optional interval lives in [0, W] (resp.
+[0, H]), which keeps a present orientation inside the tray. One ``add_no_overlap_2d`` over all
+rectangles forbids overlap. Identical parts (same type) are interchangeable, so their corners
+are ordered lexicographically, :math:`(x_a, y_a) <_{lex} (x_b, y_b)` (two non-overlapping
+rectangles never share a lower-left corner, so the order is strict and loses no layout).
+
+**Before search** (both objectives): the cheap infeasibility tests of
+:mod:`bilevel_kit.models.packing_bounds` (a part larger than the tray, area, incompatible pairs,
+tall parts, dual-feasible-function bounds) answer "infeasible" without a model.
+
+**Decision model** (``objective="feasible"``): one redundant ``add_cumulative`` per axis on the
+same intervals (the parts crossing any vertical line have heights summing to at most H, and
+symmetrically), the classic relaxation of 2D packing; it is what decides zero-waste kits, where
+every line is full (docs/formulations.md#cp-sat-packing, bench/results/packing.md). CP-SAT's
+parameters come from :data:`DECISION_PARAMS` on top of :data:`SAFE_NO_OVERLAP_2D`.
+
+**Fitness.** The paper's kit fitness (eq. 11 with the sign fix of docs/errata.md) is
+:math:`f = D_{diff} - D_{same} - W_6 Z` with Euclidean centre distances. Overlap is a hard
+constraint here, so Z = 0 and ``w6`` only enters the reported true fitness. CP-SAT needs a
+linear objective, so the model maximises the **L1 surrogate**
+
+.. math:: \tilde f = \sum_{Q(a) \ne Q(b)} (|\Delta x| + |\Delta y|)
+                  - \sum_{Q(a) = Q(b)} (|\Delta x| + |\Delta y|)
+
+(absolute values via ``add_abs_equality``, centres on a half-grid so everything is integer).
+Since :math:`\|v\|_2 \le \|v\|_1 \le \sqrt 2 \|v\|_2` the surrogate ranks layouts like the
+true fitness up to that factor; :class:`PackResult` reports both the surrogate optimum (and its
+bound) and the true Euclidean fitness of the returned layout (:func:`bilevel_kit.fitness.
+layout_fitness`, exact Z).
+
+**Reachability.** Given a reach map (:mod:`bilevel_kit.reachability`), every centre must lie in
+a reachable cell: the centre's cell column and row follow from the half-grid centre (linear
+when a cell is a whole number of half-grid units, else an element constraint) and a table of
+reachable cells, or one column span per row when the rows are contiguous, allows them.
+
+**Oracle.** :func:`fit_counts` / :func:`kit_fits` answer "does this part multiset fit" with
+memoisation (monotone: sub-multisets of a fitting one fit, super-multisets of a non-fitting one
+do not), the pre-search tests, the toolkit's shelf packer on the grid, then CP-SAT.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
+
+from ..instance import DEFAULT_WEIGHTS, Instance, PartType
+from ..plan import Placement
+
+if TYPE_CHECKING:
+    from ..reachability import ReachGrid
+
+_EPS = 1e-9
+
+#: OR-Tools 9.15 workaround. With its default ``no_overlap_2d_boolean_relations_limit`` (10),
+#: CP-SAT sometimes (about 3% of seeds with 2-8 workers) reported OPTIMAL for a worse
+#: objective than a known feasible one on our embedded schedule models (optional rectangles
+#: sharing start variables). Setting the presolve limit to 0 removed every such run in our
+#: stress tests (hundreds of seeds), so every no-overlap-2D model here sets it.
+SAFE_NO_OVERLAP_2D = {"no_overlap_2d_boolean_relations_limit": 0}
+
+
+#: CP-SAT parameters of the decision model (``objective="feasible"``), on top of
+#: :data:`SAFE_NO_OVERLAP_2D`; chosen on a training half of bench/data/packing and checked on
+#: the other half (bench/results/packing.md).
+DECISION_PARAMS: dict[str, Any] = {}
+
+#: Add one redundant cumulative per axis to the decision model.
+REDUNDANT_CUMULATIVE = True
+
+
+class _Rect(Protocol):
+    @property
+    def width(self) -> float: ...
+
+    @property
+    def height(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class PackResult:
+    """Outcome of :func:`pack`.
+
+    ``status``: ``optimal`` (fitness proven optimal for the surrogate), ``feasible`` (a layout,
+    not proven optimal; always the answer of the ``feasible`` objective), ``infeasible`` (proven
+    at this grid) or ``unknown`` (time limit). ``surrogate_objective`` and ``bound`` are the L1
+    surrogate (mm) of the layout and the solver's proven upper bound on it (``fitness`` only);
+    ``true_fitness`` is the Euclidean :math:`D_{diff} - D_{same} - W_6 Z` of the layout.
+    """
+
+    status: str
+    layout: tuple[Placement, ...] | None
+    wall_time_s: float
+    surrogate_objective: float | None = None
+    true_fitness: float | None = None
+    bound: float | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------------------------
+# Grid helpers
+# ---------------------------------------------------------------------------------------------
+
+
+def grid_up(v: float, resolution: float) -> int:
+    """Size in grid units, rounded up (a part never shrinks)."""
+    return max(1, math.ceil(v / resolution - _EPS))
+
+
+def grid_down(v: float, resolution: float) -> int:
+    """Tray size in grid units, rounded down (the tray never grows)."""
+    return math.floor(v / resolution + _EPS)
+
+
+def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
+    """True when every value is a multiple of ``resolution`` (up to float noise)."""
+    return all(abs(v / resolution - round(v / resolution)) < 1e-6 for v in values)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reachability and the shelf heuristic
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ReachTables:
+    """The instance's reach map seen from the half grid: a part centred at ``k * res / 2`` mm
+    (k integer) lies in cell column ``cols[k]`` (row ``rows[k]`` for y); ``cells`` are the
+    reachable (column, row) pairs. Same arithmetic as :meth:`ReachGrid.lookup`, and layouts
+    put centres exactly at ``k * res / 2``, so the model and the checker agree bit for bit."""
+
+    cols: tuple[int, ...]
+    rows: tuple[int, ...]
+    cells: tuple[tuple[int, int], ...]
+    n_cols: int
+    n_rows: int
+    #: when a cell is exactly ``step`` half-grid units wide (``cols[k] == k // step`` for every
+    #: centre k < 2W), the column is linear in k: cheaper than an element constraint
+    step_x: int | None = None
+    step_y: int | None = None
+    #: per row, the reachable columns as one span (lo, hi) (lo > hi: none), when every row's
+    #: reachable cells are contiguous: two small element constraints replace the cell table
+    row_spans: tuple[tuple[int, int], ...] | None = None
+
+
+def reach_tables(reach: ReachGrid, W: int, H: int, resolution: float) -> ReachTables:
+    """Tables of a :class:`bilevel_kit.reachability.ReachGrid` for a W x H grid tray."""
+    import numpy as np
+
+    ny, nx = reach.reachable.shape
+    cw, ch = reach.cell_size
+    xs = np.arange(2 * W + 1) * resolution / 2.0
+    ys = np.arange(2 * H + 1) * resolution / 2.0
+    cols = np.clip((xs // cw).astype(np.int64), 0, nx - 1)
+    rows = np.clip((ys // ch).astype(np.int64), 0, ny - 1)
+    cells = tuple((int(c), int(r)) for r, c in zip(*np.nonzero(reach.reachable), strict=True))
+
+    def step(index: np.ndarray, size: float) -> int | None:
+        q = round(2 * size / resolution)
+        k = np.arange(len(index) - 1)
+        return q if q >= 1 and bool((index[:-1] == k // q).all()) else None
+
+    rows_spans: list[tuple[int, int]] = []
+    spans: list[tuple[int, int]] | None = rows_spans
+    for r in range(ny):
+        cs = np.nonzero(reach.reachable[r])[0]
+        if len(cs) == 0:
+            rows_spans.append((nx, -1))
+        elif cs[-1] - cs[0] + 1 == len(cs):
+            rows_spans.append((int(cs[0]), int(cs[-1])))
+        else:
+            spans = None  # a row with a hole: no span encoding
+            break
+    return ReachTables(
+        tuple(map(int, cols)),
+        tuple(map(int, rows)),
+        cells,
+        nx,
+        ny,
+        step(cols, cw),
+        step(rows, ch),
+        None if spans is None else tuple(spans),
+    )
+
+
+def add_reach(
+    model: Any,
+    tables: ReachTables,
+    cx2: Any,
+    cy2: Any,
+    W: int,
+    H: int,
+    present: Any = None,
+    absent_at: tuple[int, int] = (0, 0),
+) -> None:
+    """Centre (cx2 / 2, cy2 / 2 grid units) in a reachable cell. With ``present``: only when
+    present; an absent part sits at the fixed doubled centre ``absent_at``."""
+    kx = model.new_int_var(0, 2 * W, "")
+    ky = model.new_int_var(0, 2 * H, "")
+    model.add(kx == cx2)
+    model.add(ky == cy2)
+    col = model.new_int_var(0, tables.n_cols - 1, "")
+    row = model.new_int_var(0, tables.n_rows - 1, "")
+    for k, index, cell, q in (
+        (kx, tables.cols, col, tables.step_x),
+        (ky, tables.rows, row, tables.step_y),
+    ):
+        if q is None:
+            model.add_element(k, index, cell)
+        else:  # centres never reach k = 2W (parts have a positive size)
+            model.add(k <= 2 * (W if k is kx else H) - 1)
+            model.add(q * cell <= k)
+            model.add(k <= q * cell + q - 1)
+    if tables.row_spans is not None:
+        lo = model.new_int_var(0, tables.n_cols, "")
+        hi = model.new_int_var(-1, tables.n_cols - 1, "")
+        model.add_element(row, [a for a, _ in tables.row_spans], lo)
+        model.add_element(row, [b for _, b in tables.row_spans], hi)
+        enforce = [] if present is None else [present]
+        model.add(lo <= col).only_enforce_if(enforce)
+        model.add(col <= hi).only_enforce_if(enforce)
+    elif present is None:
+        model.add_allowed_assignments([col, row], tables.cells)
+    else:
+        parked = (0, tables.cols[absent_at[0]], tables.rows[absent_at[1]])
+        model.add_allowed_assignments(
+            [present, col, row], [(1, *cell) for cell in tables.cells] + [parked]
+        )
+
+
+def _reachable(
+    tables: ReachTables | None,
+    corners_: Sequence[tuple[int, int, bool]],
+    sizes: Sequence[tuple[int, int, bool]],
+) -> bool:
+    if tables is None:
+        return True
+    ok = set(tables.cells)
+    for (x, y, rot), (w, h, _) in zip(corners_, sizes, strict=True):
+        ww, hh = (h, w) if rot else (w, h)
+        if (tables.cols[2 * x + ww], tables.rows[2 * y + hh]) not in ok:
+            return False
+    return True
+
+
+def _shelf(
+    sizes: Sequence[tuple[int, int, bool]], W: int, H: int
+) -> list[tuple[int, int, bool]] | None:
+    """A fast "yes" from the toolkit's shelf packer (:func:`~bilevel_kit.heuristics.shelf.
+    shelf_pack`) run in grid units, so its answer holds for the rounded-up sizes."""
+    from ..heuristics.shelf import shelf_pack
+    from ..instance import Tray
+
+    items = [
+        (str(j), PartType(id=str(j), width=w, height=h, pick_time=0.0, rotatable=r))
+        for j, (w, h, r) in enumerate(sizes)
+    ]
+    layout = shelf_pack(Tray(float(W), float(H)), items)
+    if layout is None:
+        return None
+    out: list[tuple[int, int, bool]] = [(0, 0, False)] * len(sizes)
+    for p in layout:
+        j = int(p.part)
+        rot = abs(p.theta - 90.0) < 1e-9
+        w, h, _ = sizes[j]
+        ww, hh = (h, w) if rot else (w, h)
+        out[j] = (round(p.x - ww / 2.0), round(p.y - hh / 2.0), rot)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The CP-SAT packing model
+# ---------------------------------------------------------------------------------------------
+
+
+def pack(
+    tray: _Rect,
+    items: Sequence[tuple[str, PartType]],
+    *,
+    objective: str = "feasible",
+    resolution: float = 1.0,
+    time_limit: float = 10.0,
+    workers: int = 2,
+    seed: int = 0,
+    w6: float | None = None,
+    log: bool = False,
+    reach: ReachGrid | None = None,
+) -> PackResult:
+    """Place ``items`` ((part id, part type) pairs) on ``tray`` without overlap.
+
+    ``objective="feasible"`` decides whether they fit (the shelf heuristic answers first when it
+    can); ``"fitness"`` maximises the L1 surrogate of the kit fitness (module docstring).
+    ``reach`` (a :class:`~bilevel_kit.reachability.ReachGrid`, see
+    :func:`bilevel_kit.reachability.reach_grid`) keeps every centre in a reachable cell.
+    """
+    from ortools.sat.python import cp_model
+
+    if objective not in ("feasible", "fitness"):
+        raise ValueError(f"objective must be 'feasible' or 'fitness', not {objective!r}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ValueError(f"resolution must be a finite number of mm > 0, not {resolution!r}")
+    t0 = time.perf_counter()
+    W, H = grid_down(tray.width, resolution), grid_down(tray.height, resolution)
+    sizes = [
+        (grid_up(pt.width, resolution), grid_up(pt.height, resolution), pt.rotatable)
+        for _, pt in items
+    ]
+    exact = is_grid_exact(
+        [tray.width, tray.height] + [v for _, pt in items for v in (pt.width, pt.height)],
+        resolution,
+    )
+    extra: dict[str, Any] = {"resolution": resolution, "grid_exact": exact, "objective": objective}
+    tables = None if reach is None else reach_tables(reach, W, H, resolution)
+
+    def done(
+        status: str, corners_: Sequence[tuple[int, int, bool]] | None, **kw: Any
+    ) -> PackResult:
+        from ..fitness import layout_fitness
+
+        layout = None if corners_ is None else _to_layout(items, sizes, corners_, resolution)
+        w6_ = DEFAULT_WEIGHTS["W6"] if w6 is None else w6
+        true_fit = None if layout is None else layout_fitness(layout, w6_)
+        return PackResult(
+            status, layout, time.perf_counter() - t0, true_fitness=true_fit, extra=extra, **kw
+        )
+
+    if not items:
+        return done(
+            "feasible" if objective == "feasible" else "optimal",
+            [],
+            surrogate_objective=0.0 if objective == "fitness" else None,
+            bound=0.0 if objective == "fitness" else None,
+        )
+    from .packing_bounds import infeasibility_reason
+
+    why = infeasibility_reason(sizes, W, H)
+    if why is not None:
+        # the tests ignore reachability, which only removes layouts: on an exact grid the
+        # answer is a proof with or without a reach map
+        extra["reason"] = why
+        extra["proof"] = exact or _infeasible_at_true_sizes(tray, items)
+        return done("infeasible", None)
+    if objective == "feasible":
+        shelf = _shelf(sizes, W, H)
+        if shelf is not None and _reachable(tables, shelf, sizes):
+            extra["reason"] = "shelf heuristic"
+            return done("feasible", shelf)
+
+    model = cp_model.CpModel()
+    xs: list[Any] = []
+    ys: list[Any] = []
+    rots: list[Any] = []  # 0/1 constants or rotation literals
+    x_iv, y_iv = [], []
+    x_sizes: list[int] = []  # size of each interval of x_iv (and y_iv) on its axis
+    y_sizes: list[int] = []
+    for j, (w, h, r) in enumerate(sizes):
+        can_turn = r and w != h and h <= W and w <= H
+        can_stay = w <= W and h <= H
+        lo_w = min(w, h) if can_turn else (w if can_stay else h)
+        lo_h = min(w, h) if can_turn else (h if can_stay else w)
+        x = model.new_int_var(0, W - lo_w, f"x{j}")
+        y = model.new_int_var(0, H - lo_h, f"y{j}")
+        xs.append(x)
+        ys.append(y)
+        if can_turn and can_stay:
+            rot = model.new_bool_var(f"rot{j}")
+            for size_x, size_y, lit in ((w, h, rot.Not()), (h, w, rot)):
+                xe = model.new_int_var(0, W, f"xe{j}")
+                ye = model.new_int_var(0, H, f"ye{j}")
+                x_iv.append(model.new_optional_interval_var(x, size_x, xe, lit, f"ix{j}"))
+                y_iv.append(model.new_optional_interval_var(y, size_y, ye, lit, f"iy{j}"))
+                x_sizes.append(size_x)
+                y_sizes.append(size_y)
+            rots.append(rot)
+        else:
+            turned = not can_stay
+            sx, sy = (h, w) if turned else (w, h)
+            x_iv.append(model.new_fixed_size_interval_var(x, sx, f"ix{j}"))
+            y_iv.append(model.new_fixed_size_interval_var(y, sy, f"iy{j}"))
+            x_sizes.append(sx)
+            y_sizes.append(sy)
+            rots.append(1 if turned else 0)
+    model.add_no_overlap_2d(x_iv, y_iv)
+    if objective == "feasible" and REDUNDANT_CUMULATIVE:
+        # redundant: the parts crossing any vertical line stack to at most H, and those
+        # crossing a horizontal line to at most W (tight for zero-waste kits)
+        model.add_cumulative(x_iv, y_sizes, H)
+        model.add_cumulative(y_iv, x_sizes, W)
+    # centres on the half grid: 2 cx = 2 x + (w or h)
+    cx2 = [2 * xs[j] + w + (h - w) * rots[j] for j, (w, h, _) in enumerate(sizes)]
+    cy2 = [2 * ys[j] + h + (w - h) * rots[j] for j, (w, h, _) in enumerate(sizes)]
+    if tables is not None:
+        for j in range(len(items)):
+            add_reach(model, tables, cx2[j], cy2[j], W, H)
+
+    # identical parts: lexicographic order of lower-left corners
+    groups: dict[str, list[int]] = {}
+    for j, (_, pt) in enumerate(items):
+        groups.setdefault(pt.id, []).append(j)
+    for members in groups.values():
+        for a, b in itertools.pairwise(members):
+            add_lex_less(model, (xs[a], ys[a]), (xs[b], ys[b]))
+
+    if objective == "fitness":
+        terms = []
+        for a in range(len(items)):
+            for b in range(a + 1, len(items)):
+                sign = -1 if items[a][1].id == items[b][1].id else 1
+                for ca, cb, lim in ((cx2[a], cx2[b], 2 * W), (cy2[a], cy2[b], 2 * H)):
+                    dv = model.new_int_var(0, lim, "")
+                    model.add_abs_equality(dv, ca - cb)
+                    terms.append(sign * dv)
+        model.maximize(sum(terms))
+
+    solver = cp_model.CpSolver()
+    solver.parameters.max_time_in_seconds = max(0.01, time_limit - (time.perf_counter() - t0))
+    solver.parameters.num_workers = max(1, workers)
+    solver.parameters.random_seed = seed
+    solver.parameters.log_search_progress = log
+    solver.parameters.no_overlap_2d_boolean_relations_limit = 0  # see SAFE_NO_OVERLAP_2D
+    if objective == "feasible":
+        for key, value in DECISION_PARAMS.items():
+            setattr(solver.parameters, key, value)
+    st = solver.solve(model)
+    extra["cpsat_status"] = solver.status_name(st)
+    if st == cp_model.INFEASIBLE:
+        extra["proof"] = (exact and reach is None) or _infeasible_at_true_sizes(tray, items)
+        return done("infeasible", None)
+    if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+        return done("unknown", None)
+    sol = [
+        (
+            solver.value(xs[j]),
+            solver.value(ys[j]),
+            bool(solver.value(rots[j])) if not isinstance(rots[j], int) else bool(rots[j]),
+        )
+        for j in range(len(items))
+    ]
+    if objective == "feasible":
+        return done("feasible", sol)
+    half = resolution / 2.0
+    status = "optimal" if st == cp_model.OPTIMAL else "feasible"
+    res = done(
+        status,
+        sol,
+        surrogate_objective=solver.objective_value * half,
+        bound=solver.best_objective_bound * half,
+    )
+    return res
+
+
+def _infeasible_at_true_sizes(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> bool:
+    """A reason no layout exists at all, grid or not: a part that fits the tray in neither
+    0/90-degree orientation, or more part area than tray area."""
+    for _, pt in items:
+        fits = pt.width <= tray.width and pt.height <= tray.height
+        if pt.rotatable:
+            fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
+        if not fits:
+            return True
+    return sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS)
+
+
+def add_lex_less(
+    model: Any, a: tuple[Any, Any], b: tuple[Any, Any], enforce: Sequence[Any] = ()
+) -> None:
+    """(a0, a1) <lex (b0, b1) (strictly), optionally only when all ``enforce`` literals hold."""
+    eq = model.new_bool_var("")
+    model.add(a[0] <= b[0]).only_enforce_if(list(enforce))
+    model.add(a[0] == b[0]).only_enforce_if([eq, *enforce])
+    model.add(a[0] < b[0]).only_enforce_if([eq.Not(), *enforce])
+    model.add(a[1] < b[1]).only_enforce_if([eq, *enforce])
+
+
+def _to_layout(
+    items: Sequence[tuple[str, PartType]],
+    sizes: Sequence[tuple[int, int, bool]],
+    corners_: Sequence[tuple[int, int, bool]],
+    resolution: float,
+) -> tuple[Placement, ...]:
+    """Grid corners -> real placements, each part centred in its grid cell."""
+    out = []
+    for (pid, pt), (w, h, _), (x, y, rot) in zip(items, sizes, corners_, strict=True):
+        ww, hh = (h, w) if rot else (w, h)
+        out.append(
+            Placement(
+                part=pid,
+                type=pt.id,
+                x=(2 * x + ww) * resolution / 2.0,
+                y=(2 * y + hh) * resolution / 2.0,
+                theta=90.0 if rot else 0.0,
+                w=pt.width,
+                h=pt.height,
+            )
+        )
+    return tuple(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# Memoised oracle on part multisets
+# ---------------------------------------------------------------------------------------------
+
+#: Layout of a multiset by part type: per type, a list of (x, y, theta) centres.
+TypedLayout = dict[str, list[tuple[float, float, float]]]
+
+
+@dataclass
+class _FitCache:
+    """Known answers for one (tray, part types, resolution): monotone in the multiset, so a
+    sub-multiset of a fitting one fits, and a super-multiset of a non-fitting one does not."""
+
+    fits: list[tuple[dict[str, int], TypedLayout]] = field(default_factory=list)
+    nofit: list[dict[str, int]] = field(default_factory=list)
+    unknown: dict[frozenset[tuple[str, int]], float] = field(default_factory=dict)
+    solves: int = 0
+
+
+_CACHES: dict[tuple[Any, ...], _FitCache] = {}
+
+
+def _cache_for(
+    tray: _Rect, part_types: Mapping[str, PartType], resolution: float, reach: ReachGrid | None
+) -> _FitCache:
+    key = (
+        tray.width,
+        tray.height,
+        resolution,
+        tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in part_types.values())),
+        None
+        if reach is None
+        else (reach.reachable.tobytes(), reach.reachable.shape, reach.cell_size),
+    )
+    return _CACHES.setdefault(key, _FitCache())
+
+
+def _leq(a: Mapping[str, int], b: Mapping[str, int]) -> bool:
+    return all(b.get(k, 0) >= n for k, n in a.items())
+
+
+def fit_counts(
+    tray: _Rect,
+    part_types: Mapping[str, PartType],
+    counts: Mapping[str, int],
+    *,
+    time_limit: float = 2.0,
+    resolution: float = 1.0,
+    workers: int = 2,
+    seed: int = 0,
+    reach: ReachGrid | None = None,
+) -> tuple[bool | None, TypedLayout | None]:
+    """Whether a part multiset fits, with a layout by type when it does (memoised).
+
+    Order of checks: cached answers (using monotonicity), the pre-search tests of
+    :mod:`~bilevel_kit.models.packing_bounds`, the shelf heuristic, then CP-SAT. ``None`` =
+    unknown within ``time_limit``; an unknown answer is retried only with a longer limit.
+    """
+    counts = {k: int(n) for k, n in counts.items() if n > 0}
+    cache = _cache_for(tray, part_types, resolution, reach)
+    for known, layout in cache.fits:
+        if _leq(counts, known):
+            return True, {k: layout[k][:n] for k, n in counts.items()}
+    for known in cache.nofit:
+        if _leq(known, counts):
+            return False, None
+    key = frozenset(counts.items())
+    if cache.unknown.get(key, -1.0) >= time_limit:
+        return None, None
+    from ..heuristics.shelf import kit_items
+
+    items = kit_items(part_types, counts)
+    cache.solves += 1
+    res = pack(
+        tray,
+        items,
+        objective="feasible",
+        resolution=resolution,
+        time_limit=time_limit,
+        workers=workers,
+        seed=seed,
+        reach=reach,
+    )
+    if res.status == "infeasible":
+        cache.nofit.append(counts)
+        return False, None
+    if res.layout is None:
+        cache.unknown[key] = time_limit
+        return None, None
+    typed: TypedLayout = {}
+    for p in res.layout:
+        typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
+    cache.fits.append((counts, typed))
+    return True, typed
+
+
+def kit_fits(
+    instance: Instance,
+    part_counts: Mapping[str, int],
+    time_limit: float = 2.0,
+    *,
+    resolution: float = 1.0,
+) -> bool | None:
+    """Cheap memoised oracle: do these parts (type -> count) fit on the instance's tray?"""
+    return _fit_on_tray(instance, part_counts, time_limit, resolution)[0]
+
+
+def _fit_on_tray(
+    instance: Instance, counts: Mapping[str, int], time_limit: float, resolution: float
+) -> tuple[bool | None, TypedLayout | None]:
+    """:func:`fit_counts` on the instance's tray and part types, within the robot's reach."""
+    from ..reachability import reach_grid
+
+    return fit_counts(
+        instance.tray,
+        instance.part_types,
+        counts,
+        time_limit=time_limit,
+        resolution=resolution,
+        reach=reach_grid(instance),
+    )
+
+
+def kit_layout(
+    instance: Instance,
+    task_ids: Sequence[str],
+    *,
+    time_limit: float = 2.0,
+    resolution: float = 1.0,
+) -> tuple[Placement, ...] | None:
+    """A non-overlapping layout for the parts of these tasks (part ids ``task:type:j``), or
+    None when they do not fit or the answer is unknown."""
+    ok, typed = _fit_on_tray(instance, instance.kit_parts(task_ids), time_limit, resolution)
+    if not ok or typed is None:
+        return None
+    return typed_to_placements(instance, task_ids, typed)
+
+
+def typed_to_placements(
+    instance: Instance, task_ids: Sequence[str], typed: TypedLayout
+) -> tuple[Placement, ...]:
+    """Hand out the slots of a by-type layout to the tasks' parts, in task order."""
+    used = dict.fromkeys(typed, 0)
+    out = []
+    for tid in task_ids:
+        for ptype, n in instance.task_by_id[tid].parts:
+            pt = instance.part_types[ptype]
+            for j in range(1, n + 1):
+                x, y, theta = typed[ptype][used[ptype]]
+                used[ptype] += 1
+                out.append(
+                    Placement(
+                        part=f"{tid}:{ptype}:{j}",
+                        type=ptype,
+                        x=x,
+                        y=y,
+                        theta=theta,
+                        w=pt.width,
+                        h=pt.height,
+                    )
+                )
+    return tuple(out)
+
+
+def clear_cache() -> None:
+    """Forget every memoised packing answer (tests, benchmarks)."""
+    _CACHES.clear()

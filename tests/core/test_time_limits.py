@@ -1,0 +1,124 @@
+"""Time limits end to end: every registered method (and ``bilevel-kit pack``) returns within
+``T + max(2 s, 5 %)`` on an instance that needs the whole budget, with an honest status (a
+valid bound never above the objective) and a plan the independent checker accepts."""
+
+from __future__ import annotations
+
+import json
+import random
+import time
+
+import pytest
+
+from bilevel_kit import check, solve
+from bilevel_kit.errors import UsageError
+from bilevel_kit.generate import generate
+from bilevel_kit.instance import from_dict
+from bilevel_kit.methods import REGISTRY, Status
+
+pytest.importorskip("ortools")
+T = 4.0
+
+
+def allowed(t: float) -> float:
+    return t + max(2.0, 0.05 * t)
+
+
+#: The instance per method: an in-tree of 60 tasks, except the MILP (20: it builds its model
+#: within the budget and then needs all of it) and bilevel-milp (the paper's table: its column
+#: MILP needs minutes there; it refuses more than 16 tasks).
+DOCS = {"milp": ("intree", 20), "bilevel-milp": ("table", 1)}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", list(REGISTRY))
+def test_method_honours_its_time_limit(method):
+    family, size = DOCS.get(method, ("intree", 60))
+    inst = from_dict(generate(family, size, seed=1))
+    t0 = time.perf_counter()
+    res = solve(inst, method, time_limit=T, seed=0)
+    wall = time.perf_counter() - t0
+    assert wall <= allowed(T), f"{method}: {wall:.2f} s for a {T} s limit"
+    assert res.status in (Status.OPTIMAL, Status.FEASIBLE, Status.UNKNOWN)
+    assert res.bound is not None
+    if res.plan is None:  # bilevel-milp on the table: no incumbent within 4 s
+        assert res.status == Status.UNKNOWN
+        return
+    assert check(inst, res.plan) == []
+    assert res.bound <= res.objective + 1e-6
+
+
+@pytest.mark.slow
+def test_cpsat_warm_start_gets_a_share_of_the_budget():
+    """The greedy-ce warm start alone used to run ~30 s on this instance (issue 13)."""
+    inst = from_dict(generate("intree", 30, seed=1))
+    res = solve(inst, "cpsat", time_limit=T)
+    assert res.wall_time_s <= allowed(T)
+    # greedy-ce gets 30 % of T as its own limit, which it may overrun by about a second
+    assert res.extra["hint_time_s"] < T
+    assert check(inst, res.plan) == []
+
+
+def test_a_model_over_the_memory_limit_is_refused_before_it_is_built(monkeypatch):
+    from bilevel_kit.models import budget
+
+    monkeypatch.setattr(budget, "MEMORY_LIMIT", budget.BASE_MEMORY + 1000)
+    inst = from_dict(generate("intree", 12, seed=1))
+    for method in ("cpsat", "milp"):
+        with pytest.raises(UsageError, match=r"task x kit variables.*memory limit"):
+            solve(inst, method, time_limit=5.0, hint="none") if method == "cpsat" else solve(
+                inst, method, time_limit=5.0
+            )
+
+
+def test_the_cli_exits_2_naming_the_size(tmp_path, monkeypatch, capsys):
+    """1,000 tasks without overheads or delivery time, so no kit cap: the CP-SAT model
+    (~10^6 task x kit variables) is refused with exit 2, never built. (The closed-form
+    shortcut is switched off: on this human-bound in-tree the quick plan is already optimal.)"""
+    from bilevel_kit.cli import main
+    from bilevel_kit.models.cpsat import method
+
+    monkeypatch.setattr(method, "closed_form_plan", lambda *a, **k: None)
+    doc = generate("intree", 1000, seed=0)
+    doc.update(delivery_time=0.0, kit_overhead={"robot": 0.0, "human": 0.0})
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(doc))
+    code = main(["solve", str(path), "-m", "cpsat", "--time-limit", "20", "-p", "hint=none"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "memory limit" in err and "task x kit variables" in err
+
+
+def perfect_packing(seed: int, n: int = 25) -> dict:
+    """A pack file of n rectangles cut from the 100 x 100 tray by guillotine cuts: a zero-waste
+    (perfect) packing exists, which is hard to find for a general model."""
+    rng = random.Random(seed)
+    rects = [(100, 100)]
+    while len(rects) < n:
+        rects.sort(key=lambda r: -r[0] * r[1])
+        w, h = rects.pop(0)
+        if w >= h:
+            c = rng.randint(w // 3, 2 * w // 3)
+            rects += [(c, h), (w - c, h)]
+        else:
+            c = rng.randint(h // 3, 2 * h // 3)
+            rects += [(w, c), (w, h - c)]
+    items = [
+        {"id": f"i{k}", "width": float(w), "height": float(h), "count": 1, "rotatable": True}
+        for k, (w, h) in enumerate(rects)
+    ]
+    return {"tray": {"width": 100.0, "height": 100.0}, "items": items}
+
+
+@pytest.mark.slow
+def test_pack_honours_its_time_limit(tmp_path, capsys):
+    from bilevel_kit.cli import main
+
+    path = tmp_path / "perfect.json"
+    path.write_text(json.dumps(perfect_packing(1)))
+    t0 = time.perf_counter()
+    code = main(["pack", str(path), "--time-limit", "3", "--out", str(tmp_path / "lay.json")])
+    wall = time.perf_counter() - t0
+    assert wall <= allowed(3.0), f"pack: {wall:.2f} s for a 3 s limit"
+    doc = json.loads((tmp_path / "lay.json").read_text())
+    assert (code, doc["status"]) in ((0, "feasible"), (3, "unknown"))  # never "infeasible"
