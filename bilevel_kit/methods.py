@@ -3,7 +3,8 @@
 A method is a function ``fn(instance, options, *, seed, time_limit) -> MethodOutput`` whose
 ``options`` is an instance of the method's own frozen options dataclass. Both are registered
 here by name and import path, so the CLI looks methods up without importing heavy back-ends
-(OR-Tools, Pyomo ...) until one is used, and a new method is one :func:`register` call.
+(OR-Tools, Pyomo ...) until one is used, and a new method is one :func:`register` call (from
+this package, a test, or a plugin: docs/extending.md).
 :func:`solve` validates the loose ``key=value`` options centrally
 (:func:`bilevel_kit.options.parse_options`): an unknown key or a bad value is a
 :class:`~bilevel_kit.errors.UsageError` naming the method and the key.
@@ -28,6 +29,7 @@ from .instance import Instance
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
 from .progress import Sink, reporting
+from .registry import Registry
 from .validate import timeline_params
 
 
@@ -115,12 +117,14 @@ class MethodSpec(Registered):
         return fn
 
 
-REGISTRY: dict[str, MethodSpec] = {}
+#: Every method, built-in and from plugins (:mod:`bilevel_kit.registry`), by name.
+REGISTRY: Registry[MethodSpec] = Registry("method")
 
 
 def register(name: str, target: str, summary: str, options: str) -> None:
-    """Add a method (by import path, so registration costs no import)."""
-    REGISTRY[name] = MethodSpec(name, target, summary, options)
+    """Add a method by import paths (``"module:function"``, ``"module:OptionsClass"``), so
+    registering imports nothing; a name already registered is a :class:`UsageError`."""
+    REGISTRY.add(MethodSpec(name, target, summary, options))
 
 
 def method_names() -> list[str]:
@@ -128,12 +132,9 @@ def method_names() -> list[str]:
 
 
 def get_method(name: str) -> MethodSpec:
-    try:
-        return REGISTRY[name]
-    except KeyError:
-        raise UsageError(
-            f"unknown method {name!r}; choose from {', '.join(method_names())}"
-        ) from None
+    if name not in REGISTRY:
+        raise UsageError(f"unknown method {name!r}; choose from {', '.join(method_names())}")
+    return REGISTRY[name]
 
 
 def check_seed(seed: Any) -> int:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 from ..errors import UsageError
 from ..options import Registered, import_target
+from ..registry import Registry
 
 if TYPE_CHECKING:
     from ..instance import Instance
@@ -38,18 +39,21 @@ class PolicyRegistry(Mapping[str, "type[Policy]"]):
     """Policy name -> class (imported lazily); :meth:`spec` gives the registration."""
 
     def __init__(self) -> None:
-        self._specs: dict[str, PolicySpec] = {}
+        self._specs: Registry[PolicySpec] = Registry("policy")
 
     def register(self, name: str, target: str, summary: str, options: str | None = None) -> None:
-        self._specs[name] = PolicySpec(name, target, summary, options)
+        """Add a policy by import paths; a name already registered is a :class:`UsageError`."""
+        self._specs.add(PolicySpec(name, target, summary, options))
+
+    def remove(self, name: str) -> None:
+        self._specs.remove(name)
 
     def spec(self, name: str) -> PolicySpec:
-        try:
-            return self._specs[name]
-        except KeyError:
+        if name not in self._specs:
             raise UsageError(
                 f"unknown policy {name!r}; policies are {', '.join(sorted(self._specs))}"
-            ) from None
+            )
+        return self._specs[name]
 
     def __getitem__(self, name: str) -> type[Policy]:
         return self._specs[name].load()

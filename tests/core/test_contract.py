@@ -7,23 +7,16 @@ where the machine's load let it get), the bound never exceeds the objective, the
 from __future__ import annotations
 
 import pytest
+from contract import INSTANCES, assert_contract
 
-from bilevel_kit import UsageError, check, load, solve
-from bilevel_kit.methods import REGISTRY, Status
+from bilevel_kit import UsageError, load, solve
+from bilevel_kit.methods import REGISTRY
 
 FAST = {
     "greedy-ce": {"samples": 60, "elite": 10, "max_iter": 30},
     "cpsat": {"workers": 1},  # one worker: CP-SAT is deterministic for a given seed
     "bilevel-milp": {"lower": "ce", "pack_time_limit": 5.0},  # packing decided, not timed out
 }
-INSTANCES = [
-    "tiny.json",
-    "stool.json",
-    "hrc_table.json",
-    "generated/intree_n8_s0.json",
-    "generated/sp_n8_s0.json",
-]
-EXACT = {"cpsat", "milp", "bilevel-milp"}
 SLOW = {("bilevel-milp", "hrc_table.json")}  # its column MILP needs minutes on the table
 
 
@@ -36,31 +29,7 @@ def _cases():
 
 @pytest.mark.parametrize(("method", "name"), list(_cases()))
 def test_contract(method, name, root):
-    inst = load(root / "instances" / name)
-    params = FAST.get(method, {})
-    first = solve(inst, method, seed=3, time_limit=30, **params)
-    assert isinstance(first.status, Status)
-    assert first.plan is not None, f"{method} gave no plan on {name}"
-    assert check(inst, first.plan) == []
-    assert first.bound is None or first.bound <= first.objective + 1e-6
-    if first.status == Status.OPTIMAL and first.status_objective == "makespan":
-        assert first.gap == pytest.approx(0.0, abs=1e-6)
-    if method == "bilevel-milp":
-        assert first.status_objective == "J" and "(for J)" in first.status_text
-    again = solve(inst, method, seed=3, time_limit=30, **params)
-    if method in EXACT and Status.OPTIMAL not in (first.status, again.status):
-        # stopped by the wall clock: where the search stood depends on the machine's load
-        assert again.status != Status.OPTIMAL or first.status != Status.OPTIMAL
-        return
-    if method == "bilevel-milp" and not all(
-        r.extra.get("local_search_converged", True) and r.extra["lower_level_cut"] == 0
-        for r in (first, again)
-    ):
-        # its warm start's local search or a kit's packing was stopped by the wall clock: the
-        # MILP may pick another plan, or a kit another layout: both must still be valid
-        assert again.plan is not None and check(inst, again.plan) == []
-        return
-    assert again.plan == first.plan
+    assert_contract(load(root / "instances" / name), method, FAST.get(method, {}))
 
 
 @pytest.mark.parametrize("method", list(REGISTRY))

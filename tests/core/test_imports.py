@@ -31,6 +31,7 @@ CORE = (
     "fitness",
     "reachability",
     "methods",
+    "registry",
     "options",
     "errors",
     "atomic",

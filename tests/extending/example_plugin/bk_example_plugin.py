@@ -1,0 +1,107 @@
+"""The worked example of docs/extending.md: a method written outside the package.
+
+``pairs`` puts ``size`` consecutive tasks of the topological order into each kit (fewer where
+their parts do not fit the tray), laid out by the shelf packer. It is deliberately simple: a
+baseline between Single Task (``size=1``) and Whole Assembly, and on the paper's table a
+surprisingly good one (docs/extending.md says by how much).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from bilevel_kit import Instance, Kit, KitDoesNotFit, MethodOutput, Plan, topological_order
+from bilevel_kit.heuristics.baselines import packed_kit
+from bilevel_kit.methods import Status
+
+if TYPE_CHECKING:
+    from bilevel_kit.sim import SimParams, SimState
+
+
+@dataclass(frozen=True)
+class PairsOptions:
+    """Every option is typed and documented: ``-p size=3`` is checked before the method runs."""
+
+    size: int = field(
+        default=2, metadata={"help": "tasks per kit (fewer where they do not fit)", "min": 1}
+    )
+
+
+def pairs(
+    instance: Instance,
+    options: PairsOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Consecutive groups of the topological order; a group that does not fit is shortened."""
+    order = topological_order(instance)
+    kits = []
+    start = 0
+    while start < len(order):
+        size = min(options.size, len(order) - start)
+        while True:
+            tasks = order[start : start + size]
+            try:
+                kits.append(packed_kit(instance, tasks, f"kit of tasks {', '.join(tasks)}"))
+                break
+            except KitDoesNotFit:
+                if size == 1:
+                    raise  # one task alone does not fit: no plan exists
+                size -= 1
+        start += size
+    # a plan, not a proof: FEASIBLE, and no bound of its own (solve() adds the closed forms)
+    return MethodOutput(Plan(tuple(kits)), Status.FEASIBLE)
+
+
+class PairsPolicy:
+    """The same rule decided online in the shop-floor simulation: at each epoch, the next
+    ``size`` undone tasks of the topological order (fewer where they do not fit)."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        *,
+        seed: int = 0,
+        params: SimParams | None = None,
+        options: PairsOptions = PairsOptions(),
+    ) -> None:
+        self.instance = instance
+        self.size = options.size
+        self.order = topological_order(instance)
+
+    def reset(self) -> None:
+        """No state survives a run: the done set in the state says where we are."""
+
+    def decide(self, state: SimState) -> Kit | None:
+        left = [t for t in self.order if t not in state.done]
+        if not left:
+            return None  # everything kitted: the robot stops
+        for size in range(min(self.size, len(left)), 0, -1):
+            try:
+                return packed_kit(self.instance, left[:size], f"kit of {', '.join(left[:size])}")
+            except KitDoesNotFit:
+                if size == 1:
+                    raise
+        raise AssertionError("unreachable")
+
+
+def register_plugin() -> None:
+    """The plugin's entry point (group ``bilevel_kit.plugins``): register by import path, so
+    nothing above is imported until the method or the policy is used."""
+    from bilevel_kit.methods import register
+    from bilevel_kit.sim.registry import POLICIES
+
+    register(
+        "pairs",
+        "bk_example_plugin:pairs",
+        "worked example: consecutive tasks of the topological order, `size` per kit",
+        "bk_example_plugin:PairsOptions",
+    )
+    POLICIES.register(
+        "pairs",
+        "bk_example_plugin:PairsPolicy",
+        "worked example: the next `size` undone tasks of the topological order per kit",
+        options="bk_example_plugin:PairsOptions",
+    )
