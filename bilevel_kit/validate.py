@@ -24,7 +24,7 @@ from typing import Any
 
 from . import geometry
 from .instance import Instance
-from .plan import Kit, KitTimes, Plan, evaluate
+from .plan import Kit, KitTimes, Placement, Plan, evaluate
 
 #: Absolute tolerance (s) when comparing reported times with the evaluator's.
 TIME_TOL = 1e-6
@@ -261,24 +261,38 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
 
 
 def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
-    out: list[Violation] = []
+    """Kit ``k``'s layout: each placement on its own, the parts against the tasks' parts,
+    reachability (when the instance asks for it), then the overlapping pairs."""
     types = instance.part_types
-    need: Counter[str] = Counter()
-    for t in kit.tasks:
-        if t in instance.task_by_id:
-            for p, n in instance.task_by_id[t].parts:
-                need[p] += n
     tray = instance.tray
     # The geometry (one test for the checker and every layout search) runs on the parts it can
     # place: a known type (its own footprint, not the drawn one) and a finite position.
     shapes = [
         replace(pl, w=types[pl.type].width, h=types[pl.type].height)
         for pl in kit.layout
-        if pl.type in types and all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta))
+        if pl.type in types and _finite(pl)
     ]
     faults = geometry.layout_violations(shapes, tray.width, tray.height)
     outside = {f.index for f in faults if f.kind == "outside_tray"}
-    have: Counter[str] = Counter()
+    out = _check_placements(instance, kit, k, outside)
+    out += _check_kit_parts(instance, kit, k)
+    if instance.reachability:
+        out += _check_reach(instance, kit, k)
+    out += _list_overlaps(shapes, faults, k)
+    return out
+
+
+def _finite(pl: Placement) -> bool:
+    return all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta))
+
+
+def _check_placements(instance: Instance, kit: Kit, k: int, outside: set[int]) -> list[Violation]:
+    """Each placement: a fresh part id, a known type, its type's footprint, a finite position,
+    no rotation of a part that may not rotate, inside the tray (``outside``: the indices, among
+    the placeable parts, that the geometry found sticking out)."""
+    out: list[Violation] = []
+    types = instance.part_types
+    tray = instance.tray
     ids: set[str] = set()
     n_shapes = 0
     for pl in kit.layout:
@@ -296,7 +310,6 @@ def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
                 )
             )
             continue
-        have[pl.type] += 1
         pt = types[pl.type]
         if not (
             math.isclose(pl.w, pt.width, abs_tol=geometry.TOL)
@@ -310,7 +323,7 @@ def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
                     k,
                 )
             )
-        if not all(math.isfinite(v) for v in (pl.x, pl.y, pl.theta)):
+        if not _finite(pl):
             out.append(
                 Violation("outside_tray", f"kit {k}: part {pl.part!r} has a non-finite position", k)
             )
@@ -334,30 +347,55 @@ def _check_layout(instance: Instance, kit: Kit, k: int) -> list[Violation]:
                 )
             )
         n_shapes += 1
-    if have != need:
-        diff = []
-        for p in sorted(set(need) | set(have)):
-            if need[p] != have[p]:
-                diff.append(f"{p}: needs {need[p]}, has {have[p]}")
-        out.append(
-            Violation(
-                "parts_mismatch",
-                f"kit {k}: parts do not match its tasks (" + "; ".join(diff) + ")",
-                k,
-            )
-        )
-    if instance.reachability:
-        from .reachability import unreachable
+    return out
 
-        for part in unreachable(instance, [p for p in kit.layout if p.type in types]):
-            out.append(
-                Violation(
-                    "unreachable",
-                    f"kit {k}: part {part!r} lies where the Sawyer cannot place it "
-                    "(its centre is in an unreachable cell of the reach map)",
-                    k,
-                )
-            )
+
+def _check_kit_parts(instance: Instance, kit: Kit, k: int) -> list[Violation]:
+    """The placed parts of known types, counted by type, against what the kit's tasks need."""
+    need: Counter[str] = Counter()
+    for t in kit.tasks:
+        if t in instance.task_by_id:
+            for p, n in instance.task_by_id[t].parts:
+                need[p] += n
+    have = Counter(pl.type for pl in kit.layout if pl.type in instance.part_types)
+    if have == need:
+        return []
+    diff = [
+        f"{p}: needs {need[p]}, has {have[p]}"
+        for p in sorted(set(need) | set(have))
+        if need[p] != have[p]
+    ]
+    return [
+        Violation(
+            "parts_mismatch",
+            f"kit {k}: parts do not match its tasks (" + "; ".join(diff) + ")",
+            k,
+        )
+    ]
+
+
+def _check_reach(instance: Instance, kit: Kit, k: int) -> list[Violation]:
+    """Parts whose centre the Sawyer cannot reach (docs/formats.md, ``reachability``)."""
+    from .reachability import unreachable
+
+    placed = [p for p in kit.layout if p.type in instance.part_types]
+    return [
+        Violation(
+            "unreachable",
+            f"kit {k}: part {part!r} lies where the Sawyer cannot place it "
+            "(its centre is in an unreachable cell of the reach map)",
+            k,
+        )
+        for part in unreachable(instance, placed)
+    ]
+
+
+def _list_overlaps(
+    shapes: Sequence[Placement], faults: Sequence[geometry.LayoutViolation], k: int
+) -> list[Violation]:
+    """One violation per overlapping pair, up to :data:`MAX_OVERLAPS_LISTED`, then one that
+    says more were left out."""
+    out: list[Violation] = []
     listed = 0
     for f in faults:
         if f.kind == "overlap":

@@ -33,7 +33,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -353,24 +353,107 @@ def run_horizon(
     """
     t0 = time.perf_counter()
     out = Path(out_dir)
-    if jobs < 1:
-        raise UsageError(f"jobs must be >= 1, got {jobs}")
-    horizons = tuple(sorted(set(horizons or (QUICK_HORIZONS if quick else HORIZONS))))
-    if horizons[0] < 1:
-        raise UsageError(f"horizons must be >= 1, got {horizons}")
-    ref_tl = reference_time_limit or (QUICK_REFERENCE_TIME_LIMIT if quick else REFERENCE_TIME_LIMIT)
-    windows = _checked_windows(windows or (QUICK_WINDOWS if quick else WINDOWS))
-    mats = tuple(mats or (QUICK_SIM_MATS if quick else SIM_MATS))
-    mttfs = tuple(mttfs or SIM_MTTFS)
-    reps = reps or (QUICK_SIM_REPS if quick else SIM_REPS)
+    grid = _grid(quick, jobs, horizons, reference_time_limit, windows, mats, mttfs, reps)
     paths = planning_instances(
         out, QUICK_TABLE_UNITS if quick else TABLE_UNITS, not quick, instances
     )
-    cells = [CompareCell(p, EXACT, seed=seed, time_limit=ref_tl) for p in paths]
+    part_a = _run_planning(paths, grid, out, quick, seed, jobs, progress)
+    part_b, cal = _Part([], 0, 0, []), None
+    if simulation:
+        part_b, timing, cal = _run_simulation(grid, out, quick, seed, units, timing, jobs, progress)
+    total = part_a.cells + part_b.cells
+    computed = part_a.computed + part_b.computed
+    result: dict[str, Any] = {
+        "quick": quick,
+        "seed": seed,
+        "horizons": list(grid.horizons),
+        "instances": paths,
+        "plan_time_limit_s": PLAN_TIME_LIMIT,
+        "reference_time_limit_s": grid.ref_tl,
+        "windows": list(grid.windows) if simulation else [],
+        "delay_cells": [[a, b] for a in grid.mats for b in grid.mttfs] if simulation else [],
+        "reps": grid.reps if simulation else 0,
+        "units": units if simulation else None,
+        "timing": asdict(timing) if timing is not None else None,
+        "calibration": cal,
+        "cells": total,
+        "computed": computed,
+        "reused": total - computed,
+        "failed": part_a.failed + part_b.failed,
+        "summary": horizon_summary(part_a.rows),
+    }
+    files = _write_outputs(out, part_a.rows, part_b.rows, quick, grid.ref_tl, (units, grid.reps))
+    result["wall_s"] = time.perf_counter() - t0
+    result["files"] = {k: str(v) for k, v in {**files, "json": out / "horizon.json"}.items()}
+    write_json(out / "horizon.json", result)
+    return result
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The points of one run: the arguments given, else the full or the quick defaults."""
+
+    horizons: tuple[int, ...]
+    ref_tl: float
+    windows: tuple[int, ...]
+    mats: tuple[float, ...]
+    mttfs: tuple[float, ...]
+    reps: int
+
+
+def _grid(
+    quick: bool,
+    jobs: int,
+    horizons: Sequence[int] | None,
+    reference_time_limit: float | None,
+    windows: Sequence[int] | None,
+    mats: Sequence[float] | None,
+    mttfs: Sequence[float] | None,
+    reps: int | None,
+) -> _Grid:
+    """Check the arguments and fill in the defaults (before any cell runs)."""
+    if jobs < 1:
+        raise UsageError(f"jobs must be >= 1, got {jobs}")
+    hs = tuple(sorted(set(horizons or (QUICK_HORIZONS if quick else HORIZONS))))
+    if hs[0] < 1:
+        raise UsageError(f"horizons must be >= 1, got {hs}")
+    return _Grid(
+        horizons=hs,
+        ref_tl=reference_time_limit
+        or (QUICK_REFERENCE_TIME_LIMIT if quick else REFERENCE_TIME_LIMIT),
+        windows=_checked_windows(windows or (QUICK_WINDOWS if quick else WINDOWS)),
+        mats=tuple(mats or (QUICK_SIM_MATS if quick else SIM_MATS)),
+        mttfs=tuple(mttfs or SIM_MTTFS),
+        reps=reps or (QUICK_SIM_REPS if quick else SIM_REPS),
+    )
+
+
+@dataclass
+class _Part:
+    """What one part of the study yields: its table rows, its cell count, the cells computed
+    now (the others were reused from ``cells/``) and the failed cells."""
+
+    rows: list[dict[str, Any]]
+    cells: int
+    computed: int
+    failed: list[dict[str, Any]]
+
+
+def _run_planning(
+    paths: Sequence[str],
+    grid: _Grid,
+    out: Path,
+    quick: bool,
+    seed: int,
+    jobs: int,
+    progress: bool | None,
+) -> _Part:
+    """Part A: the exact reference once per instance, then greedy-ce at each horizon."""
+    cells = [CompareCell(p, EXACT, seed=seed, time_limit=grid.ref_tl) for p in paths]
     cells += [
         CompareCell(p, GREEDY, seed=seed, time_limit=PLAN_TIME_LIMIT, params={"horizon": n})
         for p in paths
-        for n in horizons
+        for n in grid.horizons
     ]
     recs, computed = run_cells_counted(
         cells, horizon_cell, cell_dir=out / "cells", jobs=jobs, progress=progress, desc="horizon"
@@ -384,67 +467,53 @@ def run_horizon(
     rows = planning_rows(
         [r for r in ok if r["method"] == GREEDY], [r for r in ok if r["method"] == EXACT], quick
     )
-    total = len(cells)
-    sim_rows: list[dict[str, Any]] = []
+    return _Part(rows, len(cells), computed, failed)
+
+
+def _run_simulation(
+    grid: _Grid,
+    out: Path,
+    quick: bool,
+    seed: int,
+    units: int,
+    timing: TimingModel | None,
+    jobs: int,
+    progress: bool | None,
+) -> tuple[_Part, TimingModel, dict[str, Any] | None]:
+    """Part B: at no delay and at each delay cell, ``optimized`` and the rolling policy at
+    each window; returns the part, the timing used and its calibration (None when given)."""
+    inst, table = load_instance(None)
     cal: dict[str, Any] | None = None
-    if simulation:
-        inst, table = load_instance(None)
-        if timing is None:
-            timing, cal = calibrated_timing(inst, quick)
-        common: dict[str, Any] = {
-            "instance": table,
-            "seeds": tuple(participant_seeds(seed, reps)),
-            "units": units,
-            "timing": asdict(timing),
-        }
-        delays: list[tuple[float | None, float | None]] = [(None, None)]
-        delays += [(float(a), float(b)) for a in mats for b in mttfs]
-        sim_cells = []
-        for mat, mttf in delays:
-            sim_cells.append(Fig6Cell(mat=mat, mttf=mttf, policies=(OPT,), **common))
-            sim_cells += [
-                Fig6Cell(
-                    mat=mat,
-                    mttf=mttf,
-                    policies=(ROLLING,),
-                    policy_options={"window": w, "supply_window": w},
-                    **common,
-                )
-                for w in windows
-            ]
-        sim_recs, n = run_cells_counted(
-            sim_cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
-            desc="horizon sim",
-        )  # fmt: skip
-        computed += n
-        total += len(sim_cells)
-        failed += [{"key": r["key"], "error": r["error"]} for r in sim_recs if is_failed(r)]
-        sim_rows = window_rows([r for r in sim_recs if not is_failed(r)], quick)
-    summary = horizon_summary(rows)
-    result: dict[str, Any] = {
-        "quick": quick,
-        "seed": seed,
-        "horizons": list(horizons),
-        "instances": paths,
-        "plan_time_limit_s": PLAN_TIME_LIMIT,
-        "reference_time_limit_s": ref_tl,
-        "windows": list(windows) if simulation else [],
-        "delay_cells": [[a, b] for a in mats for b in mttfs] if simulation else [],
-        "reps": reps if simulation else 0,
-        "units": units if simulation else None,
-        "timing": asdict(timing) if timing is not None else None,
-        "calibration": cal,
-        "cells": total,
-        "computed": computed,
-        "reused": total - computed,
-        "failed": failed,
-        "summary": summary,
+    if timing is None:
+        timing, cal = calibrated_timing(inst, quick)
+    common: dict[str, Any] = {
+        "instance": table,
+        "seeds": tuple(participant_seeds(seed, grid.reps)),
+        "units": units,
+        "timing": asdict(timing),
     }
-    files = _write_outputs(out, rows, sim_rows, quick, ref_tl, (units, reps))
-    result["wall_s"] = time.perf_counter() - t0
-    result["files"] = {k: str(v) for k, v in {**files, "json": out / "horizon.json"}.items()}
-    write_json(out / "horizon.json", result)
-    return result
+    delays: list[tuple[float | None, float | None]] = [(None, None)]
+    delays += [(float(a), float(b)) for a in grid.mats for b in grid.mttfs]
+    sim_cells = []
+    for mat, mttf in delays:
+        sim_cells.append(Fig6Cell(mat=mat, mttf=mttf, policies=(OPT,), **common))
+        sim_cells += [
+            Fig6Cell(
+                mat=mat,
+                mttf=mttf,
+                policies=(ROLLING,),
+                policy_options={"window": w, "supply_window": w},
+                **common,
+            )
+            for w in grid.windows
+        ]
+    sim_recs, computed = run_cells_counted(
+        sim_cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
+        desc="horizon sim",
+    )  # fmt: skip
+    failed = [{"key": r["key"], "error": r["error"]} for r in sim_recs if is_failed(r)]
+    rows = window_rows([r for r in sim_recs if not is_failed(r)], quick)
+    return _Part(rows, len(sim_cells), computed, failed), timing, cal
 
 
 def _write_outputs(

@@ -288,23 +288,44 @@ def _summaries(rows: Sequence[Mapping[str, Any]], n_studies: int) -> list[dict[s
     return [summarize_study([r for r in rows if r["study"] == j]) for j in range(n_studies)]
 
 
+@dataclass(frozen=True)
+class _Protocol:
+    """The settings the calibration and the sensitivity runs share: the instance, its tray
+    rule and delivery time, the grid size (``quick``), the CE parameters, and the calibration
+    cohort's seed, size and participants."""
+
+    inst: Instance
+    trays: int | str | None
+    delivery_time: float
+    quick: bool
+    ce: CEParams | None
+    n_participants: int
+    calibration_seed: int
+    calibration_studies: int
+
+    def calibration_cohort(self) -> Cohort:
+        return draw_cohort(
+            self.calibration_seed, self.calibration_studies, self.n_participants, CALIBRATION
+        )
+
+    def calibrate(
+        self, cohort: Cohort, design: WithinSubjectModel, base: TimingModel, **fit: Any
+    ) -> dict[str, Any]:
+        """:func:`_calibrate` at the protocol's tray rule and delivery time."""
+        return _calibrate(
+            self.inst, cohort, design, base, self.trays, self.delivery_time, self.quick, **fit
+        )
+
+
 def _sensitivity(
-    inst: Instance,
-    design: WithinSubjectModel,
-    base: TimingModel,
-    quick: bool,
-    seed: int,
-    calibration_seed: int,
-    n_participants: int,
-    n_studies: int,
-    cal_studies: int,
-    ce: CEParams | None,
+    proto: _Protocol, design: WithinSubjectModel, base: TimingModel, seed: int, n_studies: int
 ) -> list[dict[str, Any]]:
     """Refit step 1 at each (d, trays) of :data:`SENSITIVITY` (``within_cv`` kept) and
     evaluate ``n_studies`` fresh studies: the predicted medians and the inside count."""
+    inst, quick, ce = proto.inst, proto.quick, proto.ce
     out: list[dict[str, Any]] = []
-    cal_cohort = draw_cohort(calibration_seed, cal_studies, n_participants, CALIBRATION)
-    cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
+    cal_cohort = proto.calibration_cohort()
+    cohort = draw_cohort(seed, n_studies, proto.n_participants, EVALUATION)
     for d, trays in SENSITIVITY:
         cal = _calibrate(inst, cal_cohort, design, base, trays, d, quick, f_target=None)
         tm = replace(base, **cal["values"])
@@ -451,40 +472,23 @@ def run_user_study(
     """
     t0 = time.perf_counter()
     inst, _ = load_instance(instance)
-    if n_studies is None:
-        n_studies = 5 if quick else EVALUATION_STUDIES
-    if calibration_studies is None:
-        calibration_studies = 2 if quick else CALIBRATION_STUDIES
+    n_studies, calibration_studies = _study_sizes(
+        quick, n_studies, calibration_studies, n_participants
+    )
     if sensitivity is None:
         sensitivity = not quick
-    if n_studies < 2 or calibration_studies < 1 or n_participants < 2:
-        raise UsageError("need n_studies >= 2, calibration_studies >= 1, n_participants >= 2")
     if ce is None and quick:
         ce = QUICK_CE
-    design = design or WithinSubjectModel()
-    base = TimingModel()
-    cal_cohort = draw_cohort(calibration_seed, calibration_studies, n_participants, CALIBRATION)
-    fit = {"targets": targets, "free": free}
-    cal = _calibrate(
-        inst, cal_cohort, design, base, trays, delivery_time, quick, f_target=f_target, ce=ce, **fit
+    proto = _Protocol(
+        inst, trays, delivery_time, quick, ce, n_participants, calibration_seed, calibration_studies
     )
-    cal["f_target"] = f"{f_target[0]} {f_target[1]:g}" if f_target else None
-    design = replace(design, within_cv=cal["within_cv"])
-    timing = replace(base, **cal["values"])
-    if f_target is not None:
-        # step 1 again at the fitted within_cv: the reported fitted values are the final ones
-        cal1 = _calibrate(
-            inst, cal_cohort, design, timing, trays, delivery_time, quick, f_target=None, **fit
-        )
-        timing = replace(timing, **cal1["values"])
-        cal["values"] = cal1["values"]
-        cal["targets"] = cal1["targets"] + [t for t in cal["targets"] if not t["condition"]]
+    base = TimingModel()
+    fit = {"targets": targets, "free": free}
+    cal, design, timing = _fit(proto, design or WithinSubjectModel(), base, fit, f_target)
     cohort = draw_cohort(seed, n_studies, n_participants, EVALUATION)
     params = study_params(timing, trays, ce, delivery_time)
     rows = _study_rows(inst, params, design, cohort, jobs)
     summaries = _summaries(rows, n_studies)
-    fitted = _fitted_keys(cal)
-    table = prediction_table(summaries, fitted)
     eff_trays = inst.with_overrides(trays=trays).trays
     result: dict[str, Any] = {
         "instance": inst.name,
@@ -498,29 +502,72 @@ def run_user_study(
         "design": asdict(design),
         "ce": asdict(ce) if ce is not None else None,
         "calibration": cal,
+        **_predictions(summaries, cal, timing, design, delivery_time, eff_trays),
+    }
+    if sensitivity:
+        result["sensitivity"] = _sensitivity(proto, design, base, seed, 3 if quick else 50)
+    result["wall_s"] = time.perf_counter() - t0
+    _write_study(Path(out_dir), result, rows)
+    return result
+
+
+def _study_sizes(
+    quick: bool, n_studies: int | None, calibration_studies: int | None, n_participants: int
+) -> tuple[int, int]:
+    """The number of evaluation and of calibration studies (defaults: 200 and 10, quick 5 and
+    2), checked with the cohort size: a prediction interval needs two studies at least."""
+    if n_studies is None:
+        n_studies = 5 if quick else EVALUATION_STUDIES
+    if calibration_studies is None:
+        calibration_studies = 2 if quick else CALIBRATION_STUDIES
+    if n_studies < 2 or calibration_studies < 1 or n_participants < 2:
+        raise UsageError("need n_studies >= 2, calibration_studies >= 1, n_participants >= 2")
+    return n_studies, calibration_studies
+
+
+def _fit(
+    proto: _Protocol,
+    design: WithinSubjectModel,
+    base: TimingModel,
+    fit: Mapping[str, Any],
+    f_target: tuple[str, float] | None,
+) -> tuple[dict[str, Any], WithinSubjectModel, TimingModel]:
+    """Step 1 of the protocol on the calibration cohort: ``robot_scale`` and ``o_H`` to the
+    targets and ``within_cv`` to ``f_target`` (``fit``: the targets and the free parameters);
+    with ``f_target``, step 1 again at the fitted ``within_cv`` so that the reported values are
+    the final ones. Returns the calibration record, the design and the timing."""
+    cohort = proto.calibration_cohort()
+    cal = proto.calibrate(cohort, design, base, f_target=f_target, ce=proto.ce, **fit)
+    cal["f_target"] = f"{f_target[0]} {f_target[1]:g}" if f_target else None
+    design = replace(design, within_cv=cal["within_cv"])
+    timing = replace(base, **cal["values"])
+    if f_target is not None:
+        cal1 = proto.calibrate(cohort, design, timing, f_target=None, **fit)
+        timing = replace(timing, **cal1["values"])
+        cal["values"] = cal1["values"]
+        cal["targets"] = cal1["targets"] + [t for t in cal["targets"] if not t["condition"]]
+    return cal, design, timing
+
+
+def _predictions(
+    summaries: Sequence[Mapping[str, Any]],
+    cal: Mapping[str, Any],
+    timing: TimingModel,
+    design: WithinSubjectModel,
+    delivery_time: float,
+    trays: int | None,
+) -> dict[str, Any]:
+    """The result's tables: each paper number's prediction, how many fall inside, the
+    parameters, and the share of studies where OPT vs ST is not significant."""
+    table = prediction_table(summaries, _fitted_keys(cal))
+    return {
         "table": table,
         "inside": dict(zip(("inside", "predicted"), inside_count(table), strict=True)),
-        "parameters": parameter_table(timing, design, cal, delivery_time, eff_trays),
+        "parameters": parameter_table(timing, design, cal, delivery_time, trays),
         "opt_vs_st_not_significant": float(
             np.mean([(s["tukey"]["total"]["OPT-ST"]["p"] or 1) >= 0.05 for s in summaries])
         ),
     }
-    if sensitivity:
-        result["sensitivity"] = _sensitivity(
-            inst,
-            design,
-            base,
-            quick,
-            seed,
-            calibration_seed,
-            n_participants,
-            3 if quick else 50,
-            calibration_studies,
-            ce,
-        )
-    result["wall_s"] = time.perf_counter() - t0
-    _write_study(Path(out_dir), result, rows)
-    return result
 
 
 __all__ = [

@@ -1,0 +1,211 @@
+"""The JSON Schema (draft 2020-12) of the instance format ``bilevel-kit/1`` (docs/formats.md).
+
+The schema checks the structure; the parser then checks what a schema cannot say (unknown
+references, duplicates, cycles, parts larger than the tray). ``bilevel-kit schema`` prints
+:func:`schema`, and docs/formats.md's field tables follow it. Each part of the document has
+its own builder below, in the order the properties appear in the schema.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .model import DEFAULT_HORIZON, DEFAULT_REPAIR_TIME, DEFAULT_WEIGHTS, FORMAT
+from .ranges import MAX_LENGTH, MAX_TIME, MAX_WEIGHT
+
+_NONNEG = {"type": "number", "minimum": 0, "maximum": MAX_TIME}  # times (s)
+_POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_TIME}  # times > 0 (s)
+#: lengths (mm); the lower limit MIN_LENGTH is checked after the schema, with its reason
+_LENGTH = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
+_ID = {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"}
+
+
+def schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of the instance format ``bilevel-kit/1``."""
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": "https://bilevel-kit/schemas/instance-1.json",
+        "title": "bilevel-kit instance",
+        "description": "A just-in-time kitting problem. Lengths in mm, times in s.",
+        "type": "object",
+        "required": ["format", "name", "tray", "part_types", "tasks"],
+        "additionalProperties": False,
+        "properties": {
+            "format": {"const": FORMAT},
+            "name": {"type": "string", "minLength": 1},
+            "description": {"type": "string"},
+            "assumptions": {
+                "type": "array",
+                "items": {"type": "string"},
+                "description": "Every number that had to be assumed, and why.",
+            },
+            "tray": _tray_schema(),
+            "delivery_time": {**_NONNEG, "default": 0.0, "description": "d in the paper (s)"},
+            "kit_overhead": _kit_overhead_schema(),
+            "part_types": {"type": "array", "minItems": 1, "items": _part_type_schema()},
+            "tasks": {"type": "array", "minItems": 1, "items": _task_schema()},
+            "precedence": _precedence_schema(),
+            "weights": _weights_schema(),
+            "horizon": {"type": "integer", "minimum": 1, "default": DEFAULT_HORIZON},
+            "trays": _trays_schema(),
+            "supply": _supply_schema(),
+            "units": {"type": "integer", "minimum": 1, "default": 1},
+            "station": _station_schema(),
+            **_robot_schema(),
+        },
+    }
+
+
+def _tray_schema() -> dict[str, Any]:
+    return {
+        "type": "object",
+        "required": ["width", "height"],
+        "additionalProperties": False,
+        "properties": {"width": _LENGTH, "height": _LENGTH},
+    }
+
+
+def _kit_overhead_schema() -> dict[str, Any]:
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "properties": {
+            "robot": {**_NONNEG, "default": 0.0, "description": "robot time per kit"},
+            "human": {**_NONNEG, "default": 0.0, "description": "human time per kit"},
+        },
+    }
+
+
+def _part_type_schema() -> dict[str, Any]:
+    """One entry of ``part_types``."""
+    return {
+        "type": "object",
+        "required": ["id", "width", "height", "pick_time"],
+        "additionalProperties": False,
+        "properties": {
+            "id": _ID,
+            "name": {"type": "string"},
+            "width": _LENGTH,
+            "height": _LENGTH,
+            "pick_time": _NONNEG,
+            "rotatable": {"type": "boolean", "default": True},
+        },
+    }
+
+
+def _task_schema() -> dict[str, Any]:
+    """One entry of ``tasks``: its parts (type and count) and its human time."""
+    part_request = {
+        "type": "object",
+        "required": ["type", "count"],
+        "additionalProperties": False,
+        "properties": {
+            "type": {"type": "string"},
+            "count": {"type": "integer", "minimum": 1},
+        },
+    }
+    return {
+        "type": "object",
+        "required": ["id", "parts", "human_time"],
+        "additionalProperties": False,
+        "properties": {
+            "id": {**_ID, "pattern": "^[A-Za-z0-9_.:-]+$"},
+            "name": {"type": "string"},
+            "product": {"type": "string", "minLength": 1},
+            "parts": {"type": "array", "items": part_request},
+            "human_time": {
+                "type": "object",
+                "required": ["mean"],
+                "additionalProperties": False,
+                "properties": {"mean": _NONNEG, "sd": {**_NONNEG, "default": 0.0}},
+            },
+            "robot_time": {
+                **_NONNEG,
+                "description": "override of the sum of the parts' pick times",
+            },
+        },
+    }
+
+
+def _precedence_schema() -> dict[str, Any]:
+    return {
+        "type": "array",
+        "items": {
+            "type": "array",
+            "prefixItems": [{"type": "string"}, {"type": "string"}],
+            "minItems": 2,
+            "maxItems": 2,
+        },
+        "description": "edges [a, b]: task a must be finished before task b starts",
+    }
+
+
+def _weights_schema() -> dict[str, Any]:
+    """W1..W7, each described by its default (:data:`~bilevel_kit.instance.DEFAULT_WEIGHTS`)."""
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "properties": {
+            k: {
+                "type": "number",
+                "minimum": 0,
+                "maximum": MAX_WEIGHT,
+                "description": f"default {v}",
+            }
+            for k, v in DEFAULT_WEIGHTS.items()
+        },
+    }
+
+
+def _trays_schema() -> dict[str, Any]:
+    return {
+        "type": ["integer", "null"],
+        "minimum": 1,
+        "default": None,
+        "description": "kit trays in circulation: the robot starts kit k only when the "
+        "tray of kit k - trays is back, i.e. once the human has retrieved its parts "
+        "(the paper's study: 1); absent or null: unlimited",
+    }
+
+
+def _supply_schema() -> dict[str, Any]:
+    """Per part type, the simulator's feeder (docs/simulation.md)."""
+    return {
+        "type": "object",
+        "description": "per part type: Poisson arrivals (mean inter-arrival MAT), "
+        "exponential time to failure (MTTF) and a fixed repair time",
+        "additionalProperties": {
+            "type": "object",
+            "required": ["mat"],
+            "additionalProperties": False,
+            "properties": {
+                "mat": _POS,
+                "mttf": _POS,
+                "repair_time": {**_NONNEG, "default": DEFAULT_REPAIR_TIME},
+            },
+        },
+    }
+
+
+def _station_schema() -> dict[str, Any]:
+    from ..sawyer.station import station_schema
+
+    return station_schema()
+
+
+def _robot_schema() -> dict[str, Any]:
+    """The properties of the Sawyer's reachability rule and of its motion-model times."""
+    return {
+        "reachability": {
+            "type": "boolean",
+            "default": False,
+            "description": "enforce Sawyer reachability of every placement (uses 'station', "
+            "or the default station)",
+        },
+        "reach_resolution": {**_LENGTH, "default": 10.0, "description": "reach map cell (mm)"},
+        "robot_times": {
+            "enum": ["pick_time", "motion"],
+            "default": "pick_time",
+            "description": "'motion': pick times from the Sawyer motion model",
+        },
+    }

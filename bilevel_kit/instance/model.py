@@ -1,0 +1,362 @@
+"""The instance data model: the dataclasses, the expanded (all-units) view and the constants.
+
+An :class:`Instance` holds one product (or a mix) as tasks with a precedence graph, the part
+types the robot kits for them, the tray and the paper's weights; ``units`` copies are built one
+after another, and :attr:`Instance.tasks` / :attr:`Instance.precedence` are the expanded view
+every solver, the evaluator and the checker work on. Reading a file is :mod:`.parser`'s job.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any
+
+from ..errors import InstanceError
+from .ranges import MAX_TIME, MAX_WEIGHT, parse_trays
+
+FORMAT = "bilevel-kit/1"
+
+#: Defaults of the paper's weights W1..W7 (the paper publishes none; docs/errata.md).
+#: Units: W1 per precedence violation (only used when precedence is a penalty, not a hard
+#: constraint), W2 seconds per task in the next kit, W3/W4 per second of robot/human mismatch,
+#: W5 seconds per millimetre of kit fitness, W6 millimetres of fitness per mm^2 of overlap,
+#: W7 seconds per unavailable part.
+DEFAULT_WEIGHTS: dict[str, float] = {
+    "W1": 1000.0,
+    "W2": 1.0,
+    "W3": 1.0,
+    "W4": 1.0,
+    "W5": 0.001,
+    "W6": 10.0,
+    "W7": 30.0,
+}
+DEFAULT_HORIZON = 5
+#: Seconds a failed feeder takes to repair when the supply gives no ``repair_time``.
+DEFAULT_REPAIR_TIME = 30.0
+
+
+class _Rectangle:
+    """The area of a tray or a part: width x height (mm^2)."""
+
+    width: float
+    height: float
+
+    @property
+    def area(self) -> float:
+        return self.width * self.height
+
+
+@dataclass(frozen=True)
+class Tray(_Rectangle):
+    width: float
+    height: float
+
+
+@dataclass(frozen=True)
+class PartType(_Rectangle):
+    """A kind of part; ``rotatable`` parts may lie at any angle on the tray."""
+
+    id: str
+    width: float
+    height: float
+    pick_time: float
+    rotatable: bool = True
+    name: str = ""
+    #: The file's pick time when ``pick_time`` comes from the Sawyer motion model.
+    nominal_pick_time: float | None = None
+
+
+@dataclass(frozen=True)
+class Task:
+    """One assembly task: the human assembles it from the parts the robot kits for it."""
+
+    id: str
+    name: str
+    parts: tuple[tuple[str, int], ...]
+    human_mean: float
+    human_sd: float = 0.0
+    robot_time: float | None = None
+    product: str = ""
+    unit: int = 1
+    base_id: str = ""
+
+
+@dataclass(frozen=True)
+class Supply:
+    """Feeder of one part type for the simulator: Poisson arrivals, exponential failures."""
+
+    mat: float
+    mttf: float | None = None
+    repair_time: float = DEFAULT_REPAIR_TIME
+
+
+@dataclass(frozen=True)
+class Instance:
+    """A kitting problem. Fields mirror the JSON format; see
+    :func:`~bilevel_kit.instance.json_schema.schema`."""
+
+    name: str
+    tray: Tray
+    delivery_time: float
+    kit_overhead_robot: float
+    kit_overhead_human: float
+    part_types: Mapping[str, PartType]
+    base_tasks: tuple[Task, ...]
+    base_precedence: tuple[tuple[str, str], ...]
+    weights: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_WEIGHTS))
+    horizon: int = DEFAULT_HORIZON
+    supply: Mapping[str, Supply] = field(default_factory=dict)
+    units: int = 1
+    description: str = ""
+    assumptions: tuple[str, ...] = ()
+    #: Sawyer station geometry (:class:`bilevel_kit.sawyer.Station`), None if not given.
+    station: Any = None
+    #: Enforce Sawyer reachability of every placement (packers, CE and the checker).
+    reachability: bool = False
+    #: Cell size (mm) of the reach map that defines reachability.
+    reach_resolution: float = 10.0
+    #: ``"pick_time"``: robot times from the parts' pick times; ``"motion"``: each part's pick
+    #: time is the Sawyer motion model's mean pick-and-place time over the reachable tray.
+    robot_times: str = "pick_time"
+    #: Kit trays in circulation (the study's protocol: 1); ``None``: unlimited, the robot may
+    #: run ahead of the human (docs/timeline.md).
+    trays: int | None = None
+    source: str = "<memory>"
+
+    # -- the expanded (all-units) view -------------------------------------------------------
+    @cached_property
+    def tasks(self) -> tuple[Task, ...]:
+        """All tasks of all units; ids get an ``@u`` suffix when ``units > 1``."""
+        if self.units == 1:
+            return tuple(replace(t, base_id=t.base_id or t.id) for t in self.base_tasks)
+        return tuple(
+            replace(t, id=f"{t.id}@{u}", name=f"{t.name} (unit {u})", unit=u, base_id=t.id)
+            for u in range(1, self.units + 1)
+            for t in self.base_tasks
+        )
+
+    @cached_property
+    def precedence(self) -> tuple[tuple[str, str], ...]:
+        """Edges of the expanded graph.
+
+        Within a unit the product's own edges; between units, every sink of product p in unit
+        u precedes every source of p in unit u+1, which (transitively) makes every task of unit
+        u precede every task of the same product in unit u+1.
+        """
+        if self.units == 1:
+            return self.base_precedence
+        succ = {t.id: 0 for t in self.base_tasks}
+        pred = {t.id: 0 for t in self.base_tasks}
+        for a, b in self.base_precedence:
+            succ[a] += 1
+            pred[b] += 1
+        products: dict[str, list[Task]] = {}
+        for t in self.base_tasks:
+            products.setdefault(t.product, []).append(t)
+        edges: list[tuple[str, str]] = []
+        for u in range(1, self.units + 1):
+            edges += [(f"{a}@{u}", f"{b}@{u}") for a, b in self.base_precedence]
+            if u == self.units:
+                continue
+            for members in products.values():
+                sinks = [t.id for t in members if succ[t.id] == 0]
+                sources = [t.id for t in members if pred[t.id] == 0]
+                edges += [(f"{s}@{u}", f"{r}@{u + 1}") for s in sinks for r in sources]
+        return tuple(edges)
+
+    @cached_property
+    def task_by_id(self) -> dict[str, Task]:
+        return {t.id: t for t in self.tasks}
+
+    @cached_property
+    def index(self) -> dict[str, int]:
+        """Position of each task id in :attr:`tasks` (the deterministic tie-break order)."""
+        return {t.id: i for i, t in enumerate(self.tasks)}
+
+    @cached_property
+    def predecessors(self) -> dict[str, frozenset[str]]:
+        """Direct predecessors of each task in the expanded graph."""
+        pred: dict[str, set[str]] = {t.id: set() for t in self.tasks}
+        for a, b in self.precedence:
+            pred[b].add(a)
+        return {k: frozenset(v) for k, v in pred.items()}
+
+    @cached_property
+    def ancestors(self) -> dict[str, frozenset[str]]:
+        """All (transitive) predecessors of each task."""
+        out: dict[str, frozenset[str]] = {}
+        for tid in topological_order(self):
+            acc: set[str] = set()
+            for p in self.predecessors[tid]:
+                acc.add(p)
+                acc |= out[p]
+            out[tid] = frozenset(acc)
+        return out
+
+    # -- durations and parts -----------------------------------------------------------------
+    def robot_time(self, task_id: str) -> float:
+        """Robot kitting time of a task: its override, else the sum of its parts' pick times."""
+        t = self.task_by_id[task_id]
+        if t.robot_time is not None:
+            return t.robot_time
+        return sum(self.part_types[p].pick_time * n for p, n in t.parts)
+
+    def human_time(self, task_id: str) -> float:
+        """Expected human assembly time of a task."""
+        return self.task_by_id[task_id].human_mean
+
+    def kit_parts(self, task_ids: Iterable[str]) -> Counter[str]:
+        """Multiset of part types (type -> count) that a kit holding these tasks needs."""
+        c: Counter[str] = Counter()
+        for tid in task_ids:
+            for p, n in self.task_by_id[tid].parts:
+                c[p] += n
+        return c
+
+    @property
+    def n_tasks(self) -> int:
+        return len(self.tasks)
+
+    # -- variants ----------------------------------------------------------------------------
+    def with_overrides(
+        self,
+        *,
+        delivery_time: float | None = None,
+        weights: Mapping[str, float] | None = None,
+        horizon: int | None = None,
+        units: int | None = None,
+        trays: int | str | None = None,
+    ) -> Instance:
+        """A copy with some fields replaced (the CLI's ``--d``, ``--weights``, ``--trays`` ...).
+
+        ``trays="unlimited"`` lifts the tray limit; ``None`` leaves every field as it is.
+        """
+        changes: dict[str, Any] = {}
+        if trays is not None:
+            changes["trays"] = parse_trays(trays, self.source)
+        if delivery_time is not None:
+            if not math.isfinite(delivery_time) or not 0 <= delivery_time <= MAX_TIME:
+                raise InstanceError(
+                    self.source, "$.delivery_time", f"must be a number in [0, {MAX_TIME:g}] s"
+                )
+            changes["delivery_time"] = float(delivery_time)
+        if weights:
+            unknown = set(weights) - set(DEFAULT_WEIGHTS)
+            if unknown:
+                raise InstanceError(
+                    self.source, "$.weights", f"unknown weight(s) {', '.join(sorted(unknown))}"
+                )
+            for k, v in weights.items():
+                if not (math.isfinite(v) and 0 <= v <= MAX_WEIGHT):
+                    raise InstanceError(
+                        self.source, f"$.weights.{k}", f"must be a number in [0, {MAX_WEIGHT:g}]"
+                    )
+            changes["weights"] = {**self.weights, **{k: float(v) for k, v in weights.items()}}
+        if horizon is not None:
+            if horizon < 1:
+                raise InstanceError(self.source, "$.horizon", "must be >= 1")
+            changes["horizon"] = int(horizon)
+        if units is not None:
+            if units < 1:
+                raise InstanceError(self.source, "$.units", "must be >= 1")
+            changes["units"] = int(units)
+        return replace(self, **changes) if changes else self
+
+    @property
+    def tray_limit(self) -> int | None:
+        """The number of trays that binds, ``None`` when the robot is never held back (no
+        limit, or at least as many trays as tasks, hence as kits)."""
+        if self.trays is None or self.trays >= self.n_tasks:
+            return None
+        return self.trays
+
+    def station_fields(self) -> dict[str, Any]:
+        """The document fields of the robot's station and of the reachability rule
+        (docs/formats.md), those that are set: shared by every writer of instance documents."""
+        doc: dict[str, Any] = {}
+        if self.station is not None:
+            doc["station"] = self.station.to_dict()
+        if self.reachability:
+            doc["reachability"] = True
+            doc["reach_resolution"] = self.reach_resolution
+        return doc
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of this instance (the base tasks, not the expansion)."""
+        doc: dict[str, Any] = {"format": FORMAT, "name": self.name}
+        if self.description:
+            doc["description"] = self.description
+        if self.assumptions:
+            doc["assumptions"] = list(self.assumptions)
+        doc["tray"] = {"width": self.tray.width, "height": self.tray.height}
+        doc["delivery_time"] = self.delivery_time
+        doc["kit_overhead"] = {"robot": self.kit_overhead_robot, "human": self.kit_overhead_human}
+        doc["part_types"] = [
+            {
+                "id": p.id,
+                **({"name": p.name} if p.name else {}),
+                "width": p.width,
+                "height": p.height,
+                "pick_time": p.pick_time if p.nominal_pick_time is None else p.nominal_pick_time,
+                "rotatable": p.rotatable,
+            }
+            for p in self.part_types.values()
+        ]
+        tasks = []
+        for t in self.base_tasks:
+            d: dict[str, Any] = {"id": t.id, "name": t.name}
+            if t.product and t.product != self.name:
+                d["product"] = t.product
+            d["parts"] = [{"type": p, "count": n} for p, n in t.parts]
+            d["human_time"] = {"mean": t.human_mean, "sd": t.human_sd}
+            if t.robot_time is not None:
+                d["robot_time"] = t.robot_time
+            tasks.append(d)
+        doc["tasks"] = tasks
+        doc["precedence"] = [list(e) for e in self.base_precedence]
+        doc["weights"] = dict(self.weights)
+        doc["horizon"] = self.horizon
+        if self.trays is not None:
+            doc["trays"] = self.trays
+        if self.supply:
+            doc["supply"] = {
+                k: {
+                    "mat": s.mat,
+                    **({"mttf": s.mttf} if s.mttf is not None else {}),
+                    "repair_time": s.repair_time,
+                }
+                for k, s in self.supply.items()
+            }
+        doc["units"] = self.units
+        doc.update(self.station_fields())
+        if self.robot_times != "pick_time":
+            doc["robot_times"] = self.robot_times
+        return doc
+
+
+def topological_order(instance: Instance, rank: Mapping[str, int] | None = None) -> list[str]:
+    """Kahn's algorithm with ties broken by ``rank`` (default: file order, the deterministic
+    default order): among the ready tasks, the one of smallest rank comes first."""
+    import heapq
+
+    indeg = {t.id: 0 for t in instance.tasks}
+    succ: dict[str, list[str]] = {t.id: [] for t in instance.tasks}
+    for a, b in instance.precedence:
+        indeg[b] += 1
+        succ[a].append(b)
+    pos = rank if rank is not None else {t.id: i for i, t in enumerate(instance.tasks)}
+    heap = [(pos[t], t) for t, d in indeg.items() if d == 0]
+    heapq.heapify(heap)
+    out: list[str] = []
+    while heap:
+        _, t = heapq.heappop(heap)
+        out.append(t)
+        for s in succ[t]:
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                heapq.heappush(heap, (pos[s], s))
+    return out

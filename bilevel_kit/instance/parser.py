@@ -1,0 +1,303 @@
+"""Reading instance documents: :func:`load` a file, :func:`from_dict` a parsed document.
+
+The document is checked in two passes: its structure by the JSON Schema
+(:func:`~bilevel_kit.instance.json_schema.schema`), then its meaning (unknown references,
+duplicates, cycles, parts larger than the tray, lengths below the floor), section by section in
+the order of the file. The first problem raises :class:`~bilevel_kit.errors.InstanceError`,
+whose message names the file and the JSON path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from .. import jsonio
+from ..errors import InstanceError
+from ..jsonio import ErrorType, validate_document
+from .json_schema import schema
+from .model import (
+    DEFAULT_HORIZON,
+    DEFAULT_REPAIR_TIME,
+    DEFAULT_WEIGHTS,
+    FORMAT,
+    Instance,
+    PartType,
+    Supply,
+    Task,
+    Tray,
+)
+from .ranges import check_lengths, parse_trays
+
+
+def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
+    """Parse a JSON file strictly (see :func:`bilevel_kit.jsonio.read_json`)."""
+    return jsonio.read_json(path, error)
+
+
+def load(path: str | Path) -> Instance:
+    """Load and validate an instance file."""
+    return from_dict(read_json(path, InstanceError), str(path))
+
+
+def document(
+    name: str,
+    part_types: list[dict[str, Any]],
+    tasks: list[dict[str, Any]],
+    *,
+    tray: tuple[float, float] = (100.0, 100.0),
+    delivery_time: float = 1.0,
+    overhead: tuple[float, float] = (1.0, 1.0),
+    precedence: list[list[str]] | None = None,
+    **fields: Any,
+) -> dict[str, Any]:
+    """A minimal instance document (docs/formats.md) in the usual key order; ``overhead`` is
+    (robot, human) in seconds, ``fields`` any further top-level field (``trays`` ...)."""
+    return {
+        "format": FORMAT,
+        "name": name,
+        "tray": {"width": tray[0], "height": tray[1]},
+        "delivery_time": delivery_time,
+        "kit_overhead": {"robot": overhead[0], "human": overhead[1]},
+        "part_types": part_types,
+        "tasks": tasks,
+        "precedence": [] if precedence is None else precedence,
+        **fields,
+    }
+
+
+def from_dict(doc: Any, source: str = "<memory>") -> Instance:
+    """Validate a parsed JSON document and build the :class:`Instance`."""
+    _check_structure(doc, source)
+    tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
+    check_lengths(doc["tray"], "$.tray", source)
+    check_lengths(doc, "$", source, ("reach_resolution",))
+    part_types = _part_types(doc["part_types"], tray, source)
+    name = doc["name"]
+    tasks = _tasks(doc["tasks"], part_types, name, source)
+    edges = _precedence(doc.get("precedence", []), [t.id for t in tasks], source)
+    supply = _supply(doc.get("supply", {}), part_types, source)
+    station = _station(doc, source)
+    robot_times = doc.get("robot_times", "pick_time")
+    if robot_times == "motion":
+        part_types = _motion_pick_times(part_types, station, tray, source)
+    overhead = doc.get("kit_overhead", {})
+    return Instance(
+        name=name,
+        tray=tray,
+        delivery_time=float(doc.get("delivery_time", 0.0)),
+        kit_overhead_robot=float(overhead.get("robot", 0.0)),
+        kit_overhead_human=float(overhead.get("human", 0.0)),
+        part_types=part_types,
+        base_tasks=tuple(tasks),
+        base_precedence=tuple(edges),
+        weights={**DEFAULT_WEIGHTS, **{k: float(v) for k, v in doc.get("weights", {}).items()}},
+        horizon=int(doc.get("horizon", DEFAULT_HORIZON)),
+        supply=supply,
+        units=int(doc.get("units", 1)),
+        description=doc.get("description", ""),
+        assumptions=tuple(doc.get("assumptions", ())),
+        station=station,
+        reachability=bool(doc.get("reachability", False)),
+        reach_resolution=float(doc.get("reach_resolution", 10.0)),
+        robot_times=robot_times,
+        trays=parse_trays(doc.get("trays"), source) if doc.get("trays") is not None else None,
+        source=source,
+    )
+
+
+def _check_structure(doc: Any, source: str) -> None:
+    """The format tag first (a clearer message than the schema's for a newer file), then the
+    JSON Schema."""
+    if isinstance(doc, dict) and "format" in doc and doc["format"] != FORMAT:
+        raise InstanceError(
+            source,
+            "$.format",
+            f"unsupported format {doc['format']!r}; this version reads {FORMAT!r}",
+        )
+    validate_document(doc, source, schema(), InstanceError)
+
+
+def _part_types(entries: list[dict[str, Any]], tray: Tray, source: str) -> dict[str, PartType]:
+    """The part types by id: unique ids, lengths above the floor, each fitting the tray."""
+    part_types: dict[str, PartType] = {}
+    for i, p in enumerate(entries):
+        if p["id"] in part_types:
+            raise InstanceError(
+                source, f"$.part_types[{i}].id", f"duplicate part type id {p['id']!r}"
+            )
+        check_lengths(p, f"$.part_types[{i}]", source)
+        pt = PartType(
+            id=p["id"],
+            width=float(p["width"]),
+            height=float(p["height"]),
+            pick_time=float(p["pick_time"]),
+            rotatable=bool(p.get("rotatable", True)),
+            name=p.get("name", ""),
+        )
+        _check_fits(pt, tray, f"$.part_types[{i}]", source)
+        part_types[pt.id] = pt
+    return part_types
+
+
+def _check_fits(pt: PartType, tray: Tray, where: str, source: str) -> None:
+    """A part must fit the tray axis-aligned (either way round when it may rotate): else no
+    kit holding it has a layout."""
+    fits = pt.width <= tray.width and pt.height <= tray.height
+    if pt.rotatable:
+        fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
+    if not fits:
+        orient = "either axis-aligned orientation" if pt.rotatable else "its fixed orientation"
+        raise InstanceError(
+            source,
+            where,
+            f"part {pt.id!r} ({pt.width:g} x {pt.height:g} mm) "
+            f"does not fit the {tray.width:g} x {tray.height:g} mm tray in {orient}",
+        )
+
+
+def _tasks(
+    entries: list[dict[str, Any]], part_types: Mapping[str, PartType], product: str, source: str
+) -> list[Task]:
+    """The base tasks: unique ids without ``@`` (reserved for unit suffixes), known parts."""
+    tasks: list[Task] = []
+    seen: set[str] = set()
+    for i, t in enumerate(entries):
+        if t["id"] in seen:
+            raise InstanceError(source, f"$.tasks[{i}].id", f"duplicate task id {t['id']!r}")
+        if "@" in t["id"]:
+            raise InstanceError(source, f"$.tasks[{i}].id", "'@' is reserved for unit suffixes")
+        seen.add(t["id"])
+        ht = t["human_time"]
+        tasks.append(
+            Task(
+                id=t["id"],
+                name=t.get("name", t["id"]),
+                parts=_task_parts(t["parts"], part_types, f"$.tasks[{i}]", source),
+                human_mean=float(ht["mean"]),
+                human_sd=float(ht.get("sd", 0.0)),
+                robot_time=float(t["robot_time"]) if "robot_time" in t else None,
+                product=t.get("product", product),
+                base_id=t["id"],
+            )
+        )
+    return tasks
+
+
+def _task_parts(
+    requests: list[dict[str, Any]], part_types: Mapping[str, PartType], where: str, source: str
+) -> tuple[tuple[str, int], ...]:
+    """A task's ``(type, count)`` pairs: known types, each listed once."""
+    parts: list[tuple[str, int]] = []
+    for j, req in enumerate(requests):
+        if req["type"] not in part_types:
+            raise InstanceError(
+                source, f"{where}.parts[{j}].type", f"unknown part type {req['type']!r}"
+            )
+        if any(req["type"] == q for q, _ in parts):
+            raise InstanceError(
+                source,
+                f"{where}.parts[{j}].type",
+                f"part type {req['type']!r} listed twice; give one count",
+            )
+        parts.append((req["type"], int(req["count"])))
+    return tuple(parts)
+
+
+def _precedence(pairs: list[list[str]], task_ids: list[str], source: str) -> list[tuple[str, str]]:
+    """The edges in file order without repeats: known tasks, no self-loop, no cycle."""
+    known = set(task_ids)
+    edges: list[tuple[str, str]] = []
+    edge_set: set[tuple[str, str]] = set()
+    for k, (a, b) in enumerate(pairs):
+        for side, tid in ((0, a), (1, b)):
+            if tid not in known:
+                raise InstanceError(source, f"$.precedence[{k}][{side}]", f"unknown task {tid!r}")
+        if a == b:
+            raise InstanceError(source, f"$.precedence[{k}]", f"task {a!r} cannot precede itself")
+        if (a, b) not in edge_set:
+            edge_set.add((a, b))
+            edges.append((a, b))
+    cycle = _find_cycle(task_ids, edges)
+    if cycle is not None:
+        raise InstanceError(source, "$.precedence", "precedence cycle " + " -> ".join(cycle))
+    return edges
+
+
+def _find_cycle(nodes: list[str], edges: Iterable[tuple[str, str]]) -> list[str] | None:
+    """One directed cycle as a node list (first node repeated at the end), or None."""
+    succ: dict[str, list[str]] = {n: [] for n in nodes}
+    for a, b in edges:
+        succ[a].append(b)
+    color = dict.fromkeys(nodes, 0)  # 0 new, 1 on stack, 2 done
+    for root in nodes:
+        if color[root]:
+            continue
+        stack: list[tuple[str, int]] = [(root, 0)]
+        path: list[str] = [root]
+        color[root] = 1
+        while stack:
+            node, i = stack[-1]
+            if i < len(succ[node]):
+                stack[-1] = (node, i + 1)
+                nxt = succ[node][i]
+                if color[nxt] == 1:
+                    return [*path[path.index(nxt) :], nxt]
+                if color[nxt] == 0:
+                    color[nxt] = 1
+                    stack.append((nxt, 0))
+                    path.append(nxt)
+            else:
+                color[node] = 2
+                stack.pop()
+                path.pop()
+    return None
+
+
+def _supply(
+    entries: Mapping[str, Any], part_types: Mapping[str, PartType], source: str
+) -> dict[str, Supply]:
+    """The simulator's feeders, by known part type (docs/simulation.md)."""
+    supply: dict[str, Supply] = {}
+    for ptype, s in entries.items():
+        if ptype not in part_types:
+            raise InstanceError(source, f"$.supply.{ptype}", f"unknown part type {ptype!r}")
+        supply[ptype] = Supply(
+            mat=float(s["mat"]),
+            mttf=float(s["mttf"]) if "mttf" in s else None,
+            repair_time=float(s.get("repair_time", DEFAULT_REPAIR_TIME)),
+        )
+    return supply
+
+
+def _station(doc: Mapping[str, Any], source: str) -> Any:
+    """The Sawyer station of the document (:class:`bilevel_kit.sawyer.Station`), None if the
+    document gives none."""
+    if "station" not in doc:
+        return None
+    from ..sawyer.station import Station, StationError
+
+    try:
+        return Station.from_dict(doc["station"])
+    except StationError as exc:
+        raise InstanceError(source, "$.station", str(exc)) from None
+
+
+def _motion_pick_times(
+    part_types: dict[str, PartType], station: Any, tray: Tray, source: str
+) -> dict[str, PartType]:
+    """Pick times from the Sawyer motion model: the mean pick-and-place time of each type over
+    the reachable cells of the tray (the layout is not known when times are planned)."""
+    from ..sawyer import DEFAULT_STATION, UnreachableError, tray_average_time
+
+    st = station or DEFAULT_STATION
+    out = {}
+    for pid, pt in part_types.items():
+        try:
+            t = tray_average_time(st, pid, tray.width, tray.height)
+        except UnreachableError as exc:
+            raise InstanceError(source, "$.robot_times", str(exc)) from None
+        out[pid] = replace(pt, pick_time=t, nominal_pick_time=pt.pick_time)
+    return out

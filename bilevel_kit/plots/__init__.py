@@ -1,0 +1,59 @@
+"""Figures: the robot/human Gantt chart, tray layouts, method comparisons and cross-entropy
+convergence, all in the toolkit's one style (:mod:`bilevel_kit.style`, docs/figures.md).
+
+Every ``plot_*`` function draws into ``ax`` when one is given (otherwise it makes a new figure)
+and returns the Axes; :func:`plot_trays` makes many Axes and returns the Figure. Nothing here
+calls ``plt.show``: write figures with :func:`save_figure`, which also closes them.
+
+The artists carry ``gid`` tags so that tests and callers can find them again:
+
+* Gantt chart: ``robot:kit:<k>``, ``robot:delivery:<k>``, ``robot:tray_wait:<k>``,
+  ``robot:idle``, ``human:pickup:<k>``, ``human:task:<task id>``, ``human:idle`` (bar
+  Rectangles), ``makespan`` (the vertical line).
+* Tray: ``tray`` (the outline Rectangle), ``part:<part id>`` (one Polygon per placement).
+* Comparison: ``makespan``/``human_idle`` (bars), ``status:<method>`` (texts), ``bound``.
+
+Bars of zero duration (no delivery time, no pickup overhead ...) are not drawn. Labels that
+would not fit inside their bar or part are left out; the colours and the legend still say
+what each bar or part is.
+
+One module per figure family: :mod:`.gantt`, :mod:`.trays`, :mod:`.comparison` (methods
+compared, gaps to the bound) and :mod:`.convergence`; :mod:`.common` holds what they share
+(:func:`save_figure`). Import every name from here.
+"""
+
+from __future__ import annotations
+
+from .common import save_figure
+from .comparison import plot_comparison, plot_gaps
+from .convergence import plot_convergence
+from .gantt import BAR_HEIGHT, GANTT_WIDTH, HUMAN_Y, ROBOT_Y, plot_gantt, tray_waits
+from .trays import (
+    TRAY_CELL,
+    TRAY_COLUMNS,
+    kit_fitness,
+    plot_tray,
+    plot_trays,
+    type_colors,
+    type_swatches,
+)
+
+__all__ = [
+    "BAR_HEIGHT",
+    "GANTT_WIDTH",
+    "HUMAN_Y",
+    "ROBOT_Y",
+    "TRAY_CELL",
+    "TRAY_COLUMNS",
+    "kit_fitness",
+    "plot_comparison",
+    "plot_convergence",
+    "plot_gantt",
+    "plot_gaps",
+    "plot_tray",
+    "plot_trays",
+    "save_figure",
+    "tray_waits",
+    "type_colors",
+    "type_swatches",
+]

@@ -1,0 +1,351 @@
+"""Tray layouts: one kit's tray (:func:`plot_tray`) or every kit's on one page
+(:func:`plot_trays`), with a fixed fill per part type across all trays of an instance."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+
+from .. import style
+from ..geometry import corners
+from ..instance import Instance
+from ..plan import Kit, Placement, Plan
+from ..style import plural, styled
+from .common import axes_width_in, figure_size, pyplot
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+#: Most columns of a new :func:`plot_trays` grid, and the size (inches) of its cells.
+TRAY_COLUMNS = 10
+TRAY_CELL = (1.7, 3.4)
+
+
+def type_swatches(instance: Instance) -> dict[str, style.Swatch]:
+    """A fixed fill per part type: the sorted type ids mapped onto
+    :func:`bilevel_kit.style.categorical`, so a type looks the same in every tray plot of the
+    instance and no two types look alike."""
+    ids = sorted(instance.part_types)
+    return dict(zip(ids, style.categorical(len(ids)), strict=True))
+
+
+def type_colors(instance: Instance) -> dict[str, Any]:
+    """The colour of each part type's :func:`type_swatches` (types beyond the ten colours of
+    the palette differ from earlier types by their hatch)."""
+    return {t: s.color for t, s in type_swatches(instance).items()}
+
+
+def _type_patch(swatch: style.Swatch | None, label: str) -> Any:
+    from matplotlib.patches import Patch
+
+    face = swatch.color if swatch is not None else style.UNKNOWN_COLOR
+    return Patch(
+        facecolor=face,
+        hatch=swatch.hatch if swatch is not None else "",
+        edgecolor="black",
+        linewidth=0.5,
+        label=label,
+    )
+
+
+def _label_angle(theta: float, w: float, h: float) -> float:
+    """Text rotation along the placement's long side, kept upright (-90, 90]."""
+    a = theta if w >= h else theta + 90.0
+    a = (a + 90.0) % 180.0 - 90.0
+    return 90.0 if a == -90.0 else a
+
+
+def _part_label(part: str, long_in: float, short_in: float, size: float) -> str | None:
+    """The part id if it fits inside the part (``long_in`` x ``short_in`` inches), else its
+    trailing copy number ("foot-3" -> "3"; the fill already gives the type), else None."""
+    if size / 72 * 1.2 > short_in:
+        return None
+    short = part.rstrip("0123456789")
+    candidates = [part] + ([part[len(short) :]] if short and short != part else [])
+    return next((c for c in candidates if style.text_width_in(c, size) + 0.02 <= long_in), None)
+
+
+def kit_fitness(instance: Instance, kit: Kit) -> float | None:
+    """Kit fitness (mm, bigger is better; paper Eq. 11 with the sign of docs/errata.md) of the
+    kit's layout, None without one."""
+    if not kit.layout:
+        return None
+    from ..fitness import layout_fitness
+
+    return layout_fitness(kit.layout, instance.weights["W6"])
+
+
+def _fitness_text(instance: Instance, kit: Kit) -> str:
+    f = kit_fitness(instance, kit)
+    return "no layout" if f is None else f"fitness {round(f):,} mm"  # an int: never "-0"
+
+
+def _extent(
+    instance: Instance, placements: Iterable[Placement]
+) -> tuple[float, float, float, float]:
+    """(x0, x1, y0, y1) in mm: the tray and every placement, with a margin of 3 % of the
+    tray's longer side (a part may stick out; the checker says so, the figure shows it)."""
+    W, H = instance.tray.width, instance.tray.height
+    xs, ys = [0.0, W], [0.0, H]
+    for p in placements:
+        c = corners(p.x, p.y, p.w, p.h, p.theta)
+        xs += [float(c[:, 0].min()), float(c[:, 0].max())]
+        ys += [float(c[:, 1].min()), float(c[:, 1].max())]
+    m = 0.03 * max(W, H)
+    return min(xs) - m, max(xs) + m, min(ys) - m, max(ys) + m
+
+
+@styled
+def plot_tray(
+    instance: Instance,
+    kit: Kit,
+    ax: Axes | None = None,
+    title: str | None = None,
+    *,
+    legend: bool = True,
+) -> Axes:
+    """The kit's tray layout: the tray outline and each placement as a rotated rectangle
+    (:func:`bilevel_kit.geometry.corners`) filled by part type (:func:`type_swatches`) and
+    labelled with its part id where the label fits inside the part, or else its copy number
+    (small parts stay unlabelled; labels never leave the axes). The default title gives the
+    number of parts, the kit fitness (:func:`kit_fitness`) and the tasks. ``legend=False``
+    leaves out the legend of part types."""
+    W, H = instance.tray.width, instance.tray.height
+    if ax is None:
+        fig_w = 5.5
+        _, ax = pyplot().subplots(figsize=(fig_w + 1.5, fig_w * H / W + 0.9), layout="constrained")
+        ax = cast("Axes", ax)
+    swatches = type_swatches(instance)
+    _draw_tray_outline(ax, W, H)
+    x0, x1, y0, y1 = _extent(instance, kit.layout)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    _draw_placements(ax, instance, kit, swatches)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(_tray_title(instance, kit) if title is None else title, fontsize=style.FONT_SIZE)
+    if not kit.layout:
+        ax.text(W / 2, H / 2, "no layout", ha="center", va="center", color="gray")
+    if legend:
+        used = sorted({p.type for p in kit.layout})
+        if used:
+            ax.legend(
+                handles=[_type_patch(swatches.get(t), t) for t in used],
+                title="part type",
+                loc="upper left",
+                bbox_to_anchor=(1.02, 1.0),
+                borderaxespad=0.0,
+            )
+    return ax
+
+
+def _draw_tray_outline(ax: Axes, width: float, height: float) -> None:
+    from matplotlib.patches import Rectangle
+
+    ax.add_patch(
+        Rectangle(
+            (0.0, 0.0),
+            width,
+            height,
+            fill=True,
+            facecolor="#f5f5f0",
+            edgecolor="black",
+            linewidth=1.2,
+            gid="tray",
+            zorder=1,
+        )
+    )
+
+
+def _inches_per_mm(ax: Axes) -> float:
+    """The scale of an equal-aspect Axes: from its width or its height, whichever limits the
+    box (before layout, like :func:`~bilevel_kit.plots.common.axes_width_in`)."""
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    pos = ax.get_position()
+    return min(axes_width_in(ax) / (x1 - x0), pos.height * figure_size(ax)[1] / (y1 - y0))
+
+
+def _draw_placements(
+    ax: Axes, instance: Instance, kit: Kit, swatches: dict[str, style.Swatch]
+) -> None:
+    """Each placement as a polygon filled by its type, labelled where the label fits (a size
+    smaller on a tray drawn under 1.5 inches)."""
+    from matplotlib.patches import Polygon
+
+    scale = _inches_per_mm(ax)
+    W, H = instance.tray.width, instance.tray.height
+    size = style.SMALL_SIZE if scale * min(W, H) >= 1.5 else style.SMALL_SIZE - 1
+    for p in kit.layout:
+        sw = swatches.get(p.type)
+        ax.add_patch(
+            Polygon(
+                corners(p.x, p.y, p.w, p.h, p.theta),
+                closed=True,
+                facecolor=sw.color if sw is not None else style.UNKNOWN_COLOR,
+                hatch=sw.hatch if sw is not None else "",
+                edgecolor="black",
+                linewidth=0.6,
+                alpha=0.85,
+                gid=f"part:{p.part}",
+                zorder=2,
+            )
+        )
+        label = _part_label(p.part, max(p.w, p.h) * scale, min(p.w, p.h) * scale, size)
+        if label is not None:
+            ax.text(
+                p.x,
+                p.y,
+                label,
+                ha="center",
+                va="center",
+                fontsize=size,
+                rotation=_label_angle(p.theta, p.w, p.h),
+                rotation_mode="anchor",
+                zorder=3,
+                clip_on=True,
+            )
+
+
+def _tray_title(instance: Instance, kit: Kit) -> str:
+    """The default title: number of parts and kit fitness, then the tasks (cut at 40 chars)."""
+    if not kit.tasks:
+        return "empty kit"
+    tasks = ", ".join(kit.tasks)
+    if len(tasks) > 40:
+        tasks = tasks[:37] + "..."
+    return f"{plural(len(kit.layout), 'part')}, {_fitness_text(instance, kit)}\ntasks {tasks}"
+
+
+@styled
+def plot_trays(instance: Instance, plan: Plan, ncols: int | None = None) -> Figure:
+    """One :func:`plot_tray` subplot per kit (in delivery order), titled with the kit's number,
+    tasks and fitness, and one legend of the part types used by the plan; returns the Figure
+    (unused grid cells are hidden). All trays share one scale; tick labels and axis labels
+    ("x (mm)", "y (mm)") sit on the left column and on the lowest tray of each column.
+    ``ncols`` defaults to about the square root of the number of kits (at least 3, at most
+    :data:`TRAY_COLUMNS`); cells shrink from 3.4 to 1.7 inches as columns are added, so 100
+    kits stay one readable page. The margins are fixed in inches (no layout engine), which
+    keeps a 100-tray figure quick to draw."""
+    n = len(plan.kits)
+    if ncols is None:
+        ncols = min(TRAY_COLUMNS, max(3, math.ceil(math.sqrt(n))))
+    ncols = max(1, min(ncols, n))
+    extent = _extent(instance, (p for kit in plan.kits for p in kit.layout))
+    cell = float(np.clip(12.0 / ncols, *TRAY_CELL))
+    used = sorted({p.type for kit in plan.kits for p in kit.layout})
+    grid = _TrayGrid(n, ncols, cell, extent, used)
+    fig, flat = grid.figure()
+    for k, kit in enumerate(plan.kits):
+        _draw_tray_cell(instance, kit, k, flat[k], grid)
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    if n == 0:
+        flat[0].set_visible(True)
+        flat[0].set_axis_off()
+        flat[0].text(0.5, 0.5, "no kits", ha="center", va="center")
+    if used:
+        swatches = type_swatches(instance)
+        fig.legend(
+            handles=[_type_patch(swatches.get(t), t) for t in used],
+            title="part type",
+            loc="upper right",
+            bbox_to_anchor=(1.0, 1 - (grid.top + grid.hgap) / grid.height),
+            frameon=False,
+        )
+    W, H = instance.tray.width, instance.tray.height
+    fig.suptitle(
+        f"{instance.name}: tray layouts of {plural(n, 'kit')} ({W:g} x {H:g} mm; "
+        "kit fitness, bigger is better)",
+        y=1 - 0.12 / grid.height,
+        va="top",
+    )
+    return fig
+
+
+class _TrayGrid:
+    """The page of :func:`plot_trays`: ``nrows`` x ``ncols`` cells ``cell`` inches wide, and
+    margins and gaps fixed in inches (two title lines above each tray, ticks and labels
+    outside, the legend of part types on the right)."""
+
+    left, bottom, top, wgap = 0.75, 0.55, 0.5, 0.15
+
+    def __init__(
+        self,
+        n: int,
+        ncols: int,
+        cell: float,
+        extent: tuple[float, float, float, float],
+        used: list[str],
+    ) -> None:
+        self.n, self.ncols = n, ncols
+        self.nrows = max(1, math.ceil(n / ncols))
+        self.cell, self.extent = cell, extent
+        self.small = cell < 2.5
+        self.title_size = style.SMALL_SIZE if self.small else style.FONT_SIZE
+        x0, x1, y0, y1 = extent
+        self.box_h = cell * (y1 - y0) / (x1 - x0)
+        self.right = 0.3 + (
+            max(style.text_width_in(t, style.LEGEND_SIZE) for t in used) + 0.5 if used else 0
+        )
+        self.hgap = 2.6 * self.title_size / 72 + 0.2
+        self.width = self.left + ncols * cell + (ncols - 1) * self.wgap + self.right
+        self.height = (
+            self.bottom
+            + self.nrows * self.box_h
+            + (self.nrows - 1) * self.hgap
+            + self.hgap
+            + self.top
+        )
+
+    def figure(self) -> tuple[Figure, list[Axes]]:
+        """The figure and its Axes, row by row."""
+        fig = pyplot().figure(figsize=(self.width, self.height))
+        spec = fig.add_gridspec(
+            self.nrows,
+            self.ncols,
+            left=self.left / self.width,
+            right=1 - self.right / self.width,
+            bottom=self.bottom / self.height,
+            top=1 - (self.top + self.hgap) / self.height,
+            wspace=self.wgap / self.cell,
+            hspace=self.hgap / self.box_h,
+        )
+        flat = [fig.add_subplot(spec[r, c]) for r in range(self.nrows) for c in range(self.ncols)]
+        return fig, flat
+
+
+def _draw_tray_cell(instance: Instance, kit: Kit, k: int, ax: Axes, grid: _TrayGrid) -> None:
+    """Kit ``k``'s (0-based) tray in its cell, at the page's shared scale; ticks only on the
+    left column and on the lowest tray of each column."""
+    from matplotlib.ticker import NullLocator
+
+    width = 22 if grid.small else 32
+    tasks = ", ".join(kit.tasks)
+    if len(tasks) > width:
+        tasks = tasks[: width - 3] + "..."
+    plot_tray(
+        instance,
+        kit,
+        ax=ax,
+        title=f"kit {k + 1}: {tasks}\n{_fitness_text(instance, kit)}",
+        legend=False,
+    )
+    ax.title.set_fontsize(grid.title_size)
+    x0, x1, y0, y1 = grid.extent
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    if grid.small:
+        ax.tick_params(labelsize=style.SMALL_SIZE - 1, length=2, pad=1)
+        ax.locator_params(nbins=3)
+    if k + grid.ncols < grid.n:  # a tray below shows the x axis (no ticks: quicker to draw)
+        ax.set_xlabel("")
+        ax.xaxis.set_major_locator(NullLocator())
+    if k % grid.ncols:
+        ax.set_ylabel("")
+        ax.yaxis.set_major_locator(NullLocator())
