@@ -1,6 +1,6 @@
 """Compiled kernels of the lower level (numba), with numpy as the fallback.
 
-The cross-entropy loop (:mod:`bilevel_kit.heuristics.cross_entropy`) spends most of its time
+The cross-entropy loop (:mod:`bilevel_kit.heuristics.ce.sampling`) spends most of its time
 scoring its samples (Eqs. 8-10 with the box Z, docs/errata.md for the sign of Eq. 11). Numpy
 needs a dozen passes over (pairs x samples) temporaries for that; the kernel here makes one
 pass: for each pair, a loop over the samples (contiguous, vectorised by the compiler) that
@@ -65,34 +65,71 @@ def _score_samples(
     parts pre-filled; ``half_w``/``half_h``: half sides of the rotatable parts; ``consts``:
     (pi / 180, tray width, tray height, W6, 0, 2) in the samples' dtype. Writes the
     projected centres into ``X``, ``z`` (box Z) and ``cost`` (D_same - D_diff + W6 Z)."""
-    S = X.shape[1]
-    deg = consts[0]
-    wd = consts[1]
-    ht = consts[2]
-    w6f = consts[3]
-    zero = consts[4]
-    two = consts[5]
     if X.itemsize == 4:  # float32
-        _rotated_extents32(X, n, rot_idx, half_w, half_h, exT, eyT, deg)
+        _rotated_extents32(X, n, rot_idx, half_w, half_h, exT, eyT, consts[0])
     else:
-        for k in range(rot_idx.size):
-            row = rot_idx[k]
-            hw = half_w[k]
-            hh = half_h[k]
-            for s in range(S):
-                t = X[2 * n + k, s] * deg
-                c = abs(np.cos(t))
-                sn = abs(np.sin(t))
-                exT[row, s] = c * hw + sn * hh
-                eyT[row, s] = sn * hw + c * hh
+        _rotated_extents64(X, n, rot_idx, half_w, half_h, exT, eyT, consts[0])
+    _project(X, n, exT, eyT, consts[1], consts[2])
+    _pair_scores(X, n, exT, eyT, pair_i, pair_j, sign, consts[3], consts[4], consts[5], cost, z)
+
+
+def _rotated_extents64(
+    X: np.ndarray,
+    n: int,
+    rot_idx: np.ndarray,
+    half_w: np.ndarray,
+    half_h: np.ndarray,
+    exT: np.ndarray,
+    eyT: np.ndarray,
+    deg: float,
+) -> None:  # pragma: no cover - compiled by numba
+    """Half-extents of the rotatable parts' boxes in float64, with ``cos``/``sin`` (the float32
+    twin is :func:`_rotated_extents32`)."""
+    for k in range(rot_idx.size):
+        row = rot_idx[k]
+        hw = half_w[k]
+        hh = half_h[k]
+        for s in range(X.shape[1]):
+            t = X[2 * n + k, s] * deg
+            c = abs(np.cos(t))
+            sn = abs(np.sin(t))
+            exT[row, s] = c * hw + sn * hh
+            eyT[row, s] = sn * hw + c * hh
+
+
+def _project(
+    X: np.ndarray, n: int, exT: np.ndarray, eyT: np.ndarray, wd: float, ht: float
+) -> None:  # pragma: no cover - compiled by numba
+    """The CE projection, in place: each centre clipped so that its box lies in the
+    ``wd`` x ``ht`` tray (``min(max(c, e), side - e)``, as the numpy loop computes it)."""
     for a in range(n):
-        for s in range(S):
+        for s in range(X.shape[1]):
             ex = exT[a, s]
             v = max(X[a, s], ex)
             X[a, s] = min(v, wd - ex)
             ey = eyT[a, s]
             v = max(X[n + a, s], ey)
             X[n + a, s] = min(v, ht - ey)
+
+
+def _pair_scores(
+    X: np.ndarray,
+    n: int,
+    exT: np.ndarray,
+    eyT: np.ndarray,
+    pair_i: np.ndarray,
+    pair_j: np.ndarray,
+    sign: np.ndarray,
+    w6f: float,
+    zero: float,
+    two: float,
+    cost: np.ndarray,
+    z: np.ndarray,
+) -> None:  # pragma: no cover - compiled by numba
+    """Box Z into ``z`` and ``D_same - D_diff + W6 Z`` into ``cost``: for each pair, one
+    contiguous (vectorised) loop over the samples adding the signed distance and the box
+    overlap ``max(0, min(e_i + e_j - |d|, 2 min(e_i, e_j)))`` per axis."""
+    S = X.shape[1]
     for s in range(S):
         cost[s] = zero
         z[s] = zero
@@ -179,7 +216,7 @@ def _rotated_extents32(
 def _uniform_pairs(raw: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:  # pragma: no cover
     """Two 24-bit float32 uniforms from each 64-bit word of ``raw``: ``x = 1 - u0`` (bits
     63-40; exact, in (0, 1]) and ``t = u1`` (bits 39-16), as
-    :func:`bilevel_kit.heuristics.cross_entropy._standard_normal` computes them with numpy."""
+    :func:`bilevel_kit.heuristics.ce.sampling.standard_normal` computes them with numpy."""
     scale = np.float32(2.0**-24)
     one = np.float32(1.0)
     for k in range(raw.size):
@@ -286,101 +323,149 @@ def _ce_block(
     gammas: np.ndarray,
 ) -> int:  # pragma: no cover - compiled by numba
     """Up to ``n_it`` CE iterations (numbers ``it0``, ``it0 + 1``, ...) with the standard normals
-    of ``pool`` (``n_it * dim`` rows): sample, score (:func:`_score_samples`), track the best
-    (and best overlap-free) sample, refit mean and covariance to the elite, factor. The
-    numpy loop of :mod:`bilevel_kit.heuristics.cross_entropy` does the same steps; mirrored
-    sampling when ``pool`` has fewer columns than samples.
+    of ``pool`` (``n_it * dim`` rows): sample (:func:`_sample_into`), score
+    (:func:`_score_samples`), track the best (and best overlap-free) sample
+    (:func:`_track_best`), refit mean and covariance to the elite (:func:`_refit`), factor
+    (:func:`_factor`), test convergence. The numpy loop of
+    :mod:`bilevel_kit.heuristics.ce.sampling` does the same steps; mirrored sampling when
+    ``pool`` has fewer columns than samples.
 
     ``fparams``: (mean smoothing, covariance smoothing, Sigma floor, tol); ``state``:
     (best cost, best overlap-free cost, converged flag, last iteration) in and out. Returns the
     iterations performed."""
     dim = X.shape[0]
-    S = X.shape[1]
     m = pool.shape[1]
-    a_mu = fparams[0]
-    b_cov = fparams[1]
-    floor = fparams[2]
-    tol = fparams[3]
     mu_dt = np.empty(dim, dtype=X.dtype)
     LZ = np.empty((dim, m), dtype=X.dtype)
     el = np.empty((dim, elite))
     mu_e = np.empty(dim)
-    done = 0
     for q in range(n_it):
         it = it0 + q
-        Z = pool[q * dim : (q + 1) * dim]
-        np.dot(L, Z, LZ)
-        for d in range(dim):
-            mu_dt[d] = mu[d]
-        for d in range(dim):
-            md = mu_dt[d]
-            for s in range(m):
-                X[d, s] = LZ[d, s] + md
-            for s in range(S - m):
-                X[d, m + s] = md - LZ[d, s]
+        _sample_into(pool[q * dim : (q + 1) * dim], L, mu, mu_dt, LZ, X)
         _score_samples(
             X, n, rot_idx, half_w, half_h, exT, eyT, consts, pair_i, pair_j, sign, cost, z
         )
-        k = 0
-        kf = -1
-        for s in range(S):
-            if cost[s] < cost[k]:
-                k = s
-            if z[s] == 0 and (kf < 0 or cost[s] < cost[kf]):
-                kf = s
-        if cost[k] < state[0]:
-            state[0] = cost[k]
-            for d in range(dim):
-                best[d] = X[d, k]
-        if kf >= 0 and cost[kf] < state[1]:
-            state[1] = cost[kf]
-            for d in range(dim):
-                best_feasible[d] = X[d, kf]
+        _track_best(X, cost, z, best, best_feasible, state)
         trace[it - 1] = -state[0]
-        order = np.argsort(cost)[:elite]
-        gamma = cost[order[0]]
-        for e in range(elite):
-            if cost[order[e]] > gamma:
-                gamma = cost[order[e]]
-        gammas[it - 1] = gamma
-        for d in range(dim):
-            acc = 0.0
-            for e in range(elite):
-                v = np.float64(X[d, order[e]])
-                el[d, e] = v
-                acc += v
-            mu_e[d] = acc * (1.0 / elite)
-        for d in range(dim):
-            for e in range(elite):
-                el[d, e] -= mu_e[d]
-        cov_e = np.dot(el, el.T)
-        cov_e *= 1.0 / elite
-        if b_cov >= 1.0:
-            cov[:, :] = cov_e
-        else:
-            for i in range(dim):
-                for j in range(dim):
-                    cov[i, j] = cov[i, j] * (1.0 - b_cov) + cov_e[i, j] * b_cov
-        for d in range(dim):
-            mu[d] = mu[d] * (1.0 - a_mu) + a_mu * mu_e[d]
-        fl = floor
-        ok = False
-        for _ in range(8):
-            if _cholesky_into(cov, fl, L):
-                ok = True
-                break
-            fl *= 10.0
-        done = q + 1
+        gammas[it - 1] = _refit(X, cost, el, mu_e, mu, cov, fparams[0], fparams[1])
         state[3] = it
-        if not ok:
+        if not _factor(cov, fparams[2], L):
             state[2] = -1.0  # the caller raises LinAlgError
-            return done
-        if it > patience:
-            gain = gammas[it - 1 - patience] - gammas[it - 1]
-            if abs(gain) <= tol * max(1.0, abs(gammas[it - 1])):
-                state[2] = 1.0
-                return done
-    return done
+            return q + 1
+        if it > patience and _flat(gammas, it, patience, fparams[3]):
+            state[2] = 1.0
+            return q + 1
+    return n_it
+
+
+def _sample_into(
+    Z: np.ndarray, L: np.ndarray, mu: np.ndarray, mu_dt: np.ndarray, LZ: np.ndarray, X: np.ndarray
+) -> None:  # pragma: no cover - compiled by numba
+    """Samples ``mu + L Z`` into the first ``m`` columns of ``X`` (m: Z's columns) and
+    ``mu - L Z`` into the rest (mirrored); ``mu`` is rounded to the samples' dtype first
+    (``mu_dt``), as the numpy loop adds it."""
+    dim = X.shape[0]
+    S = X.shape[1]
+    m = Z.shape[1]
+    np.dot(L, Z, LZ)
+    for d in range(dim):
+        mu_dt[d] = mu[d]
+    for d in range(dim):
+        md = mu_dt[d]
+        for s in range(m):
+            X[d, s] = LZ[d, s] + md
+        for s in range(S - m):
+            X[d, m + s] = md - LZ[d, s]
+
+
+def _track_best(
+    X: np.ndarray,
+    cost: np.ndarray,
+    z: np.ndarray,
+    best: np.ndarray,
+    best_feasible: np.ndarray,
+    state: np.ndarray,
+) -> None:  # pragma: no cover - compiled by numba
+    """Copy the batch's best sample into ``best`` and its best overlap-free one (box Z = 0)
+    into ``best_feasible`` when they beat ``state[0]`` and ``state[1]`` (updated too); ties
+    go to the earlier sample, as ``np.argmin``'s."""
+    dim = X.shape[0]
+    k = 0
+    kf = -1
+    for s in range(X.shape[1]):
+        if cost[s] < cost[k]:
+            k = s
+        if z[s] == 0 and (kf < 0 or cost[s] < cost[kf]):
+            kf = s
+    if cost[k] < state[0]:
+        state[0] = cost[k]
+        for d in range(dim):
+            best[d] = X[d, k]
+    if kf >= 0 and cost[kf] < state[1]:
+        state[1] = cost[kf]
+        for d in range(dim):
+            best_feasible[d] = X[d, kf]
+
+
+def _refit(
+    X: np.ndarray,
+    cost: np.ndarray,
+    el: np.ndarray,
+    mu_e: np.ndarray,
+    mu: np.ndarray,
+    cov: np.ndarray,
+    a_mu: float,
+    b_cov: float,
+) -> float:  # pragma: no cover - compiled by numba
+    """Refit ``mu`` and ``cov`` in place to the ``el.shape[1]`` best samples (maximum
+    likelihood, smoothed by ``a_mu`` and ``b_cov``; ``el``, ``mu_e``: float64 scratch);
+    returns the elite threshold gamma (the worst elite score)."""
+    dim = X.shape[0]
+    elite = el.shape[1]
+    order = np.argsort(cost)[:elite]
+    gamma = cost[order[0]]
+    for e in range(elite):
+        if cost[order[e]] > gamma:
+            gamma = cost[order[e]]
+    for d in range(dim):
+        acc = 0.0
+        for e in range(elite):
+            v = np.float64(X[d, order[e]])
+            el[d, e] = v
+            acc += v
+        mu_e[d] = acc * (1.0 / elite)
+    for d in range(dim):
+        for e in range(elite):
+            el[d, e] -= mu_e[d]
+    cov_e = np.dot(el, el.T)
+    cov_e *= 1.0 / elite
+    if b_cov >= 1.0:
+        cov[:, :] = cov_e
+    else:
+        for i in range(dim):
+            for j in range(dim):
+                cov[i, j] = cov[i, j] * (1.0 - b_cov) + cov_e[i, j] * b_cov
+    for d in range(dim):
+        mu[d] = mu[d] * (1.0 - a_mu) + a_mu * mu_e[d]
+    return gamma
+
+
+def _factor(cov: np.ndarray, floor: float, L: np.ndarray) -> bool:  # pragma: no cover
+    """Cholesky factor of ``cov + floor * I`` into ``L`` (:func:`_cholesky_into`), the floor
+    growing tenfold on failure, eight tries; False if none succeeded."""
+    fl = floor
+    for _ in range(8):
+        if _cholesky_into(cov, fl, L):
+            return True
+        fl *= 10.0
+    return False
+
+
+def _flat(gammas: np.ndarray, it: int, patience: int, tol: float) -> bool:  # pragma: no cover
+    """de Boer et al.'s convergence test after iteration ``it > patience``: gamma moved by at
+    most ``tol * max(1, |gamma|)`` over the last ``patience`` iterations."""
+    gain = gammas[it - 1 - patience] - gammas[it - 1]
+    return abs(gain) <= tol * max(1.0, abs(gammas[it - 1]))
 
 
 def _push_apart_loop(
@@ -394,7 +479,7 @@ def _push_apart_loop(
     height: float,
     rounds: int,
 ) -> bool:  # pragma: no cover - compiled by numba (tests compare it with the numpy loop)
-    """The rounds of :func:`bilevel_kit.heuristics.cross_entropy._push_apart` on ``x``, ``y`` in
+    """The rounds of :func:`bilevel_kit.heuristics.ce.accept.push_apart` on ``x``, ``y`` in
     place; True once no boxes overlap. The numpy loop's arithmetic operation by operation:
     the pair moves are summed per part in pair order, as ``np.bincount`` sums them, so the
     result is the same float for float."""
@@ -462,6 +547,8 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     that the CE block calls the compiled scorer and Cholesky factorisation. The environment
     variable is read at every call."""
     global _JITTED, _score_samples, _sin_cos_small, _rotated_extents32, _cholesky_into, _ce_block
+    global _sample_into, _track_best, _refit, _factor, _flat
+    global _rotated_extents64, _project, _pair_scores
     global _push_apart_loop, _uniform_pairs, _box_muller
     if disabled():
         return None
@@ -471,8 +558,16 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
             return None
         _sin_cos_small = jit(_sin_cos_small)
         _rotated_extents32 = jit(_rotated_extents32)
+        _rotated_extents64 = jit(_rotated_extents64)
+        _project = jit(_project)
+        _pair_scores = jit(_pair_scores)
         _score_samples = jit(_score_samples)
         _cholesky_into = jit(_cholesky_into)
+        _sample_into = jit(_sample_into)
+        _track_best = jit(_track_best)
+        _refit = jit(_refit)
+        _factor = jit(_factor)
+        _flat = jit(_flat)
         _ce_block = jit(_ce_block)
         _push_apart_loop = jit(_push_apart_loop)
         _uniform_pairs = jit(_uniform_pairs)

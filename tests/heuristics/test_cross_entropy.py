@@ -12,7 +12,9 @@ import pytest
 from bilevel_kit import geometry
 from bilevel_kit.errors import UsageError
 from bilevel_kit.fitness import layout_terms
-from bilevel_kit.heuristics import cross_entropy as ce
+from bilevel_kit.heuristics.ce.accept import push_apart
+from bilevel_kit.heuristics.ce.kit import build_kit
+from bilevel_kit.heuristics.ce.sampling import standard_normal
 from bilevel_kit.heuristics.cross_entropy import Arrangement, CEParams, arrange
 from bilevel_kit.instance import Instance, PartType, from_dict
 from bilevel_kit.plan import Placement
@@ -217,9 +219,9 @@ def test_start_layout_is_never_made_worse() -> None:
 
 
 def test_push_apart_separates_boxes() -> None:
-    kit = ce._build_kit(TRAY, {"a": 2, "b": 1}, np.float64)
+    kit = build_kit(TRAY, {"a": 2, "b": 1}, np.float64)
     x, y, th = np.array([100.0, 105.0, 0.0]), np.array([100.0, 103.0, 0.0]), np.zeros(3)
-    moved = ce._push_apart(kit, x, y, th)
+    moved = push_apart(kit, x, y, th)
     assert moved is not None
     mx, my = moved
     assert max(abs(mx[0] - mx[1]), abs(my[0] - my[1])) >= 20.0
@@ -238,7 +240,7 @@ def test_bad_arguments() -> None:
 
 
 def test_standard_normals_float32() -> None:
-    z = ce._standard_normal(np.random.default_rng(0), (400, 500), np.float32)
+    z = standard_normal(np.random.default_rng(0), (400, 500), np.float32)
     assert z.dtype == np.float32
     assert abs(float(z.mean())) < 0.01
     assert abs(float(z.std()) - 1.0) < 0.01

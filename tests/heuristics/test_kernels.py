@@ -152,11 +152,12 @@ def test_compiled_push_apart_is_the_numpy_loop_float_for_float() -> None:
     """The repair of overlapping layouts (random centres and angles): the same moves, the
     same floats, the same give-up. A 9-part kit is mostly separated within 200 rounds, the
     28-part table kit never (random layouts); 3 rounds separate neither."""
-    from bilevel_kit.heuristics.cross_entropy import _build_kit, _push_apart
+    from bilevel_kit.heuristics.ce.accept import push_apart
+    from bilevel_kit.heuristics.ce.kit import build_kit
 
     separated = {9: 0, 28: 0}
     for parts in (SMALL_KIT, TABLE_PARTS):
-        kit = _build_kit(TABLE, parts, np.float64)
+        kit = build_kit(TABLE, parts, np.float64)
         for seed in range(12):
             rng = np.random.default_rng(seed)
             x = rng.uniform(0, TABLE.tray.width, kit.n)
@@ -164,8 +165,8 @@ def test_compiled_push_apart_is_the_numpy_loop_float_for_float() -> None:
             theta = rng.uniform(-90, 90, kit.n)
             theta[kit.fixed_idx] = 0.0
             for rounds in (3, 200):
-                fast = _push_apart(kit, x, y, theta, rounds=rounds)
-                slow = _push_apart(kit, x, y, theta, rounds=rounds, compiled=False)
+                fast = push_apart(kit, x, y, theta, rounds=rounds)
+                slow = push_apart(kit, x, y, theta, rounds=rounds, compiled=False)
                 assert (fast is None) == (slow is None)
                 if fast is not None and slow is not None:
                     assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
@@ -202,7 +203,7 @@ def test_compiled_normals_equal_the_numpy_path() -> None:
     normal (Kolmogorov-Smirnov, moments) and equal to float32 rounding."""
     from scipy import stats
 
-    from bilevel_kit.heuristics.cross_entropy import _standard_normal
+    from bilevel_kit.heuristics.ce.sampling import standard_normal
 
     raw = np.random.default_rng(11).bit_generator.random_raw(1000)
     x, t = np.empty(1000, dtype=np.float32), np.empty(1000, dtype=np.float32)
@@ -211,8 +212,8 @@ def test_compiled_normals_equal_the_numpy_path() -> None:
     assert np.array_equal(x, 1 - (raw >> np.uint64(40)).astype(np.float32) / 2**24)
     assert np.array_equal(t, ((raw >> np.uint64(16)) % 2**24).astype(np.float32) / 2**24)
 
-    fast = _standard_normal(np.random.default_rng(5), (336, 501), np.float32)
-    slow = _standard_normal(np.random.default_rng(5), (336, 501), np.float32, compiled=False)
+    fast = standard_normal(np.random.default_rng(5), (336, 501), np.float32)
+    slow = standard_normal(np.random.default_rng(5), (336, 501), np.float32, compiled=False)
     assert fast.shape == slow.shape == (336, 501) and fast.dtype == np.float32
     assert np.abs(fast - slow).max() < 1e-5
     assert abs(float(fast.mean())) < 0.005 and abs(float(fast.std()) - 1.0) < 0.005
@@ -220,5 +221,5 @@ def test_compiled_normals_equal_the_numpy_path() -> None:
     assert 4.5 < float(np.abs(fast).max()) < 5.8  # 24-bit uniforms cap the tails at ~5.8
     # a second draw continues the generator's stream (no reuse of words)
     gen = np.random.default_rng(5)
-    _standard_normal(gen, (336, 501), np.float32)
-    assert not np.array_equal(_standard_normal(gen, (336, 501), np.float32), fast)
+    standard_normal(gen, (336, 501), np.float32)
+    assert not np.array_equal(standard_normal(gen, (336, 501), np.float32), fast)
