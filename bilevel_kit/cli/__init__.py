@@ -18,7 +18,19 @@ import functools
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from . import check, compare, generate, methods, pack, reach, repro, schema, simulate, solve
+from . import (
+    check,
+    compare,
+    execute,
+    generate,
+    methods,
+    pack,
+    reach,
+    repro,
+    schema,
+    simulate,
+    solve,
+)
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
@@ -62,6 +74,7 @@ COMMANDS: dict[str, Command] = {
     "repro": repro,
     "pack": pack,
     "reach": reach,
+    "execute": execute,
     "generate": generate,
     "check": check,
     "schema": schema,

@@ -3,7 +3,10 @@
 Modules: :mod:`.model` (the 7-dof arm built in code, FK), :mod:`.station` (tray and bin poses,
 mm), :mod:`.ik` (top-down grasp IK), :mod:`.reach` (reachability maps and checks, plotting),
 :mod:`.motion` (pick-and-place times). Pinocchio is imported only when a model is built, so
-importing this package is cheap.
+importing this package is cheap. Executing a plan (docs/execution.md) lives in submodules this
+package does not import: :mod:`.trajectory` (per-kit joint trajectories and the timeline's
+events), :mod:`.bags` (ROS 1 and ROS 2 bags), :mod:`.scene` (the animated 3-D view) and
+:mod:`.figures` (joint trajectory plots).
 
 Units: the public API takes tray points in mm (tray frame) and station poses in mm (robot
 base frame); the model and IK work in metres and radians.

@@ -22,8 +22,10 @@ grasp point) and is, in order:
 
 The vertical approach / retreat moves are timed as joint-space lines too (over 100 mm the
 Cartesian deviation is small). At the slot, the gripper yaw among the station's allowed yaws
-is the one that needs the least ``right_j6`` travel from the pose above the bin. The IK at
-the slot is warm-started from the bin pose, which keeps the arm on the same branch.
+is the one that needs the least ``right_j6`` travel from the pose above the bin; the allowed
+yaws are measured from the part's x axis, which lies at the placement's angle ``theta`` from
+the tray x axis (0 by default, the layout-free case). The IK at the slot is warm-started from
+the bin pose, which keeps the arm on the same branch.
 """
 
 from __future__ import annotations
@@ -149,7 +151,8 @@ class PickPlace:
     q_bin: np.ndarray
     q_slot_above: np.ndarray
     q_slot: np.ndarray
-    #: Gripper yaw at the slot, degrees from the tray x axis (one of ``station.grasp_yaws``).
+    #: Gripper yaw at the slot, degrees from the tray x axis: the part's angle ``theta`` plus
+    #: one of ``station.grasp_yaws``.
     slot_yaw: float
     steps: dict[str, float] = field(default_factory=dict)
 
@@ -188,16 +191,19 @@ def pick_place(
     part_type: str,
     slot_xy_mm: tuple[float, float] | np.ndarray,
     params: MotionParams = DEFAULT_PARAMS,
+    theta: float = 0.0,
 ) -> PickPlace:
-    """Plan one cycle (see the module docstring); raises :class:`UnreachableError` when the
-    bin or the slot (release or approach pose) cannot be reached."""
+    """Plan one cycle (see the module docstring) for a part laid at angle ``theta`` (deg, from
+    the tray x axis); raises :class:`UnreachableError` when the bin or the slot (release or
+    approach pose) cannot be reached."""
     arm = Arm(station.tool_offset_m)
     q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type))
     x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
     place = station.tray_to_base(x, y, station.place_height)
     above = place + np.array([0.0, 0.0, station.approach_height / 1000.0])
     where = f"tray slot ({x:g}, {y:g}) mm"
-    sol = _solve(arm, above, station.slot_yaws(), q_ba, f"the approach pose above {where}")
+    yaws = tuple(a + float(theta) for a in station.slot_yaws())
+    sol = _solve(arm, above, yaws, q_ba, f"the approach pose above {where}")
     q_sa, yaw = sol.q, sol.yaw_deg
     q_sp = _solve(arm, place, (yaw,), q_sa, where).q
     down_bin = move_time(q_ba, q_bg, params)
@@ -213,7 +219,7 @@ def pick_place(
     }
     if params.return_to_bin:
         steps["return"] = move_time(q_sa, q_ba, params)
-    slot_yaw = station.grasp_yaws[station.slot_yaws().index(yaw)]
+    slot_yaw = float(theta) + station.grasp_yaws[yaws.index(yaw)]
     return PickPlace(q_ba, q_bg, q_sa, q_sp, slot_yaw, steps)
 
 
@@ -222,18 +228,26 @@ def pick_place_time(
     part_type: str,
     slot_xy_mm: tuple[float, float] | np.ndarray,
     params: MotionParams = DEFAULT_PARAMS,
+    theta: float = 0.0,
 ) -> float:
-    """Seconds for one pick at the bin of ``part_type`` and place at tray point (x, y) mm."""
-    return pick_place(station, part_type, slot_xy_mm, params).total
+    """Seconds for one pick at the bin of ``part_type`` and place at tray point (x, y) mm,
+    the part at angle ``theta`` (deg)."""
+    return pick_place(station, part_type, slot_xy_mm, params, theta).total
 
 
 def layout_time(
     station: Station, layout: Iterable[Any], params: MotionParams = DEFAULT_PARAMS
 ) -> float:
     """Robot seconds to kit a layout: the sum of :func:`pick_place_time` over its placements
-    (objects with ``type``, ``x`` and ``y``, e.g. :class:`bilevel_kit.plan.Placement`)."""
+    (objects with ``type``, ``x``, ``y`` and optionally ``theta``, e.g.
+    :class:`bilevel_kit.plan.Placement`)."""
     return float(
-        sum(pick_place_time(station, str(p.type), (float(p.x), float(p.y)), params) for p in layout)
+        sum(
+            pick_place_time(
+                station, str(p.type), (float(p.x), float(p.y)), params, getattr(p, "theta", 0.0)
+            )
+            for p in layout
+        )
     )
 
 

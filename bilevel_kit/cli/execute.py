@@ -1,0 +1,244 @@
+"""``bilevel-kit execute``: a plan as Sawyer joint trajectories in ROS bags, and an animated
+3-D view (docs/execution.md).
+
+Everything that can fail on the input (the files, the plan against the instance, a bin or
+slot out of reach) fails before anything is written; the outputs are then written under
+temporary names next to their targets and renamed together, so a failed run leaves nothing
+half-written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from .common import EXIT_OK, add_output, positive_int
+
+if TYPE_CHECKING:
+    from ..sawyer.bags import BagInfo
+    from ..sawyer.trajectory import Execution
+
+HELP = "write a plan's Sawyer trajectories as ROS bags and an animated 3-D view"
+DESCRIPTION = (
+    "Turn a solution into what the Sawyer runs: per kit, one joint trajectory (the motion "
+    "model's moves, limits and profiles, so it lasts the kit's modelled robot time), gripper "
+    "commands and the timeline's events (wait for the tray, tray push, delivery) at the plan's "
+    "times, as ROS 1 and/or ROS 2 bags with standard message types; and a standalone HTML page "
+    "animating the arm, the trays and the parts. Prints per kit the trajectory's duration "
+    "against the modelled time. Exit 2, writing nothing, when the solution does not fit the "
+    "instance or a bin or slot is out of the arm's reach. See docs/execution.md."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("instance", help="instance JSON file (format bilevel-kit/1)")
+    p.add_argument("solution", help="solution JSON file of that instance")
+    add_output(
+        p,
+        "--bag",
+        folder=True,
+        metavar="DIR",
+        help="write the bags in this folder: NAME.bag (ROS 1) and NAME_ros2/ (ROS 2)",
+    )
+    p.add_argument(
+        "--format",
+        choices=("ros1", "ros2", "both"),
+        default=None,
+        help="which bags to write (default: both)",
+    )
+    add_output(p, "--html", metavar="FILE", help="write the animated 3-D view here")
+    p.add_argument("--kit", type=positive_int, metavar="K", help="only kit K (default: all)")
+
+
+def _formats(args: argparse.Namespace) -> tuple[str, ...]:
+    from ..errors import UsageError
+
+    if args.format is not None and args.bag is None:
+        raise UsageError("--format needs --bag DIR")
+    if args.bag is None:
+        return ()
+    return ("ros1", "ros2") if args.format in (None, "both") else (args.format,)
+
+
+def _bag_targets(args: argparse.Namespace, stem: str) -> dict[str, Path]:
+    """Each bag's path, refusing to replace anything that is not a bag of the same kind."""
+    from ..errors import UsageError
+    from ..sawyer.bags import bag_name
+
+    out = {}
+    for fmt in _formats(args):
+        target = Path(args.bag) / bag_name(stem, fmt)
+        if fmt == "ros1" and target.is_dir():
+            raise UsageError(f"--bag {args.bag}: {target} is a folder, not a ROS 1 bag")
+        is_bag = target.is_dir() and (target / "metadata.yaml").is_file()
+        if fmt == "ros2" and target.exists() and not is_bag:
+            raise UsageError(f"--bag {args.bag}: {target} exists and is not a ROS 2 bag")
+        out[fmt] = target
+    return out
+
+
+class _Staging:
+    """Outputs written as ``.NAME.*/NAME`` next to their targets, then renamed together."""
+
+    def __init__(self) -> None:
+        self.moves: list[tuple[Path, Path]] = []
+        self.created: list[Path] = []
+
+    def path(self, target: Path) -> Path:
+        missing = [p for p in (target.parent, *target.parent.parents) if not p.exists()]
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if missing:
+            self.created.append(missing[-1])
+        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+        self.moves.append((tmp / target.name, target))
+        return tmp / target.name
+
+    def commit(self) -> None:
+        for src, dst in self.moves:
+            if dst.is_dir() and not dst.is_symlink():  # a ROS 2 bag being replaced
+                old = Path(tempfile.mkdtemp(prefix=f".{dst.name}.old.", dir=dst.parent))
+                os.replace(dst, old / dst.name)
+                os.replace(src, dst)
+                shutil.rmtree(old)
+            else:
+                os.replace(src, dst)
+            src.parent.rmdir()
+        self.moves = []
+
+    def abort(self) -> None:
+        for src, _ in self.moves:
+            shutil.rmtree(src.parent, ignore_errors=True)
+        for folder in self.created:
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _staging() -> Iterator[_Staging]:
+    staging = _Staging()
+    try:
+        yield staging
+        staging.commit()
+    except BaseException:
+        staging.abort()
+        raise
+
+
+def _load(args: argparse.Namespace) -> Execution:
+    """The execution of the solution (or of its kit ``--kit``), after checking it fits."""
+    from .. import solution
+    from ..errors import UsageError
+    from ..instance import load
+    from ..sawyer.trajectory import plan_execution
+
+    instance = load(args.instance)
+    sol = solution.read(args.solution)
+    violations = sol.check(instance)
+    if violations:
+        raise UsageError(
+            f"{args.solution} is not a valid plan of {args.instance}: {violations[0]} "
+            f"({len(violations)} violation(s); bilevel-kit check lists them)"
+        )
+    n = len(sol.plan.kits)
+    if args.kit is not None and args.kit > n:
+        raise UsageError(f"--kit {args.kit}: the solution has {n} kit{'s' * (n != 1)}")
+    kits = None if args.kit is None else [args.kit]
+    return plan_execution(instance, sol.plan, kits=kits)
+
+
+def _report(ex: Execution) -> None:
+    from ..sawyer.trajectory import verify
+
+    n_parts = sum(len(layout) for layout in ex.layouts.values())
+    print(f"{ex.instance}: {len(ex.layouts)} of {ex.n_plan_kits} kits, {n_parts} parts")
+    print("kit  parts  robot start  arm start  trajectory  modelled  difference  plan robot  slack")
+    print("                   (s)        (s)        (s)       (s)        (s)        (s)     (s)")
+    overhead = {kt.kit: kt.start - kt.plan.robot_start for kt in ex.kits}
+    for kt in ex.kits:
+        plan_robot = kt.plan.robot_end - kt.plan.robot_start - overhead[kt.kit]
+        print(
+            f"{kt.kit:>3}  {len(kt.parts):>5}  {kt.plan.robot_start:>11.3f}  {kt.start:>9.3f}  "
+            f"{kt.duration:>10.3f}  {kt.modelled:>8.3f}  {kt.duration - kt.modelled:>10.1e}  "
+            f"{plan_robot:>10.3f}  {kt.plan.robot_end - kt.end:>6.3f}"
+        )
+        if kt.extra > 0:
+            print(f"     kit {kt.kit}: {kt.extra:.3f} s of bin changes (not in the motion model)")
+        if kt.overrun > 0:
+            print(f"     warning: kit {kt.kit}'s arm ends {kt.overrun:.3f} s after the plan's push")
+    v = verify(ex)
+    print(
+        f"largest |trajectory - modelled - bin changes|: {v.duration_error:.1e} s; closest to a "
+        f"joint position limit: {v.position_margin:.3f} rad ({v.margin_joint}); peak speed "
+        f"{100 * v.speed_share:.1f}% of the velocity limit ({100 * v.fd_speed_share:.1f}% by "
+        f"finite differences); FK error at place waypoints {1000 * v.place_error:.4f} mm, at "
+        f"grasp waypoints {1000 * v.grasp_error:.4f} mm"
+    )
+
+
+def _describe(info: BagInfo) -> str:
+    from ..sawyer.bags import EVENTS_TOPIC, GRIPPER_TOPIC, TRAJECTORY_TOPIC
+    from ..style import plural
+
+    c = info.counts
+    return (
+        f"wrote {info.path} ({info.format.upper()} bag, {info.size / 1e3:.0f} kB, "
+        f"{info.n_messages} messages: {c[TRAJECTORY_TOPIC]} "
+        f"{'trajectory' if c[TRAJECTORY_TOPIC] == 1 else 'trajectories'}, "
+        f"{plural(c[GRIPPER_TOPIC], 'gripper command')}, "
+        f"{plural(c[EVENTS_TOPIC], 'event stamp')})"
+    )
+
+
+@contextlib.contextmanager
+def _writing(target: Path | str) -> Iterator[None]:
+    """An OS error while writing ``target`` as a one-line usage error (exit 2)."""
+    from ..errors import UsageError
+
+    try:
+        yield
+    except OSError as exc:
+        raise UsageError(f"cannot write {target}: {exc.strerror or exc}; nothing written") from None
+
+
+def _write(
+    ex: Execution, targets: dict[str, Path], html: str | None, page: str | None
+) -> list[BagInfo]:
+    """Write every output through one staging: all of them, or none."""
+    from ..sawyer.bags import BagInfo, write_bag
+
+    infos = []
+    with _writing("the outputs"), _staging() as staging:
+        for fmt, target in targets.items():
+            with _writing(target):
+                info = write_bag(ex, staging.path(target), fmt)
+            infos.append(BagInfo(fmt, target, info.size, info.counts))
+        if html is not None and page is not None:
+            with _writing(html), open(staging.path(Path(html)), "w", encoding="utf-8") as fh:
+                fh.write(page)
+    return infos
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..paths import safe_name
+
+    _formats(args)
+    ex = _load(args)
+    stem = safe_name(ex.instance) + ("" if args.kit is None else f"_kit{args.kit}")
+    targets = _bag_targets(args, stem)
+    page = None
+    if args.html:
+        from ..sawyer.scene import html_page
+
+        page = html_page(ex)
+    infos = _write(ex, targets, args.html, page)
+    _report(ex)
+    for info in infos:
+        print(_describe(info))
+    if page is not None:
+        print(f"wrote {args.html} (animated 3-D view, {len(page.encode()) / 1e6:.2f} MB)")
+    return EXIT_OK

@@ -1,0 +1,230 @@
+"""ROS 1 and ROS 2 bags of an execution, with standard message types (docs/execution.md).
+
+Written and read with the pure-Python ``rosbags`` package, so no ROS installation is needed.
+Topics (:data:`TOPICS`):
+
+* ``/bilevel_kit/arm/joint_trajectory``: ``trajectory_msgs/JointTrajectory``, one message per
+  kit, recorded when the kit's arm motion starts. Joint names ``right_j0`` .. ``right_j6``;
+  every point has positions, velocities and accelerations and its ``time_from_start``.
+  ``header.stamp`` is zero, ROS's "start when received", so a replayed bag drives a trajectory
+  controller with the plan's timing.
+* ``/bilevel_kit/gripper/command``: ``sensor_msgs/JointState`` of the electric gripper's
+  two finger joints, one message per command (close at a grasp, open at a release), stamped
+  with the command's time. Positions are the URDF's finger limits: open
+  (0.020833, -0.020833) m, closed (0, 0); a real gripper stops on the part.
+* ``/bilevel_kit/events``: ``diagnostic_msgs/DiagnosticArray``, one message per instant of
+  the timeline, one status per event there (name ``kit K``, message the event, key/values
+  ``kit``, ``event``, ``plan_time``, ``detail``), stamped with the plan's time.
+
+Plan time ``t`` is recorded as ROS time ``t +`` :data:`EPOCH` seconds: a ROS 1 bag's default
+query starts at 1 ns, which would skip a message at exactly 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from .model import JOINT_NAMES
+from .trajectory import Event, Execution, KitTrajectory
+
+#: Seconds of ROS time at plan time 0.
+EPOCH = 1.0
+TRAJECTORY_TOPIC = "/bilevel_kit/arm/joint_trajectory"
+GRIPPER_TOPIC = "/bilevel_kit/gripper/command"
+EVENTS_TOPIC = "/bilevel_kit/events"
+TRAJECTORY_TYPE = "trajectory_msgs/msg/JointTrajectory"
+GRIPPER_TYPE = "sensor_msgs/msg/JointState"
+EVENTS_TYPE = "diagnostic_msgs/msg/DiagnosticArray"
+#: Topic -> message type, in the order the connections are added.
+TOPICS = {
+    TRAJECTORY_TOPIC: TRAJECTORY_TYPE,
+    GRIPPER_TOPIC: GRIPPER_TYPE,
+    EVENTS_TOPIC: EVENTS_TYPE,
+}
+FINGER_JOINTS = ("right_gripper_l_finger_joint", "right_gripper_r_finger_joint")
+FINGERS_OPEN = (0.020833, -0.020833)
+FINGERS_CLOSED = (0.0, 0.0)
+FORMATS = ("ros1", "ros2")
+#: rosbag2 metadata version written (the ``rosbags`` writer supports 8 and 9).
+ROS2_VERSION: Literal[8, 9] = 8
+
+
+def to_ns(seconds: float) -> int:
+    """Plan seconds as ROS time in integer nanoseconds."""
+    return round((EPOCH + seconds) * 1e9)
+
+
+def _stamp(types: dict[str, Any], ns: int) -> Any:
+    return types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+
+
+def _header(types: dict[str, Any], ros1: bool, ns: int, frame: str = "") -> Any:
+    extra = {"seq": 0} if ros1 else {}
+    return types["std_msgs/msg/Header"](stamp=_stamp(types, ns), frame_id=frame, **extra)
+
+
+def _trajectory(types: dict[str, Any], ros1: bool, kt: KitTrajectory) -> Any:
+    point = types["trajectory_msgs/msg/JointTrajectoryPoint"]
+    duration = types["builtin_interfaces/msg/Duration"]
+    points = []
+    for t, q, qd, qdd in zip(kt.times, kt.positions, kt.velocities, kt.accelerations, strict=True):
+        ns = round(float(t) * 1e9)
+        points.append(
+            point(
+                positions=np.asarray(q, dtype=np.float64),
+                velocities=np.asarray(qd, dtype=np.float64),
+                accelerations=np.asarray(qdd, dtype=np.float64),
+                effort=np.zeros(0, dtype=np.float64),
+                time_from_start=duration(sec=ns // 10**9, nanosec=ns % 10**9),
+            )
+        )
+    return types[TRAJECTORY_TYPE](
+        header=_header(types, ros1, 0, "base"), joint_names=list(JOINT_NAMES), points=points
+    )
+
+
+def _gripper(types: dict[str, Any], ros1: bool, ns: int, closed: bool) -> Any:
+    return types[GRIPPER_TYPE](
+        header=_header(types, ros1, ns),
+        name=list(FINGER_JOINTS),
+        position=np.array(FINGERS_CLOSED if closed else FINGERS_OPEN, dtype=np.float64),
+        velocity=np.zeros(0, dtype=np.float64),
+        effort=np.zeros(0, dtype=np.float64),
+    )
+
+
+def _events(types: dict[str, Any], ros1: bool, ns: int, events: Sequence[Event]) -> Any:
+    kv = types["diagnostic_msgs/msg/KeyValue"]
+    status = types["diagnostic_msgs/msg/DiagnosticStatus"]
+    return types[EVENTS_TYPE](
+        header=_header(types, ros1, ns),
+        status=[
+            status(
+                level=0,
+                name=f"kit {e.kit}",
+                message=e.name,
+                hardware_id="sawyer",
+                values=[
+                    kv(key="kit", value=str(e.kit)),
+                    kv(key="event", value=e.name),
+                    kv(key="plan_time", value=f"{e.time:.9f}"),
+                    kv(key="detail", value=e.detail),
+                ],
+            )
+            for e in events
+        ],
+    )
+
+
+def messages(execution: Execution, fmt: str) -> list[tuple[str, int, Any]]:
+    """``(topic, ROS time ns, message)`` of every message of the bag, in time order."""
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = fmt == "ros1"
+    types = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE).types
+    out: list[tuple[str, int, Any]] = []
+    for kt in execution.kits:
+        out.append((TRAJECTORY_TOPIC, to_ns(kt.start), _trajectory(types, ros1, kt)))
+    for t, _kit, _part, closed in execution.gripper_commands():
+        ns = to_ns(t)
+        out.append((GRIPPER_TOPIC, ns, _gripper(types, ros1, ns, closed)))
+    groups: dict[int, list[Event]] = {}
+    for e in execution.events:
+        groups.setdefault(to_ns(e.time), []).append(e)
+    for ns, group in groups.items():
+        out.append((EVENTS_TOPIC, ns, _events(types, ros1, ns, group)))
+    order = list(TOPICS)
+    out.sort(key=lambda m: (m[1], order.index(m[0])))
+    return out
+
+
+@dataclass(frozen=True)
+class BagInfo:
+    """A written bag: its path (a file for ROS 1, a folder for ROS 2), size and counts."""
+
+    format: str
+    path: Path
+    size: int
+    counts: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def n_messages(self) -> int:
+        return sum(self.counts.values())
+
+
+def _size(path: Path) -> int:
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size
+
+
+def write_bag(execution: Execution, path: str | Path, fmt: str) -> BagInfo:
+    """Write the ``fmt`` (``"ros1"`` or ``"ros2"``) bag of ``execution`` at ``path``, which
+    must not exist (a ``.bag`` file for ROS 1, a folder for ROS 2)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown bag format {fmt!r}; expected one of {', '.join(FORMATS)}")
+    path = Path(path)
+    msgs = messages(execution, fmt)
+    counts = dict.fromkeys(TOPICS, 0)
+    if fmt == "ros1":
+        from rosbags.rosbag1 import Writer as Writer1
+
+        store = get_typestore(Stores.ROS1_NOETIC)
+        with Writer1(path) as w1:
+            conns = {t: w1.add_connection(t, m, typestore=store) for t, m in TOPICS.items()}
+            for topic, ns, msg in msgs:
+                w1.write(conns[topic], ns, store.serialize_ros1(msg, TOPICS[topic]))
+                counts[topic] += 1
+    else:
+        from rosbags.rosbag2 import Writer as Writer2
+
+        store = get_typestore(Stores.ROS2_HUMBLE)
+        with Writer2(path, version=ROS2_VERSION) as w2:
+            conns = {t: w2.add_connection(t, m, typestore=store) for t, m in TOPICS.items()}
+            for topic, ns, msg in msgs:
+                w2.write(conns[topic], ns, store.serialize_cdr(msg, TOPICS[topic]))
+                counts[topic] += 1
+    return BagInfo(fmt, path, _size(path), counts)
+
+
+def bag_name(stem: str, fmt: str) -> str:
+    """File (ROS 1) or folder (ROS 2) name of a bag under ``--bag DIR``."""
+    return f"{stem}.bag" if fmt == "ros1" else f"{stem}_ros2"
+
+
+def read_bag(path: str | Path) -> dict[str, list[tuple[int, Any]]]:
+    """Every message of a bag written here (either format), per topic: ``(ROS time ns,
+    deserialised message)`` in the bag's order."""
+    from rosbags.highlevel import AnyReader
+
+    out: dict[str, list[tuple[int, Any]]] = {}
+    with AnyReader([Path(path)]) as reader:
+        for conn, ns, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((ns, reader.deserialize(raw, conn.msgtype)))
+    return out
+
+
+def trajectory_arrays(msg: Any) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+    """``(joint names, time_from_start [s], positions, velocities)`` of a read-back
+    ``JointTrajectory``."""
+    t = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 for p in msg.points])
+    q = np.array([p.positions for p in msg.points], dtype=float)
+    qd = np.array([p.velocities for p in msg.points], dtype=float)
+    return list(msg.joint_names), t, q, qd
+
+
+def event_names(msgs: Iterable[tuple[int, Any]]) -> list[tuple[float, int, str]]:
+    """``(plan time, kit, event)`` of read-back event messages, from the stamps."""
+    out = []
+    for ns, msg in msgs:
+        for status in msg.status:
+            values = {kv.key: kv.value for kv in status.values}
+            out.append((ns * 1e-9 - EPOCH, int(values["kit"]), values["event"]))
+    return out

@@ -1,0 +1,356 @@
+"""``bilevel-kit execute``: per-kit Sawyer trajectories in ROS bags, read back and checked
+against the joint limits, the motion model and the slot and bin poses (docs/execution.md)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pin = pytest.importorskip("pinocchio")
+pytest.importorskip("rosbags")
+
+import bilevel_kit.sawyer as S  # noqa: E402, N812
+from bilevel_kit import load, solve  # noqa: E402
+from bilevel_kit import solution as solution_io  # noqa: E402
+from bilevel_kit.cli import main  # noqa: E402
+from bilevel_kit.plan import evaluate  # noqa: E402
+from bilevel_kit.sawyer import bags  # noqa: E402
+from bilevel_kit.sawyer.trajectory import plan_execution, verify  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+TABLE = ROOT / "instances" / "hrc_table.json"
+REFERENCE = ROOT.parent / "shared" / "reference" / "sawyer"
+ST = S.DEFAULT_STATION
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def instance():
+    return load(TABLE)
+
+
+@pytest.fixture(scope="module")
+def plan(instance):
+    """Single Task's plan of the paper's table: 12 kits, 28 parts, solved in milliseconds."""
+    res = solve(instance, "single-task")
+    assert res.plan is not None
+    return res
+
+
+@pytest.fixture(scope="module")
+def solution_file(plan, tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("sol") / "single.json"
+    solution_io.write(path, plan)
+    return path
+
+
+@pytest.fixture(scope="module")
+def written(solution_file, tmp_path_factory):
+    """One run of the command: (folder, stdout)."""
+    out = tmp_path_factory.mktemp("exec")
+    code = main(
+        [
+            "execute",
+            str(TABLE),
+            str(solution_file),
+            "--bag",
+            str(out / "bags"),
+            "--html",
+            str(out / "view.html"),
+        ]
+    )
+    assert code == 0
+    return out
+
+
+def _tfs(point) -> float:
+    return point.time_from_start.sec + point.time_from_start.nanosec * 1e-9
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "ros2"])
+def test_bags_read_back_within_limits_and_on_the_plan_times(fmt, written, instance, plan):
+    path = written / "bags" / bags.bag_name("hrc_table", fmt)
+    topics = bags.read_bag(path)
+    assert set(topics) == set(bags.TOPICS)
+    timeline = evaluate(instance, plan.plan)
+    kits = plan.plan.kits
+    trajectories = topics[bags.TRAJECTORY_TOPIC]
+    assert len(trajectories) == len(kits)  # one trajectory per kit
+    for topic, msgs in topics.items():  # bag stamps strictly increase on every topic
+        stamps = [ns for ns, _ in msgs]
+        assert all(b > a for a, b in itertools.pairwise(stamps)), topic
+    for k, (ns, msg) in enumerate(trajectories):
+        times = timeline.kits[k]
+        assert msg.header.stamp.sec == 0 and msg.header.stamp.nanosec == 0  # start on receipt
+        assert ns == bags.to_ns(times.robot_start + instance.kit_overhead_robot)
+        names, t, q, qd = bags.trajectory_arrays(msg)
+        assert names == [f"right_j{i}" for i in range(7)]
+        assert t[0] == 0.0 and np.all(np.diff(t) > 0)
+        assert np.all(q >= S.Q_LOWER - 1e-9) and np.all(q <= S.Q_UPPER + 1e-9)
+        assert np.all(np.abs(qd) <= S.V_MAX * (1 + 1e-9))
+        fd = np.diff(q, axis=0) / np.diff(t)[:, None]
+        assert np.all(np.abs(fd) <= S.V_MAX * (1 + 1e-6))
+        # The duration is the motion model's time of this kit's layout, computed apart.
+        assert t[-1] == pytest.approx(S.layout_time(ST, kits[k].layout), abs=1e-6)
+        assert ns * 1e-9 - bags.EPOCH + t[-1] <= times.robot_end + 1e-6  # fits the plan
+
+
+def _waypoint(traj_ns: int, msg, command_ns: int) -> np.ndarray:
+    """The trajectory point at a gripper command's time (it is a sample, to the nanosecond)."""
+    offset = (command_ns - traj_ns) * 1e-9
+    for point in msg.points:
+        if abs(_tfs(point) - offset) < 2e-9:
+            return np.array(point.positions)
+    raise AssertionError(f"no trajectory point at {offset} s")
+
+
+def _commands(topics):
+    """Per kit, the gripper commands (ns, closed) inside its trajectory's time span."""
+    trajectories = topics[bags.TRAJECTORY_TOPIC]
+    out = []
+    for i, (ns, msg) in enumerate(trajectories):
+        end = ns + round(_tfs(msg.points[-1]) * 1e9)
+        cmds = [
+            (c_ns, bool(np.all(np.asarray(c.position) == 0.0)))
+            for c_ns, c in topics[bags.GRIPPER_TOPIC]
+            if ns <= c_ns <= end
+        ]
+        out.append((ns, msg, cmds))
+        assert i == 0 or ns > trajectories[i - 1][0]
+    return out
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "ros2"])
+def test_grasp_and_place_waypoints_hit_the_bin_and_the_slot(fmt, written, plan):
+    topics = bags.read_bag(written / "bags" / bags.bag_name("hrc_table", fmt))
+    arm = S.Arm(ST.tool_offset_m)
+    worst = 0.0
+    for kit, (ns, msg, cmds) in zip(plan.plan.kits, _commands(topics), strict=True):
+        assert [closed for _, closed in cmds] == [True, False] * len(kit.layout)
+        for p, (close, release) in zip(
+            kit.layout, zip(cmds[::2], cmds[1::2], strict=True), strict=True
+        ):
+            grasp = arm.placement(_waypoint(ns, msg, close[0]))
+            assert np.linalg.norm(grasp.translation - ST.bin_point(p.type)) <= 1e-3
+            place = arm.placement(_waypoint(ns, msg, release[0]))
+            target = ST.tray_to_base(p.x, p.y, ST.place_height)
+            worst = max(worst, float(np.linalg.norm(place.translation - target)))
+            R = place.rotation
+            assert math.acos(min(1.0, -R[2, 2])) <= 1e-2  # tool z straight down
+            yaw = math.degrees(math.atan2(R[1, 0], R[0, 0])) - ST.tray_yaw - p.theta
+            assert min(abs((yaw - g + 180) % 360 - 180) for g in ST.grasp_yaws) <= 0.6
+    assert worst <= 1e-3
+
+
+def test_place_waypoints_match_the_upstream_urdf(written, plan):
+    """The same waypoints through Rethink's own description (electric gripper tip)."""
+    path = REFERENCE / "derived" / "sawyer_electric_gripper.urdf"
+    if not path.exists():
+        pytest.skip(f"upstream Sawyer description not available ({path})")
+    model = pin.buildModelFromUrdf(str(path))
+    data = model.createData()
+    tip = model.getFrameId("right_gripper_tip")
+    topics = bags.read_bag(written / "bags" / bags.bag_name("hrc_table", "ros2"))
+    for kit, (ns, msg, cmds) in zip(plan.plan.kits, _commands(topics), strict=True):
+        for p, (release_ns, _) in zip(kit.layout, cmds[1::2], strict=True):
+            q = pin.neutral(model)
+            for name, value in zip(S.JOINT_NAMES, _waypoint(ns, msg, release_ns), strict=True):
+                q[model.joints[model.getJointId(name)].idx_q] = value
+            pin.framesForwardKinematics(model, data, q)
+            target = ST.tray_to_base(p.x, p.y, ST.place_height)
+            assert np.linalg.norm(data.oMf[tip].translation - target) <= 1e-3
+
+
+def test_events_carry_the_plan_times(written, instance, plan):
+    topics = bags.read_bag(written / "bags" / bags.bag_name("hrc_table", "ros1"))
+    events = bags.event_names(topics[bags.EVENTS_TOPIC])
+    timeline = evaluate(instance, plan.plan)
+    for k, times in enumerate(timeline.kits, start=1):
+        mine = {name: t for t, kit, name in events if kit == k}
+        assert mine["tray_ready"] == pytest.approx(times.robot_start, abs=1e-9)
+        assert mine["tray_push"] == pytest.approx(times.robot_end, abs=1e-9)
+        assert mine["tray_delivered"] == pytest.approx(times.arrive, abs=1e-9)
+        if k > 1 and times.robot_start > timeline.kits[k - 2].arrive + 1e-9:
+            assert mine["wait_for_tray"] == pytest.approx(timeline.kits[k - 2].arrive, abs=1e-9)
+        else:
+            assert "wait_for_tray" not in mine
+    assert any(name == "wait_for_tray" for _, _, name in events)  # one tray in circulation
+
+
+def test_the_report_shows_durations_against_the_model(capsys, solution_file, tmp_path):
+    code, out, err = run(capsys, "execute", TABLE, solution_file, "--bag", tmp_path / "b")
+    assert code == 0 and err == ""
+    rows = [line.split() for line in out.splitlines() if line[:3].strip().isdigit()]
+    assert len(rows) == 12
+    for row in rows:
+        assert float(row[4]) == pytest.approx(float(row[5]), abs=1e-3)  # trajectory = model
+        assert abs(float(row[6])) < 1e-9
+    assert "hrc_table.bag (ROS1 bag" in out and "hrc_table_ros2 (ROS2 bag" in out
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
+        "hrc_table.bag",
+        "hrc_table_ros2",
+    ]
+
+
+def test_one_kit_and_one_format(capsys, solution_file, tmp_path, instance, plan):
+    code, _out, _ = run(
+        capsys, "execute", TABLE, solution_file, "--bag", tmp_path, "--kit", 3, "--format", "ros1"
+    )
+    assert code == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["hrc_table_kit3.bag"]
+    topics = bags.read_bag(tmp_path / "hrc_table_kit3.bag")
+    assert len(topics[bags.TRAJECTORY_TOPIC]) == 1
+    assert {kit for _, kit, _ in bags.event_names(topics[bags.EVENTS_TOPIC])} == {3}
+    # run again: the bag is replaced, not refused
+    code, _, _ = run(
+        capsys, "execute", TABLE, solution_file, "--bag", tmp_path, "--kit", 3, "--format", "ros1"
+    )
+    assert code == 0 and [p.name for p in tmp_path.iterdir()] == ["hrc_table_kit3.bag"]
+
+
+def _far_instance(tmp_path: Path, station: dict) -> tuple[Path, Path]:
+    doc = json.loads(TABLE.read_text())
+    doc["station"] = station
+    inst_path = tmp_path / "far.json"
+    inst_path.write_text(json.dumps(doc))
+    sol_path = tmp_path / "far_solution.json"
+    solution_io.write(sol_path, solve(load(inst_path), "single-task"))
+    return inst_path, sol_path
+
+
+@pytest.mark.parametrize(
+    ("station", "message"),
+    [
+        ({"tray_pose": {"x": 1400.0}}, r"kit 1, part foot-1 \(type foot\): .*tray slot"),
+        ({"bins": {"leg": [0.0, 1600.0, 0.0]}}, r"kit 1, part leg-1 \(type leg\): .*bin of part"),
+    ],
+)
+def test_out_of_reach_is_exit_2_naming_kit_and_part(capsys, tmp_path, station, message):
+    inst_path, sol_path = _far_instance(tmp_path, station)
+    out = tmp_path / "out"
+    code, text, err = run(
+        capsys, "execute", inst_path, sol_path, "--bag", out, "--html", out / "v.html"
+    )
+    assert code == 2 and text == ""
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert re.search(message, err), err
+    assert not out.exists()
+
+
+def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, solution_file, root):
+    other = tmp_path / "tiny_solution.json"
+    solution_io.write(other, solve(load(root / "instances" / "tiny.json"), "single-task"))
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    out = tmp_path / "out"
+    cases = [
+        (tmp_path / "missing.json", solution_file, "--bag", out),
+        (TABLE, tmp_path / "missing.json", "--bag", out),
+        (TABLE, other, "--bag", out),
+        (TABLE, solution_file, "--bag", out, "--kit", 13),
+        (TABLE, solution_file, "--bag", out, "--kit", 0),
+        (TABLE, solution_file, "--format", "ros1"),
+        (TABLE, solution_file, "--bag", a_file),
+        (TABLE, solution_file, "--html", a_file / "v.html"),
+    ]
+    for argv in cases:
+        code, _text, err = run(capsys, "execute", *argv)
+        assert code == 2, argv
+        assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+        assert not out.exists()
+
+
+def test_a_failed_write_leaves_nothing(capsys, tmp_path, solution_file, monkeypatch):
+    real = bags.write_bag
+
+    def flaky(ex, path, fmt):
+        if fmt == "ros2":
+            raise OSError(28, "No space left on device")
+        return real(ex, path, fmt)
+
+    monkeypatch.setattr(bags, "write_bag", flaky)
+    old = tmp_path / "bags"
+    old.mkdir()
+    (old / "hrc_table_kit1.bag").write_text("the previous bag")
+    code, _, err = run(
+        capsys,
+        "execute",
+        TABLE,
+        solution_file,
+        "--kit",
+        1,
+        "--bag",
+        old,
+        "--html",
+        tmp_path / "v.html",
+    )
+    assert code == 2 and "No space left on device" in err
+    assert [p.name for p in old.iterdir()] == ["hrc_table_kit1.bag"]  # no temporary left
+    assert (old / "hrc_table_kit1.bag").read_text() == "the previous bag"
+    assert not (tmp_path / "v.html").exists()
+
+
+def test_bin_changes_are_timed_apart_from_the_model(instance, plan):
+    doc = instance.to_dict()
+    doc["station"] = {"bins": {"leg": [350.0, 450.0, -100.0], "foot": [250.0, 600.0, -80.0]}}
+    from bilevel_kit.instance import from_dict
+
+    other = from_dict(doc)
+    ex = plan_execution(other, plan.plan)
+    station = other.station
+    assert any(kt.extra > 0 for kt in ex.kits)
+    for kt, kit in zip(ex.kits, plan.plan.kits, strict=True):
+        assert kt.modelled == pytest.approx(S.layout_time(station, kit.layout), abs=1e-9)
+        assert kt.duration == pytest.approx(kt.modelled + kt.extra, abs=1e-9)
+        assert ("to_bin" in [s.name for s in kt.segments]) == (kt.extra > 0)
+    v = verify(ex)
+    assert v.place_error <= 1e-3 and v.grasp_error <= 1e-3
+    assert v.speed_share <= 1 + 1e-9 and v.fd_speed_share <= 1 + 1e-9
+    assert v.position_margin > 0 and v.duration_error < 1e-9
+
+
+def test_exact_positions_agree_with_the_samples(instance, plan):
+    ex = plan_execution(instance, plan.plan, kits=[2], dt=0.01)
+    kt = ex.kits[0]
+    np.testing.assert_allclose(kt.positions_at(kt.times), kt.positions, atol=1e-9)
+    coarse = plan_execution(instance, plan.plan, kits=[2], dt=0.2).kits[0]
+    assert coarse.duration == pytest.approx(kt.duration, abs=1e-12)
+    assert len(coarse.times) < len(kt.times)
+
+
+def test_joint_trajectory_figure(instance, plan):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from bilevel_kit.sawyer.figures import (
+        limit_lines,
+        plot_joint_positions,
+        plot_joint_velocities,
+        plot_kit_trajectory,
+    )
+
+    kt = plan_execution(instance, plan.plan, kits=[1]).kits[0]
+    _fig, ax = plt.subplots()
+    assert plot_joint_positions(kt, ax=ax) is ax
+    assert len(limit_lines(ax)) == 14  # lower and upper of every joint
+    assert ax.get_xlabel() and ax.get_ylabel()
+    ax2 = plot_joint_velocities(kt)
+    assert len(limit_lines(ax2)) == 2
+    top = max(line.get_ydata().max() for line in ax2.get_lines() if "v:" in str(line.get_gid()))
+    assert top <= 100.0 + 1e-6
+    figure = plot_kit_trajectory(kt)
+    assert len(figure.axes) == 2
+    plt.close("all")
