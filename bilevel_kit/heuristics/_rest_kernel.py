@@ -1,16 +1,16 @@
 """The core enumeration of greedy-ce's window rests, compiled (numba).
 
-:class:`bilevel_kit.heuristics.greedy_search._Rests` finds the best rest of a prefix by
-enumerating *cores* (unions of the need sets of deep tasks, at most ``m`` tasks) in the order
-of a depth-first search, and scoring each with the best free multiset of robot times from a
-sorted table. :func:`best_cores` is that loop, operation by operation: the same candidates in
+:class:`bilevel_kit.heuristics.prefix.rests.RestDecomposition` finds the best rest of a prefix
+by enumerating *cores* (unions of the need sets of deep tasks, at most ``m`` tasks) in the
+order of a depth-first search, and scoring each with the best free multiset of robot times from
+a sorted table. :func:`best_cores` is that loop, operation by operation: the same candidates in
 the same order, the same search (a stack, the distinct cores in the order they are popped, at
 most ``max_cores`` of them), the same table look-up (binary search, then a scan up and down
-past multisets that use more tasks of a value than are left) and the same floating-point
-sums, which are exact here (the caller uses it only when every sum of robot times is exact,
-so a core's sum does not depend on the order of its tasks). It returns each core's rest sum
-R(Q); the caller scores them all with F at once and takes the first of least F, the result
-of the loop that keeps the first strict improvement.
+past multisets that use more tasks of a value than are left) and the same floating-point sums,
+which are exact here (the caller uses it only when every sum of robot times is exact, so a
+core's sum does not depend on the order of its tasks). It returns each core's rest sum R(Q);
+the caller scores them all with F at once and takes the first of least F, the result of the
+loop that keeps the first strict improvement.
 
 numba is imported on first use; without it (or with ``BILEVEL_KIT_NO_NUMBA=1``,
 :mod:`bilevel_kit.heuristics._kernels`) :func:`kernel` returns None and the caller runs its own
