@@ -72,7 +72,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
 from ...bounds import best_bound, min_kits
@@ -96,7 +96,10 @@ from ..common import (
 )
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
-from .scaling import scale_times, scaled_makespan, scaled_objective
+from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
+
+if TYPE_CHECKING:
+    from .live import Live as LiveProgress
 
 TrayMode = Literal["auto", "embedded", "benders"]
 Objective = Literal["makespan", "human_idle"]
@@ -349,8 +352,6 @@ def run(
     """Minimise makespan (or human idle) over all segmentations and orders (module
     docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
     budget = Budget(time_limit, keep_back=KEEP_BACK)
-    from ortools.sat.python import cp_model
-
     try:
         sc = scale_times(instance, options.time_resolution, options.refine_times, releases)
     except ValueError as exc:
@@ -368,45 +369,77 @@ def run(
             "hint_used": False,
         },
     )
-    extra = report.extra
     unfit = packer.task_not_fitting()  # then no plan exists
     if unfit is not None:
-        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        report.extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
         return report.finish(None, Status.INFEASIBLE, None)
-
-    n = instance.n_tasks
-    sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
-    groups = chain_groups_idx(n, _edges(instance), sig)
-    extra["symmetric_chains"] = sum(len(g) for g in groups)
-    ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
-
-    incumbent = _incumbent(ctx, hint, pack_tl, extra)
-    tracker = progress.tracker(options.objective)
-    live = None
-    if tracker.active:
-        from .live import Live
-
-        ctx.live = live = Live(ctx, tracker)
-        tracker.report(bound=_closed_bound(instance, options.objective), stage="CP-SAT")
-        if incumbent is not None:
-            tracker.report(incumbent=live.real(incumbent))
+    ctx = _context(instance, sc, options, packer, budget, report.extra)
+    incumbent = _incumbent(ctx, hint, pack_tl, report.extra)
+    live = _start_live(ctx, incumbent)
     upper = None
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
     mode = _tray_mode(instance, options.tray, K)
-    extra.update(
+    report.extra.update(
         tray_mode=mode,
         max_kits=K,
         upper_start=None
         if incumbent is None
         else evaluate(instance, _plan_of(ctx, incumbent, None)).makespan,
     )
+    proven = _proven_without_model(ctx, incumbent, upper, report)
+    if proven is not None:
+        return proven
+    if not _buildable(instance, K, budget, report.extra):
+        if incumbent is None:
+            return report.finish(None, Status.UNKNOWN, best_bound(instance))
+        return _conclude(ctx, None, State(incumbent, upper), report)
+    return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
+
+
+def _context(
+    instance: Instance,
+    sc: Scaled,
+    options: ScheduleOptions,
+    packer: Packer,
+    budget: Budget,
+    extra: dict[str, Any],
+) -> Context:
+    """The run's context, with the interchangeable chains (symmetry breaking)."""
+    n = instance.n_tasks
+    sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
+    groups = chain_groups_idx(n, _edges(instance), sig)
+    extra["symmetric_chains"] = sum(len(g) for g in groups)
+    return Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+
+
+def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
+    """The live progress when somebody listens (then also ``ctx.live``), with the closed-form
+    bound and the incumbent reported."""
+    tracker = progress.tracker(ctx.objective)
+    if not tracker.active:
+        return None
+    from .live import Live
+
+    ctx.live = live = Live(ctx, tracker)
+    tracker.report(bound=_closed_bound(ctx.instance, ctx.objective), stage="CP-SAT")
+    if incumbent is not None:
+        tracker.report(incumbent=live.real(incumbent))
+    return live
+
+
+def _proven_without_model(
+    ctx: Context, incumbent: list[list[int]] | None, upper: int | None, report: _Report
+) -> MethodOutput | None:
+    """The result when the incumbent attains a closed-form bound or the release bound (then
+    it is optimal and no model is built); None otherwise."""
+    instance, sc, extra = ctx.instance, ctx.sc, report.extra
     start_ms = extra["upper_start"]
     closed_done = (
         start_ms is not None and start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
     )
-    if options.objective == "makespan" and closed_done:
+    if ctx.objective == "makespan" and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
@@ -415,8 +448,15 @@ def run(
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
         extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, upper, proven=True), report)
+    return None
+
+
+def _buildable(instance: Instance, K: int, budget: Budget, extra: dict[str, Any]) -> bool:
+    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
+    a ``reason``) when it would not be built and solved within the time left."""
     cells = assignment_cells(instance, K)
     extra["model_cells"] = cells
+    n = instance.n_tasks
     check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
     if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
         extra.update(
@@ -426,21 +466,39 @@ def run(
             cpsat_status="NOT_BUILT",
             cuts=0,
         )
-        if incumbent is None:
-            return report.finish(None, Status.UNKNOWN, best_bound(instance))
-        return _conclude(ctx, None, State(incumbent, upper), report)
+        return False
+    return True
+
+
+def _solve_model(
+    ctx: Context,
+    options: ScheduleOptions,
+    K: int,
+    upper: int | None,
+    mode: str,
+    incumbent: list[list[int]] | None,
+    live: LiveProgress | None,
+    seed: int,
+    cpsat_params: dict[str, Any] | None,
+    report: _Report,
+) -> MethodOutput:
+    """Build the model with K kits (C <= ``upper``), configure CP-SAT and search (embedded or
+    Benders) from the incumbent; the result."""
+    from ortools.sat.python import cp_model
+
+    instance, extra, budget = ctx.instance, report.extra, ctx.budget
     mdl = build(
         instance,
-        sc,
+        ctx.sc,
         K=K,
         upper=upper,
         embedded=mode == "embedded",
         objective=options.objective,
         pack_res=options.pack_resolution,
-        groups=groups,
+        groups=ctx.groups,
     )
     extra["build_time_s"] = budget.elapsed()
-    ctx.budget = budget.cut(cells * OVERRUN_S_PER_CELL)  # CP-SAT's overrun, kept back
+    ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = max(1, options.workers)
     solver.parameters.random_seed = seed

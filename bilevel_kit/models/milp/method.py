@@ -151,87 +151,122 @@ def run(
     closed = best_bound(instance)
     pack_tl = pack_time_limit(budget)
     packer = Packer(instance, pack_tl, budget.cut(MARGIN))
-    extra: dict[str, Any] = {
-        "solver": options.solver,
-        "objective": options.objective,
-        "tray_mode": options.tray,
-        "iterations": 0,
-        "cuts": 0,
-        "unproven_cuts": 0,
-        "time_limit_enforced": options.solver == "highs" or options.solver in SOLVER_OPTIONS,
-    }
-
     live = _Live(progress.tracker(options.objective), instance, options.objective)
-
-    def finish(plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
-        extra["wall_time_s"] = budget.elapsed()
-        if plan is not None:
-            live.final(plan, bound, extra.get("idle_bound"))
-        return MethodOutput(plan, status, bound, extra, status_objective=options.objective)
-
+    r = _Run(instance, options, budget, packer, closed, live)
+    r.extra.update(
+        solver=options.solver,
+        objective=options.objective,
+        tray_mode=options.tray,
+        iterations=0,
+        cuts=0,
+        unproven_cuts=0,
+        time_limit_enforced=options.solver == "highs" or options.solver in SOLVER_OPTIONS,
+    )
     unfit = packer.task_not_fitting()  # then no plan exists
     if unfit is not None:
-        extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
-        return finish(None, Status.INFEASIBLE, None)
+        r.extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
+        return r.finish(None, Status.INFEASIBLE, None)
+    inc, inc_obj, upper, K = _incumbent(r, pack_tl)
+    if upper is not None and upper <= closed + TOL:
+        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
+        # without a model (bilevel_kit/bounds.py, (d))
+        r.extra.update(build_time_s=0.0, termination="closed_form_bound")
+        return _conclude(r, inc, None, Status.OPTIMAL)
+    if not _buildable(r, K):
+        return _conclude(r, inc, None, Status.FEASIBLE)
+    return _solve_master(r, K, upper, inc, inc_obj, opt, seed, solver_options)
 
-    # incumbent, upper bound and the kit cap (only valid for plans at least as good)
+
+#: The registered method ``milp`` (module docstring) is :func:`run`.
+milp = run
+
+
+@dataclass
+class _Run:
+    """What the steps of one run share, and how it ends (wall time, the last live report)."""
+
+    instance: Instance
+    options: MilpOptions
+    budget: Budget
+    packer: Packer
+    closed: float  # the closed-form makespan bound
+    live: _Live
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        self.extra["wall_time_s"] = self.budget.elapsed()
+        if plan is not None:
+            self.live.final(plan, bound, self.extra.get("idle_bound"))
+        objective = self.options.objective
+        return MethodOutput(plan, status, bound, self.extra, status_objective=objective)
+
+
+def _incumbent(
+    r: _Run, pack_tl: float
+) -> tuple[list[list[str]] | None, float | None, float | None, int]:
+    """The quick plan (for makespan, first one attaining the closed-form bound), its
+    objective, the upper bound U and the kit cap K (valid only for plans at least as good)."""
+    instance, budget, objective = r.instance, r.budget, r.options.objective
     inc = None
-    if options.objective == "makespan":  # optimal at once if it attains the closed-form bound
+    if objective == "makespan":  # optimal at once if it attains the closed-form bound
         inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
     inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
-    inc_obj = None if inc is None else objective_value(instance, inc, options.objective)
+    inc_obj = None if inc is None else objective_value(instance, inc, objective)
     upper = None
     K = instance.n_tasks
-    if inc is not None and inc_obj is not None and options.objective == "makespan":
+    if inc is not None and inc_obj is not None and objective == "makespan":
         upper = inc_obj
         K = min(K, kit_cap(instance, upper))
         K = max(K, len(inc))
-    extra["max_kits"] = K
-    extra["upper_start"] = inc_obj
-    live.tracker.report(
-        live.seconds(inc_obj),
-        closed if options.objective == "makespan" else None,
-        stage=f"MILP ({options.solver})",
+    r.extra["max_kits"] = K
+    r.extra["upper_start"] = inc_obj
+    r.live.tracker.report(
+        r.live.seconds(inc_obj),
+        r.closed if objective == "makespan" else None,
+        stage=f"MILP ({r.options.solver})",
     )
-    if (
-        inc is not None
-        and inc_obj is not None
-        and options.objective == "makespan"
-        and inc_obj <= closed + TOL
-    ):
-        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
-        # without a model (bilevel_kit/bounds.py, (d))
-        extra.update(build_time_s=0.0, termination="closed_form_bound")
-        plan = _with_layouts(instance, inc, packer, extra)
-        if plan is None:
-            return finish(None, Status.UNKNOWN, closed)
-        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
-        return finish(plan, Status.OPTIMAL, bound)
+    return inc, inc_obj, upper, K
 
+
+def _buildable(r: _Run, K: int) -> bool:
+    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
+    a ``reason``) when it would not be built and solved within the time left."""
+    instance = r.instance
     cells = assignment_cells(instance, K)
-    extra["model_cells"] = cells
+    r.extra["model_cells"] = cells
     check_model_memory(
         "milp", cells, BYTES_PER_CELL, f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
     )
-    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
-        extra.update(
+    if too_slow_to_build(r.budget, cells * BUILD_S_PER_CELL, MARGIN):
+        r.extra.update(
             reason=f"a model of {cells:,} task x kit variables would not be built and solved "
             "within the time limit; the quick plan is returned",
             build_time_s=0.0,
             termination="not_built",
         )
-        plan = None if inc is None else _with_layouts(instance, inc, packer, extra)
-        if plan is None:
-            return finish(None, Status.UNKNOWN, closed)
-        bound = _makespan_bound(instance, plan, closed, None, options.objective, extra)
-        return finish(plan, Status.FEASIBLE, bound)
-    master = build(instance, K, upper, options.objective)
-    extra["build_time_s"] = budget.elapsed()
-    loop = _Benders(instance, master, packer, budget, options, inc, inc_obj, live)
+        return False
+    return True
+
+
+def _solve_master(
+    r: _Run,
+    K: int,
+    upper: float | None,
+    inc: list[list[str]] | None,
+    inc_obj: float | None,
+    opt: Any,
+    seed: int,
+    solver_options: Mapping[str, Any] | None,
+) -> MethodOutput:
+    """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
+    options = r.options
+    master = build(r.instance, K, upper, options.objective)
+    r.extra["build_time_s"] = r.budget.elapsed()
+    loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, inc_obj, r.live)
     if options.tray == "auto":
         loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
-    extra.update(
+    r.extra.update(
         iterations=loop.iterations,
         cuts=master.n_cuts,
         unproven_cuts=loop.cuts.unproven,
@@ -240,17 +275,21 @@ def run(
     )
     if loop.inc is None:
         if loop.infeasible:
-            return finish(None, Status.INFEASIBLE, None)
-        return finish(None, Status.UNKNOWN, closed)
-    plan = _with_layouts(instance, loop.inc, packer, extra)
+            return r.finish(None, Status.INFEASIBLE, None)
+        return r.finish(None, Status.UNKNOWN, r.closed)
+    return _conclude(r, loop.inc, loop.lower, Status.OPTIMAL if loop.proven else Status.FEASIBLE)
+
+
+def _conclude(
+    r: _Run, kits: list[list[str]] | None, lower: float | None, status: Status
+) -> MethodOutput:
+    """The plan of ``kits`` with ``status`` and its makespan bound (from the master's bound
+    ``lower``, if any); unknown when there are no kits or some kit has no layout in time."""
+    plan = None if kits is None else _with_layouts(r.instance, kits, r.packer, r.extra)
     if plan is None:
-        return finish(None, Status.UNKNOWN, closed)
-    bound = _makespan_bound(instance, plan, closed, loop.lower, options.objective, extra)
-    return finish(plan, Status.OPTIMAL if loop.proven else Status.FEASIBLE, bound)
-
-
-#: The registered method ``milp`` (module docstring) is :func:`run`.
-milp = run
+        return r.finish(None, Status.UNKNOWN, r.closed)
+    bound = _makespan_bound(r.instance, plan, r.closed, lower, r.options.objective, r.extra)
+    return r.finish(plan, status, bound)
 
 
 def _with_layouts(
