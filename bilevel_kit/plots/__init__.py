@@ -10,12 +10,17 @@ The artists carry ``gid`` tags so that tests and callers can find them again:
 * Gantt chart: ``robot:kit:<k>``, ``robot:delivery:<k>``, ``robot:tray_wait:<k>``,
   ``robot:idle``, ``human:pickup:<k>``, ``human:task:<task id>``, ``human:idle`` (bar
   Rectangles), ``makespan`` (the vertical line).
-* Tray: ``tray`` (the outline Rectangle), ``part:<part id>`` (one Polygon per placement).
-* Comparison: ``makespan``/``human_idle`` (bars), ``status:<method>`` (texts), ``bound``.
+* Gantt labels: ``label:kit:<k>``, ``label:task:<task id>`` (texts, inside a bar or on a
+  leader), ``leader:label:...`` (the leader lines).
+* Tray: ``tray`` (the outline Rectangle), ``part:<part id>`` (one Polygon per placement),
+  ``label:part:<part id>`` (its type or key inside it), ``label:parts:<id>,<id>`` (the key of
+  small parts on a leader).
+* Comparison: ``makespan:<method>`` (the dot), ``noplan:<method>`` (text), ``bound`` (line);
+  ``human_idle`` (bars of the idle panel).
 
-Bars of zero duration (no delivery time, no pickup overhead ...) are not drawn. Labels that
-would not fit inside their bar or part are left out; the colours and the legend still say
-what each bar or part is.
+Bars of zero duration (no delivery time, no pickup overhead ...) are not drawn. A label that
+does not fit inside its bar or part goes beside it on a leader line; a Gantt chart whose task
+bars are too narrow even for that lists the tasks by kit under the chart.
 
 One module per figure family: :mod:`.gantt`, :mod:`.trays`, :mod:`.comparison` (methods
 compared, gaps to the bound) and :mod:`.convergence`; :mod:`.common` holds what they share
@@ -35,6 +40,7 @@ from .trays import (
     plot_tray,
     plot_trays,
     type_colors,
+    type_keys,
     type_swatches,
 )
 
@@ -55,5 +61,6 @@ __all__ = [
     "save_figure",
     "tray_waits",
     "type_colors",
+    "type_keys",
     "type_swatches",
 ]
