@@ -26,8 +26,8 @@ Otherwise a command must exit 0. What the test changes, and why:
 * **Optional arguments** shown in brackets (``[--kit K]``) are left out, except ``[--quick]``,
   which is kept: it is the fast form.
 * **Parsed, not run**: the ``repro`` studies. Their arguments go through the CLI's own
-  parser (a misspelt option fails), but a study takes 15-80 s even with ``--quick``, and
-  tests/repro/ and tests/cli/ run each quick study end to end.
+  parser (a misspelt option fails), but a study takes 15-120 s even with ``--quick``
+  (measured under load), and tests/repro/ and tests/cli/ run each quick study end to end.
 * **Fast options**, so the whole file runs in minutes: ``--methods all`` becomes
   ``single-task,greedy-ce,cpsat`` (``bilevel-milp`` alone spends its 60 s default limit and
   ``milp`` starts a HiGHS child, both tested elsewhere); ``--time-limit`` is capped at 10 s;
@@ -67,7 +67,7 @@ NOT_RUN = [
 PARSE_ONLY = [
     (
         re.compile(r"\bbilevel-kit\s+repro\b"),
-        "a study: 15-80 s even with --quick; tests/repro/ and tests/cli/ run each quick study",
+        "a study: 15-120 s even with --quick; tests/repro/ and tests/cli/ run each quick study",
     ),
 ]
 FAST_METHODS = "single-task,greedy-ce,cpsat"
