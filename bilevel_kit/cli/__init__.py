@@ -32,6 +32,7 @@ from . import (
     solve,
 )
 from .common import (
+    EXIT_CODES,
     EXIT_INVALID,
     EXIT_OK,
     EXIT_UNKNOWN,
@@ -43,6 +44,7 @@ from .common import (
 
 __all__ = [
     "COMMANDS",
+    "EXIT_CODES",
     "EXIT_INVALID",
     "EXIT_OK",
     "EXIT_UNKNOWN",
@@ -99,8 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="bilevel-kit",
         description="Just-in-time robotic kitting: solve, compare and check kitting plans.",
-        epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
-        "within the time limit, 4 no layout on this grid (pack)\n\nmethods:\n" + listing,
+        epilog="exit codes:\n"
+        + "\n".join(f"  {code:<4} {meaning}" for code, meaning in EXIT_CODES.items())
+        + "\n\nmethods:\n"
+        + listing,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(
