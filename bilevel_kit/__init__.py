@@ -9,11 +9,52 @@ The public API: load an instance, solve it with a registered method, evaluate an
 []
 """
 
-from .errors import BilevelKitError, InstanceError, KitDoesNotFit, SolutionError, UsageError
-from .instance import Instance, PartType, Task, Tray, load, topological_order
-from .methods import REGISTRY, MethodOutput, Result, register, solve
-from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate
-from .validate import Violation, check
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .errors import BilevelKitError, InstanceError, KitDoesNotFit, SolutionError, UsageError
+    from .instance import Instance, PartType, Task, Tray, load, topological_order
+    from .methods import REGISTRY, MethodOutput, Result, register, solve
+    from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate
+    from .validate import Violation, check
+
+#: Where each name of the public API lives. They are imported on first use: the command line
+#: imports this package before it can take Ctrl-C (docs/cli.md#interrupting-a-command), and
+#: numpy and the rest come later, inside the command.
+_EXPORTS = {
+    **dict.fromkeys(
+        ("BilevelKitError", "InstanceError", "KitDoesNotFit", "SolutionError", "UsageError"),
+        "errors",
+    ),
+    **dict.fromkeys(
+        ("Instance", "PartType", "Task", "Tray", "load", "topological_order"), "instance"
+    ),
+    **dict.fromkeys(("REGISTRY", "MethodOutput", "Result", "register", "solve"), "methods"),
+    **dict.fromkeys(("Kit", "KitTimes", "Placement", "Plan", "Timeline", "evaluate"), "plan"),
+    **dict.fromkeys(("Violation", "check"), "validate"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:  # a submodule, e.g. ``bilevel_kit.plan``
+        try:
+            return importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
 
 __version__ = "0.1.0"
 

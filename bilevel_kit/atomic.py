@@ -12,6 +12,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from .interrupt import on_forced_exit, remove_path
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
@@ -29,10 +31,11 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             prefix=f".{target.name}.", suffix=target.suffix or ".tmp", dir=folder
         )
         os.close(fd)
-        os.chmod(tmp, _mode_for(target))
-        yield Path(tmp)
-        os.replace(tmp, target)
-        tmp = None
+        with on_forced_exit(remove_path(tmp)):
+            os.chmod(tmp, _mode_for(target))
+            yield Path(tmp)
+            os.replace(tmp, target)
+            tmp = None
     finally:
         if tmp is not None:
             with contextlib.suppress(FileNotFoundError):

@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import argparse
 import functools
+import sys
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from ..interrupt import message, signal_guard
 from . import (
     check,
     compare,
@@ -33,6 +35,7 @@ from . import (
 )
 from .common import (
     EXIT_CODES,
+    EXIT_INTERRUPTED,
     EXIT_INVALID,
     EXIT_OK,
     EXIT_UNKNOWN,
@@ -127,9 +130,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, or a usage error already printed on one line
-        return int(exc.code or 0)
-    return run_command(args.command, COMMANDS[args.command].run, args)
+    """The command line; ``argv`` None: ``sys.argv`` (the process is this command, so after a
+    signal the guard's deadline also covers the interpreter's exit)."""
+    with signal_guard(linger=argv is None):  # Ctrl-C and SIGTERM at any moment
+        try:
+            parser = build_parser()
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit as exc:  # --help, or a usage error already printed on one line
+                return int(exc.code or 0)
+        except KeyboardInterrupt as exc:
+            print(message(exc), file=sys.stderr)
+            return EXIT_INTERRUPTED
+        return run_command(args.command, COMMANDS[args.command].run, args)

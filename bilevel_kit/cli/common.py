@@ -8,13 +8,9 @@ option. Only the standard library is imported here: ``bilevel-kit --help`` must 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
-import signal
 import sys
-import threading
-from collections.abc import Callable, Iterator
-from types import FrameType
+from collections.abc import Callable
 from typing import IO, TYPE_CHECKING, Any, NoReturn, TypeVar
 
 if TYPE_CHECKING:
@@ -33,7 +29,8 @@ MAX_SEED = 2**31 - 1
 
 #: A sweep finished but some of its cells failed (their error records say why).
 EXIT_FAILED = 5
-#: Ctrl-C: the sweep stopped, every finished cell is kept (128 + SIGINT).
+#: Ctrl-C or SIGTERM: the command stopped and cleaned up; a sweep keeps its finished cells
+#: (128 + SIGINT, for SIGTERM too: one code for "interrupted", docs/cli.md).
 EXIT_INTERRUPTED = 130
 #: Every exit code a command uses, with its meaning: ``bilevel-kit --help`` lists them, and
 #: the README's list is tested against this one (tests/cli/test_cli.py).
@@ -44,7 +41,8 @@ EXIT_CODES: dict[int, str] = {
     EXIT_UNKNOWN: "no definite answer within the time limit",
     EXIT_NO_GRID_LAYOUT: "pack: no layout on this grid, which is not a proof that none exists",
     EXIT_FAILED: "a sweep (compare, simulate, repro) finished but some cells failed",
-    EXIT_INTERRUPTED: "interrupted by Ctrl-C (a sweep keeps its finished cells)",
+    EXIT_INTERRUPTED: "interrupted by Ctrl-C or SIGTERM (a sweep keeps its finished cells; "
+    "nothing else is written)",
 }
 #: The environment variable naming a running Dask scheduler (as Dask itself reads it).
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
@@ -403,41 +401,21 @@ def print_violations(lines: list[str], stream: IO[str], limit: int = 20) -> None
         print(f"  ... and {len(lines) - limit} more", file=stream)
 
 
-@contextlib.contextmanager
-def _terminate_as_interrupt() -> Iterator[None]:
-    """SIGTERM raises ``KeyboardInterrupt`` while a command runs (main thread, default handler
-    only), so a ``kill`` cleans up like Ctrl-C: temporary files removed, solver children
-    killed, finished sweep cells kept. Python's default SIGTERM ends the process at once."""
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
-    ):
-        yield
-        return
-
-    def interrupt(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
 def run_command(
     name: str, run: Callable[[argparse.Namespace], int], args: argparse.Namespace
 ) -> int:
-    """Run one command: a library error is one line on stderr and exit 2, no traceback."""
+    """Run one command: a library error is one line on stderr and exit 2, no traceback; an
+    interrupt (Ctrl-C, or SIGTERM under :func:`bilevel_kit.interrupt.signal_guard`) is one
+    line and exit 130 once every cleanup on the way has run."""
     from ..errors import BilevelKitError
+    from ..interrupt import message
 
     try:
-        with _terminate_as_interrupt():
-            check_output_options(args)
-            return run(args)
+        check_output_options(args)
+        return run(args)
     except BilevelKitError as exc:
         print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("bilevel-kit: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        print(message(exc), file=sys.stderr)
         return EXIT_INTERRUPTED

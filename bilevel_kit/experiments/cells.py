@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypedDict, Unpack
 import numpy as np
 
 from .. import atomic
+from ..interrupt import on_forced_exit, remove_path
 
 if TYPE_CHECKING:
     from distributed import Client, LocalCluster
@@ -121,19 +122,35 @@ class SerialExecutor:
 
 
 @contextlib.contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """Ignore SIGINT while local worker processes are started (in the main thread only)."""
+def _local_workers(scratch: str) -> Iterator[None]:
+    """Start local workers that ignore SIGINT, so that Ctrl-C (which a terminal sends to the
+    whole process group) is the client's alone, without ignoring it in the client.
+
+    An ignored signal stays ignored across ``exec`` and ``fork``; so the workers are forked
+    from a multiprocessing fork server started while this process ignores SIGINT, for the
+    few milliseconds of that start only (a worker started by ``spawn`` would need the client
+    to ignore Ctrl-C during the whole cluster start, seconds). Every scratch space (the
+    scheduler's too, with its lock files) goes to ``scratch``, removed with the cluster."""
+    import multiprocessing.forkserver
+    import multiprocessing.resource_tracker
     import signal
     import threading
 
-    if threading.current_thread() is not threading.main_thread():
+    import dask
+
+    config = {
+        "distributed.worker.multiprocessing-method": "forkserver",
+        "temporary-directory": scratch,
+    }
+    with dask.config.set(config):
+        if threading.current_thread() is threading.main_thread():
+            multiprocessing.resource_tracker.ensure_running()  # it guards itself: not here
+            old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+            try:
+                multiprocessing.forkserver.ensure_running()
+            finally:
+                signal.signal(signal.SIGINT, old)
         yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
 
 
 class DaskExecutor:
@@ -156,6 +173,8 @@ class DaskExecutor:
         self._client: Client | None = None
         self._cluster: LocalCluster | None = None
         self._interrupted = False
+        self._scratch: str | None = None  # the local workers' folder, removed at close
+        self._forced = contextlib.ExitStack()  # cleanups if the process has to be ended
 
     def client(self) -> Client:
         """The Dask client (started on first call)."""
@@ -167,15 +186,31 @@ class DaskExecutor:
             if self.scheduler is not None:
                 self._client = Client(self.scheduler, timeout=30)
             else:
-                with _sigint_ignored():  # the workers inherit it: Ctrl-C is the client's
-                    self._cluster = LocalCluster(
-                        n_workers=self.jobs,
+                import tempfile
+
+                # every scratch space (and its lock files) in a folder of our own
+                self._scratch = tempfile.mkdtemp(prefix="bilevel_dask_")
+                self._forced.enter_context(on_forced_exit(remove_path(self._scratch)))
+                with _local_workers(self._scratch):  # Ctrl-C is the client's
+                    # the scheduler first, then the workers: an interrupt while they start
+                    # finds a cluster to stop (a half-built one would fail at exit)
+                    self._cluster = cluster = LocalCluster(
+                        n_workers=0,
                         threads_per_worker=1,
                         processes=True,
                         dashboard_address=None,
                         silence_logs=logging.ERROR,
+                        local_directory=self._scratch,
                     )
-                self._client = Client(self._cluster)
+                    self._forced.enter_context(on_forced_exit(lambda: _kill_workers(cluster)))
+                    self._client = Client(cluster)
+                    try:
+                        jobs = self.jobs or 1
+                        cluster.scale(jobs)
+                        self._client.wait_for_workers(jobs)
+                    except BaseException:
+                        self._interrupted = True  # close() stops the workers at once
+                        raise
         return self._client
 
     def run(
@@ -211,30 +246,44 @@ class DaskExecutor:
                     client.cancel(list(pending), force=True)
 
     def close(self) -> None:
-        """Disconnect (and stop the ``LocalCluster`` this executor started)."""
+        """Disconnect (and stop the ``LocalCluster`` this executor started; after an
+        interrupt, at once: its workers are killed, and a cluster still starting is not
+        waited for)."""
         client, cluster = self._client, self._cluster
         self._client = self._cluster = None
         if cluster is not None and self._interrupted:
             import logging
 
             # The in-process scheduler logs each killed worker's closed connection with a
-            # traceback (at INFO); after Ctrl-C that is noise, not news.
-            logging.getLogger("distributed").setLevel(logging.ERROR)
+            # traceback; after Ctrl-C that is noise, not news.
+            logging.getLogger("distributed").setLevel(logging.CRITICAL)
             _kill_workers(cluster)  # busy with cells nobody waits for: stop now
         with contextlib.suppress(Exception):
             if client is not None:
                 client.close(timeout=2)
-        with contextlib.suppress(Exception):
-            if cluster is not None:
-                cluster.close(timeout=2)
+        if cluster is not None:
+            try:
+                cluster.close(timeout=1 if self._interrupted else 2)
+            except Exception:  # e.g. workers still starting: not waited for at exit either
+                cluster.shutdown_on_close = False
+        if self._scratch is not None:
+            import shutil
+
+            shutil.rmtree(self._scratch, ignore_errors=True)
+            self._scratch = None
+        self._forced.close()
 
 
 def _kill_workers(cluster: LocalCluster) -> None:
-    """Kill the worker processes a ``LocalCluster`` started, by their PIDs."""
+    """Kill the worker processes a ``LocalCluster`` started, by their PIDs (their nannies
+    told first not to start new ones)."""
     import os
     import signal
 
-    for nanny in list(cluster.workers.values()):
+    nannies = list(cluster.workers.values())
+    for nanny in nannies:
+        nanny.auto_restart = False
+    for nanny in nannies:
         with contextlib.suppress(Exception):
             os.kill(nanny.process.process.pid, signal.SIGKILL)
 

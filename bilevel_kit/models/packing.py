@@ -408,7 +408,9 @@ def _solve(
     if objective == "feasible":
         for key, value in DECISION_PARAMS.items():
             setattr(solver.parameters, key, value)
-    return solver, solver.solve(model)
+    from .stoppable import solve  # Ctrl-C and SIGTERM stop it (docs/cli.md)
+
+    return solver, solve(solver, model)
 
 
 def _answer(

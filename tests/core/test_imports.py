@@ -41,6 +41,7 @@ CORE = (
     "style",
     "solution",
     "packfile",
+    "interrupt",
     "_native",
 )
 #: The rooms above the core, bottom to top; a room imports only the core, ``sawyer`` and rooms

@@ -14,6 +14,7 @@ import functools
 import math
 from typing import Any
 
+from .. import stoppable
 from ..common import NoGoodCuts, kit_order
 from .context import MARGIN, Context, Model, State
 from .model import canonical, extract_kits, hint
@@ -102,7 +103,7 @@ class _Benders:
                 self.cuts.unproven == 0
             )  # after an unproven cut the bound is no proof
             live.tracker.report(stage=f"CP-SAT Benders, {self.mdl.n_cuts} cuts")
-        st = solver.solve(mdl.model, self.ctx.callback)
+        st = stoppable.solve(solver, mdl.model, self.ctx.callback)
         state.status_name = solver.status_name(st)
         if st == cp_model.INFEASIBLE:
             # the master holds C <= U, so without an unproven cut the incumbent is optimal

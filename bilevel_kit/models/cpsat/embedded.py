@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from .. import stoppable
 from .context import Context, Model, State
 from .model import extract_kits, hint
 from .scaling import scaled_objective
@@ -28,7 +29,7 @@ def run_embedded(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int
     # a large embedded model (10 tables: 7e4 variables, 1e5 constraints, 40 s of presolve)
     # overran its CP-SAT limit by 2.2 s of 57 s: keep 4 % more back here
     solver.parameters.max_time_in_seconds = 0.96 * left
-    st = solver.solve(mdl.model, ctx.callback)
+    st = stoppable.solve(solver, mdl.model, ctx.callback)
     state.status_name = solver.status_name(st)
     if st in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         kits = extract_kits(mdl, solver)

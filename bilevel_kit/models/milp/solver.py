@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...errors import UsageError
+from ...interrupt import kill_pid, on_forced_exit, remove_path
 from ..budget import Budget
 
 #: Relative tolerance when comparing float objectives (the MILP works on real seconds).
@@ -239,7 +240,10 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
     import sys
     import tempfile
 
-    with tempfile.TemporaryDirectory(prefix="bilevel_milp_") as tmp:
+    with (
+        tempfile.TemporaryDirectory(prefix="bilevel_milp_") as tmp,
+        on_forced_exit(remove_path(tmp)),  # a stuck process is ended without its finally
+    ):
         path = os.path.join(tmp, "model.mps")
         out = os.path.join(tmp, "result.json")
         _, smap_id = model.write(path, format="mps", io_options={"symbolic_solver_labels": False})
@@ -285,7 +289,8 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
         if pipe is not None:
             pipe.start()
         try:  # the child never outlives this call: killed on a timeout, an error or a signal
-            _, err = proc.communicate(timeout=max(1.0, left) + KILL_GRACE)
+            with on_forced_exit(kill_pid(proc.pid)):
+                _, err = proc.communicate(timeout=max(1.0, left) + KILL_GRACE)
         except subprocess.TimeoutExpired:
             return SolveInfo("killed", False, False, False, None, None, 0.0)
         finally:

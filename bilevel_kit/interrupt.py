@@ -1,0 +1,249 @@
+"""Stopping on Ctrl-C or SIGTERM at any moment, within about a second, cleaning up.
+
+Python raises ``KeyboardInterrupt`` only when the main thread runs Python code: a native call
+(a CP-SAT solve, a compiled kernel, a large numpy operation) delays it until the call returns,
+which for a solve can be its whole time limit. Three pieces make every command stop at once
+(docs/cli.md#interrupting-a-command):
+
+* :func:`run_stoppable` runs a native call that releases the GIL (a CP-SAT solve) in a helper
+  thread while the main thread waits, so the main thread takes the signal at once, asks the
+  call to stop and waits for it to return; the interrupt then goes on up, and every
+  ``finally`` and ``with`` on the way cleans up (temporary files, child processes);
+* SIGTERM raises :class:`Terminated`, a ``KeyboardInterrupt``, so a ``kill`` cleans up like
+  Ctrl-C (and exits 130 too: one code for "interrupted");
+* :func:`signal_guard`, around a whole command, watches for the signals from a thread of its
+  own: if the process has not ended :data:`GRACE` seconds after the first signal (the main
+  thread is stuck in a native call), or at a second signal, it runs the cleanups registered
+  with :func:`on_forced_exit`, prints one line and ends the process with ``os._exit``.
+
+Nothing here imports beyond the standard library: the CLI installs the guard before any
+heavy import.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import os
+import signal
+import socket
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from types import FrameType
+from typing import TypeVar
+
+T = TypeVar("T")
+
+#: Exit code after SIGINT (Ctrl-C) and after SIGTERM alike: 128 + SIGINT.
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+#: Seconds the main thread has to stop by itself after a signal before the process is ended.
+GRACE = 2.0
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that the same cleanups run."""
+
+
+def message(exc: BaseException | None = None) -> str:
+    """The one line a command prints when it was interrupted."""
+    return "bilevel-kit: interrupted" + (" (SIGTERM)" if isinstance(exc, Terminated) else "")
+
+
+# ---------------------------------------------------------------------------------------------
+# Cleanups for a forced exit
+# ---------------------------------------------------------------------------------------------
+
+_CLEANUPS: dict[int, Callable[[], None]] = {}
+_COUNTER = itertools.count()
+_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def on_forced_exit(cleanup: Callable[[], None]) -> Iterator[None]:
+    """While inside, ``cleanup`` runs if the guard has to end the process (it may run in
+    another thread, so it only removes paths or kills processes, and never raises)."""
+    key = next(_COUNTER)
+    with _LOCK:
+        _CLEANUPS[key] = cleanup
+    try:
+        yield
+    finally:
+        with _LOCK:
+            _CLEANUPS.pop(key, None)
+
+
+def _run_cleanups() -> None:
+    with _LOCK:
+        todo = list(_CLEANUPS.values())[::-1]  # the innermost first
+    for cleanup in todo:
+        with contextlib.suppress(BaseException):
+            cleanup()
+
+
+def remove_path(path: str | os.PathLike[str]) -> Callable[[], None]:
+    """A cleanup removing a file or a folder tree (if it still exists)."""
+
+    def cleanup() -> None:
+        import shutil
+
+        if os.path.isdir(path) and not os.path.islink(path):
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+
+    return cleanup
+
+
+def kill_pid(pid: int) -> Callable[[], None]:
+    """A cleanup killing a child process (SIGKILL; gone already: nothing)."""
+
+    def cleanup() -> None:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+
+    return cleanup
+
+
+# ---------------------------------------------------------------------------------------------
+# Native calls that can be stopped
+# ---------------------------------------------------------------------------------------------
+
+
+def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
+    """``call()``, a native call that releases the GIL and returns soon after ``stop()``.
+
+    In the main thread the call runs in a helper thread and the main thread waits on an
+    event, which a signal interrupts: then ``stop()`` is called, the call is waited for and
+    the interrupt is raised again (module docstring). Elsewhere ``call()`` runs directly.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return call()
+    done = threading.Event()
+    box: list[T] = []
+    failure: list[BaseException] = []
+
+    def target() -> None:
+        try:
+            box.append(call())
+        except BaseException as exc:  # handed to the main thread
+            failure.append(exc)
+        finally:
+            done.set()
+
+    helper = threading.Thread(target=target, name="native-call", daemon=True)
+    helper.start()
+    try:
+        done.wait()
+    except BaseException:
+        stop()
+        helper.join()
+        raise
+    if failure:
+        raise failure[0]
+    return box[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# The guard around a command
+# ---------------------------------------------------------------------------------------------
+
+
+class _Guard:
+    """The state of :func:`signal_guard`: the first signal, and the watchdog thread."""
+
+    def __init__(self, grace: float) -> None:
+        self.grace = grace
+        self.first: int | None = None  # the signal the handler raised for
+        self.armed = False  # the watchdog's deadline runs
+        self.finished = threading.Event()
+        self.reader, self.writer = socket.socketpair()
+        self.writer.setblocking(False)
+        self.thread = threading.Thread(target=self._watch, name="signal-guard", daemon=True)
+
+    def handler(self, signum: int, frame: FrameType | None) -> None:
+        """The Python-level handler: raise at the first signal only (a second one is the
+        watchdog's, so that a cleanup under way is not cut short by another exception)."""
+        if self.first is not None:
+            return
+        self.first = signum
+        raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+    def _watch(self) -> None:
+        """Read the signal numbers Python's C handler writes to the wake-up socket."""
+        seen = 0
+        while True:
+            try:
+                data = self.reader.recv(64)
+            except OSError:
+                return
+            if not data:  # the guard was closed
+                return
+            for signum in data:
+                if signum not in (signal.SIGINT, signal.SIGTERM):
+                    continue
+                seen += 1
+                if seen == 1:
+                    self.armed = True
+                    threading.Thread(
+                        target=self._deadline, args=(signum,), name="signal-deadline", daemon=True
+                    ).start()
+                else:
+                    self._force(signum)
+
+    def _deadline(self, signum: int) -> None:
+        if not self.finished.wait(self.grace):
+            self._force(signum)
+
+    def _force(self, signum: int) -> None:
+        """End the process now: cleanups, one line, the exit code of the signal."""
+        if self.finished.is_set():
+            return
+        _run_cleanups()
+        term = signum == signal.SIGTERM
+        with contextlib.suppress(OSError):
+            os.write(2, f"{message(Terminated() if term else None)} (forced)\n".encode())
+        os._exit(EXIT_INTERRUPTED)
+
+    def close(self, linger: bool) -> None:
+        """Stop watching; ``linger``: a deadline already running stays (the process is
+        ending after a signal, and its exit must not hang either)."""
+        if not (linger and self.armed):
+            self.finished.set()
+        with contextlib.suppress(OSError):
+            self.writer.close()
+        with contextlib.suppress(OSError):
+            self.reader.shutdown(socket.SHUT_RDWR)
+        self.thread.join(timeout=1.0)
+        with contextlib.suppress(OSError):
+            self.reader.close()
+
+
+@contextlib.contextmanager
+def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
+    """Inside: SIGINT raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated` in the main
+    thread, and a watchdog ends the process ``grace`` seconds after the first signal (at once
+    after a second) if it is still running (module docstring). ``linger``: the guard is the
+    whole process (the command line), so after a signal the deadline also covers the
+    interpreter's exit. Outside the main thread, or when SIGTERM already has a handler of
+    someone else's, nothing is installed."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) not in (signal.SIG_DFL, None)
+        or sys.platform == "win32"
+    ):
+        yield
+        return
+    guard = _Guard(grace)
+    old_int = signal.signal(signal.SIGINT, guard.handler)
+    old_term = signal.signal(signal.SIGTERM, guard.handler)
+    old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
+    guard.thread.start()
+    try:
+        yield
+    finally:
+        signal.set_wakeup_fd(old_fd)
+        signal.signal(signal.SIGTERM, old_term)
+        signal.signal(signal.SIGINT, old_int)
+        guard.close(linger)
