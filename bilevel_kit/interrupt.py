@@ -50,6 +50,17 @@ def message(exc: BaseException | None = None) -> str:
     return "bilevel-kit: interrupted" + (" (SIGTERM)" if isinstance(exc, Terminated) else "")
 
 
+def forget_unhandled_interrupt() -> None:
+    """Tell CPython that the interrupt was handled. A ``KeyboardInterrupt`` that crossed a C
+    ``PyRun_*`` call (some imports run code that way) is remembered even once our code has
+    caught it, and the interpreter then ends the process with SIGINT after it exits, instead
+    of with the command's exit code."""
+    import ctypes
+
+    with contextlib.suppress(Exception):  # best effort: another interpreter may lack it
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
+
+
 # ---------------------------------------------------------------------------------------------
 # Cleanups for a forced exit
 # ---------------------------------------------------------------------------------------------
@@ -236,11 +247,12 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         yield
         return
     guard = _Guard(grace)
-    old_int = signal.signal(signal.SIGINT, guard.handler)
-    old_term = signal.signal(signal.SIGTERM, guard.handler)
-    old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
     guard.thread.start()
-    try:
+    old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
+    old_int, old_term = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    try:  # from here on, a signal raises inside the try
+        signal.signal(signal.SIGINT, guard.handler)
+        signal.signal(signal.SIGTERM, guard.handler)
         yield
     finally:
         signal.set_wakeup_fd(old_fd)

@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from ..interrupt import message, signal_guard
+from ..interrupt import forget_unhandled_interrupt, message, signal_guard
 from . import (
     check,
     compare,
@@ -132,14 +132,21 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """The command line; ``argv`` None: ``sys.argv`` (the process is this command, so after a
     signal the guard's deadline also covers the interpreter's exit)."""
-    with signal_guard(linger=argv is None):  # Ctrl-C and SIGTERM at any moment
-        try:
-            parser = build_parser()
-            try:
-                args = parser.parse_args(argv)
-            except SystemExit as exc:  # --help, or a usage error already printed on one line
-                return int(exc.code or 0)
-        except KeyboardInterrupt as exc:
-            print(message(exc), file=sys.stderr)
-            return EXIT_INTERRUPTED
-        return run_command(args.command, COMMANDS[args.command].run, args)
+    try:
+        with signal_guard(linger=argv is None):  # Ctrl-C and SIGTERM at any moment
+            code = _parse_and_run(argv)
+    except KeyboardInterrupt as exc:  # while starting, before the command runs
+        print(message(exc), file=sys.stderr)
+        code = EXIT_INTERRUPTED
+    if code == EXIT_INTERRUPTED:
+        forget_unhandled_interrupt()
+    return code
+
+
+def _parse_and_run(argv: Sequence[str] | None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, or a usage error already printed on one line
+        return int(exc.code or 0)
+    return run_command(args.command, COMMANDS[args.command].run, args)
