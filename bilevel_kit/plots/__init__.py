@@ -12,18 +12,21 @@ The artists carry ``gid`` tags so that tests and callers can find them again:
   Rectangles), ``makespan`` (the vertical line).
 * Tray: ``tray`` (the outline Rectangle), ``part:<part id>`` (one Polygon per placement).
 * Comparison: ``makespan``/``human_idle`` (bars), ``status:<method>`` (texts), ``bound``.
+* KitBench: ``profile:<method>`` (step lines), ``gap:<method>`` (scatter collections).
 
 Bars of zero duration (no delivery time, no pickup overhead ...) are not drawn. Labels that
 would not fit inside their bar or part are left out; the colours and the legend still say
 what each bar or part is.
 
 One module per figure family: :mod:`.gantt`, :mod:`.trays`, :mod:`.comparison` (methods
-compared, gaps to the bound) and :mod:`.convergence`; :mod:`.common` holds what they share
+compared, gaps to the bound), :mod:`.convergence` and :mod:`.bench` (KitBench's performance
+profile and gap against size); :mod:`.common` holds what they share
 (:func:`save_figure`). Import every name from here.
 """
 
 from __future__ import annotations
 
+from .bench import plot_gap_vs_size, plot_profile
 from .common import save_figure
 from .comparison import plot_comparison, plot_gaps
 from .convergence import plot_convergence
@@ -49,7 +52,9 @@ __all__ = [
     "plot_comparison",
     "plot_convergence",
     "plot_gantt",
+    "plot_gap_vs_size",
     "plot_gaps",
+    "plot_profile",
     "plot_tray",
     "plot_trays",
     "save_figure",
