@@ -7,9 +7,10 @@ Each instance is written by ``bilevel-kit generate`` (the command is stored in t
 ``bench update`` fill them). Rows of instances already in the index keep their records.
 
 The design: seven families; sizes from 12 to about 1,000 tasks, most between 25 and 250; the
-variants rotate over the library so that every combination of trays (1 / unlimited) x tray
-(tight / loose) x delivery time (0 / 10 / 30 s) occurs, and the two variants of one family and
-size always differ in trays. Tight tray: about 6 tasks' parts by area for the random families
+variants rotate over each family, each family starting one step further, so that every
+combination of trays (1 / unlimited) x tray (tight / loose) x delivery time (0 / 10 / 30 s)
+occurs, the two variants of one family and size always differ in trays, and the largest sizes
+have both tray settings. Tight tray: about 6 tasks' parts by area for the random families
 (``--tightness tasks/6``), 160 x 120 mm for the products; loose: about 20 tasks' parts
 (``--tightness tasks/20``), the paper's 300 x 200 mm for the products.
 """
@@ -58,8 +59,8 @@ def _tightness(tasks: int, tray: str) -> str:
 def commands() -> list[tuple[list[str], str, str]]:
     """(generate arguments, family, tray label) of every instance, in the library's order."""
     out = []
-    count = itertools.count()
-    for family, (sizes, doubled) in DESIGN.items():
+    for phase, (family, (sizes, doubled)) in enumerate(DESIGN.items()):
+        count = itertools.count(phase)  # each family starts one step further in the rotation
         for size in sizes:
             for seed in (1, 2) if size in doubled else (1,):
                 i = next(count)
