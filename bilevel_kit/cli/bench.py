@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
+from typing import Any
 
 from .common import (
     EXIT_INVALID,
@@ -118,7 +120,7 @@ def _run(args: argparse.Namespace) -> int:
         for row in result.rows:
             if row["status"] == "error":
                 print(f"{row['instance']} / {row['method']}: {row['error']}", file=sys.stderr)
-        print((args.out + "/results.md").replace("//", "/") + ":")
+        print(f"{Path(args.out) / 'results.md'}:")
         print("\n".join(_summary_lines(result.summary)))
         code = EXIT_OK
         if any(r["valid"] is False for r in result.rows):
@@ -127,40 +129,34 @@ def _run(args: argparse.Namespace) -> int:
         return sweep_exit(session, code, result.failed)
 
 
-def _summary_lines(summary: list[dict[str, object]]) -> list[str]:
+def _summary_lines(summary: list[dict[str, Any]]) -> list[str]:
+    """The per-method summary as a short text table (results.md has the whole one)."""
     from ..experiments import text_lines
 
-    header = ["method", "plans", "within 1 %", "within 5 %", "median cert. gap (%)"]
+    def pct(value: float | None, digits: int) -> str:
+        return "-" if value is None else f"{100 * value:.{digits}f}"
+
+    header = ["method", "plans", "within 1 % (%)", "within 5 % (%)", "median cert. gap (%)"]
     rows = [
         [
             str(t["method"]),
             f"{t['plans']}/{t['cells']}",
-            _share(t["within_1%"]),
-            _share(t["within_5%"]),
-            "-"
-            if t["median_certified_gap"] is None
-            else f"{100 * float(t['median_certified_gap']):.2f}",  # type: ignore[arg-type]
+            pct(t["within_1%"], 0),
+            pct(t["within_5%"], 0),
+            pct(t["median_certified_gap"], 2),
         ]
         for t in summary
     ]
     return text_lines(header, rows)
 
 
-def _share(value: object) -> str:
-    return "-" if value is None else f"{100 * float(value):.0f} %"  # type: ignore[arg-type]
-
-
 def _verify(args: argparse.Namespace) -> int:
-    from ..experiments.kitbench import Library, parse_filter, select, verify
+    from ..experiments.kitbench import Library, parse_filter, verify
 
     library = Library.at(args.library)
     terms = parse_filter(args.filter)
     t0 = time.perf_counter()
-    records, problems = verify(library)
-    if terms:
-        names = {r.instance for r in select(records, terms)}
-        problems = [p for p in problems if p.instance in names]
-        records = [r for r in records if r.instance in names]
+    records, problems = verify(library, terms)
     wall = time.perf_counter() - t0
     for p in problems:
         print(p.line(), file=sys.stderr)

@@ -29,20 +29,21 @@ def plot_profile(
 ) -> Axes:
     """The performance profile: for each method, the share of instances whose makespan is
     within a factor tau of the best-known (``ratios``: makespan / best-known per instance,
-    ``inf`` where the method has no plan). Dotted lines mark 1 % and 5 % above the best-known;
-    the x axis is logarithmic from tau = 1 to ``tau_max`` (default: the largest finite ratio,
-    at least 1.1). Each curve is a step function named ``profile:<method>``."""
+    ``inf`` where the method has no plan). The x axis is tau - 1 in percent ("above
+    best-known"), linear up to 1 % and logarithmic beyond, so the first percent and the tail
+    both show; dotted lines mark 1 % and 5 %. It runs to ``tau_max`` (default: the largest
+    finite ratio, at least 1.1). Each curve is a step function named ``profile:<method>``."""
     plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(6.5, 4), layout="constrained")
     finite = [r for rs in ratios.values() for r in rs if math.isfinite(r)]
-    top = tau_max or max(1.1, 1.02 * max(finite, default=1.1))
+    top = 100 * ((tau_max or max(1.1, 1.02 * max(finite, default=1.1))) - 1)
     swatches = style.categorical(len(ratios))
     for (method, rs), swatch, marker in zip(ratios.items(), swatches, _markers(), strict=False):
         n = len(rs)
-        xs = np.sort(np.asarray([r for r in rs if math.isfinite(r)], dtype=float))
+        xs = 100 * (np.sort(np.asarray([r for r in rs if math.isfinite(r)], dtype=float)) - 1)
         share = np.arange(1, len(xs) + 1) / max(n, 1)
-        x = np.concatenate([[1.0], np.maximum(xs, 1.0), [top]])
+        x = np.concatenate([[0.0], np.maximum(xs, 0.0), [top]])
         y = np.concatenate([[0.0], share, [share[-1] if len(share) else 0.0]])
         ax.step(
             x,
@@ -55,24 +56,16 @@ def plot_profile(
             markevery=[len(x) - 1],
             markersize=4,
         )
-    for tau, text in ((1.01, "1 %"), (1.05, "5 %")):
-        if tau < top:
-            ax.axvline(tau, color="0.5", linestyle=":", lw=0.8, gid=f"tau:{text}")
-            ax.annotate(
-                text,
-                (tau, 0.02),
-                xytext=(2, 0),
-                textcoords="offset points",
-                fontsize=style.SMALL_SIZE,
-                color="0.3",
-            )
-    ax.set_xscale("log")
-    ax.set_xlim(1.0, top)
+    for pct in (1.0, 5.0):
+        if pct < top:
+            ax.axvline(pct, color="0.5", linestyle=":", lw=0.8, gid=f"tau:{pct:g} %")
+    ax.set_xscale("symlog", linthresh=1.0, linscale=1.0)
+    ax.set_xlim(0.0, top)
     ax.set_ylim(0.0, 1.02)
-    ticks = [t for t in (1.0, 1.01, 1.02, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0) if t <= top]
+    ticks = [t for t in (0, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500) if t <= top]
     ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
     ax.minorticks_off()
-    ax.set_xlabel("τ: makespan / best-known makespan (log scale)")
+    ax.set_xlabel("above best-known, τ - 1 (%; linear to 1 %, log beyond)")
     ax.set_ylabel("share of instances within τ")
     ax.set_title("performance profile")
     ax.legend(loc="lower right")

@@ -384,3 +384,28 @@ def test_blocks_render_from_the_records():
     out = render_blocks(text, _records())
     assert "1 of 3 records are proven optimal" in out and "old" not in out
     assert render_blocks(out, _records()) == out
+
+
+def test_profile_and_gap_plots():
+    import matplotlib.pyplot as plt
+
+    from bilevel_kit.plots import plot_gap_vs_size, plot_profile
+
+    ax = plot_profile({"a": [1.0, 1.02, float("inf")], "b": [1.0, 1.0, 1.3]})
+    lines = {line.get_gid(): line for line in ax.get_lines()}
+    assert {"profile:a", "profile:b", "tau:1 %", "tau:5 %"} <= set(lines)
+    # a reaches 2 of 3 instances (the third has no plan), b all three
+    assert lines["profile:a"].get_ydata()[-1] == pytest.approx(2 / 3)
+    assert lines["profile:b"].get_ydata()[-1] == pytest.approx(1.0)
+    assert ax.get_xscale() == "symlog" and ax.get_xlim()[0] == 0.0
+    plt.close(ax.figure)
+    _, mine = plt.subplots()
+    rows = [
+        {"method": "a", "tasks": 12, "certified_gap": 0.01},
+        {"method": "a", "tasks": 1000, "certified_gap": None},
+        {"method": "b", "tasks": 50, "certified_gap": 0.2},
+    ]
+    assert plot_gap_vs_size(rows, ax=mine) is mine
+    points = {c.get_gid(): c.get_offsets() for c in mine.collections}
+    assert len(points["gap:a"]) == 1 and list(points["gap:b"][0]) == [50, 20]
+    plt.close(mine.figure)

@@ -252,6 +252,16 @@ def plan_merge(library: Library, run_dirs: Sequence[str | Path]) -> Merge:
     return merge
 
 
+def solution_text(doc: dict[str, Any]) -> str:
+    """A solution document as the library stores it: one kit per line (compact, and a
+    changed plan is a readable diff), every other key on a line of its own."""
+    head = json.dumps({k: v for k, v in doc.items() if k != "kits"}, indent=1, allow_nan=False)
+    kits = ",\n".join(
+        "  " + json.dumps(kit, separators=(",", ":"), allow_nan=False) for kit in doc["kits"]
+    )
+    return head[:-2] + ',\n "kits": [\n' + kits + "\n ]\n}\n"
+
+
 @contextlib.contextmanager
 def _signals_held() -> Iterator[None]:
     """Ctrl-C and SIGTERM wait until the files are in place (the renames take microseconds)."""
@@ -268,7 +278,7 @@ def apply_merge(library: Library, merge: Merge) -> None:
     from ...atomic import atomic_path
 
     texts = [
-        (library.solution_path(name), json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        (library.solution_path(name), solution_text(doc))
         for name, doc in sorted(merge.solutions.items())
     ]
     texts.insert(0, (library.index_path, library.index_text(merge.records)))

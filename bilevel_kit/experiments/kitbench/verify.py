@@ -10,7 +10,7 @@ and every solution file an instance. Only the checker and the evaluator run: no 
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +18,7 @@ from ...errors import BilevelKitError
 from ...instance import Instance, load
 from ...plan import evaluate
 from ...solution import read
+from .filters import Term, select
 from .library import Library, Record, bound_above, same_time, trays_text
 
 
@@ -94,10 +95,12 @@ def stray_files(library: Library, records: Iterable[Record]) -> list[Problem]:
     return out
 
 
-def verify(library: Library) -> tuple[list[Record], list[Problem]]:
-    """The records and every problem of the library (the index is read strictly first)."""
+def verify(library: Library, terms: Sequence[Term] = ()) -> tuple[list[Record], list[Problem]]:
+    """The records and every problem of the library (the index is read strictly first);
+    with filter ``terms``, only the records they select (and no search for stray files)."""
     records = library.read()
-    problems = stray_files(library, records)
+    problems = [] if terms else stray_files(library, records)
+    records = select(records, terms)
     for rec in records:
         problems += check_record(library, rec)
     return records, problems
