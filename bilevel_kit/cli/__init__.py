@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from . import (
+    bench,
     check,
     compare,
     execute,
@@ -72,6 +73,7 @@ class Command(Protocol):
 COMMANDS: dict[str, Command] = {
     "solve": solve,
     "compare": compare,
+    "bench": bench,
     "simulate": simulate,
     "repro": repro,
     "pack": pack,
