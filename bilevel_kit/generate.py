@@ -255,7 +255,7 @@ def _check_solvable(doc: dict[str, Any], tightness: float) -> None:
     """Every task's parts fit the tray on their own, else no plan exists (a kit holds at least
     one task): the area bound first, then the packing oracle for the few that pass it."""
     from .instance import from_dict
-    from .models.packing import kit_fits
+    from .models.packing_oracle import kit_fits
 
     inst = from_dict(doc, "<generated>")
     tried: set[frozenset[tuple[str, int]]] = set()

@@ -10,11 +10,16 @@ of master solutions with the packing oracle and cuts those that do not fit (:mod
 rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
 kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
 enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
-with Benders on a loaded machine), else ``benders``. Embedded models run with
+with Benders on a loaded machine) and the embedded tray proves optimality for every plan
+(:func:`embed_scope`: all the instance's parts fit one tray, or none may rotate and the grid is
+exact), else ``benders``. Embedded models run with
 :data:`~bilevel_kit.models.packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
-"optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
-the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
-every plan. Times are scaled to integers (:mod:`.scaling`).
+"optimal" and ``bound`` speak of every plan the checker accepts (parts at any angle); the
+model's own optimum and bound hold for the plans its exclusions were proven for, which may be
+the 0/90-degree plans only (``optimal_axis_aligned``, ``bound_axis_aligned``,
+docs/formulations.md#what-optimal-means). The closed-form bounds of :mod:`bilevel_kit.bounds`,
+which the bound never undercuts, hold for every plan. Times are scaled to integers
+(:mod:`.scaling`).
 
 **Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
 checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
@@ -52,8 +57,13 @@ order with a non-overlapping layout. ``extra`` keys:
 * ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
   of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
   chains), ``hint_used`` (the given plan was a valid start);
-* ``benders_iterations``, ``unproven_cuts`` (Benders only), ``cuts``, ``cpsat_status``,
+* ``benders_iterations``, ``unproven_cuts``, ``axis_aligned_cuts`` (Benders only: cuts without
+  a proof, and with one for 0/90-degree layouts only), ``cuts``, ``cpsat_status``,
   ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
+* ``proof_scope`` (``any angle``, ``0/90 degrees`` or None), ``status_reason`` (why the status
+  is weaker than the model's verdict), ``optimal_axis_aligned`` and ``bound_axis_aligned`` (the
+  model's verdict and bound among 0/90-degree plans), ``infeasible_axis_aligned`` (no such
+  plan; status unknown);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
   scaled times); ``idle_bound`` for ``objective="human_idle"``;
@@ -81,7 +91,7 @@ from ...instance import Instance
 from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
-from .. import packing
+from .. import packing, packing_oracle
 from ..budget import Budget, check_model_memory, too_slow_to_build
 from ..common import (
     Packer,
@@ -93,7 +103,9 @@ from ..common import (
     plan_extra,
     quick_plan,
     reduced_edges,
+    scope_claims,
 )
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
@@ -330,11 +342,11 @@ class _Report:
     def __init__(self, budget: Budget, extra: dict[str, Any]) -> None:
         self.budget = budget
         self.extra = extra
-        self.solves_before = sum(c.solves for c in packing._CACHES.values())
+        self.solves_before = packing_oracle.pack_solves()
 
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         extra = self.extra
-        extra["pack_solves"] = sum(c.solves for c in packing._CACHES.values()) - self.solves_before
+        extra["pack_solves"] = packing_oracle.pack_solves() - self.solves_before
         extra["wall_time_s"] = self.budget.elapsed()
         return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
 
@@ -369,10 +381,9 @@ def run(
             "hint_used": False,
         },
     )
-    unfit = packer.task_not_fitting()  # then no plan exists
+    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
     if unfit is not None:
-        report.extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
-        return report.finish(None, Status.INFEASIBLE, None)
+        return _no_plan(instance, unfit, report)
     ctx = _context(instance, sc, options, packer, budget, report.extra)
     incumbent = _incumbent(ctx, hint, pack_tl, report.extra)
     live = _start_live(ctx, incumbent)
@@ -380,7 +391,7 @@ def run(
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
-    mode = _tray_mode(instance, options.tray, K)
+    mode = _tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
         tray_mode=mode,
         max_kits=K,
@@ -411,7 +422,52 @@ def _context(
     sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
     groups = chain_groups_idx(n, _edges(instance), sig)
     extra["symmetric_chains"] = sum(len(g) for g in groups)
-    return Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+    ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+    ctx.embed_scope = embed_scope(instance, packer)
+    return ctx
+
+
+def _no_plan(instance: Instance, unfit: tuple[str, str], report: _Report) -> MethodOutput:
+    """A task whose parts alone do not fit: no plan at all (infeasible) when that is proven
+    at any angle, else none with 0/90-degree layouts (unknown: one at other angles may
+    exist)."""
+    task, scope = unfit
+    if scope == ANY_ANGLE:
+        report.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
+        return report.finish(None, Status.INFEASIBLE, None)
+    report.extra.update(
+        reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
+        "(a layout at other angles may exist)",
+        infeasible_axis_aligned=True,
+        proof_scope=AXIS_ALIGNED,
+    )
+    return report.finish(None, Status.UNKNOWN, best_bound(instance))
+
+
+def embed_scope(instance: Instance, packer: Packer) -> str | None:
+    """Which plans a tray embedded on ``packer``'s grid holds (docs/formulations.md#what-
+    optimal-means): every plan when all the instance's parts fit one tray on that grid (then
+    the model excludes no kit); else the 0/90-degree plans when the grid is exact (every size
+    a multiple of it, no reach map); else None: the model's bound proves nothing."""
+    from ...heuristics.shelf import kit_items
+
+    every = instance.kit_parts([t.id for t in instance.tasks])
+    whole = packing.pack(
+        instance.tray,
+        kit_items(instance.part_types, every),
+        resolution=packer.res,
+        time_limit=min(packer.pack_tl, 0.5, max(0.01, packer.budget.remaining())),
+        reach=packer.reach,
+    )
+    if whole.layout is not None:
+        return ANY_ANGLE
+    sizes = [instance.tray.width, instance.tray.height]
+    sizes += [v for pt in instance.part_types.values() for v in (pt.width, pt.height)]
+    if packer.reach is not None or not packing.is_grid_exact(sizes, packer.res):
+        return None
+    if all(not instance.part_types[p].rotatable for p in every):
+        return ANY_ANGLE  # such parts lie at 0 or 180 degrees only
+    return AXIS_ALIGNED
 
 
 def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
@@ -447,7 +503,8 @@ def _proven_without_model(
     if upper is not None and sc.rel and upper <= release_bound(instance, sc):
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
         extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
-        return _conclude(ctx, None, State(incumbent, upper, upper, proven=True), report)
+        state = State(incumbent, upper, upper, proven=True, lower_any=upper)
+        return _conclude(ctx, None, state, report)
     return None
 
 
@@ -513,8 +570,10 @@ def _solve_model(
     extra["cpsat_status"] = state.status_name
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
-        if state.infeasible:
+        if state.infeasible and state.scope == ANY_ANGLE:
             return report.finish(None, Status.INFEASIBLE, None)
+        if state.infeasible and state.scope == AXIS_ALIGNED:
+            extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
         return report.finish(None, Status.UNKNOWN, best_bound(instance))
     return _conclude(ctx, mdl, state, report)
 
@@ -548,6 +607,11 @@ def _incumbent(
     idx = instance.index
     candidates: list[list[list[int]]] = []
     if hint is not None and sorted(hint.task_order) == sorted(ids):
+        from ...validate import check
+
+        if not check(instance, hint):  # its layouts are valid: its kits fit, at any angle
+            for kit in hint.kits:
+                packer.learn(instance.kit_parts(kit.tasks), kit.layout)
         hk = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
@@ -589,12 +653,16 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     return K
 
 
-def _tray_mode(instance: Instance, tray: str, K: int) -> str:
-    """``tray`` with ``auto`` resolved (module docstring)."""
+def _tray_mode(instance: Instance, tray: str, K: int, scope: str | None) -> str:
+    """``tray`` with ``auto`` resolved (module docstring); ``scope``: what an embedded tray
+    would prove (:func:`embed_scope`). Embedded only when it proves optimality for every plan:
+    otherwise Benders, whose cuts each carry their own proof (many hold at any angle: area,
+    inscribed disks) and whose oracle confirms a misfit of an inexact grid on the exact one."""
     if tray != "auto":
         return tray
     n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
     small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
+    small = small and scope == ANY_ANGLE
     # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
     # (bench/results/cpsat_trays.csv)
     return "embedded" if small and instance.tray_limit is None else "benders"
@@ -607,22 +675,38 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     plan = _plan_of(ctx, state.kits, state.layouts, ctx.packer)
     real = evaluate(instance, plan)
     closed = best_bound(instance)
-    lower = state.lower
-    lower_s = None if lower is None else round(lower * sc.res, 9)  # a multiple of res >= 1e-4
+    lower_s = None if state.lower is None else round(state.lower * sc.res, 9)  # >= 1e-4
+    any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
     idle_bound = None
     if ctx.objective == "makespan":
-        bound_s = closed if lower_s is None else max(closed, lower_s)
-        optimal = state.proven and (sc.exact or (real.makespan <= bound_s + 1e-6 and not sc.rel))
+        bound_s = closed if any_s is None else max(closed, any_s)  # every plan (module doc)
+        bound_axis = closed if lower_s is None else max(closed, lower_s)
+        exact = sc.exact or (real.makespan <= bound_axis + 1e-6 and not sc.rel)
+        optimal_axis = state.proven and state.scope is not None and exact
+        optimal = (optimal_axis and state.scope == ANY_ANGLE) or (
+            real.makespan <= bound_s + 1e-6 and not sc.rel
+        )
+        extra.update(bound_axis_aligned=bound_axis, optimal_axis_aligned=optimal_axis)
     else:
-        if lower is not None and sc.exact and mdl is not None:
-            idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
+        idle_axis = None
+        if sc.exact and mdl is not None:  # the model's bounds on human idle, in s
+            if state.lower is not None:
+                idle_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
+            if state.lower_any is not None:
+                idle_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
         w_min = (
             sum(instance.human_time(i) for i in ctx.ids)
             + min_kits(instance) * instance.kit_overhead_human
         )
         bound_s = closed if idle_bound is None else max(closed, idle_bound + w_min)
-        optimal = state.proven and sc.exact
-        extra["idle_bound"] = idle_bound
+        optimal_axis = state.proven and sc.exact and state.scope is not None
+        optimal = optimal_axis and state.scope == ANY_ANGLE
+        extra.update(
+            idle_bound=idle_bound,
+            idle_bound_axis_aligned=idle_axis,
+            optimal_axis_aligned=optimal_axis,
+        )
+    extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
     missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
@@ -660,6 +744,6 @@ def _plan_of(
         elif packer is not None:
             ok, typed = packer.counts(dict(instance.kit_parts(tasks)))
             if ok and typed is not None:
-                layout = packing.typed_to_placements(instance, tasks, typed)
+                layout = packing_oracle.typed_to_placements(instance, tasks, typed)
         out.append(Kit(tasks, layout))
     return Plan(tuple(out))
