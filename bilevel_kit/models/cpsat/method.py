@@ -109,6 +109,8 @@ from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
+from .tray import embed_scope, tray_mode
+from .warm import MIN_RUN, best_heuristic_plan
 
 if TYPE_CHECKING:
     from .live import Live as LiveProgress
@@ -117,23 +119,10 @@ TrayMode = Literal["auto", "embedded", "benders"]
 Objective = Literal["makespan", "human_idle"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
-#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
-AUTO_EMBEDDED_MAX_RECTS = 300
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
-#: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
-HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
 #: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
 HINT_SHARE = 0.3
-#: The least time (s) a step is given even when the budget is spent (it returns at once).
-MIN_RUN = 0.05
-#: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
-MIN_HINT = 0.3
-#: Seconds per task kept back from a heuristic's share of the warm start for its run past its
-#: own ``time_limit``. Measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks for greedy-ce before
-#: its incremental timeline, +0.5-1.4 s at 1,000 tasks since (bench/results/scale.md): now a
-#: conservative margin, kept because the scale benchmark's cpsat rows were measured with it.
-HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
 #: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
 #: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
 BYTES_PER_CELL = 6_000
@@ -248,49 +237,6 @@ def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
     return closed_form_plan(instance, packer) is not None
 
 
-def best_heuristic_plan(
-    instance: Instance,
-    methods: Sequence[str] = HINT_METHODS,
-    seed: int = 0,
-    time_limit: float | None = None,
-) -> tuple[Plan | None, str | None]:
-    """The plan of lowest makespan among heuristic methods (a warm start for exact models);
-    methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
-    all: each gets what is left of it, and once it is spent the remaining methods are
-    skipped (unless no plan is known yet)."""
-    import time
-
-    from ...errors import BilevelKitError
-    from ...methods import get_method
-
-    end = None if time_limit is None else time.perf_counter() + time_limit
-    best: tuple[float, Plan, str] | None = None
-    for name in methods:
-        left = None if end is None else end - time.perf_counter()
-        if left is not None and left <= 0 and best is not None:
-            break
-        if left is not None:  # keep back the method's overrun past its own limit
-            left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
-            if left <= MIN_HINT and best is not None:
-                continue
-        try:
-            spec = get_method(name)
-            fn = spec.load()
-            tl = None if left is None else max(MIN_RUN, left)
-            if spec.options:
-                out = fn(instance, spec.parse({}), seed=seed, time_limit=tl)
-            else:
-                out = fn(instance, seed=seed)
-        except BilevelKitError:
-            continue
-        if out.plan is None:
-            continue
-        ms = evaluate(instance, out.plan).makespan
-        if best is None or ms < best[0]:
-            best = (ms, out.plan, name)
-    return (best[1], best[2]) if best else (None, None)
-
-
 def solve(
     instance: Instance,
     *,
@@ -391,7 +337,7 @@ def run(
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
-    mode = _tray_mode(instance, options.tray, K, ctx.embed_scope)
+    mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
         tray_mode=mode,
         max_kits=K,
@@ -442,32 +388,6 @@ def _no_plan(instance: Instance, unfit: tuple[str, str], report: _Report) -> Met
         proof_scope=AXIS_ALIGNED,
     )
     return report.finish(None, Status.UNKNOWN, best_bound(instance))
-
-
-def embed_scope(instance: Instance, packer: Packer) -> str | None:
-    """Which plans a tray embedded on ``packer``'s grid holds (docs/formulations.md#what-
-    optimal-means): every plan when all the instance's parts fit one tray on that grid (then
-    the model excludes no kit); else the 0/90-degree plans when the grid is exact (every size
-    a multiple of it, no reach map); else None: the model's bound proves nothing."""
-    from ...heuristics.shelf import kit_items
-
-    every = instance.kit_parts([t.id for t in instance.tasks])
-    whole = packing.pack(
-        instance.tray,
-        kit_items(instance.part_types, every),
-        resolution=packer.res,
-        time_limit=min(packer.pack_tl, 0.5, max(0.01, packer.budget.remaining())),
-        reach=packer.reach,
-    )
-    if whole.layout is not None:
-        return ANY_ANGLE
-    sizes = [instance.tray.width, instance.tray.height]
-    sizes += [v for pt in instance.part_types.values() for v in (pt.width, pt.height)]
-    if packer.reach is not None or not packing.is_grid_exact(sizes, packer.res):
-        return None
-    if all(not instance.part_types[p].rotatable for p in every):
-        return ANY_ANGLE  # such parts lie at 0 or 180 degrees only
-    return AXIS_ALIGNED
 
 
 def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
@@ -565,6 +485,7 @@ def _solve_model(
     if live is not None:
         live.mdl = mdl
         ctx.callback = live.attach(solver, solutions_are_plans=mode == "embedded")
+        live.bound_valid = mode != "embedded" or ctx.embed_scope == ANY_ANGLE
     state = _search(ctx, mdl, solver, mode, incumbent)
     extra.update(state.info)
     extra["cpsat_status"] = state.status_name
@@ -651,21 +572,6 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
         )
         K = min(K, max(1, slack // sc.o_h))
     return K
-
-
-def _tray_mode(instance: Instance, tray: str, K: int, scope: str | None) -> str:
-    """``tray`` with ``auto`` resolved (module docstring); ``scope``: what an embedded tray
-    would prove (:func:`embed_scope`). Embedded only when it proves optimality for every plan:
-    otherwise Benders, whose cuts each carry their own proof (many hold at any angle: area,
-    inscribed disks) and whose oracle confirms a misfit of an inexact grid on the exact one."""
-    if tray != "auto":
-        return tray
-    n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
-    small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
-    small = small and scope == ANY_ANGLE
-    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
-    # (bench/results/cpsat_trays.csv)
-    return "embedded" if small and instance.tray_limit is None else "benders"
 
 
 def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:

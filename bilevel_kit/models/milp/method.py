@@ -476,7 +476,7 @@ class _Benders:
                 on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
             )
             go_on = self.step(info)
-            self.live.model_values(self.inc_obj, self.lower)
+            self.live.model_values(self.inc_obj, self.lower_any)
             if not go_on:
                 break
         return info
