@@ -155,7 +155,12 @@ def main() -> None:
                         "peak_rss_mb": max(float(r["peak_rss_mb"]) for r in runs),
                     }
                 )
-                print(", ".join(f"{k} {v:.4g}" for k, v in part_rows[-1].items()))
+                print(
+                    ", ".join(
+                        f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                        for k, v in part_rows[-1].items()
+                    )
+                )
             write_rows(args.parts_out, part_rows)
             print(f"wrote {args.parts_out}")
     if not args.sizes:

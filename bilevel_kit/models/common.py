@@ -190,6 +190,11 @@ class Packer:
         for known, typed in self.known:
             if all(known.get(k, 0) >= n for k, n in counts.items() if n > 0):
                 return Fit(True, {k: typed[k][:n] for k, n in counts.items() if n > 0})
+        return self.grid_verdict(counts, limit)
+
+    def grid_verdict(self, counts: Mapping[str, int], limit: float | None = None) -> Fit:
+        """The oracle's answer alone: its layouts lie on a packing grid at 0 or 90 degrees
+        (what the embedded model's hints need), never one of :meth:`learn`'s."""
         return packing_oracle.fit_verdict(
             self.instance.tray,
             self.instance.part_types,

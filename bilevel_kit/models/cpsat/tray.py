@@ -165,8 +165,9 @@ def grid_corners(
     res = packer.res
     out: Corners = {}
     for kit in kits:
-        ok, typed = packer.counts(dict(instance.kit_parts([instance.tasks[i].id for i in kit])))
-        if not ok or typed is None:
+        fit = packer.grid_verdict(instance.kit_parts([instance.tasks[i].id for i in kit]))
+        typed = fit.layout
+        if not fit.fits or typed is None:
             return None
         slot = dict.fromkeys(typed, 0)
         for i in kit:
