@@ -61,7 +61,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--figures",
         folder=True,
         metavar="DIR",
-        help="write a comparison chart and one Gantt chart per method here",
+        help="write a comparison chart, and one Gantt chart and one page of tray layouts per "
+        "method, here",
     )
     add_output(p, "--cells", folder=True, metavar="DIR", help="save/resume per-cell results in DIR")
     add_instance_overrides(p)
@@ -163,8 +164,9 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
 
 
 def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, Any]) -> None:
-    """A comparison chart per instance and a Gantt chart per instance x method (of the
-    instance as solved, with the command's overrides such as ``--trays``)."""
+    """A comparison chart per instance (methods without a plan marked "no plan"), and per
+    instance x method with a plan a Gantt chart and its tray layouts (of the instance as
+    solved, with the command's overrides such as ``--trays``)."""
     from pathlib import Path
 
     from .. import plots, solution
@@ -188,9 +190,12 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
-        ax = plots.plot_comparison(ok)
+        ax = plots.plot_comparison(rows)
         plots.save_figure(ax.figure, out / f"{name}_compare.png")
         for r in ok:
             sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
+            stem = out / f"{name}_{safe_name(r['method'])}"
             ax = plots.plot_gantt(inst, sol.plan, method=str(r["method"]))
-            plots.save_figure(ax.figure, out / f"{name}_{safe_name(r['method'])}_gantt.png")
+            plots.save_figure(ax.figure, f"{stem}_gantt.png")
+            fig = plots.plot_trays(inst, sol.plan, method=str(r["method"]))
+            plots.save_figure(fig, f"{stem}_trays.png")

@@ -175,8 +175,8 @@ def test_a_task_without_a_0_90_layout_is_unknown_not_infeasible():
 def test_the_generator_refuses_only_on_a_proof():
     from bilevel_kit.generate import _check_solvable
 
-    _check_solvable(offgrid_doc(), 1.0)  # fits on the exact grid: accepted
-    _check_solvable(offgrid_doc(50.1234567, 100.2469134), 1.0)  # not decided: accepted
+    _check_solvable(offgrid_doc(), 1.0, None)  # fits on the exact grid: accepted
+    _check_solvable(offgrid_doc(50.1234567, 100.2469134), 1.0, None)  # undecided: accepted
 
 
 # ---------------------------------------------------------------------------------------------
