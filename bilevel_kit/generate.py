@@ -379,9 +379,13 @@ def _check_solvable(
     doc: dict[str, Any], tightness: float | None, tray: tuple[float, float] | None
 ) -> None:
     """Every task's parts fit the tray on their own, else no plan exists (a kit holds at least
-    one task): the area bound first, then the packing oracle for the few that pass it."""
+    one task): the area bound first, then the packing oracle for the few that pass it. Only a
+    proof refuses (docs/formulations.md#what-optimal-means): one at any angle means no method
+    can solve the instance, one for 0/90-degree layouts that the exact models and the
+    baselines cannot (only parts at other angles might fit); an undecided answer passes."""
     from .instance import from_dict
-    from .models.packing import kit_fits
+    from .models.packing import ANY_ANGLE
+    from .models.packing_oracle import kit_verdict
 
     inst = from_dict(doc, "<generated>")
     tried: set[frozenset[tuple[str, int]]] = set()
@@ -392,13 +396,20 @@ def _check_solvable(
             continue
         tried.add(key)
         area = sum(inst.part_types[p].area * n for p, n in counts.items())
-        if area > inst.tray.area or kit_fits(inst, counts) is False:
+        fit = None if area > inst.tray.area else kit_verdict(inst, counts, 2.0)
+        if fit is None or fit.fits is False:
             what = (
                 "--tray" if tray is not None else f"--tightness {tightness or DEFAULT_TIGHTNESS:g}"
             )
             fix = "a larger --tray" if tray is not None else "a lower --tightness"
+            how = (
+                ", so no method can solve this instance"
+                if fit is None or fit.scope == ANY_ANGLE
+                else " at 0 or 90 degrees, so neither the exact models nor the baselines can "
+                "solve this instance"
+            )
             raise UsageError(
                 f"{what}: the parts of task {task.id} do not fit the "
-                f"{inst.tray.width:g} x {inst.tray.height:g} mm tray on their own, so no "
-                f"method can solve this instance; use {fix}"
+                f"{inst.tray.width:g} x {inst.tray.height:g} mm tray on their own{how}; "
+                f"use {fix}"
             )
