@@ -21,6 +21,7 @@ from typing import Protocol
 
 from ..interrupt import forget_unhandled_interrupt, message, signal_guard
 from . import (
+    bench,
     check,
     compare,
     execute,
@@ -75,6 +76,7 @@ class Command(Protocol):
 COMMANDS: dict[str, Command] = {
     "solve": solve,
     "compare": compare,
+    "bench": bench,
     "simulate": simulate,
     "repro": repro,
     "pack": pack,
