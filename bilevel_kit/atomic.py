@@ -2,12 +2,16 @@
 
 A reader (or a crash) never sees a half-written result file, and a failed command leaves
 no partial output behind. The file gets the mode a plain write would give (umask honoured).
+The target's path is resolved first (``a/../y.png`` is ``y.png`` and creates no ``a``; a
+link's file is replaced, not the link). Only a regular file (or a new one) is replaced: a
+device or a pipe (``/dev/null``, ``/dev/stdout``) is written in place, never renamed over.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,8 +26,15 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     On an exception (``KeyboardInterrupt`` included) the temporary file is removed and
     ``path`` is left untouched.
     """
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
+    try:
+        in_place = not stat.S_ISREG(os.stat(path).st_mode)  # a device or a pipe
+    except OSError:
+        in_place = False  # a new file
+    if in_place:
+        yield Path(path)
+        return
+    target = Path(os.path.realpath(path))
+    folder = target.parent
     folder.mkdir(parents=True, exist_ok=True)
     tmp: str | None = None
     try:  # whatever ends the write (an error, Ctrl-C, SIGTERM raised as one) removes the temp
@@ -58,4 +69,5 @@ def write_text(path: str | Path, text: str) -> None:
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(text)
         fh.flush()
-        os.fsync(fh.fileno())
+        if stat.S_ISREG(os.fstat(fh.fileno()).st_mode):  # a pipe cannot be synced
+            os.fsync(fh.fileno())

@@ -22,6 +22,19 @@ from typing import Any
 ErrorType = Callable[[str, str, str], Exception]
 
 
+#: The most digits an integer of these files may have: no field takes a number near 10^30,
+#: and a longer one would only be slow to convert (Python refuses 4,300 digits) or overflow a
+#: float later.
+MAX_INT_DIGITS = 30
+#: A ``\\u`` escape of a UTF-16 surrogate in JSON text: a lone one is not Unicode.
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+class _TooLong(str):
+    """An integer literal of more than :data:`MAX_INT_DIGITS` digits, kept as its text."""
+
+
 class _Duplicated(dict):  # type: ignore[type-arg]
     """A JSON object in which ``duplicate`` appeared more than once."""
 
@@ -51,25 +64,36 @@ def json_path(parts: Iterable[Any]) -> str:
 
 
 def _first_problem(doc: Any) -> tuple[tuple[Any, ...], str] | None:
-    """The path and message of the first duplicate key or non-finite number, in file order."""
+    """The path and message of the first duplicate key, non-finite number, integer of too
+    many digits or string with a lone surrogate, in file order."""
     stack: list[tuple[Any, tuple[Any, ...]]] = [(doc, ())]
     while stack:
         obj, path = stack.pop()
         if isinstance(obj, float):
             if not math.isfinite(obj):
                 return path, "must be a finite number (NaN/Infinity not allowed)"
+        elif isinstance(obj, _TooLong):
+            return path, f"an integer of {len(obj.lstrip('-'))} digits is out of range"
+        elif isinstance(obj, str):
+            if _SURROGATE.search(obj):
+                return path, "not valid Unicode (a lone UTF-16 surrogate escape)"
         elif isinstance(obj, dict):
             if isinstance(obj, _Duplicated):
                 return path, f"duplicate key {obj.duplicate!r} (JSON objects need unique keys)"
+            for k in obj:
+                if _SURROGATE.search(k):
+                    return path, f"key {k!r} is not valid Unicode (a lone UTF-16 surrogate escape)"
             stack.extend((v, (*path, k)) for k, v in reversed(obj.items()))
         elif isinstance(obj, list):
             stack.extend((v, (*path, i)) for i, v in reversed(list(enumerate(obj))))
     return None
 
 
-def read_json(path: str | Path, error: ErrorType) -> Any:
-    """Parse a JSON file; a missing file, malformed JSON, a duplicate key or a non-finite
-    number raises ``error(file, json_path, message)``."""
+def read_json(path: str | Path, error: ErrorType, *, long_ints: bool = False) -> Any:
+    """Parse a JSON file; a missing file, malformed JSON, a duplicate key, a non-finite
+    number, a lone surrogate or an integer of more than :data:`MAX_INT_DIGITS` digits raises
+    ``error(file, json_path, message)``. ``long_ints``: integers up to Python's own limit of
+    4,300 digits are read as they are (the checker names them as violations itself)."""
     src = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -94,8 +118,21 @@ def read_json(path: str | Path, error: ErrorType) -> Any:
             suspect[0] = True
         return value
 
+    def integer(literal: str) -> int | str:
+        if len(literal) > MAX_INT_DIGITS and not (long_ints and len(literal) <= 4300):
+            suspect[0] = True
+            return _TooLong(literal)
+        return int(literal)
+
+    suspect[0] = bool(_SURROGATE_ESCAPE.search(text))
     try:
-        doc = json.loads(text, object_pairs_hook=pairs, parse_constant=constant, parse_float=number)
+        doc = json.loads(
+            text,
+            object_pairs_hook=pairs,
+            parse_constant=constant,
+            parse_float=number,
+            parse_int=integer,
+        )
     except json.JSONDecodeError as exc:
         raise error(
             src, "$", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"

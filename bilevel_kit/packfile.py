@@ -12,7 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from .errors import InstanceError
-from .instance import MAX_LENGTH, Instance, PartType, Tray, check_lengths
+from .instance import (
+    ID_PATTERN,
+    MAX_LENGTH,
+    MAX_PACK_PARTS,
+    Instance,
+    PartType,
+    Tray,
+    check_lengths,
+)
 from .jsonio import read_json, validate_document
 
 #: The ``format`` tag of layout files.
@@ -44,10 +52,15 @@ def schema() -> dict[str, Any]:
                     "required": ["id", "width", "height"],
                     "additionalProperties": False,
                     "properties": {
-                        "id": {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"},
+                        "id": {"type": "string", "minLength": 1, "pattern": ID_PATTERN},
                         "width": _POS,
                         "height": _POS,
-                        "count": {"type": "integer", "minimum": 1, "default": 1},
+                        "count": {
+                            "type": "integer",
+                            "minimum": 1,
+                            "maximum": MAX_PACK_PARTS,
+                            "default": 1,
+                        },
                         "rotatable": {"type": "boolean", "default": True},
                     },
                 },
@@ -82,6 +95,13 @@ def load(path: str | Path) -> tuple[Instance, dict[str, int]]:
             bool(item.get("rotatable", True)),
         )
         counts[item["id"]] = int(item.get("count", 1))
+    if sum(counts.values()) > MAX_PACK_PARTS:
+        raise InstanceError(
+            src,
+            "$.items",
+            f"{sum(counts.values()):,} parts in all, above the limit of {MAX_PACK_PARTS:,} "
+            "(docs/formats.md#ranges)",
+        )
     tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
     inst = Instance(
         name=Path(path).stem,

@@ -2,16 +2,32 @@
 
 A command that solves for an hour and then cannot write its result has lost the hour, and one
 that writes some outputs before failing on the next leaves a half-done result. So each output
-option is checked up front (:func:`check_outputs`): a file must not be an existing folder, a
-folder must not be an existing file, the nearest existing parent must be a writable folder,
-and two options must not name the same path. Names that become parts of paths (an instance's
-``name`` in figure file names) go through :func:`safe_name` first.
+option is checked up front (:func:`check_outputs`, docs/cli.md#output-paths):
+
+* a file is a regular file that can be opened for writing, or a new file; either way its
+  folder (or the nearest existing ancestor) must let a file be created there, since results are
+  written to a temporary file and renamed over the target (:mod:`bilevel_kit.atomic`). A
+  character device or a pipe (``/dev/null``, ``/dev/stdout``) is written in place, never
+  replaced; any other kind of file is refused;
+* a folder is an existing folder new files can be created in, or a new one;
+* a figure's suffix names a format the figures can be saved in (none: PNG);
+* no two outputs, and no output and an input, are the same file once the paths are resolved
+  (``a/../y.png`` is ``y.png``; links are followed).
+
+Whether a folder takes new files is tried, not guessed from permission bits (root passes every
+permission check, yet nothing can be created in ``/proc``): a temporary file is created and
+removed at once, and the folder's modification time put back. Names that become parts of paths
+(an instance's ``name`` in figure file names) go through :func:`safe_name` first.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import re
+import stat
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -19,6 +35,23 @@ from .errors import UsageError
 
 #: The longest file-name stem :func:`safe_name` returns.
 MAX_NAME = 100
+#: The figure formats matplotlib saves, by suffix (a figure without a suffix is a PNG).
+FIGURE_SUFFIXES = (
+    ".png",
+    ".pdf",
+    ".svg",
+    ".svgz",
+    ".eps",
+    ".ps",
+    ".jpg",
+    ".jpeg",
+    ".tif",
+    ".tiff",
+    ".webp",
+    ".pgf",
+)
+
+PathLike = str | os.PathLike[str]
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -29,53 +62,121 @@ def _nearest_existing(path: Path) -> Path:
     return Path(".")
 
 
+def _takes_new_files(folder: Path) -> str | None:
+    """Why no file can be created in the existing folder ``folder`` (None: one can). Tried:
+    a temporary file is created and removed, and the folder's times are put back."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"cannot create files in {folder} (permission denied)"
+    try:
+        times = os.stat(folder)
+        fd, probe = tempfile.mkstemp(prefix=".bilevel-kit-probe-", dir=folder)
+    except OSError as exc:
+        return f"cannot create files in {folder} ({exc.strerror or exc})"
+    os.close(fd)
+    os.unlink(probe)
+    with contextlib.suppress(OSError):
+        os.utime(folder, ns=(times.st_atime_ns, times.st_mtime_ns))
+    return None
+
+
 def _parent_problem(path: Path) -> str | None:
     """Why no file or folder can be created at ``path`` (None: it can)."""
     base = _nearest_existing(path.absolute().parent)
     if not base.is_dir():
         return f"{base} is not a folder"
-    if not os.access(base, os.W_OK | os.X_OK):
-        return f"cannot create files in {base} (permission denied)"
-    return None
+    return _takes_new_files(base)
 
 
-def file_problem(path: str | os.PathLike[str]) -> str | None:
-    """Why ``path`` cannot be written as a file (None: it can)."""
+def _stat(path: Path) -> os.stat_result | None:
+    """``os.stat`` of ``path``; None when nothing is there (a missing folder or a file where
+    a folder would be on the way: :func:`_parent_problem` says which)."""
+    try:
+        return os.stat(path)
+    except OSError as exc:
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            return None
+        raise
+
+
+def _opens_for_writing(path: Path) -> bool:
+    """Can the existing regular file be opened for writing? (Nothing is written, nothing
+    changes; a pipe is never opened here: its reader would see the end of the data.)"""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+    except OSError:
+        return False
+    os.close(fd)
+    return True
+
+
+def file_problem(path: PathLike, figure: bool = False) -> str | None:
+    """Why ``path`` cannot be written as a file (None: it can); ``figure``: also its suffix."""
     p = Path(path)
     if not str(path) or p.name in ("", ".", ".."):
         return "not a file name"
-    if p.is_dir():
+    if figure and p.suffix and p.suffix.lower() not in FIGURE_SUFFIXES:
+        return f"unknown figure format {p.suffix!r} (use {', '.join(FIGURE_SUFFIXES)})"
+    try:
+        st = _stat(p)
+    except OSError as exc:
+        return f"cannot be reached ({exc.strerror or exc})"
+    if st is None:
+        return _parent_problem(p)
+    if stat.S_ISDIR(st.st_mode):
         return "is a folder, not a file"
-    if p.exists():
-        if not os.access(p, os.W_OK):
-            return "exists and is not writable"
-        return None
-    return _parent_problem(p)
+    if not (stat.S_ISREG(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISFIFO(st.st_mode)):
+        return "exists and is not a regular file, a device or a pipe"
+    if not stat.S_ISREG(st.st_mode):  # a device or a pipe: written in place
+        return None if os.access(p, os.W_OK) else "exists and is not writable"
+    if not _opens_for_writing(p):
+        return "exists and is not writable"
+    return _takes_new_files(Path(os.path.realpath(p)).parent)  # a temporary file, renamed
 
 
-def folder_problem(path: str | os.PathLike[str]) -> str | None:
+def folder_problem(path: PathLike) -> str | None:
     """Why ``path`` cannot be used as an output folder (None: it can)."""
     p = Path(path)
     if not str(path):
         return "not a folder name"
-    if p.exists():
-        if not p.is_dir():
-            return "exists and is not a folder"
-        if not os.access(p, os.W_OK | os.X_OK):
-            return "is not writable"
-        return None
-    return _parent_problem(p)
+    try:
+        st = _stat(p)
+    except OSError as exc:
+        return f"cannot be reached ({exc.strerror or exc})"
+    if st is None:
+        return _parent_problem(p)
+    if not stat.S_ISDIR(st.st_mode):
+        return "exists and is not a folder"
+    return None if _takes_new_files(p) is None else "is not writable"
+
+
+def same_file_keys(path: PathLike) -> list[tuple[object, ...]]:
+    """What identifies the file ``path`` names: its resolved path (``a/../y.png`` is
+    ``y.png``, links followed) and, when it exists, its device and inode (hard links)."""
+    keys: list[tuple[object, ...]] = [("path", os.path.realpath(path))]
+    with contextlib.suppress(OSError):
+        st = os.stat(path)
+        keys.append(("inode", st.st_dev, st.st_ino))
+    return keys
 
 
 def check_outputs(
-    files: Mapping[str, str | os.PathLike[str] | None],
-    folders: Mapping[str, str | os.PathLike[str] | None] | None = None,
+    files: Mapping[str, PathLike | None],
+    folders: Mapping[str, PathLike | None] | None = None,
+    *,
+    figures: Mapping[str, PathLike | None] | None = None,
+    inputs: Mapping[str, PathLike | None] | None = None,
 ) -> None:
     """Raise :class:`UsageError` ``OPTION PATH: reason`` for the first output that cannot be
-    written. ``files``/``folders`` map an option (``"--out"``) to its path; None: not given."""
-    seen: dict[Path, str] = {}
+    written (module docstring). ``files``, ``folders`` and ``figures`` map an output option
+    (``"--out"``) to its path, ``inputs`` an input's name to its path; None: not given."""
+    seen: dict[tuple[object, ...], str] = {}
+    for name, path in (inputs or {}).items():
+        if path is not None:
+            for key in same_file_keys(path):
+                seen.setdefault(key, f"the input {name}")
     for kind, given, problem in (
         ("file", files, file_problem),
+        ("file", figures or {}, lambda p: file_problem(p, figure=True)),
         ("folder", folders or {}, folder_problem),
     ):
         for option, path in given.items():
@@ -84,10 +185,11 @@ def check_outputs(
             why = problem(path)
             if why is not None:
                 raise UsageError(f"{option} {path}: {why}")
-            key = Path(path).absolute()
-            if key in seen:
-                raise UsageError(f"{option} {path}: the same {kind} as {seen[key]}")
-            seen[key] = option
+            keys = same_file_keys(path)
+            for key in keys:
+                if key in seen:
+                    raise UsageError(f"{option} {path}: the same {kind} as {seen[key]}")
+            seen.update(dict.fromkeys(keys, option))
 
 
 def safe_name(name: str, default: str = "unnamed") -> str:

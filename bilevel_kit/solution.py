@@ -305,4 +305,4 @@ def _timeline(params: dict[str, Any] | None, num: _Numbers) -> dict[str, Any] | 
 
 def read(path: str | Path) -> LoadedSolution:
     """Load a solution file; malformed files raise :class:`SolutionError` naming the field."""
-    return from_dict(read_json(path, SolutionError), str(path))
+    return from_dict(read_json(path, SolutionError, long_ints=True), str(path))

@@ -250,25 +250,48 @@ def add_resolution(p: argparse.ArgumentParser, text: str, default: float | None 
 
 
 def add_output(
-    p: argparse.ArgumentParser, *flags: str, folder: bool = False, **kwargs: Any
+    p: argparse.ArgumentParser,
+    *flags: str,
+    folder: bool = False,
+    figure: bool = False,
+    **kwargs: Any,
 ) -> None:
-    """An output option. :func:`run_command` checks its path (:mod:`bilevel_kit.paths`)
-    before the command does any work, so a bad path costs nothing and writes nothing."""
+    """An output option: a file, a ``folder``, or a ``figure`` (a file whose suffix names its
+    format). :func:`run_command` checks its path (:mod:`bilevel_kit.paths`) before the command
+    does any work, so a bad path costs nothing and writes nothing."""
     action = p.add_argument(*flags, **kwargs)
-    key = "output_folders" if folder else "output_files"
+    key = "output_folders" if folder else "output_figures" if figure else "output_files"
     known = dict(p.get_default(key) or {})
     known[flags[0]] = action.dest
     p.set_defaults(**{key: known})
 
 
+#: The arguments that name input files, wherever a command has them: no output may be one
+#: of these files.
+INPUTS = ("instance", "instances", "solution", "file")
+
+
 def check_output_options(args: argparse.Namespace) -> None:
-    """Every output option given (see :func:`add_output`), checked in one go."""
+    """Every output option given (see :func:`add_output`), checked in one go against each
+    other and against the command's input files (:data:`INPUTS`)."""
     from ..paths import check_outputs
 
     def given(key: str) -> dict[str, Any]:
         return {opt: getattr(args, dest) for opt, dest in (getattr(args, key, None) or {}).items()}
 
-    check_outputs(given("output_files"), given("output_folders"))
+    inputs: dict[str, Any] = {}
+    for dest in INPUTS:
+        value = getattr(args, dest, None)
+        values = value if isinstance(value, list) else [value]
+        inputs.update(
+            {f"{dest} {i}" if len(values) > 1 else dest: v for i, v in enumerate(values, 1)}
+        )
+    check_outputs(
+        given("output_files"),
+        given("output_folders"),
+        figures=given("output_figures"),
+        inputs={k: v for k, v in inputs.items() if isinstance(v, str)},
+    )
 
 
 def add_param_option(p: argparse.ArgumentParser, text: str) -> None:

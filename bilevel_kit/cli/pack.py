@@ -52,7 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=positive_int, default=2, help="CP-SAT workers (2)")
     add_seed(p)
     add_output(p, "--out", "-o", metavar="FILE", help="write the layout as JSON")
-    add_output(p, "--png", metavar="FILE", help="draw the layout")
+    add_output(p, "--png", figure=True, metavar="FILE", help="draw the layout")
 
 
 def _read_target(args: argparse.Namespace) -> tuple[Instance, dict[str, int], list[str]]:

@@ -20,7 +20,7 @@ DESCRIPTION = (
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instance")
     add_resolution(p, "cell size in mm (default: the instance's reach_resolution, 10)")
-    add_output(p, "--png", metavar="FILE", help="draw the map here")
+    add_output(p, "--png", figure=True, metavar="FILE", help="draw the map here")
     p.add_argument("--solution", metavar="FILE", help="solution whose kit to draw on the map")
     p.add_argument("--kit", type=positive_int, help="kit of --solution (default 1)")
 
@@ -34,6 +34,16 @@ def run(args: argparse.Namespace) -> int:
     args.kit = args.kit or 1
     instance = load(args.instance)
     resolution = instance.reach_resolution if args.resolution is None else args.resolution
+    from ..instance.ranges import reach_cells_problem
+
+    why = reach_cells_problem(instance.tray.width, instance.tray.height, resolution)
+    if why is not None:
+        where = (
+            f"--resolution {resolution:g}"
+            if args.resolution
+            else f"{args.instance}: $.reach_resolution"
+        )
+        raise UsageError(f"{where}: {why}")
     layout = None
     if args.solution:
         from .. import solution

@@ -51,8 +51,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="registered method: " + ", ".join(REGISTRY),
     )
     add_output(p, "--out", "-o", metavar="FILE", help="write the solution JSON here")
-    add_output(p, "--gantt", metavar="PNG", help="draw the robot/human Gantt chart")
-    add_output(p, "--tray", metavar="PNG", help="draw every kit's tray layout")
+    add_output(p, "--gantt", figure=True, metavar="PNG", help="draw the robot/human Gantt chart")
+    add_output(p, "--tray", figure=True, metavar="PNG", help="draw every kit's tray layout")
     p.add_argument(
         "--check",
         action="store_true",
@@ -62,6 +62,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_output(
         p,
         "--convergence",
+        figure=True,
         metavar="PNG",
         help="plot the cross-entropy trace of one kit (greedy-ce)",
     )

@@ -31,14 +31,30 @@ from .model import (
     topological_order,
 )
 from .parser import document, from_dict, load, read_json
-from .ranges import MAX_LENGTH, MAX_TIME, MAX_WEIGHT, MIN_LENGTH, check_lengths, parse_trays
+from .ranges import (
+    ID_PATTERN,
+    MAX_LENGTH,
+    MAX_PACK_PARTS,
+    MAX_PARTS,
+    MAX_TASKS,
+    MAX_TIME,
+    MAX_WEIGHT,
+    MIN_LENGTH,
+    check_lengths,
+    check_size,
+    parse_trays,
+)
 
 __all__ = [
     "DEFAULT_HORIZON",
     "DEFAULT_REPAIR_TIME",
     "DEFAULT_WEIGHTS",
     "FORMAT",
+    "ID_PATTERN",
     "MAX_LENGTH",
+    "MAX_PACK_PARTS",
+    "MAX_PARTS",
+    "MAX_TASKS",
     "MAX_TIME",
     "MAX_WEIGHT",
     "MIN_LENGTH",
@@ -48,6 +64,7 @@ __all__ = [
     "Task",
     "Tray",
     "check_lengths",
+    "check_size",
     "document",
     "from_dict",
     "load",

@@ -11,13 +11,13 @@ from __future__ import annotations
 from typing import Any
 
 from .model import DEFAULT_HORIZON, DEFAULT_REPAIR_TIME, DEFAULT_WEIGHTS, FORMAT
-from .ranges import MAX_LENGTH, MAX_TIME, MAX_WEIGHT
+from .ranges import ID_PATTERN, MAX_LENGTH, MAX_PARTS, MAX_TASKS, MAX_TIME, MAX_WEIGHT
 
 _NONNEG = {"type": "number", "minimum": 0, "maximum": MAX_TIME}  # times (s)
 _POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_TIME}  # times > 0 (s)
 #: lengths (mm); the lower limit MIN_LENGTH is checked after the schema, with its reason
 _LENGTH = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
-_ID = {"type": "string", "minLength": 1, "pattern": "^[A-Za-z0-9_.:-]+$"}
+_ID = {"type": "string", "minLength": 1, "pattern": ID_PATTERN}
 
 
 def schema() -> dict[str, Any]:
@@ -50,10 +50,15 @@ def schema() -> dict[str, Any]:
             "tasks": {"type": "array", "minItems": 1, "items": _task_schema()},
             "precedence": _precedence_schema(),
             "weights": _weights_schema(),
-            "horizon": {"type": "integer", "minimum": 1, "default": DEFAULT_HORIZON},
+            "horizon": {
+                "type": "integer",
+                "minimum": 1,
+                "maximum": MAX_TASKS,
+                "default": DEFAULT_HORIZON,
+            },
             "trays": _trays_schema(),
             "supply": _supply_schema(),
-            "units": {"type": "integer", "minimum": 1, "default": 1},
+            "units": {"type": "integer", "minimum": 1, "maximum": MAX_TASKS, "default": 1},
             "station": _station_schema(),
             **_robot_schema(),
         },
@@ -105,7 +110,7 @@ def _task_schema() -> dict[str, Any]:
         "additionalProperties": False,
         "properties": {
             "type": {"type": "string"},
-            "count": {"type": "integer", "minimum": 1},
+            "count": {"type": "integer", "minimum": 1, "maximum": MAX_PARTS},
         },
     }
     return {
@@ -113,7 +118,7 @@ def _task_schema() -> dict[str, Any]:
         "required": ["id", "parts", "human_time"],
         "additionalProperties": False,
         "properties": {
-            "id": {**_ID, "pattern": "^[A-Za-z0-9_.:-]+$"},
+            "id": _ID,
             "name": {"type": "string"},
             "product": {"type": "string", "minLength": 1},
             "parts": {"type": "array", "items": part_request},

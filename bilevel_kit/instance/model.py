@@ -16,7 +16,7 @@ from functools import cached_property
 from typing import Any
 
 from ..errors import InstanceError
-from .ranges import MAX_TIME, MAX_WEIGHT, parse_trays
+from .ranges import MAX_TIME, MAX_WEIGHT, check_size, parse_trays
 
 FORMAT = "bilevel-kit/1"
 
@@ -265,6 +265,7 @@ class Instance:
         if units is not None:
             if units < 1:
                 raise InstanceError(self.source, "$.units", "must be >= 1")
+            check_size(len(self.base_tasks), int(units), self.source)
             changes["units"] = int(units)
         return replace(self, **changes) if changes else self
 

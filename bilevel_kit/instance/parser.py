@@ -29,7 +29,7 @@ from .model import (
     Task,
     Tray,
 )
-from .ranges import check_lengths, parse_trays
+from .ranges import check_lengths, check_reach_cells, check_size, parse_trays
 
 
 def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
@@ -77,9 +77,12 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     part_types = _part_types(doc["part_types"], tray, source)
     name = doc["name"]
     tasks = _tasks(doc["tasks"], part_types, name, source)
+    check_size(len(tasks), int(doc.get("units", 1)), source)
     edges = _precedence(doc.get("precedence", []), [t.id for t in tasks], source)
     supply = _supply(doc.get("supply", {}), part_types, source)
-    station = _station(doc, source)
+    station = _station(doc, source, part_types)
+    if doc.get("reachability", False):  # the reach map is built: its size is checked first
+        check_reach_cells(tray.width, tray.height, float(doc.get("reach_resolution", 10.0)), source)
     robot_times = doc.get("robot_times", "pick_time")
     if robot_times == "motion":
         part_types = _motion_pick_times(part_types, station, tray, source)
@@ -273,17 +276,21 @@ def _supply(
     return supply
 
 
-def _station(doc: Mapping[str, Any], source: str) -> Any:
+def _station(doc: Mapping[str, Any], source: str, part_types: Mapping[str, PartType]) -> Any:
     """The Sawyer station of the document (:class:`bilevel_kit.sawyer.Station`), None if the
-    document gives none."""
+    document gives none; its bins must be of known part types."""
     if "station" not in doc:
         return None
     from ..sawyer.station import Station, StationError
 
     try:
-        return Station.from_dict(doc["station"])
+        station = Station.from_dict(doc["station"])
     except StationError as exc:
         raise InstanceError(source, "$.station", str(exc)) from None
+    for name, _ in station.bins:
+        if name not in part_types:
+            raise InstanceError(source, f"$.station.bins.{name}", f"unknown part type {name!r}")
+    return station
 
 
 def _motion_pick_times(

@@ -21,6 +21,64 @@ MIN_LENGTH = 0.01
 MAX_LENGTH = 1e5
 MAX_TIME = 1e7
 MAX_WEIGHT = 1e6
+#: The most tasks an instance may have once its units are built one after another: the
+#: checker is measured up to 80,000 tasks (bench/bench_check.py, the 180,000-task file of
+#: issue 14 checks in seconds); beyond this an input number (``units: 1e9``) would only ask
+#: for memory no machine has.
+MAX_TASKS = 200_000
+#: The most parts one task may ask for (the checker is measured on a 30,000-part kit).
+MAX_PARTS = 100_000
+#: The most parts a pack file may ask for in all: pack lays them out with one CP-SAT model of
+#: pairwise no-overlap constraints, hopeless long before this.
+MAX_PACK_PARTS = 10_000
+#: The pattern of every id (part types, tasks, pack items). ``$`` alone would let a trailing
+#: newline through in Python's regular expressions; the lookahead says "the end" in both
+#: Python's and JSON Schema's (ECMA-262) dialects.
+ID_PATTERN = r"^[A-Za-z0-9_.:-]+$(?!\n)"
+
+
+def check_size(n_tasks: int, units: int, source: str) -> None:
+    """At most :data:`MAX_TASKS` tasks over all units (an :class:`InstanceError` naming
+    ``$.units`` when the units make the instance too large, else ``$.tasks``)."""
+    if n_tasks * units > MAX_TASKS:
+        where = "$.units" if units > 1 else "$.tasks"
+        raise InstanceError(
+            source,
+            where,
+            f"{n_tasks} task(s) x {units} unit(s) = {n_tasks * units:,} tasks, above the "
+            f"limit of {MAX_TASKS:,} (docs/formats.md#ranges)",
+        )
+
+
+#: The most cells a reach map may have: each cell holds a joint configuration and a few numbers
+#: (about 75 bytes) and costs an inverse-kinematics solve, so a million cells is ~75 MB and
+#: already hours of work; a 600 x 400 mm tray at the default 10 mm is 2,400 cells.
+MAX_REACH_CELLS = 1_000_000
+
+
+def reach_cells(width: float, height: float, resolution: float) -> int:
+    """The number of cells of a reach map (as the Sawyer's reach map builds them)."""
+    nx = max(1, math.ceil(width / resolution - 1e-9))
+    ny = max(1, math.ceil(height / resolution - 1e-9))
+    return nx * ny
+
+
+def reach_cells_problem(width: float, height: float, resolution: float) -> str | None:
+    """Why a reach map of this tray at this cell size is not built (None: it is)."""
+    cells = reach_cells(width, height, resolution)
+    if cells <= MAX_REACH_CELLS:
+        return None
+    return (
+        f"a reach map of {width:g} x {height:g} mm at {resolution:g} mm has {cells:,} cells, "
+        f"above the limit of {MAX_REACH_CELLS:,} (use a coarser resolution)"
+    )
+
+
+def check_reach_cells(width: float, height: float, resolution: float, source: str) -> None:
+    """An :class:`InstanceError` at ``$.reach_resolution`` when the map would be too large."""
+    why = reach_cells_problem(width, height, resolution)
+    if why is not None:
+        raise InstanceError(source, "$.reach_resolution", why)
 
 
 def check_lengths(

@@ -45,9 +45,10 @@ def save_figure(figure: Figure | SubFigure, path: str | os.PathLike[str], dpi: i
     try:
         with atomic.atomic_path(out) as tmp:
             fig.savefig(tmp, format=fmt, dpi=dpi, bbox_inches="tight")
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
+            if tmp.is_file():  # not a device written in place (/dev/null)
+                umask = os.umask(0)
+                os.umask(umask)
+                os.chmod(tmp, 0o666 & ~umask)
     finally:
         plt.close(fig)
     return out
