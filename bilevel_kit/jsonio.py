@@ -13,7 +13,9 @@ from __future__ import annotations
 import functools
 import json
 import math
+import os
 import re
+import stat
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -95,7 +97,9 @@ def read_json(path: str | Path, error: ErrorType, *, long_ints: bool = False) ->
     ``error(file, json_path, message)``. ``long_ints``: integers up to Python's own limit of
     4,300 digits are read as they are (the checker names them as violations itself)."""
     src = str(path)
-    try:
+    try:  # a FIFO would block until a writer comes (forever), a device never ends
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            raise error(src, "$", "cannot read file (not a regular file: a folder, pipe or device)")
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
         raise error(src, "$", "file not found") from None

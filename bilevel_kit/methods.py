@@ -144,17 +144,24 @@ def check_seed(seed: Any) -> int:
     return seed
 
 
+#: The longest time limit (about 11.6 days): the solvers' and the operating system's waits
+#: take milliseconds in a C int (24.8 days at most), and no run of this toolkit is longer.
+MAX_TIME_LIMIT = 1e6
+
+
 def check_time_limit(time_limit: Any) -> float | None:
-    """A time limit is ``None`` (the method's default) or a finite number of seconds > 0."""
+    """A time limit is ``None`` (the method's default) or seconds in (0, MAX_TIME_LIMIT]."""
     if time_limit is None:
         return None
     if (
         isinstance(time_limit, bool)
         or not isinstance(time_limit, int | float)
         or not math.isfinite(time_limit)
-        or time_limit <= 0
+        or not 0 < time_limit <= MAX_TIME_LIMIT
     ):
-        raise UsageError(f"time limit must be a finite number of seconds > 0, got {time_limit!r}")
+        raise UsageError(
+            f"time limit must be seconds > 0 and <= {MAX_TIME_LIMIT:g}, got {time_limit!r}"
+        )
     return float(time_limit)
 
 

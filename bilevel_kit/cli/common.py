@@ -211,6 +211,16 @@ def nonneg(text: str) -> float:
     return _checked(text, float, lambda v: v >= 0 and v != float("inf"), "a finite number >= 0")
 
 
+def time_limit(text: str) -> float:
+    """A time limit: seconds > 0 and at most :data:`bilevel_kit.methods.MAX_TIME_LIMIT`, the
+    same range for every command and for :func:`bilevel_kit.methods.check_time_limit`."""
+    from ..methods import MAX_TIME_LIMIT
+
+    return _checked(
+        text, float, lambda v: 0 < v <= MAX_TIME_LIMIT, f"seconds > 0 and <= {MAX_TIME_LIMIT:g}"
+    )
+
+
 def positive_int(text: str) -> int:
     """An integer >= 1 (counts)."""
     return _checked(text, int, lambda v: v >= 1, "an integer >= 1")
@@ -240,8 +250,8 @@ def add_seed(
 def add_time_limit(
     p: argparse.ArgumentParser, text: str, default: float | None = None, flag: str = "--time-limit"
 ) -> None:
-    """``--time-limit S``, seconds >= 0 (:func:`nonneg`); None: the method's own."""
-    p.add_argument(flag, type=nonneg, default=default, metavar="S", help=text)
+    """``--time-limit S``, seconds in (0, 1e6] (:func:`time_limit`); None: the method's own."""
+    p.add_argument(flag, type=time_limit, default=default, metavar="S", help=f"{text}; S > 0")
 
 
 def add_resolution(p: argparse.ArgumentParser, text: str, default: float | None = None) -> None:
@@ -338,6 +348,16 @@ def add_instance_overrides(p: argparse.ArgumentParser) -> None:
     )
 
 
+def scheduler_address(text: str) -> str:
+    """A Dask scheduler's address, ``[PROTOCOL://]HOST:PORT`` (what Dask itself requires:
+    an address without a port fails only after Dask tried to connect)."""
+    import re
+
+    if not re.fullmatch(r"([a-z]+://)?(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+):\d{1,5}", text):
+        raise argparse.ArgumentTypeError(f"expected [tcp://]HOST:PORT, got {text!r}")
+    return text
+
+
 def add_sweep_options(p: argparse.ArgumentParser, what: str = "cells") -> None:
     """``--jobs N``, ``--scheduler ADDRESS`` and ``-q``: where a sweep's cells run
     (docs/cluster.md); :func:`sweep_session` reads them back."""
@@ -353,6 +373,7 @@ def add_sweep_options(p: argparse.ArgumentParser, what: str = "cells") -> None:
     )
     g.add_argument(
         "--scheduler",
+        type=scheduler_address,
         metavar="tcp://HOST:PORT",
         help=f"run the {what} on a running Dask cluster (default: ${SCHEDULER_ENV} if set); "
         "overrides --jobs",
@@ -369,7 +390,14 @@ def sweep_session(args: argparse.Namespace) -> AbstractContextManager[SweepSessi
     from ..experiments.cells import sweep_session as session
 
     scheduler = args.scheduler or os.environ.get(SCHEDULER_ENV) or None
-    return session(args.jobs, scheduler, progress=False if args.quiet else None)
+    if scheduler is not None and not args.scheduler:
+        from ..errors import UsageError
+
+        try:
+            scheduler_address(scheduler)
+        except argparse.ArgumentTypeError as exc:
+            raise UsageError(f"${SCHEDULER_ENV}: {exc}") from None
+    return session(args.jobs, scheduler, progress=False if args.quiet else None, connect=True)
 
 
 def sweep_exit(session: SweepSession, code: int, failed: int | None = None) -> int:

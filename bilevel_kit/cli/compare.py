@@ -89,19 +89,32 @@ def method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, A
     return out
 
 
+def _methods(text: str) -> list[str]:
+    """``--methods``: registered names, at least one, each once ('all': every method)."""
+    from ..errors import UsageError
+    from ..methods import get_method, method_names
+
+    if text == "all":
+        return method_names()
+    methods = [m.strip() for m in text.split(",") if m.strip()]
+    if not methods:
+        raise UsageError(f"--methods {text!r}: name at least one method, or 'all'")
+    for m in methods:
+        get_method(m)
+        if methods.count(m) > 1:
+            raise UsageError(f"--methods {text!r}: {m!r} is named twice")
+    return methods
+
+
 def run(args: argparse.Namespace) -> int:
     from ..experiments import CompareCell, add_best_bound_gap, compare_cell, run_cells
     from ..instance import load
-    from ..methods import get_method, method_names
+    from ..methods import get_method
 
-    methods = (
-        method_names()
-        if args.methods == "all"
-        else [m.strip() for m in args.methods.split(",") if m.strip()]
-    )
-    for m in methods:
-        get_method(m)
+    methods = _methods(args.methods)
     params = method_params(args.param, methods)
+    for m in methods:  # every method's options before any cell runs (a bad one is exit 2)
+        get_method(m).parse(params[m])
     overrides = instance_overrides(args)
     for path in args.instances:  # validate every input before any solve or write
         load(path).with_overrides(**overrides)

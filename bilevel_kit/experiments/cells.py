@@ -153,6 +153,20 @@ def _local_workers(scratch: str) -> Iterator[None]:
         yield
 
 
+def _connect(client: type[Client], address: str) -> Client:
+    """A client of the scheduler at ``address``; a scheduler that is not there (or an address
+    Dask cannot read) is a :class:`UsageError` naming it, not a traceback (Dask waits 30 s)."""
+    from ..errors import UsageError
+
+    try:
+        return client(address, timeout=30)
+    except (OSError, ValueError, TimeoutError) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise UsageError(
+            f"--scheduler {address}: no Dask scheduler to connect to ({reason})"
+        ) from None
+
+
 class DaskExecutor:
     """Cells as Dask tasks: on a ``LocalCluster`` of ``jobs`` single-threaded worker processes,
     or on the existing cluster whose scheduler listens at ``scheduler`` (``tcp://HOST:PORT``).
@@ -184,7 +198,7 @@ class DaskExecutor:
             from distributed import Client, LocalCluster
 
             if self.scheduler is not None:
-                self._client = Client(self.scheduler, timeout=30)
+                self._client = _connect(Client, self.scheduler)
             else:
                 import tempfile
 
@@ -364,14 +378,21 @@ def sweep_session(
     scheduler: str | None = None,
     progress: bool | None = None,
     summary: bool = True,
+    connect: bool = False,
 ) -> Iterator[SweepSession]:
     """Run every sweep inside on ``jobs`` local workers or the cluster at ``scheduler``,
-    with a progress bar (``None``: only on a terminal) and a summary line on stderr."""
+    with a progress bar (``None``: only on a terminal) and a summary line on stderr.
+    ``connect``: connect to ``scheduler`` now (the CLI: exit 2 before any cell), not at the
+    first sweep."""
     global _SESSION
     previous = _SESSION
     session = SweepSession(jobs, scheduler, progress, summary)
     _SESSION = session
     try:
+        if connect and scheduler is not None:  # a scheduler that is not there: no sweep
+            executor = session.executor(2)
+            assert isinstance(executor, DaskExecutor)
+            executor.client()
         yield session
     finally:
         _SESSION = previous
@@ -398,11 +419,42 @@ def write_json(path: str | Path, obj: Any) -> Path:
     return Path(path)
 
 
+#: The longest cell file name kept as the cell's key (a file name has at most 255 bytes, and
+#: the temporary file it is written through adds a prefix and a suffix).
+MAX_CELL_NAME = 180
+
+
+def cell_file(folder: Path, key: str) -> Path:
+    """The file of the cell ``key`` in ``folder``: ``KEY.json``, or for a key too long for a
+    file name (a long instance file name) its start and a hash of the whole key."""
+    import hashlib
+
+    name = f"{key}.json"
+    if len(name.encode()) > MAX_CELL_NAME:
+        digest = hashlib.sha256(key.encode()).hexdigest()[:16]
+        name = f"{key.encode()[: MAX_CELL_NAME - 40].decode(errors='ignore')}~{digest}.json"
+    return folder / name
+
+
 def _saved(path: Path | None) -> Record | None:
-    """A finished cell's saved record (an error record counts as not finished: retried)."""
+    """A finished cell's saved record (an error record counts as not finished: retried).
+    A file there that is not a record (empty, not JSON, not an object) is a
+    :class:`UsageError`: the folder is not what ``--cells`` wrote, and guessing is worse."""
+    from ..errors import UsageError
+
     if path is None or not path.exists():
         return None
-    rec: Record = json.loads(path.read_text())
+    try:
+        rec: Record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc).split(":")[0]
+        raise UsageError(
+            f"{path}: not a saved cell ({reason}); remove it to rerun the cell"
+        ) from None
+    if not isinstance(rec, dict):
+        raise UsageError(
+            f"{path}: not a saved cell (not a JSON object); remove it to rerun the cell"
+        )
     return None if is_failed(rec) and "traceback" in rec else rec
 
 
@@ -437,7 +489,7 @@ def run_sweep(
         folder.mkdir(parents=True, exist_ok=True)
         for tmp in folder.glob(".*.json.*.json"):  # a killed client's half-written file
             tmp.unlink(missing_ok=True)
-    paths = [folder / f"{c.key()}.json" if folder is not None else None for c in cells]
+    paths = [cell_file(folder, c.key()) if folder is not None else None for c in cells]
     records: list[Record | None] = [_saved(p) for p in paths]
     todo = [i for i, r in enumerate(records) if r is None]
     report = SweepReport(desc, len(cells), skipped=len(cells) - len(todo))

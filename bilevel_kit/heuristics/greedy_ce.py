@@ -168,7 +168,10 @@ class GreedyCEOptions:
     max_iter: int = field(default=100, metadata={"help": "CE iteration cap", "min": 1})
     tol: float = field(
         default=1e-4,
-        metadata={"help": "CE convergence: relative change of the elite threshold (unitless)"},
+        metadata={
+            "help": "CE convergence: relative change of the elite threshold (unitless, >= 0)",
+            "min": 0.0,
+        },
     )
     patience: int = field(
         default=10, metadata={"help": "CE convergence: iterations within tol", "min": 1}
@@ -185,7 +188,8 @@ class GreedyCEOptions:
         metadata={"help": "CE floor of the sd (> 0): mm for positions, degrees for angles"},
     )
     out_weight: float | None = field(
-        default=None, metadata={"help": "CE penalty per mm of tray overhang (none: automatic)"}
+        default=None,
+        metadata={"help": "CE penalty per mm of tray overhang (>= 0; none: automatic)", "min": 0.0},
     )
     precision: Literal["float32", "float64"] = field(
         default="float32", metadata={"help": "CE precision of sample scoring (results are float64)"}
@@ -196,7 +200,10 @@ class GreedyCEOptions:
     )
     restart_sd_scale: float = field(
         default=0.1,
-        metadata={"help": "CE sd of a run from a given layout, relative to a random start"},
+        metadata={
+            "help": "CE sd of a run from a given layout, relative to a random start (>= 0)",
+            "min": 0.0,
+        },
     )
     mirrored: bool = field(
         default=True, metadata={"help": "CE mirrored (antithetic) sampling: mu + L z and mu - L z"}

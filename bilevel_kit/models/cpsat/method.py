@@ -87,7 +87,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from ... import progress
 from ...bounds import best_bound, min_kits
 from ...errors import UsageError
-from ...instance import Instance
+from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
@@ -152,13 +152,23 @@ class ScheduleOptions:
         default="makespan", metadata={"help": "minimise makespan or human idle time"}
     )
     time_resolution: float = field(
-        default=0.1, metadata={"help": "time grid in s (> 0), refined when times are not exact"}
+        default=0.1,
+        metadata={
+            "help": "time grid in s (>= 0.001), refined when times are not exact",
+            "min": 0.001,
+            "max": 1e4,
+        },
     )
     refine_times: bool = field(
         default=True, metadata={"help": "refine the time grid until every time is exact"}
     )
     pack_resolution: float = field(
-        default=1.0, metadata={"help": "packing grid in mm (> 0); part sizes are rounded up"}
+        default=1.0,
+        metadata={  # the instances' length range (docs/formats.md#ranges)
+            "help": "packing grid in mm (>= 0.01); part sizes are rounded up",
+            "min": MIN_LENGTH,
+            "max": MAX_LENGTH,
+        },
     )
     log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
 
