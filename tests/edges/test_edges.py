@@ -589,6 +589,148 @@ ISSUE_23A_ROWS: dict[str, Row] = {
 ROWS.update(ISSUE_23A_ROWS)
 
 
+# --- issue 23, items 3, 5, 6, 7 (outputs, tracebacks, sizes, small items) -------------------
+# A block of its own, like the one above.
+
+#: A FIFO to create instead of a file (reading one blocked forever).
+FIFO = object()
+
+
+def argv_row(argv: list[str], code: int, *words: str, **files: Any) -> Row:
+    """A row whose arguments may be empty or hold spaces (``--methods ""``)."""
+    return Row(tuple(argv), code, words, {"i": tiny_text, **files})
+
+
+SOLVE_TO = "solve {i} -m single-task -o {o}/s.json"
+SURROGATE_NAME = tiny_text().replace('"name": "tiny"', '"name": "tiny\\ud800"')
+STATION = {"bins": {"block": [0.6, 0.3, 0.0], "wheel": [0.6, -0.3, 0.0]}}
+
+ISSUE_23B_ROWS: dict[str, Row] = {
+    # item 3: outputs never clobber, checked before any work
+    "out is the input instance": row(
+        "solve {i} -m single-task -o {i}", 2, "--out", "the same file as the input instance"
+    ),
+    "out a/../y.png is the gantt y.png": row(
+        "solve {i} -m single-task -o {o}/a/../y.png --gantt {o}/y.png", 2, "--gantt", "--out"
+    ),
+    "tray ./x.png is the gantt x.png": row(
+        "solve {i} -m single-task --tray {o}/./x.png --gantt {o}/x.png", 2, "same file"
+    ),
+    "out in /proc": row("solve {i} -m single-task -o /proc/x.json", 2, "--out", "/proc"),
+    "out is /proc/version": row("solve {i} -m single-task -o /proc/version", 2, "--out"),
+    "gantt g.xyz before out": row(
+        SOLVE_TO + " --gantt {o}/g.xyz", 2, "--gantt", "unknown figure format '.xyz'"
+    ),
+    "tray t.docx": row(SOLVE_TO + " --tray {o}/t.docx", 2, "--tray", "figure format"),
+    "convergence c.txt": row(
+        "solve {i} -m greedy-ce --convergence {o}/c.txt", 2, "--convergence", "'.txt'"
+    ),
+    "pack png l.bmp": row(
+        "pack {p} --out {o}/l.json --png {o}/l.bmp", 2, "--png", "'.bmp'", p=pack_file(unchanged)
+    ),
+    "pack out is the pack file": row(
+        "pack {p} --out {p}", 2, "--out", "the input file", p=pack_file(unchanged)
+    ),
+    "pack out is the png": row(
+        "pack {p} --out {o}/l.png --png {o}/l.png", 2, "--png", "--out", p=pack_file(unchanged)
+    ),
+    "reach png r.xyz": row("reach {i} --png {o}/r.xyz", 2, "--png", "figure format"),
+    "compare csv is the instance": row(
+        "compare {i} --methods single-task --csv {i}", 2, "--csv", "input instances"
+    ),
+    "compare md is the csv": row(
+        "compare {i} --methods single-task --csv {o}/t --md {o}/./t", 2, "--md", "--csv"
+    ),
+    "simulate csv is the instance": row("simulate {i} --reps 1 --csv {i}", 2, "--csv", "input"),
+    # item 5: tracebacks, now one line each, decided before the work
+    "milp time limit 1e9": row("solve {i} -m milp --time-limit 1e9", 2, "--time-limit", "1e9"),
+    "compare time limit 1e7": row(
+        "compare {i} --methods single-task --time-limit 1e7", 2, "--time-limit"
+    ),
+    "cpsat pack_resolution 1e-12": row(
+        "solve {i} -m cpsat -p pack_resolution=1e-12", 2, "'pack_resolution'", ">= 0.01"
+    ),
+    "cpsat time_resolution 1e-9": row(
+        "solve {i} -m cpsat -p time_resolution=1e-9", 2, "'time_resolution'"
+    ),
+    "5,000-digit integer in an instance": raw_instance(
+        tiny_text().replace('"delivery_time": 1.0', '"delivery_time": ' + "7" * 5000),
+        "$.delivery_time",
+        "an integer of 5000 digits",
+    ),
+    "400-digit integer in trays": bad_instance(
+        _set("trays", int("9" * 400)), "$.trays", "400 digits"
+    ),
+    "400-digit station coordinate": bad_instance(
+        _set("station", {"tray_pose": {"x": -int("9" * 400)}}), "$.station.tray_pose.x", "400"
+    ),
+    "name with a lone surrogate": raw_instance(SURROGATE_NAME, "$.name", "not valid Unicode"),
+    "key with a lone surrogate": raw_instance(
+        tiny_text().replace('"name": "tiny"', '"name": "tiny", "\\udfff": 1'), "not valid Unicode"
+    ),
+    "reach_resolution 0.01 with reachability": bad_instance(
+        _all(_set("reachability", True), _set("reach_resolution", 0.01)),
+        "$.reach_resolution",
+        "120,000,000 cells",
+    ),
+    "reach --resolution 0.01": row("reach {i} --resolution 0.01", 2, "--resolution", "cells"),
+    "units 1e9": bad_instance(_set("units", 10**9), "$.units"),
+    "units 70,000 of three tasks": bad_instance(_set("units", 70_000), "$.units", "210,000"),
+    "--units 100000000": row(SOLVE + " --units 100000000", 2, "$.units", "above the limit"),
+    "part count 1e6": bad_instance(_set("tasks.0.parts.0.count", 10**6), "$.tasks[0]"),
+    "horizon 1e6": bad_instance(_set("horizon", 10**6), "$.horizon"),
+    "pack item count 1e7": bad_pack(_set("items.0.count", 10**7), "$.items[0].count"),
+    "pack 12,000 parts in all": bad_pack(
+        lambda d: d["items"].extend(
+            {"id": f"x{k}", "width": 1, "height": 1, "count": 3000} for k in range(4)
+        ),
+        "$.items",
+        "12,004 parts in all",
+    ),
+    "compare scheduler garbage": row(
+        "compare {i} --methods single-task --scheduler garbage", 2, "--scheduler", "HOST:PORT"
+    ),
+    "compare scheduler without a port": row(
+        "compare {i} --methods single-task --scheduler tcp://localhost", 2, "--scheduler"
+    ),
+    # item 7: the smaller items
+    "part type id with a trailing newline": bad_instance(
+        _all(_set("part_types.0.id", "block\n")), "$.part_types[0].id"
+    ),
+    "task id with a trailing newline": bad_instance(_set("tasks.0.id", "t1\n"), "$.tasks[0].id"),
+    "pack item id with a trailing newline": bad_pack(_set("items.0.id", "sq\n"), "$.items[0].id"),
+    "station bin of an unknown part type": bad_instance(
+        _set("station", STATION), "$.station.bins.wheel", "unknown part type 'wheel'"
+    ),
+    **{
+        f"greedy-ce {opt}=-1": row(f"solve {{i}} -m greedy-ce -p {opt}=-1", 2, f"'{opt}'", ">= 0")
+        for opt in ("tol", "out_weight", "restart_sd_scale")
+    },
+    "compare --methods empty": argv_row(
+        ["compare", "{i}", "--methods", ""], 2, "--methods", "at least one"
+    ),
+    "compare --methods comma": row("compare {i} --methods ,", 2, "--methods"),
+    "compare repeated method": row(
+        "compare {i} --methods single-task,single-task", 2, "'single-task' is named twice"
+    ),
+    "compare bad -p before any cell": row(
+        "compare {i} --methods single-task,cpsat -p cpsat:bogus=1 --cells {o}/c",
+        2,
+        "unknown option 'bogus'",
+    ),
+    "compare -p of a method not run": row(
+        "compare {i} --methods single-task -p cpsat:workers=2", 2, "--param"
+    ),
+    "instance is a FIFO": row("solve {q} -m single-task", 2, "{q}", "not a regular file", q=FIFO),
+    "instance is /dev/null": row("solve /dev/null -m single-task", 2, "not a regular file"),
+    "solve time limit 0": row("solve {i} -m cpsat --time-limit 0", 2, "--time-limit", "> 0"),
+    "pack time limit 0": row(
+        "pack {p} --time-limit 0", 2, "--time-limit", "> 0", p=pack_file(unchanged)
+    ),
+}
+ROWS.update(ISSUE_23B_ROWS)
+
+
 def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
     """Every path under ``folder`` with its size and mtime (what "nothing written" compares)."""
     out = {}
@@ -614,6 +756,9 @@ def test_edge(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], mon
         places[key] = str(path)
         if content is DIR:
             path.mkdir()
+            continue
+        if content is FIFO:
+            os.mkfifo(path)
             continue
         text = content() if callable(content) else content
         if "\udcff" in text:
@@ -694,3 +839,32 @@ def test_coarse_grid_layout_file_says_no_grid_layout(tmp_path, capsys) -> None:
     pack.write_text(json.dumps(too_many))
     assert main(["pack", str(pack), "--resolution", "30"]) == 0
     assert ": infeasible in" in capsys.readouterr().out
+
+
+def test_a_230_character_instance_file_name_is_a_cell_file(tmp_path, capsys) -> None:
+    path = tmp_path / ("a" * 230 + ".json")
+    path.write_text(tiny_text())
+    argv = ["compare", str(path), "--methods", "single-task", "--cells", str(tmp_path / "c")]
+    assert main(argv) == 0
+    (cell,) = (tmp_path / "c").iterdir()
+    assert len(cell.name) <= 180 and cell.name.startswith("a" * 100)
+    assert main(argv) == 0  # resumed from the hashed name
+    assert "0 done, 1 skipped" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text", ["", "[1]", "{", "null"])
+def test_a_cell_file_that_is_no_record_is_exit_2(text, tmp_path, capsys) -> None:
+    argv = ["compare", str(TINY), "--methods", "single-task", "--cells", str(tmp_path / "c")]
+    assert main(argv) == 0
+    (cell,) = (tmp_path / "c").iterdir()
+    cell.write_text(text)
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a saved cell" in err and "Traceback" not in err
+    assert cell.read_text() == text
+
+
+def test_a_device_output_is_written_in_place(tmp_path, capsys) -> None:
+    assert main(["solve", str(TINY), "-m", "single-task", "-o", "/dev/null"]) == 0
+    assert Path("/dev/null").is_char_device()
