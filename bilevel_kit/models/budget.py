@@ -98,6 +98,25 @@ def check_model_memory(owner: str, cells: int, bytes_per_cell: float, what: str)
     return need
 
 
+def memory_reason(
+    owner: str, cells: int, smallest: int, bytes_per_cell: float, what: str
+) -> str | None:
+    """The memory verdict of a model of ``cells`` variables whose kit count came from the
+    incumbent, ``smallest`` the variables at the fewest kits any plan could need (the closed
+    bound's kit cap): a :class:`UsageError` when even that model is over the limit (the size
+    decides, never the time limit), else the ``reason`` this model is not built (a better
+    incumbent would make it smaller), or None when it fits."""
+    check_model_memory(owner, smallest, bytes_per_cell, what)
+    need = BASE_MEMORY + cells * bytes_per_cell
+    if need <= MEMORY_LIMIT:
+        return None
+    return (
+        f"a model of {cells:,} task x kit variables (the incumbent's kit count) would need "
+        f"about {need / 2**30:.1f} GB, above the {MEMORY_LIMIT / 2**30:g} GB memory limit; "
+        "the incumbent is returned (a longer time limit may find one with fewer kits)"
+    )
+
+
 def too_slow_to_build(budget: Budget, estimate_s: float, margin: float = 0.0) -> bool:
     """Would building a model (``estimate_s`` seconds) take more than :data:`BUILD_SHARE` of
     the time left? Then the run keeps its incumbent instead of overrunning its limit."""

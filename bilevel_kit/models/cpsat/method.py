@@ -80,6 +80,7 @@ order with a non-overlapping layout. ``extra`` keys:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
@@ -92,7 +93,7 @@ from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
-from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..budget import Budget, memory_reason, too_slow_to_build
 from ..common import (
     Packer,
     assignment_cells,
@@ -358,7 +359,7 @@ def run(
     proven = _proven_without_model(ctx, incumbent, upper, report)
     if proven is not None:
         return proven
-    if not _buildable(instance, K, budget, report.extra):
+    if not _buildable(instance, K, _fewest_kits(ctx, K), budget, report.extra):
         if incumbent is None:
             return report.finish(None, Status.UNKNOWN, best_bound(instance))
         return _conclude(ctx, None, State(incumbent, upper), report)
@@ -438,13 +439,30 @@ def _proven_without_model(
     return None
 
 
-def _buildable(instance: Instance, K: int, budget: Budget, extra: dict[str, Any]) -> bool:
-    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
-    a ``reason``) when it would not be built and solved within the time left."""
+def _fewest_kits(ctx: Context, K: int) -> int:
+    """The kit cap of the best conceivable incumbent (one at the closed-form bound): the
+    smallest model any run could build, whatever its time limit (:func:`_buildable`)."""
+    if ctx.objective != "makespan":
+        return K
+    lowest = math.floor(best_bound(ctx.instance) / ctx.sc.res + 1e-9)
+    return min(K, max(_kit_cap(ctx, lowest), min_kits(ctx.instance)))
+
+
+def _buildable(
+    instance: Instance, K: int, fewest: int, budget: Budget, extra: dict[str, Any]
+) -> bool:
+    """Whether to build the model with K kits: a UsageError when even the model of ``fewest``
+    kits is over the memory limit (the size decides, not the limit), False (with a ``reason``)
+    when this one is, or would not be built and solved within the time left."""
     cells = assignment_cells(instance, K)
     extra["model_cells"] = cells
     n = instance.n_tasks
-    check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
+    smallest = assignment_cells(instance, fewest)
+    what = f"task x kit variables ({n} tasks, K = {fewest})"
+    why = memory_reason("cpsat", cells, smallest, BYTES_PER_CELL, what)
+    if why is not None:
+        extra.update(reason=why, build_time_s=0.0, cpsat_status="NOT_BUILT", cuts=0)
+        return False
     if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
         extra.update(
             reason=f"a model of {cells:,} task x kit variables would not be built and solved "

@@ -63,7 +63,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
-from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..budget import Budget, memory_reason, too_slow_to_build
 from ..common import (
     NoGoodCuts,
     Packer,
@@ -247,14 +247,22 @@ def _incumbent(
 
 
 def _buildable(r: _Run, K: int) -> bool:
-    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
-    a ``reason``) when it would not be built and solved within the time left."""
+    """Whether to build the model with K kits: a UsageError when even the model of the
+    fewest kits any run could have is over the memory limit (the size decides, not the time
+    limit), False (with a ``reason``) when this one is, or would not be built and solved
+    within the time left."""
     instance = r.instance
     cells = assignment_cells(instance, K)
     r.extra["model_cells"] = cells
-    check_model_memory(
-        "milp", cells, BYTES_PER_CELL, f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
-    )
+    fewest = K  # the kit cap of an incumbent at the closed-form bound: the smallest model
+    if r.options.objective == "makespan":
+        fewest = min(K, max(kit_cap(instance, r.closed), min_kits(instance)))
+    what = f"task x kit variables ({instance.n_tasks} tasks, K = {fewest})"
+    smallest = assignment_cells(instance, fewest)
+    why = memory_reason("milp", cells, smallest, BYTES_PER_CELL, what)
+    if why is not None:
+        r.extra.update(reason=why, build_time_s=0.0, termination="not_built")
+        return False
     if too_slow_to_build(r.budget, cells * BUILD_S_PER_CELL, MARGIN):
         r.extra.update(
             reason=f"a model of {cells:,} task x kit variables would not be built and solved "
