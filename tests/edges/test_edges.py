@@ -706,6 +706,10 @@ ISSUE_23B_ROWS: dict[str, Row] = {
         f"greedy-ce {opt}=-1": row(f"solve {{i}} -m greedy-ce -p {opt}=-1", 2, f"'{opt}'", ">= 0")
         for opt in ("tol", "out_weight", "restart_sd_scale")
     },
+    # item 6: options whose cost no time limit bounds, refused up front
+    "greedy-ce samples 1e6": row(
+        "solve {i} -m greedy-ce -p samples=1000000 --time-limit 2", 2, "'samples'", "<= 20000"
+    ),
     "compare --methods empty": argv_row(
         ["compare", "{i}", "--methods", ""], 2, "--methods", "at least one"
     ),

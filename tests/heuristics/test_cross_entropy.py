@@ -245,3 +245,20 @@ def test_standard_normals_float32() -> None:
     assert abs(float(z.mean())) < 0.01
     assert abs(float(z.std()) - 1.0) < 0.01
     assert 0.0035 < float((np.abs(z) > 2.9).mean()) < 0.0040  # two-sided tail 0.00373
+
+
+def test_a_kit_above_max_ce_parts_gets_the_shelf_layout_without_ce():
+    """CE's covariance grows with the square of the parts (4,000 parts asked for 6 GiB):
+    beyond MAX_CE_PARTS the kit gets the shelf packer's layout, checked like any other."""
+    from bilevel_kit import instance as inst_mod
+    from bilevel_kit.heuristics import cross_entropy
+
+    n = cross_entropy.MAX_CE_PARTS + 1
+    doc = inst_mod.document(
+        "many",
+        [{"id": "p", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
+        [{"id": "t", "parts": [{"type": "p", "count": n}], "human_time": {"mean": 2.0}}],
+        tray=(300.0, 300.0),
+    )
+    arr = cross_entropy.arrange(inst_mod.from_dict(doc), {"p": n})
+    assert arr.fits and arr.source == "packer" and len(arr.layout) == n and arr.iterations == 0
