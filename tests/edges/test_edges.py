@@ -680,12 +680,12 @@ ISSUE_23B_ROWS: dict[str, Row] = {
     "part count 1e6": bad_instance(_set("tasks.0.parts.0.count", 10**6), "$.tasks[0]"),
     "horizon 1e6": bad_instance(_set("horizon", 10**6), "$.horizon"),
     "pack item count 1e7": bad_pack(_set("items.0.count", 10**7), "$.items[0].count"),
-    "pack 12,000 parts in all": bad_pack(
+    "pack 4,004 parts in all": bad_pack(
         lambda d: d["items"].extend(
-            {"id": f"x{k}", "width": 1, "height": 1, "count": 3000} for k in range(4)
+            {"id": f"x{k}", "width": 1, "height": 1, "count": 1000} for k in range(4)
         ),
         "$.items",
-        "12,004 parts in all",
+        "4,004 parts in all",
     ),
     "compare scheduler garbage": row(
         "compare {i} --methods single-task --scheduler garbage", 2, "--scheduler", "HOST:PORT"
@@ -710,6 +710,12 @@ ISSUE_23B_ROWS: dict[str, Row] = {
     "greedy-ce samples 1e6": row(
         "solve {i} -m greedy-ce -p samples=1000000 --time-limit 2", 2, "'samples'", "<= 20000"
     ),
+    "greedy-ce enumerate at horizon 12": row(
+        "solve {table} -m greedy-ce -p horizon=12 -p decision=enumerate --time-limit 2",
+        2,
+        "more than 200,000 partial sequences",
+    ),
+    "pack 10,000 parts": bad_pack(_set("items.0.count", 10_000), "$.items[0].count"),
     "compare --methods empty": argv_row(
         ["compare", "{i}", "--methods", ""], 2, "--methods", "at least one"
     ),
