@@ -30,7 +30,7 @@ MAX_SEED = 2**31 - 1
 #: A sweep finished but some of its cells failed (their error records say why).
 EXIT_FAILED = 5
 #: Ctrl-C or SIGTERM: the command stopped and cleaned up; a sweep keeps its finished cells
-#: (128 + SIGINT, for SIGTERM too: one code for "interrupted", docs/cli.md).
+#: (128 + SIGINT, for SIGTERM too: one code for "interrupted", docs/cli.md#exit-codes).
 EXIT_INTERRUPTED = 130
 #: Every exit code a command uses, with its meaning: ``bilevel-kit --help`` lists them, and
 #: the README's list is tested against this one (tests/cli/test_cli.py).
