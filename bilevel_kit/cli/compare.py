@@ -111,6 +111,9 @@ def run(args: argparse.Namespace) -> int:
         for path in args.instances
         for m in methods
     ]
+    from .solve import compile_notice
+
+    compile_notice(methods)
     with sweep_session(args) as session:
         raw = run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
         records = add_best_bound_gap(_named(c, r) for c, r in zip(cells, raw, strict=True))

@@ -113,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
         ReplicationCell(instance, args.policy, params, s)
         for s in range(args.seed, args.seed + args.reps)
     ]
+    from .solve import compile_notice
+
+    compile_notice([args.policy])
     with sweep_session(args) as session:
         records = run_cells(cells, replication_cell, desc=f"simulate {args.policy}")
     failed = [r for r in records if is_failed(r)]

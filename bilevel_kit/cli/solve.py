@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING
+from collections.abc import Iterable
+from typing import IO, TYPE_CHECKING
 
 from .common import (
     EXIT_INVALID,
@@ -89,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
     instance = load_instance(args)
+    if not args.quiet:
+        compile_notice([args.method])
     with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
         result = solve(
             instance,
@@ -197,3 +200,26 @@ def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
         f"{t['layout_source']}",
     )
     return ax.figure
+
+
+#: The one note of a first run: numba compiles the cross-entropy kernels once per install.
+COMPILE_NOTE = (
+    "note: compiling the cross-entropy kernels (first run after an install: about 15 s, "
+    "once; numba caches them)"
+)
+
+
+def compile_notice(needed: Iterable[str], stream: IO[str] | None = None) -> None:
+    """Say on a terminal that a slow first compile is coming, rather than stay silent for
+    ~15 s; ``needed``: the methods or policies about to run (the paper's cross-entropy lower
+    level compiles: greedy-ce and the optimized policies)."""
+    from ..progress import is_terminal
+
+    stream = sys.stderr if stream is None else stream
+    uses_ce = any(n == "greedy-ce" or n.startswith("optimized") for n in needed)
+    if not uses_ce or not is_terminal(stream):
+        return
+    from ..heuristics._kernels import cache_missing
+
+    if cache_missing():
+        print(COMPILE_NOTE, file=stream, flush=True)
