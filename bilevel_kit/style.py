@@ -7,8 +7,11 @@ figure whatever the caller's rcParams. Colours come from two sources:
   then the same colours again *with a hatch* (never the same swatch twice without a visible
   difference), and for more than :data:`MAX_SWATCHES` things a continuous colormap sampled at
   distinct points;
-* :func:`kit_colors` for the kits of a plan: ``tab10`` up to ten kits, beyond that the
-  continuous :data:`KIT_CMAP` indexed by the kit's number, explained by a colour bar.
+* :func:`kit_colors` for the kits of a plan: the eight colours of :data:`KIT_PALETTE` up to
+  eight kits, beyond that the continuous :data:`KIT_CMAP` indexed by the kit's number,
+  explained by a colour bar. Neither holds a red, pink or grey: those are the marks every
+  Gantt chart shows (idle time, the makespan, deliveries, pickups, tray waits), and a kit
+  must never be mistaken for one (:func:`color_distance` at least :data:`MIN_CONTRAST`).
 
 Every axis of every figure carries a label with its unit ("time (s)", "x (mm)").
 matplotlib is imported inside the functions, so importing this module stays cheap.
@@ -58,6 +61,23 @@ PALETTE = (
     "#bcbd22",
     "#17becf",
 )
+#: Colours of the kits of a Gantt chart: ``tab10`` without its red, pink and grey (the marks'
+#: colours below), and two darker colours of matplotlib's ``Set1`` and ``tab20b``. Every two
+#: of them, their lighter task shades (:func:`lighten`) and every mark are at least
+#: :data:`MIN_CONTRAST` apart (tests/core/test_plots.py).
+KIT_PALETTE = (
+    "#1f77b4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#9467bd",
+    "#17becf",
+    "#bcbd22",
+    "#a65628",
+    "#637939",
+)
+#: Least CIE76 colour difference (:func:`color_distance`) between two kit colours, or a kit
+#: colour and a mark; 20 is "clearly different at a glance" (2.3 is just noticeable).
+MIN_CONTRAST = 20.0
 #: Hatches that tell apart the second, third ... round of :data:`PALETTE`.
 HATCHES = ("", "//", "..", "xx", "\\\\", "oo")
 #: How many things :func:`categorical` tells apart by colour and hatch.
@@ -65,10 +85,12 @@ MAX_SWATCHES = len(PALETTE) * len(HATCHES)
 #: Continuous colormap of the kits when there are more than ten (with a colour bar).
 KIT_CMAP = "viridis"
 
-#: Fixed colours of the things every Gantt chart shows.
+#: Fixed colours of the things every Gantt chart shows. Idle time is drawn opaque in
+#: :data:`IDLE_FILL` (a light :data:`IDLE_COLOR`) hatched in :data:`IDLE_COLOR`.
 DELIVERY_COLOR = "#9e9e9e"
 PICKUP_COLOR = "#5d5d5d"
 IDLE_COLOR = "#e57373"
+IDLE_FILL = "#f7d5d5"
 TRAY_WAIT_COLOR = "#90a4ae"
 MAKESPAN_COLOR = "#b71c1c"
 UNKNOWN_COLOR = "#bdbdbd"
@@ -122,14 +144,52 @@ def categorical(n: int) -> list[Swatch]:
 
 
 def kit_colors(n: int) -> tuple[list[RGBA], bool]:
-    """Colours of kits 1..n and whether they need a colour bar: ``tab10`` up to ten kits,
-    else :data:`KIT_CMAP` sampled at the kit numbers (colour bar from kit 1 to kit n)."""
-    if n <= len(PALETTE):
-        return [rgba(c) for c in PALETTE[:n]], False
+    """Colours of kits 1..n and whether they need a colour bar: :data:`KIT_PALETTE` up to
+    eight kits, else :data:`KIT_CMAP` sampled at the kit numbers (colour bar from kit 1 to
+    kit n)."""
+    if n <= len(KIT_PALETTE):
+        return [rgba(c) for c in KIT_PALETTE[:n]], False
     from matplotlib import colormaps
 
     cmap = colormaps[KIT_CMAP]
     return [rgba(cmap(k / (n - 1))) for k in range(n)], True
+
+
+def mark_colors() -> dict[str, RGBA]:
+    """The colours of the marks of a Gantt chart that no kit colour may resemble: the idle
+    fill and hatch, the makespan line, deliveries, pickups and tray waits as drawn."""
+    return {
+        "idle": rgba(IDLE_FILL),
+        "idle hatch": rgba(IDLE_COLOR),
+        "makespan": rgba(MAKESPAN_COLOR),
+        "delivery": rgba(DELIVERY_COLOR),
+        "pickup": rgba(PICKUP_COLOR),
+        "tray wait": lighten(TRAY_WAIT_COLOR, 0.4),
+    }
+
+
+def _lab(color: object) -> tuple[float, float, float]:
+    """CIE L*a*b* (D65) of an sRGB colour (alpha ignored)."""
+    r, g, b, _ = rgba(color)
+
+    def linear(c: float) -> float:
+        return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+    lr, lg, lb = linear(r), linear(g), linear(b)
+    xyz = (
+        (0.4124 * lr + 0.3576 * lg + 0.1805 * lb) / 0.95047,
+        0.2126 * lr + 0.7152 * lg + 0.0722 * lb,
+        (0.0193 * lr + 0.1192 * lg + 0.9505 * lb) / 1.08883,
+    )
+    fx, fy, fz = (v ** (1 / 3) if v > 216 / 24389 else (24389 / 27 * v + 16) / 116 for v in xyz)
+    return 116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)
+
+
+def color_distance(a: object, b: object) -> float:
+    """CIE76 colour difference (Euclidean distance in L*a*b*) of two colours: about 2.3 is
+    just noticeable, 20 and more tells things apart at a glance."""
+    la, lb = _lab(a), _lab(b)
+    return float(sum((u - v) ** 2 for u, v in zip(la, lb, strict=True)) ** 0.5)
 
 
 def lighten(color: object, amount: float = 0.45) -> RGBA:

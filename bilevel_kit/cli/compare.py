@@ -61,7 +61,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--figures",
         folder=True,
         metavar="DIR",
-        help="write a comparison chart and one Gantt chart per method here",
+        help="write a comparison chart, and one Gantt chart and one page of tray layouts per "
+        "method, here",
     )
     add_output(p, "--cells", folder=True, metavar="DIR", help="save/resume per-cell results in DIR")
     add_instance_overrides(p)
@@ -135,6 +136,7 @@ def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
 def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
     """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan."""
     from ..experiments import format_markdown, format_table, write_csv
+    from ..experiments.compare import inconsistencies
 
     print(format_table(records))
     for r in records:
@@ -148,18 +150,23 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
         from ..atomic import write_text
 
         write_text(args.md, format_markdown(records))
+    code = EXIT_OK
     if any(
         r.get("valid") is False and r["status"] != "error" and r["makespan"] is not None
         for r in records
     ):
         print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
-        return EXIT_INVALID
-    return EXIT_OK
+        code = EXIT_INVALID
+    for line in inconsistencies(records):  # false claims: never printed as normal
+        print(f"INCONSISTENT: {line}", file=sys.stderr)
+        code = EXIT_INVALID
+    return code
 
 
 def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, Any]) -> None:
-    """A comparison chart per instance and a Gantt chart per instance x method (of the
-    instance as solved, with the command's overrides such as ``--trays``)."""
+    """A comparison chart per instance (methods without a plan marked "no plan"), and per
+    instance x method with a plan a Gantt chart and its tray layouts (of the instance as
+    solved, with the command's overrides such as ``--trays``)."""
     from pathlib import Path
 
     from .. import plots, solution
@@ -183,9 +190,12 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
-        ax = plots.plot_comparison(ok)
+        ax = plots.plot_comparison(rows)
         plots.save_figure(ax.figure, out / f"{name}_compare.png")
         for r in ok:
             sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
+            stem = out / f"{name}_{safe_name(r['method'])}"
             ax = plots.plot_gantt(inst, sol.plan, method=str(r["method"]))
-            plots.save_figure(ax.figure, out / f"{name}_{safe_name(r['method'])}_gantt.png")
+            plots.save_figure(ax.figure, f"{stem}_gantt.png")
+            fig = plots.plot_trays(inst, sol.plan, method=str(r["method"]))
+            plots.save_figure(fig, f"{stem}_trays.png")

@@ -23,6 +23,7 @@ NO_GRID_LAYOUT = "no_grid_layout"
 if TYPE_CHECKING:
     from ..instance import Instance, Tray
     from ..models.packing import PackResult
+    from ..plan import Kit
 
 HELP = "place parts on the tray with CP-SAT (fits? best layout?)"
 DESCRIPTION = (
@@ -135,13 +136,28 @@ def run(args: argparse.Namespace) -> int:
         from ..plan import Kit
         from ..plots import plot_tray, save_figure
 
-        ax = plot_tray(
-            instance, Kit(tuple(tasks), res.layout), title=f"{instance.name}: {res.status}"
-        )
+        kit = Kit(tuple(tasks), res.layout)
+        ax = plot_tray(instance, kit, title=_png_title(instance, kit, args, res.status))
         save_figure(ax.figure, args.png)
     if status == NO_GRID_LAYOUT:
         return EXIT_NO_GRID_LAYOUT
     return EXIT_UNKNOWN if status == "unknown" else EXIT_OK
+
+
+def _png_title(instance: Instance, kit: Kit, args: argparse.Namespace, status: str) -> str:
+    """The layout figure's title: what was packed (instance and tasks, or the pack file), the
+    parts and the kit fitness, then how (CP-SAT's answer, objective, grid)."""
+    from ..plots import kit_fitness
+    from ..style import plural
+
+    head = instance.name + (f", tasks {', '.join(kit.tasks)}" if kit.tasks else "")
+    fitness = kit_fitness(instance, kit)
+    what = plural(len(kit.layout), "part") + (
+        f", kit fitness {round(fitness):,} mm" if fitness is not None else ""
+    )
+    return (
+        f"{head}: {what}\nCP-SAT {status}, objective {args.objective}, {args.resolution:g} mm grid"
+    )
 
 
 def layout_document(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from .common import EXIT_INVALID, EXIT_OK, add_output, add_resolution, positive_int
 
@@ -71,6 +72,14 @@ def run(args: argparse.Namespace) -> int:
         from ..plots import save_figure
         from ..sawyer import plot_reach_map
 
-        ax = plot_reach_map(m, layout)
+        title = (
+            f"{instance.name}: Sawyer reachability, {100 * m.fraction:.0f}% of {nx} x {ny} cells"
+        )
+        if layout is not None:
+            title += (
+                f"\nkit {args.kit} of {Path(args.solution).name}: {len(layout)} parts, "
+                f"{len(bad)} unreachable" + (" (red)" if bad else "")
+            )
+        ax = plot_reach_map(m, layout, title=title)
         save_figure(ax.figure, args.png)
     return EXIT_INVALID if bad else EXIT_OK

@@ -123,7 +123,9 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
             ax = plots.plot_gantt(instance, result.plan, result.timeline, method=result.method)
             figures.append((ax.figure, args.gantt))
         if args.tray:
-            figures.append((plots.plot_trays(instance, result.plan), args.tray))
+            figures.append(
+                (plots.plot_trays(instance, result.plan, method=result.method), args.tray)
+            )
     if args.out:
         from ..solution import write
 

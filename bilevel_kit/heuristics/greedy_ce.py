@@ -207,6 +207,13 @@ class GreedyCEOptions:
     cov_smoothing: float = field(
         default=0.3, metadata={"help": "CE covariance update smoothing, in (0, 1]", "max": 1.0}
     )
+    snap: bool = field(
+        default=False,
+        metadata={
+            "help": "turn each CE angle to the nearest quarter turn where the layout stays "
+            "valid and its fitness does not drop"
+        },
+    )
 
     def __post_init__(self) -> None:
         try:

@@ -5,10 +5,15 @@ rounded *up* and the tray *down*, so a grid-feasible layout is truly non-overlap
 the tray: each part is drawn centred in its (possibly slightly larger) grid cell. When every
 size is a multiple of the resolution the grid is exact: integer sizes admit an integer-position
 packing whenever any packing exists (bottom-left compaction), so "infeasible" is then a proof
-for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution": every
+for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution". Every
 infeasible answer records in ``extra["proof"]`` whether it is a proof (an exact grid without
 reachability, or a reason that holds at true sizes: a part larger than the tray, or more part
-area than tray area). ``bilevel-kit pack`` reports the others as "no layout on this grid".
+area than tray area) and in ``extra["proof_scope"]`` which layouts it rules out
+(:data:`ANY_ANGLE`: every layout the checker accepts, parts at any angle; :data:`AXIS_ALIGNED`:
+the layouts whose parts lie at 0 or 90 degrees, docs/formulations.md#what-optimal-means).
+``bilevel-kit pack`` reports the others as "no layout on this grid";
+:func:`exact_resolution` gives the grid on which every size is exact, which the oracle
+(:mod:`.packing_oracle`) uses to confirm such an answer.
 
 **Model.** Every part has a lower-left corner (x, y). A rotatable, non-square part has two
 optional rectangles, one per orientation (0 and 90 degrees), whose presence literals are
@@ -45,11 +50,11 @@ layout_fitness`, exact Z).
 **Reachability.** Given a reach map (:mod:`bilevel_kit.reachability`), every centre must lie in
 a reachable cell: the centre's cell column and row follow from the half-grid centre (linear
 when a cell is a whole number of half-grid units, else an element constraint) and a table of
-reachable cells, or one column span per row when the rows are contiguous, allows them.
+reachable cells, or one column span per row when the rows are contiguous, allows them
+(:mod:`.packing_reach`).
 
-**Oracle.** :func:`fit_counts` / :func:`kit_fits` answer "does this part multiset fit" with
-memoisation (monotone: sub-multisets of a fitting one fit, super-multisets of a non-fitting one
-do not), the pre-search tests, the toolkit's shelf packer on the grid, then CP-SAT.
+**Oracle.** :mod:`.packing_oracle` answers "does this part multiset fit" with memoisation and
+says what a "no" proves.
 """
 
 from __future__ import annotations
@@ -61,13 +66,23 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..instance import DEFAULT_WEIGHTS, Instance, PartType
+from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
+from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
 
 if TYPE_CHECKING:
     from ..reachability import ReachGrid
 
 _EPS = 1e-9
+
+#: Proof scopes of an infeasible answer (module docstring, "Grid"): no layout at all, parts at
+#: any angle (what the checker accepts) ...
+ANY_ANGLE = "any angle"
+#: ... or no layout whose parts lie at 0 or 90 degrees (a layout at other angles may exist).
+AXIS_ALIGNED = "0/90 degrees"
+#: The finest exact grid :func:`exact_resolution` offers: a tray side of at most this many
+#: grid units (finer grids are "absurd": the answer stays unproven).
+MAX_EXACT_UNITS = 1_000_000
 
 #: OR-Tools 9.15 workaround. With its default ``no_overlap_2d_boolean_relations_limit`` (10),
 #: CP-SAT sometimes (about 3% of seeds with 2-8 workers) reported OPTIMAL for a worse
@@ -134,130 +149,36 @@ def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
     return all(abs(v / resolution - round(v / resolution)) < 1e-6 for v in values)
 
 
+def exact_resolution(values: Sequence[float]) -> float | None:
+    """The coarsest grid (mm) of which every value is a multiple: the greatest common divisor
+    of the values as fractions with denominators up to 10^6 (152.4, 12.7 and 300 give 0.1);
+    None when a value is no such fraction or the largest value would span more than
+    :data:`MAX_EXACT_UNITS` units (module docstring, "Grid")."""
+    from fractions import Fraction
+
+    fracs = []
+    for v in values:
+        f = Fraction(v).limit_denominator(10**6)
+        if f <= 0 or abs(float(f) - v) > 1e-9 * max(1.0, abs(v)):
+            return None
+        fracs.append(f)
+    if not fracs:
+        return None
+    num = 0
+    den = 1
+    for f in fracs:
+        den = den * f.denominator // math.gcd(den, f.denominator)
+    for f in fracs:
+        num = math.gcd(num, f.numerator * (den // f.denominator))
+    step = Fraction(num, den)
+    if max(fracs) / step > MAX_EXACT_UNITS:
+        return None
+    return float(step)
+
+
 # ---------------------------------------------------------------------------------------------
-# Reachability and the shelf heuristic
+# The shelf heuristic
 # ---------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class ReachTables:
-    """The instance's reach map seen from the half grid: a part centred at ``k * res / 2`` mm
-    (k integer) lies in cell column ``cols[k]`` (row ``rows[k]`` for y); ``cells`` are the
-    reachable (column, row) pairs. Same arithmetic as :meth:`ReachGrid.lookup`, and layouts
-    put centres exactly at ``k * res / 2``, so the model and the checker agree bit for bit."""
-
-    cols: tuple[int, ...]
-    rows: tuple[int, ...]
-    cells: tuple[tuple[int, int], ...]
-    n_cols: int
-    n_rows: int
-    #: when a cell is exactly ``step`` half-grid units wide (``cols[k] == k // step`` for every
-    #: centre k < 2W), the column is linear in k: cheaper than an element constraint
-    step_x: int | None = None
-    step_y: int | None = None
-    #: per row, the reachable columns as one span (lo, hi) (lo > hi: none), when every row's
-    #: reachable cells are contiguous: two small element constraints replace the cell table
-    row_spans: tuple[tuple[int, int], ...] | None = None
-
-
-def reach_tables(reach: ReachGrid, W: int, H: int, resolution: float) -> ReachTables:
-    """Tables of a :class:`bilevel_kit.reachability.ReachGrid` for a W x H grid tray."""
-    import numpy as np
-
-    ny, nx = reach.reachable.shape
-    cw, ch = reach.cell_size
-    xs = np.arange(2 * W + 1) * resolution / 2.0
-    ys = np.arange(2 * H + 1) * resolution / 2.0
-    cols = np.clip((xs // cw).astype(np.int64), 0, nx - 1)
-    rows = np.clip((ys // ch).astype(np.int64), 0, ny - 1)
-    cells = tuple((int(c), int(r)) for r, c in zip(*np.nonzero(reach.reachable), strict=True))
-
-    def step(index: np.ndarray, size: float) -> int | None:
-        q = round(2 * size / resolution)
-        k = np.arange(len(index) - 1)
-        return q if q >= 1 and bool((index[:-1] == k // q).all()) else None
-
-    rows_spans: list[tuple[int, int]] = []
-    spans: list[tuple[int, int]] | None = rows_spans
-    for r in range(ny):
-        cs = np.nonzero(reach.reachable[r])[0]
-        if len(cs) == 0:
-            rows_spans.append((nx, -1))
-        elif cs[-1] - cs[0] + 1 == len(cs):
-            rows_spans.append((int(cs[0]), int(cs[-1])))
-        else:
-            spans = None  # a row with a hole: no span encoding
-            break
-    return ReachTables(
-        tuple(map(int, cols)),
-        tuple(map(int, rows)),
-        cells,
-        nx,
-        ny,
-        step(cols, cw),
-        step(rows, ch),
-        None if spans is None else tuple(spans),
-    )
-
-
-def add_reach(
-    model: Any,
-    tables: ReachTables,
-    cx2: Any,
-    cy2: Any,
-    W: int,
-    H: int,
-    present: Any = None,
-    absent_at: tuple[int, int] = (0, 0),
-) -> None:
-    """Centre (cx2 / 2, cy2 / 2 grid units) in a reachable cell. With ``present``: only when
-    present; an absent part sits at the fixed doubled centre ``absent_at``."""
-    kx = model.new_int_var(0, 2 * W, "")
-    ky = model.new_int_var(0, 2 * H, "")
-    model.add(kx == cx2)
-    model.add(ky == cy2)
-    col = model.new_int_var(0, tables.n_cols - 1, "")
-    row = model.new_int_var(0, tables.n_rows - 1, "")
-    for k, index, cell, q in (
-        (kx, tables.cols, col, tables.step_x),
-        (ky, tables.rows, row, tables.step_y),
-    ):
-        if q is None:
-            model.add_element(k, index, cell)
-        else:  # centres never reach k = 2W (parts have a positive size)
-            model.add(k <= 2 * (W if k is kx else H) - 1)
-            model.add(q * cell <= k)
-            model.add(k <= q * cell + q - 1)
-    if tables.row_spans is not None:
-        lo = model.new_int_var(0, tables.n_cols, "")
-        hi = model.new_int_var(-1, tables.n_cols - 1, "")
-        model.add_element(row, [a for a, _ in tables.row_spans], lo)
-        model.add_element(row, [b for _, b in tables.row_spans], hi)
-        enforce = [] if present is None else [present]
-        model.add(lo <= col).only_enforce_if(enforce)
-        model.add(col <= hi).only_enforce_if(enforce)
-    elif present is None:
-        model.add_allowed_assignments([col, row], tables.cells)
-    else:
-        parked = (0, tables.cols[absent_at[0]], tables.rows[absent_at[1]])
-        model.add_allowed_assignments(
-            [present, col, row], [(1, *cell) for cell in tables.cells] + [parked]
-        )
-
-
-def _reachable(
-    tables: ReachTables | None,
-    corners_: Sequence[tuple[int, int, bool]],
-    sizes: Sequence[tuple[int, int, bool]],
-) -> bool:
-    if tables is None:
-        return True
-    ok = set(tables.cells)
-    for (x, y, rot), (w, h, _) in zip(corners_, sizes, strict=True):
-        ww, hh = (h, w) if rot else (w, h)
-        if (tables.cols[2 * x + ww], tables.rows[2 * y + hh]) not in ok:
-            return False
-    return True
 
 
 def _shelf(
@@ -310,13 +231,44 @@ def pack(
     ``reach`` (a :class:`~bilevel_kit.reachability.ReachGrid`, see
     :func:`bilevel_kit.reachability.reach_grid`) keeps every centre in a reachable cell.
     """
-    from ortools.sat.python import cp_model
-
     if objective not in ("feasible", "fitness"):
         raise ValueError(f"objective must be 'feasible' or 'fitness', not {objective!r}")
     if not (math.isfinite(resolution) and resolution > 0):
         raise ValueError(f"resolution must be a finite number of mm > 0, not {resolution!r}")
     t0 = time.perf_counter()
+    grid = _grid(tray, items, resolution, reach)
+    extra: dict[str, Any] = {
+        "resolution": resolution,
+        "grid_exact": grid.exact,
+        "objective": objective,
+    }
+    done = _Done(items, grid, DEFAULT_WEIGHTS["W6"] if w6 is None else w6, t0, extra)
+    early = _before_search(tray, items, grid, objective, done)
+    if early is not None:
+        return early
+    model, parts = _build(items, grid, objective)
+    params = {"num_workers": max(1, workers), "random_seed": seed, "log_search_progress": log}
+    solver, st = _solve(model, objective, time_limit - (time.perf_counter() - t0), params)
+    return _answer(tray, items, grid, objective, solver, st, parts, done)
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The tray (W x H) and the parts' ``sizes`` (w, h, rotatable) in grid units (module
+    docstring, "Grid"); ``exact``: every size a multiple of the resolution; ``tables``: the reach
+    map on this grid, if any."""
+
+    W: int
+    H: int
+    sizes: list[tuple[int, int, bool]]
+    exact: bool
+    resolution: float
+    tables: ReachTables | None
+
+
+def _grid(
+    tray: _Rect, items: Sequence[tuple[str, PartType]], resolution: float, reach: ReachGrid | None
+) -> _Grid:
     W, H = grid_down(tray.width, resolution), grid_down(tray.height, resolution)
     sizes = [
         (grid_up(pt.width, resolution), grid_up(pt.height, resolution), pt.rotatable)
@@ -326,21 +278,44 @@ def pack(
         [tray.width, tray.height] + [v for _, pt in items for v in (pt.width, pt.height)],
         resolution,
     )
-    extra: dict[str, Any] = {"resolution": resolution, "grid_exact": exact, "objective": objective}
     tables = None if reach is None else reach_tables(reach, W, H, resolution)
+    return _Grid(W, H, sizes, exact, resolution, tables)
 
-    def done(
-        status: str, corners_: Sequence[tuple[int, int, bool]] | None, **kw: Any
+
+@dataclass(frozen=True)
+class _Done:
+    """How :func:`pack` ends: grid corners (x, y, rotated) become the layout, with its true
+    fitness and the wall time since ``t0``."""
+
+    items: Sequence[tuple[str, PartType]]
+    grid: _Grid
+    w6: float
+    t0: float
+    extra: dict[str, Any]
+
+    def __call__(
+        self, status: str, corners_: Sequence[tuple[int, int, bool]] | None, **kw: Any
     ) -> PackResult:
         from ..fitness import layout_fitness
 
-        layout = None if corners_ is None else _to_layout(items, sizes, corners_, resolution)
-        w6_ = DEFAULT_WEIGHTS["W6"] if w6 is None else w6
-        true_fit = None if layout is None else layout_fitness(layout, w6_)
-        return PackResult(
-            status, layout, time.perf_counter() - t0, true_fitness=true_fit, extra=extra, **kw
+        g = self.grid
+        layout = (
+            None if corners_ is None else _to_layout(self.items, g.sizes, corners_, g.resolution)
         )
+        true_fit = None if layout is None else layout_fitness(layout, self.w6)
+        wall = time.perf_counter() - self.t0
+        return PackResult(status, layout, wall, true_fitness=true_fit, extra=self.extra, **kw)
 
+
+def _before_search(
+    tray: _Rect,
+    items: Sequence[tuple[str, PartType]],
+    grid: _Grid,
+    objective: str,
+    done: _Done,
+) -> PackResult | None:
+    """The answers without a model (module docstring, "Before search"): no parts, the
+    pre-search tests of :mod:`.packing_bounds`, and (deciding) the shelf heuristic."""
     if not items:
         return done(
             "feasible" if objective == "feasible" else "optimal",
@@ -350,65 +325,61 @@ def pack(
         )
     from .packing_bounds import infeasibility_reason
 
-    why = infeasibility_reason(sizes, W, H)
+    why = infeasibility_reason(grid.sizes, grid.W, grid.H)
     if why is not None:
         # the tests ignore reachability, which only removes layouts: on an exact grid the
         # answer is a proof with or without a reach map
-        extra["reason"] = why
-        extra["proof"] = exact or _infeasible_at_true_sizes(tray, items)
+        done.extra["reason"] = why
+        scope = _true_size_scope(tray, items)
+        if grid.exact and why == "area":
+            scope = ANY_ANGLE  # the grid areas are the true areas
+        _set_proof(done.extra, items, grid.exact or scope is not None, scope)
         return done("infeasible", None)
     if objective == "feasible":
-        shelf = _shelf(sizes, W, H)
-        if shelf is not None and _reachable(tables, shelf, sizes):
-            extra["reason"] = "shelf heuristic"
+        shelf = _shelf(grid.sizes, grid.W, grid.H)
+        if shelf is not None and corners_reachable(grid.tables, shelf, grid.sizes):
+            done.extra["reason"] = "shelf heuristic"
             return done("feasible", shelf)
+    return None
 
+
+@dataclass
+class _Parts:
+    """The model's variables per part: lower-left corner, rotation (a 0/1 constant or a
+    literal); and its rectangles per axis with their sizes on that axis."""
+
+    xs: list[Any] = field(default_factory=list)
+    ys: list[Any] = field(default_factory=list)
+    rots: list[Any] = field(default_factory=list)
+    x_iv: list[Any] = field(default_factory=list)
+    y_iv: list[Any] = field(default_factory=list)
+    x_sizes: list[int] = field(default_factory=list)
+    y_sizes: list[int] = field(default_factory=list)
+
+
+def _build(
+    items: Sequence[tuple[str, PartType]], grid: _Grid, objective: str
+) -> tuple[Any, _Parts]:
+    """The CP-SAT packing model of the module docstring ("Model", "Decision model",
+    "Fitness", "Reachability")."""
+    from ortools.sat.python import cp_model
+
+    W, H, sizes = grid.W, grid.H, grid.sizes
     model = cp_model.CpModel()
-    xs: list[Any] = []
-    ys: list[Any] = []
-    rots: list[Any] = []  # 0/1 constants or rotation literals
-    x_iv, y_iv = [], []
-    x_sizes: list[int] = []  # size of each interval of x_iv (and y_iv) on its axis
-    y_sizes: list[int] = []
-    for j, (w, h, r) in enumerate(sizes):
-        can_turn = r and w != h and h <= W and w <= H
-        can_stay = w <= W and h <= H
-        lo_w = min(w, h) if can_turn else (w if can_stay else h)
-        lo_h = min(w, h) if can_turn else (h if can_stay else w)
-        x = model.new_int_var(0, W - lo_w, f"x{j}")
-        y = model.new_int_var(0, H - lo_h, f"y{j}")
-        xs.append(x)
-        ys.append(y)
-        if can_turn and can_stay:
-            rot = model.new_bool_var(f"rot{j}")
-            for size_x, size_y, lit in ((w, h, rot.Not()), (h, w, rot)):
-                xe = model.new_int_var(0, W, f"xe{j}")
-                ye = model.new_int_var(0, H, f"ye{j}")
-                x_iv.append(model.new_optional_interval_var(x, size_x, xe, lit, f"ix{j}"))
-                y_iv.append(model.new_optional_interval_var(y, size_y, ye, lit, f"iy{j}"))
-                x_sizes.append(size_x)
-                y_sizes.append(size_y)
-            rots.append(rot)
-        else:
-            turned = not can_stay
-            sx, sy = (h, w) if turned else (w, h)
-            x_iv.append(model.new_fixed_size_interval_var(x, sx, f"ix{j}"))
-            y_iv.append(model.new_fixed_size_interval_var(y, sy, f"iy{j}"))
-            x_sizes.append(sx)
-            y_sizes.append(sy)
-            rots.append(1 if turned else 0)
-    model.add_no_overlap_2d(x_iv, y_iv)
+    parts = _place_parts(model, grid)
+    model.add_no_overlap_2d(parts.x_iv, parts.y_iv)
     if objective == "feasible" and REDUNDANT_CUMULATIVE:
         # redundant: the parts crossing any vertical line stack to at most H, and those
         # crossing a horizontal line to at most W (tight for zero-waste kits)
-        model.add_cumulative(x_iv, y_sizes, H)
-        model.add_cumulative(y_iv, x_sizes, W)
+        model.add_cumulative(parts.x_iv, parts.y_sizes, H)
+        model.add_cumulative(parts.y_iv, parts.x_sizes, W)
     # centres on the half grid: 2 cx = 2 x + (w or h)
+    xs, ys, rots = parts.xs, parts.ys, parts.rots
     cx2 = [2 * xs[j] + w + (h - w) * rots[j] for j, (w, h, _) in enumerate(sizes)]
     cy2 = [2 * ys[j] + h + (w - h) * rots[j] for j, (w, h, _) in enumerate(sizes)]
-    if tables is not None:
+    if grid.tables is not None:
         for j in range(len(items)):
-            add_reach(model, tables, cx2[j], cy2[j], W, H)
+            add_reach(model, grid.tables, cx2[j], cy2[j], W, H)
 
     # identical parts: lexicographic order of lower-left corners
     groups: dict[str, list[int]] = {}
@@ -428,54 +399,135 @@ def pack(
                     model.add_abs_equality(dv, ca - cb)
                     terms.append(sign * dv)
         model.maximize(sum(terms))
+    return model, parts
+
+
+def _place_parts(model: Any, grid: _Grid) -> _Parts:
+    """Each part's corner, rotation and rectangles: two optional rectangles (one per
+    orientation) for a rotatable, non-square part that fits both ways, else one fixed one."""
+    W, H = grid.W, grid.H
+    parts = _Parts()
+    for j, (w, h, r) in enumerate(grid.sizes):
+        can_turn = r and w != h and h <= W and w <= H
+        can_stay = w <= W and h <= H
+        lo_w = min(w, h) if can_turn else (w if can_stay else h)
+        lo_h = min(w, h) if can_turn else (h if can_stay else w)
+        x = model.new_int_var(0, W - lo_w, f"x{j}")
+        y = model.new_int_var(0, H - lo_h, f"y{j}")
+        parts.xs.append(x)
+        parts.ys.append(y)
+        if can_turn and can_stay:
+            rot = model.new_bool_var(f"rot{j}")
+            for size_x, size_y, lit in ((w, h, rot.Not()), (h, w, rot)):
+                xe = model.new_int_var(0, W, f"xe{j}")
+                ye = model.new_int_var(0, H, f"ye{j}")
+                parts.x_iv.append(model.new_optional_interval_var(x, size_x, xe, lit, f"ix{j}"))
+                parts.y_iv.append(model.new_optional_interval_var(y, size_y, ye, lit, f"iy{j}"))
+                parts.x_sizes.append(size_x)
+                parts.y_sizes.append(size_y)
+            parts.rots.append(rot)
+        else:
+            turned = not can_stay
+            sx, sy = (h, w) if turned else (w, h)
+            parts.x_iv.append(model.new_fixed_size_interval_var(x, sx, f"ix{j}"))
+            parts.y_iv.append(model.new_fixed_size_interval_var(y, sy, f"iy{j}"))
+            parts.x_sizes.append(sx)
+            parts.y_sizes.append(sy)
+            parts.rots.append(1 if turned else 0)
+    return parts
+
+
+def _solve(
+    model: Any, objective: str, time_left: float, params: Mapping[str, Any]
+) -> tuple[Any, Any]:
+    """CP-SAT on the model for what is left of the time limit; the solver and its status."""
+    from ortools.sat.python import cp_model
 
     solver = cp_model.CpSolver()
-    solver.parameters.max_time_in_seconds = max(0.01, time_limit - (time.perf_counter() - t0))
-    solver.parameters.num_workers = max(1, workers)
-    solver.parameters.random_seed = seed
-    solver.parameters.log_search_progress = log
+    solver.parameters.max_time_in_seconds = max(0.01, time_left)
+    for key, value in params.items():
+        setattr(solver.parameters, key, value)
     solver.parameters.no_overlap_2d_boolean_relations_limit = 0  # see SAFE_NO_OVERLAP_2D
     if objective == "feasible":
         for key, value in DECISION_PARAMS.items():
             setattr(solver.parameters, key, value)
-    st = solver.solve(model)
-    extra["cpsat_status"] = solver.status_name(st)
+    return solver, solver.solve(model)
+
+
+def _answer(
+    tray: _Rect,
+    items: Sequence[tuple[str, PartType]],
+    grid: _Grid,
+    objective: str,
+    solver: Any,
+    st: Any,
+    parts: _Parts,
+    done: _Done,
+) -> PackResult:
+    """The result of a CP-SAT solve: its layout, or why there is none (and whether that is a
+    proof, module docstring "Grid")."""
+    from ortools.sat.python import cp_model
+
+    done.extra["cpsat_status"] = solver.status_name(st)
     if st == cp_model.INFEASIBLE:
-        extra["proof"] = (exact and reach is None) or _infeasible_at_true_sizes(tray, items)
+        scope = _true_size_scope(tray, items)
+        _set_proof(done.extra, items, (grid.exact and grid.tables is None) or bool(scope), scope)
         return done("infeasible", None)
     if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return done("unknown", None)
+    rots = parts.rots
     sol = [
         (
-            solver.value(xs[j]),
-            solver.value(ys[j]),
+            solver.value(parts.xs[j]),
+            solver.value(parts.ys[j]),
             bool(solver.value(rots[j])) if not isinstance(rots[j], int) else bool(rots[j]),
         )
         for j in range(len(items))
     ]
     if objective == "feasible":
         return done("feasible", sol)
-    half = resolution / 2.0
-    status = "optimal" if st == cp_model.OPTIMAL else "feasible"
-    res = done(
-        status,
+    half = grid.resolution / 2.0
+    return done(
+        "optimal" if st == cp_model.OPTIMAL else "feasible",
         sol,
         surrogate_objective=solver.objective_value * half,
         bound=solver.best_objective_bound * half,
     )
-    return res
 
 
-def _infeasible_at_true_sizes(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> bool:
-    """A reason no layout exists at all, grid or not: a part that fits the tray in neither
-    0/90-degree orientation, or more part area than tray area."""
+def _true_size_scope(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> str | None:
+    """A reason no layout exists, grid or not, and its scope: more part area than tray area
+    or two inscribed disks without room (:func:`.packing_bounds.disks_collide`):
+    :data:`ANY_ANGLE`; a part that fits the tray in neither 0/90-degree orientation:
+    :data:`AXIS_ALIGNED` (a long part may still fit along the diagonal); None without one."""
+    from .packing_bounds import disks_collide
+
+    if sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS):
+        return ANY_ANGLE
+    if disks_collide([(pt.width, pt.height) for _, pt in items], tray.width, tray.height):
+        return ANY_ANGLE
     for _, pt in items:
         fits = pt.width <= tray.width and pt.height <= tray.height
         if pt.rotatable:
             fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
         if not fits:
-            return True
-    return sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS)
+            return AXIS_ALIGNED
+    return None
+
+
+def _set_proof(
+    extra: dict[str, Any], items: Sequence[tuple[str, PartType]], proof: bool, scope: str | None
+) -> None:
+    """``extra["proof"]`` and its ``proof_scope`` (module docstring, "Grid"): a proof for
+    0/90-degree layouts rules out every layout when no part may rotate (a part that may not
+    rotate lies at 0 or 180 degrees, the same footprint)."""
+    extra["proof"] = proof
+    if not proof:
+        extra["proof_scope"] = None
+    elif scope == ANY_ANGLE or all(not pt.rotatable for _, pt in items):
+        extra["proof_scope"] = ANY_ANGLE
+    else:
+        extra["proof_scope"] = AXIS_ALIGNED
 
 
 def add_lex_less(
@@ -511,172 +563,3 @@ def _to_layout(
             )
         )
     return tuple(out)
-
-
-# ---------------------------------------------------------------------------------------------
-# Memoised oracle on part multisets
-# ---------------------------------------------------------------------------------------------
-
-#: Layout of a multiset by part type: per type, a list of (x, y, theta) centres.
-TypedLayout = dict[str, list[tuple[float, float, float]]]
-
-
-@dataclass
-class _FitCache:
-    """Known answers for one (tray, part types, resolution): monotone in the multiset, so a
-    sub-multiset of a fitting one fits, and a super-multiset of a non-fitting one does not."""
-
-    fits: list[tuple[dict[str, int], TypedLayout]] = field(default_factory=list)
-    nofit: list[dict[str, int]] = field(default_factory=list)
-    unknown: dict[frozenset[tuple[str, int]], float] = field(default_factory=dict)
-    solves: int = 0
-
-
-_CACHES: dict[tuple[Any, ...], _FitCache] = {}
-
-
-def _cache_for(
-    tray: _Rect, part_types: Mapping[str, PartType], resolution: float, reach: ReachGrid | None
-) -> _FitCache:
-    key = (
-        tray.width,
-        tray.height,
-        resolution,
-        tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in part_types.values())),
-        None
-        if reach is None
-        else (reach.reachable.tobytes(), reach.reachable.shape, reach.cell_size),
-    )
-    return _CACHES.setdefault(key, _FitCache())
-
-
-def _leq(a: Mapping[str, int], b: Mapping[str, int]) -> bool:
-    return all(b.get(k, 0) >= n for k, n in a.items())
-
-
-def fit_counts(
-    tray: _Rect,
-    part_types: Mapping[str, PartType],
-    counts: Mapping[str, int],
-    *,
-    time_limit: float = 2.0,
-    resolution: float = 1.0,
-    workers: int = 2,
-    seed: int = 0,
-    reach: ReachGrid | None = None,
-) -> tuple[bool | None, TypedLayout | None]:
-    """Whether a part multiset fits, with a layout by type when it does (memoised).
-
-    Order of checks: cached answers (using monotonicity), the pre-search tests of
-    :mod:`~bilevel_kit.models.packing_bounds`, the shelf heuristic, then CP-SAT. ``None`` =
-    unknown within ``time_limit``; an unknown answer is retried only with a longer limit.
-    """
-    counts = {k: int(n) for k, n in counts.items() if n > 0}
-    cache = _cache_for(tray, part_types, resolution, reach)
-    for known, layout in cache.fits:
-        if _leq(counts, known):
-            return True, {k: layout[k][:n] for k, n in counts.items()}
-    for known in cache.nofit:
-        if _leq(known, counts):
-            return False, None
-    key = frozenset(counts.items())
-    if cache.unknown.get(key, -1.0) >= time_limit:
-        return None, None
-    from ..heuristics.shelf import kit_items
-
-    items = kit_items(part_types, counts)
-    cache.solves += 1
-    res = pack(
-        tray,
-        items,
-        objective="feasible",
-        resolution=resolution,
-        time_limit=time_limit,
-        workers=workers,
-        seed=seed,
-        reach=reach,
-    )
-    if res.status == "infeasible":
-        cache.nofit.append(counts)
-        return False, None
-    if res.layout is None:
-        cache.unknown[key] = time_limit
-        return None, None
-    typed: TypedLayout = {}
-    for p in res.layout:
-        typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
-    cache.fits.append((counts, typed))
-    return True, typed
-
-
-def kit_fits(
-    instance: Instance,
-    part_counts: Mapping[str, int],
-    time_limit: float = 2.0,
-    *,
-    resolution: float = 1.0,
-) -> bool | None:
-    """Cheap memoised oracle: do these parts (type -> count) fit on the instance's tray?"""
-    return _fit_on_tray(instance, part_counts, time_limit, resolution)[0]
-
-
-def _fit_on_tray(
-    instance: Instance, counts: Mapping[str, int], time_limit: float, resolution: float
-) -> tuple[bool | None, TypedLayout | None]:
-    """:func:`fit_counts` on the instance's tray and part types, within the robot's reach."""
-    from ..reachability import reach_grid
-
-    return fit_counts(
-        instance.tray,
-        instance.part_types,
-        counts,
-        time_limit=time_limit,
-        resolution=resolution,
-        reach=reach_grid(instance),
-    )
-
-
-def kit_layout(
-    instance: Instance,
-    task_ids: Sequence[str],
-    *,
-    time_limit: float = 2.0,
-    resolution: float = 1.0,
-) -> tuple[Placement, ...] | None:
-    """A non-overlapping layout for the parts of these tasks (part ids ``task:type:j``), or
-    None when they do not fit or the answer is unknown."""
-    ok, typed = _fit_on_tray(instance, instance.kit_parts(task_ids), time_limit, resolution)
-    if not ok or typed is None:
-        return None
-    return typed_to_placements(instance, task_ids, typed)
-
-
-def typed_to_placements(
-    instance: Instance, task_ids: Sequence[str], typed: TypedLayout
-) -> tuple[Placement, ...]:
-    """Hand out the slots of a by-type layout to the tasks' parts, in task order."""
-    used = dict.fromkeys(typed, 0)
-    out = []
-    for tid in task_ids:
-        for ptype, n in instance.task_by_id[tid].parts:
-            pt = instance.part_types[ptype]
-            for j in range(1, n + 1):
-                x, y, theta = typed[ptype][used[ptype]]
-                used[ptype] += 1
-                out.append(
-                    Placement(
-                        part=f"{tid}:{ptype}:{j}",
-                        type=ptype,
-                        x=x,
-                        y=y,
-                        theta=theta,
-                        w=pt.width,
-                        h=pt.height,
-                    )
-                )
-    return tuple(out)
-
-
-def clear_cache() -> None:
-    """Forget every memoised packing answer (tests, benchmarks)."""
-    _CACHES.clear()

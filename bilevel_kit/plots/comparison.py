@@ -1,6 +1,7 @@
-"""Methods compared: makespan and human idle per method (:func:`plot_comparison`, with a broken
-y axis when the makespans differ by little) and the gap of each method to the best lower bound
-(:func:`plot_gaps`)."""
+"""Methods compared: on one instance, each method's makespan against the best lower bound and
+its human idle (:func:`plot_comparison`); over instances, the gap of each method to the best
+lower bound (:func:`plot_gaps`). Both show the ``gap`` of ``compare``'s table,
+(makespan - best bound) / makespan (docs/figures.md)."""
 
 from __future__ import annotations
 
@@ -18,128 +19,175 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 
-def _nice_ticks(lo: float, hi: float, nbins: int) -> list[float]:
-    from matplotlib.ticker import MaxNLocator
+#: How the charts define the gap they show: ``compare``'s "gap to best" column.
+GAP_TEXT = "gap = (makespan - best lower bound) / makespan"
+#: Makespan of a method, or None when it found no plan.
+_Value = float | None
 
-    return [float(t) for t in MaxNLocator(nbins=nbins).tick_values(lo, hi) if lo <= t <= hi]
 
-
-def _break_axis(ax: Axes, a: float, b: float, top: float) -> str:
-    """Break the y axis of ``ax`` between ``a`` and ``b``: [0, a] takes the lower 30 % of the
-    height, (a, b) a thin band marked by a white gap and ``//`` on both spines, [b, top] the
-    rest, so differences between values above ``b`` show while values below ``a`` stay
-    readable. Values keep their data coordinates (bars are drawn from 0 as usual). Returns the
-    sentence that states the break (for the legend)."""
-    from matplotlib.ticker import FixedLocator
-
-    fa, gap = 0.3, 0.04
-    slope = (1.0 - fa - gap) / (top - b)
-
-    def forward(y: np.ndarray) -> np.ndarray:
-        y = np.asarray(y, dtype=float)
-        return np.where(
-            y <= a,
-            y * fa / a,
-            np.where(y < b, fa + (y - a) * gap / (b - a), fa + gap + (y - b) * slope),
-        )
-
-    def inverse(u: np.ndarray) -> np.ndarray:
-        u = np.asarray(u, dtype=float)
-        return np.where(
-            u <= fa,
-            u * a / fa,
-            np.where(u < fa + gap, a + (u - fa) * (b - a) / gap, b + (u - fa - gap) / slope),
-        )
-
-    ax.set_yscale("function", functions=(forward, inverse))
-    ax.set_ylim(0.0, top)
-    ax.yaxis.set_major_locator(FixedLocator(_nice_ticks(0.0, a, 3) + _nice_ticks(b, top, 5)))
-    ax.axhspan(a, b, facecolor="white", edgecolor="none", zorder=2.5, gid="axis_break")
-    marks = ax.get_yaxis_transform()
-    mid = inverse(np.array(fa + gap / 2))
-    for x in (0.0, 1.0):
-        ax.text(
-            x,
-            float(mid),
-            "//",
-            transform=marks,
-            ha="center",
-            va="center",
-            fontsize=style.FONT_SIZE,
-            fontweight="bold",
-            clip_on=False,
-            zorder=5,
-        )
-    return f"y axis broken: {a:.0f}-{b:.0f} s left out"
+def record_gap(record: dict[str, Any]) -> float | None:
+    """The record's ``gap`` to the best lower bound as ``compare`` defines it,
+    (makespan - best bound) / makespan, computed from ``best_bound`` when the record has no
+    ``gap`` field; None without a plan or a bound."""
+    if record.get("gap") is not None:
+        return float(record["gap"])
+    ms, bound = record.get("makespan"), record.get("best_bound")
+    if ms is None or bound is None or not float(ms):
+        return None
+    return max(0.0, (float(ms) - float(bound)) / float(ms))
 
 
 @styled
-def plot_comparison(records: Sequence[dict[str, Any]], ax: Axes | None = None) -> Axes:
-    """Grouped bars of makespan and human idle per method (records of ``compare``), both
-    labelled with their value, each method's status (optimal / feasible / unknown, when the
-    records have one) under its name, and the best lower bound on makespan as a dashed line.
-
-    When the makespans differ by little compared with their size (spread under 25 % of the
-    largest, all of them well above the largest human idle) the y axis is broken
-    (:func:`_break_axis`, stated in the legend) so that the differences show."""
-    from matplotlib.lines import Line2D
-
-    plt = pyplot()
+def plot_comparison(
+    records: Sequence[dict[str, Any]], ax: Axes | None = None, idle_ax: Axes | None = None
+) -> Axes:
+    """Methods compared on one instance (records of ``compare``): each method's makespan as a
+    dot on a stem that rises from the best lower bound (a dashed line), so the stem *is* the
+    method's distance to the bound, labelled with the makespan and the ``gap`` of the table,
+    (makespan - best bound) / makespan; the y axis spans the makespans, not 0..max, and a
+    method without a plan says "no plan". Beside it (a new figure, or ``idle_ax``), the human
+    idle per method as bars from 0. Each method's status (optimal / feasible / unknown) is
+    under its name. Returns the makespan Axes."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(max(5.5, 1.4 * len(records) + 3), 4), layout="constrained")
-    names = [str(r["method"]) for r in records]
-    makespan = np.array([float(r["makespan"]) for r in records])
-    idle = np.array([float(r["human_idle"]) for r in records])
-    pos = np.arange(len(records))
-    ms_color = style.PALETTE[0]
-    bars = ax.bar(pos - 0.2, makespan, 0.4, label="makespan", color=ms_color, gid="makespan")
-    idle_bars = ax.bar(
-        pos + 0.2, idle, 0.4, label="human idle", color=style.IDLE_COLOR, gid="human_idle"
-    )
-    for group, values in ((bars, makespan), (idle_bars, idle)):
-        for rect, value in zip(group, values, strict=True):
-            ax.annotate(
-                f"{value:.1f}",
-                (rect.get_x() + rect.get_width() / 2, value),
-                xytext=(0, 1),
-                textcoords="offset points",
-                ha="center",
-                va="bottom",
-                fontsize=style.SMALL_SIZE,
-            )
-    bound = records[0].get("best_bound")
-    if bound is not None:
-        ax.axhline(
-            float(bound),
-            color=style.MAKESPAN_COLOR,
-            linestyle="--",
-            lw=1,
-            label=f"best lower bound {float(bound):.1f} s",
-            gid="bound",
+        n = len(records)
+        _, (ax, idle_ax) = pyplot().subplots(
+            1,
+            2,
+            figsize=(min(12.0, max(6.5, 1.25 * n + 3.5)), 4),
+            width_ratios=(3, 2),
+            layout="constrained",
         )
+    assert ax is not None
+    names = [str(r["method"]) for r in records]
+    makespans: list[_Value] = [
+        float(r["makespan"]) if r.get("makespan") is not None else None for r in records
+    ]
+    bounds = [float(r["best_bound"]) for r in records if r.get("best_bound") is not None]
+    bound = max(bounds) if bounds else None
+    _makespan_panel(ax, records, makespans, bound)
     labels = [
         f"{name}\n({r['status']})" if r.get("status") is not None else name
         for name, r in zip(names, records, strict=True)
     ]
-    ax.set_xticks(pos, labels)
+    ax.set_xticks(np.arange(len(records)), labels)
     ax.set_xlabel(
         "method (status)" if any(r.get("status") is not None for r in records) else "method"
     )
-    ax.set_ylabel("time (s)")
-    ax.set_title(f"{records[0].get('instance', '')}: methods compared")
-    handles: list[Artist] = list(ax.get_legend_handles_labels()[0])
-    if len(records):
-        levels = list(makespan) + ([float(bound)] if bound is not None else [])
-        low, high = min(levels), max(levels)
-        a = max(float(idle.max()) * 1.3, 0.05 * low)
-        b = low - 0.6 * (high - low) - 0.03 * low
-        if high > 0 and (high - low) < 0.25 * high and b > 1.5 * a:
-            note = _break_axis(ax, a, b, high + 0.3 * (high - b))
-            handles.append(
-                Line2D([], [], linestyle="none", marker="$//$", color="black", label=note)
-            )
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    name = records[0].get("instance", "") if records else ""
+    ax.set_title(f"{name}: makespan per method\n{GAP_TEXT}")
+    if idle_ax is not None:
+        _idle_panel(idle_ax, names, records)
     return ax
+
+
+def _makespan_panel(
+    ax: Axes, records: Sequence[dict[str, Any]], makespans: list[_Value], bound: float | None
+) -> None:
+    """Dots on stems from the best lower bound (or the best makespan without one), labelled
+    "value s / gap x %"; the axis spans the values with room for the labels."""
+
+    values = [v for v in makespans if v is not None]
+    base = bound if bound is not None else (min(values) if values else 0.0)
+    levels = [*values, base]
+    low, high = min(levels), max(levels)
+    span = high - low if high > low else max(abs(high) * 0.05, 1.0)
+    ax.set_ylim(max(0.0, low - 0.45 * span), high + 0.35 * span)  # the legend goes below
+    color = style.PALETTE[0]
+    for x, (r, v) in enumerate(zip(records, makespans, strict=True)):
+        if v is None:
+            ax.annotate(
+                "no plan",
+                (x, base),
+                xytext=(0, 4),
+                textcoords="offset points",
+                ha="center",
+                va="bottom",
+                fontsize=style.SMALL_SIZE,
+                color="0.35",
+                gid=f"noplan:{r['method']}",
+            )
+            continue
+        ax.plot([x, x], [base, v], color=color, linewidth=2.5, solid_capstyle="butt")
+        ax.plot([x], [v], marker="o", color=color, markersize=7, gid=f"makespan:{r['method']}")
+        gap = record_gap(r)
+        text = f"{v:.1f} s" + (f"\ngap {100 * gap:.1f} %" if gap is not None else "")
+        ax.annotate(
+            text,
+            (x, v),
+            xytext=(0, 6),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=style.SMALL_SIZE,
+        )
+    ax.set_xlim(-0.6, len(records) - 0.4)
+    ax.set_ylabel("makespan (s)")
+    ax.grid(axis="y", alpha=0.3)
+    ax.set_axisbelow(True)
+    _makespan_legend(ax, records, makespans, bound)
+
+
+def _makespan_legend(
+    ax: Axes, records: Sequence[dict[str, Any]], makespans: list[_Value], bound: float | None
+) -> None:
+    """The bound line and the legend, in the room left under the lowest value; the bound is
+    "optimum = best lower bound" when a method proved a makespan equal to it optimal."""
+    from matplotlib.lines import Line2D
+
+    color = style.PALETTE[0]
+    handles: list[Artist] = [
+        Line2D([], [], color=color, marker="o", linewidth=2.5, label="makespan")
+    ]
+    if bound is not None:
+        optimal = any(
+            r.get("status") == "optimal" and v is not None and abs(v - bound) <= 1e-6 * bound
+            for r, v in zip(records, makespans, strict=True)
+        )
+        name = "optimum = best lower bound" if optimal else "best lower bound"
+        ax.axhline(bound, color=style.MAKESPAN_COLOR, linestyle="--", lw=1, gid="bound")
+        handles.append(
+            Line2D(
+                [], [], color=style.MAKESPAN_COLOR, linestyle="--", label=f"{name} {bound:.1f} s"
+            )
+        )
+    ax.legend(
+        handles=handles,
+        loc="lower center",
+        ncols=2 if len(records) >= 4 else 1,
+        fontsize=style.SMALL_SIZE,
+        handlelength=1.6,
+        framealpha=0.9,
+    )
+
+
+def _idle_panel(ax: Axes, names: list[str], records: Sequence[dict[str, Any]]) -> None:
+    """Human idle per method, bars from 0 labelled with their value."""
+    pos = np.arange(len(records))
+    for x, r in zip(pos, records, strict=True):
+        idle = r.get("human_idle")
+        if idle is None or r.get("makespan") is None:
+            ax.annotate(
+                "no plan", (x, 0), ha="center", va="bottom", fontsize=style.SMALL_SIZE, color="0.35"
+            )
+            continue
+        ax.bar(x, float(idle), 0.6, color=style.IDLE_COLOR, gid="human_idle")
+        ax.annotate(
+            f"{float(idle):.1f}",
+            (x, float(idle)),
+            xytext=(0, 1),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=style.SMALL_SIZE,
+        )
+    ax.set_xticks(pos, names, rotation=30, ha="right")
+    ax.set_xlim(-0.6, len(records) - 0.4)
+    ax.set_xlabel("method")
+    ax.set_ylabel("human idle (s)")
+    ax.set_title("human idle")
+    ax.set_ylim(0.0, ax.get_ylim()[1] * 1.12)
+    ax.grid(axis="y", alpha=0.3)
+    ax.set_axisbelow(True)
 
 
 @styled

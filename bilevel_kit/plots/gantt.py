@@ -1,14 +1,17 @@
 """The Gantt chart of the robot and the human (docs/timeline.md, docs/figures.md).
 
 :func:`plot_gantt` draws in steps: the kits' bars (kitting, delivery, pickup, tasks), their
-labels, the tray waits and idle time, then the axes' dress, the legend and, beyond ten kits, the
-colour bar. The order of the steps is the order the artists are added, hence the drawing order.
+labels (inside their bars or on leaders, :mod:`.lanes`), the tray waits and idle time, then the
+axes' dress, the legend, beyond eight kits the colour bar and, when the task bars are too
+narrow to name, the list of tasks by kit. The order of the steps is the order the artists are
+added, hence the drawing order.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -17,10 +20,10 @@ from .. import style
 from ..instance import Instance
 from ..plan import Kit, KitTimes, Plan, Timeline, evaluate
 from ..style import plural, styled
+from . import lanes
 from .common import axes_width_in, figure_size, pyplot
 
 if TYPE_CHECKING:
-    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
@@ -30,9 +33,6 @@ HUMAN_Y = 0.0
 BAR_HEIGHT = 0.6
 #: Width bounds (inches) of a new Gantt chart; it grows with the number of tasks in between.
 GANTT_WIDTH = (7.0, 10.0)
-
-#: A label of a bar: (x, y, text or "" when it does not fit, the bar's colour).
-_Label = tuple[float, float, str, Any]
 
 
 def _idle_intervals(
@@ -67,11 +67,6 @@ def tray_waits(
     ]
 
 
-def _most(labels: Sequence[tuple[Any, ...]]) -> bool:
-    """Whether at least half of the labels ``(..., text or "", colour)`` fit their bar."""
-    return 2 * sum(1 for lab in labels if lab[-2]) >= len(labels)
-
-
 def _bar(ax: Axes, y: float, start: float, end: float, gid: str, **kw: Any) -> Any:
     """One horizontal bar from ``start`` to ``end`` in the lane at ``y`` (None if empty)."""
     if end - start <= 0:
@@ -92,10 +87,9 @@ def _wait_style() -> dict[str, Any]:
 
 
 def _idle_style() -> dict[str, Any]:
-    """The bars of idle time of either lane (hatched red)."""
+    """The bars of idle time of either lane (light red, hatched red)."""
     return {
-        "facecolor": style.IDLE_COLOR,
-        "alpha": 0.35,
+        "facecolor": style.IDLE_FILL,
         "hatch": "\\\\",
         "edgecolor": style.IDLE_COLOR,
         "linewidth": 0.0,
@@ -111,23 +105,28 @@ def plot_gantt(
     *,
     method: str | None = None,
 ) -> Axes:
-    """Gantt chart of the robot and the human (docs/timeline.md).
+    """Gantt chart of the robot and the human (docs/timeline.md, docs/figures.md).
 
-    Robot lane: one kitting bar per kit (``robot_start``..``robot_end``, in the kit's colour,
-    labelled "kit k" or "k" when that fits), one hatched delivery bar (``robot_end``..``arrive``)
-    and, with a tray limit, a light dotted bar for each wait for a returned tray
-    (:func:`tray_waits`). Human lane: the kit pickup overhead, then each task
-    (``task_start``..``task_end``, in a lighter shade of its kit's colour, labelled with its id
-    when that fits). Up to ten kits have ten distinct colours; more kits take a continuous
-    colormap explained by a colour bar (:func:`bilevel_kit.style.kit_colors`). Idle time of
-    either lane is hatched red; a dashed line marks the makespan. The title names the instance
-    (and ``method`` when given) and the timeline's metrics. ``timeline`` defaults to
+    Robot lane: one kitting bar per kit (``robot_start``..``robot_end``, in the kit's colour),
+    one hatched delivery bar (``robot_end``..``arrive``) and, with a tray limit, a light dotted
+    bar for each wait for a returned tray (:func:`tray_waits`). Human lane: the kit pickup
+    overhead, then each task (``task_start``..``task_end``, in a lighter shade of its kit's
+    colour). Up to eight kits have eight distinct colours; more kits take a continuous
+    colormap explained by a colour bar (:func:`bilevel_kit.style.kit_colors`); no kit colour
+    resembles a mark. Idle time of either lane is hatched red; a dashed line marks the
+    makespan. The title names the instance (and ``method`` when given) and the metrics.
+
+    Every kit and task is named: inside its bar where the label fits, else on a leader beside
+    the lane (:mod:`.lanes`); when the leaders do not fit either, a list of the tasks by kit
+    under the chart names them (on a new figure, which grows to hold it). Kit labels take one
+    format per chart, "kit k" when all fit, else "k". ``timeline`` defaults to
     :func:`bilevel_kit.plan.evaluate` of the plan (pass one to draw e.g. a simulated run; the
     simulator's waits for parts are not part of a timeline and are not drawn).
     """
     tl = timeline if timeline is not None else evaluate(instance, plan)
     n_kits = len(tl.kits)
     colors, colorbar = style.kit_colors(max(n_kits, len(plan.kits)))
+    created = ax is None
     if ax is None:
         ax = _new_gantt_axes(plan)
     makespan = tl.makespan
@@ -137,16 +136,19 @@ def plot_gantt(
     # thin edges when bars are narrow, so that 100 kits do not turn into black stripes
     mean_kit_in = inches_per_s * tl.robot_work / max(n_kits, 1)
     edge: dict[str, Any] = {"edgecolor": "black", "linewidth": 0.5 if mean_kit_in >= 0.15 else 0.15}
-    fits = _label_fits(inches_per_s)
-    labels = _draw_kits(ax, instance, plan, tl, colors, edge, fits)
-    _draw_labels(ax, labels)
+    kit_bars, task_bars = _draw_kits(ax, instance, plan, tl, colors, edge)
+    robot, human, listed = _place_labels(kit_bars, task_bars, inches_per_s, right, colorbar)
+    lanes.draw(ax, robot, ROBOT_Y, +1, BAR_HEIGHT / 2, stagger=False)
+    lanes.draw(ax, human, HUMAN_Y, -1, BAR_HEIGHT / 2, stagger=True)
     waits = tray_waits(instance, tl)
     _draw_waits_and_idle(ax, tl, waits)
     ax.axvline(makespan, color=style.MAKESPAN_COLOR, linestyle="--", linewidth=1.2, gid="makespan")
-    _dress_gantt(ax, instance, tl, method)
+    _dress_gantt(ax, instance, tl, method, (lanes.room(human), lanes.room(robot)))
     _gantt_legend(ax, colors, colorbar, edge, bool(waits))
     if colorbar:
         _kit_colorbar(ax, len(colors))
+    if listed:
+        _task_list(ax, plan, colors, resize=created)
     return ax
 
 
@@ -158,15 +160,6 @@ def _new_gantt_axes(plan: Plan) -> Axes:
     return cast("Axes", ax)
 
 
-def _label_fits(inches_per_s: float) -> Callable[[str, float], bool]:
-    """Whether a label fits inside a bar of the given duration (s), with a small margin."""
-
-    def fits(text: str, duration: float) -> bool:
-        return style.text_width_in(text, style.SMALL_SIZE) + 0.03 <= duration * inches_per_s
-
-    return fits
-
-
 def _draw_kits(
     ax: Axes,
     instance: Instance,
@@ -174,26 +167,52 @@ def _draw_kits(
     tl: Timeline,
     colors: Sequence[Any],
     edge: dict[str, Any],
-    fits: Callable[[str, float], bool],
-) -> tuple[list[_Label], list[_Label]]:
-    """Every kit's bars in both lanes; returns the labels of the robot's and the human's lane
-    (drawn afterwards, only when most of a lane's labels fit)."""
-    robot_labels: list[_Label] = []
-    task_labels: list[_Label] = []
+) -> tuple[list[lanes.Bar], list[lanes.Bar]]:
+    """Every kit's bars in both lanes; returns the bars to label in the robot's lane (kits,
+    texts "k") and the human's (tasks)."""
+    kit_bars: list[lanes.Bar] = []
+    task_bars: list[lanes.Bar] = []
     for k, (kit, kt) in enumerate(zip(plan.kits, tl.kits, strict=False)):
         color = colors[k]
-        rect = _bar(
-            ax, ROBOT_Y, kt.robot_start, kt.robot_end, f"robot:kit:{k + 1}", color=color, **edge
-        )
-        label = next(
-            (s for s in (f"kit {k + 1}", f"{k + 1}") if fits(s, kt.robot_end - kt.robot_start)),
-            None,
-        )
-        if rect is not None:
-            robot_labels.append(((kt.robot_start + kt.robot_end) / 2, ROBOT_Y, label or "", color))
+        gid = f"robot:kit:{k + 1}"
+        if _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, **edge) is not None:
+            kit_bars.append(
+                lanes.Bar(kt.robot_start, kt.robot_end, f"{k + 1}", color, f"label:kit:{k + 1}")
+            )
         _draw_delivery_and_pickup(ax, k, kt, instance.kit_overhead_human, edge)
-        task_labels += _draw_tasks(ax, kit, tl, style.lighten(color), edge, fits)
-    return robot_labels, task_labels
+        task_bars += _draw_tasks(ax, kit, tl, style.lighten(color), edge)
+    return kit_bars, task_bars
+
+
+def _place_labels(
+    kit_bars: list[lanes.Bar],
+    task_bars: list[lanes.Bar],
+    inches_per_s: float,
+    width_s: float,
+    colorbar: bool,
+) -> tuple[lanes.Placement, lanes.Placement, bool]:
+    """Where the kit and task labels go, and whether the tasks must also be listed by kit.
+
+    Kit labels read "kit k" when every one fits its bar that way, else "k" (one format per
+    chart). A lane whose leaders do not fit keeps its inside labels only if at least half of
+    its labels fit (a few scattered labels would suggest the others are missing); the list of
+    tasks by kit then names every task, and every kit when no colour bar does."""
+    long = [replace(b, text=f"kit {b.text}") for b in kit_bars]
+    if all(lanes.fits_inside(b, inches_per_s) for b in long):
+        kit_bars = long
+    robot = lanes.place(kit_bars, inches_per_s, width_s)
+    human = lanes.place(task_bars, inches_per_s, width_s)
+    listed = human is None or (robot is None and not colorbar)
+
+    def inside_only(bars: list[lanes.Bar]) -> lanes.Placement:
+        fit = [b for b in bars if lanes.fits_inside(b, inches_per_s)]
+        return lanes.Placement(fit if 2 * len(fit) >= len(bars) else [], [])
+
+    return (
+        robot if robot is not None else inside_only(kit_bars),
+        human if human is not None else inside_only(task_bars),
+        listed,
+    )
 
 
 def _draw_delivery_and_pickup(
@@ -223,42 +242,18 @@ def _draw_delivery_and_pickup(
 
 
 def _draw_tasks(
-    ax: Axes,
-    kit: Kit,
-    tl: Timeline,
-    light: Any,
-    edge: dict[str, Any],
-    fits: Callable[[str, float], bool],
-) -> list[_Label]:
+    ax: Axes, kit: Kit, tl: Timeline, light: Any, edge: dict[str, Any]
+) -> list[lanes.Bar]:
     """The human's bar of each task of the kit (tasks the timeline does not hold are skipped);
-    returns their labels."""
-    labels: list[_Label] = []
-    for j, t in enumerate(kit.tasks):
+    returns the bars to label."""
+    out: list[lanes.Bar] = []
+    for t in kit.tasks:
         if t not in tl.task_start:
             continue
         s, e = tl.task_start[t], tl.task_end[t]
-        drawn = _bar(ax, HUMAN_Y, s, e, f"human:task:{t}", color=light, **edge)
-        if drawn is not None:
-            # stagger neighbouring labels so that short tasks stay readable
-            dy = BAR_HEIGHT * (0.18 if j % 2 == 0 else -0.18)
-            labels.append(((s + e) / 2, HUMAN_Y + dy, t if fits(t, e - s) else "", light))
-    return labels
-
-
-def _draw_labels(ax: Axes, lanes: Sequence[Sequence[_Label]]) -> None:
-    """A lane's labels are drawn only if most of them fit: a few scattered labels mislead."""
-    for x, y, text, color in (lab for lane in lanes if _most(lane) for lab in lane):
-        if text:
-            ax.text(
-                x,
-                y,
-                text,
-                ha="center",
-                va="center",
-                fontsize=style.SMALL_SIZE,
-                color=style.text_color(color),
-                clip_on=True,
-            )
+        if _bar(ax, HUMAN_Y, s, e, f"human:task:{t}", color=light, **edge) is not None:
+            out.append(lanes.Bar(s, e, t, light, f"label:task:{t}"))
+    return out
 
 
 def _draw_waits_and_idle(ax: Axes, tl: Timeline, waits: Sequence[tuple[int, float, float]]) -> None:
@@ -278,11 +273,16 @@ def _draw_waits_and_idle(ax: Axes, tl: Timeline, waits: Sequence[tuple[int, floa
         _bar(ax, HUMAN_Y, s, e, "human:idle", **idle_style)
 
 
-def _dress_gantt(ax: Axes, instance: Instance, tl: Timeline, method: str | None) -> None:
+def _dress_gantt(
+    ax: Axes, instance: Instance, tl: Timeline, method: str | None, room: tuple[float, float]
+) -> None:
     """Lanes, axis labels, grid and the title: the instance (and method) and the metrics, on
-    one line when it fits the axes, else on two."""
+    one line when it fits the axes, else on two. ``room``: the leader rows' room below the
+    human lane and above the robot lane (:func:`.lanes.room`)."""
     ax.set_yticks([HUMAN_Y, ROBOT_Y], ["human", "robot"])
-    ax.set_ylim(HUMAN_Y - 0.6, ROBOT_Y + 0.6)
+    margin = 0.6 - BAR_HEIGHT / 2  # between a lane and the edge of the chart
+    below, above = (max(r - margin, 0.0) for r in room)
+    ax.set_ylim(HUMAN_Y - 0.6 - below, ROBOT_Y + 0.6 + above)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("resource")
     ax.grid(axis="x", alpha=0.3)
@@ -297,35 +297,133 @@ def _dress_gantt(ax: Axes, instance: Instance, tl: Timeline, method: str | None)
     ax.set_title(one_line if wide else f"{head}\n{metrics}")
 
 
+class KitSwatch:
+    """A legend handle drawn as side-by-side stripes of a few kits' colours: "colour = kit"
+    shown with the chart's own kit colours, never one kit's colour standing for all."""
+
+    def __init__(self, colors: Sequence[Any], edge: dict[str, Any], label: str) -> None:
+        self.colors = list(colors)
+        self.edge = edge
+        self.label = label
+
+    def get_label(self) -> str:
+        return self.label
+
+
+def _swatch_handler() -> Any:
+    """The legend handler of :class:`KitSwatch` (matplotlib imported on first use)."""
+    from matplotlib.legend_handler import HandlerBase
+    from matplotlib.patches import Rectangle
+
+    class Handler(HandlerBase):
+        def create_artists(  # type: ignore[override]
+            self,
+            legend: Any,
+            orig_handle: KitSwatch,
+            xdescent: float,
+            ydescent: float,
+            width: float,
+            height: float,
+            fontsize: float,
+            trans: Any,
+        ) -> list[Any]:
+            n = len(orig_handle.colors)
+            w = width / n
+            return [
+                Rectangle(
+                    (-xdescent + i * w, -ydescent),
+                    w,
+                    height,
+                    facecolor=c,
+                    transform=trans,
+                    gid=f"swatch:{orig_handle.label}",
+                    **orig_handle.edge,
+                )
+                for i, c in enumerate(orig_handle.colors)
+            ]
+
+    return Handler()
+
+
+def _swatch_colors(colors: Sequence[Any], colorbar: bool) -> list[Any]:
+    """Up to four kit colours for the legend's kit swatches: the first kits of the palette,
+    or the colormap at its ends and thirds."""
+    if colorbar:
+        n = len(colors)
+        return [colors[round(i * (n - 1) / 3)] for i in range(4)]
+    return list(colors[:4]) or [style.KIT_PALETTE[0]]
+
+
 def _gantt_legend(
     ax: Axes, colors: Sequence[Any], colorbar: bool, edge: dict[str, Any], waits: bool
 ) -> None:
-    """The legend under the chart: one row on a wide figure, else two."""
+    """The legend under the chart: one row on a wide figure, else two. Kitting and task
+    swatches show the chart's kit colours side by side (tasks in their lighter shades)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    first = colors[0] if colors else style.PALETTE[0]
+    sample = _swatch_colors(colors, colorbar)
     kit_label = "kitting (colour = kit, see bar)" if colorbar else "kitting (colour = kit)"
-    handles: list[Artist] = [
-        Patch(facecolor=first, label=kit_label, **edge),
+    handles: list[Any] = [
+        KitSwatch(sample, edge, kit_label),
         Patch(facecolor=style.DELIVERY_COLOR, hatch="//", label="delivery", **edge),
     ]
     if waits:
         handles.append(Patch(label="waiting for tray", **_wait_style()))
     handles += [
         Patch(facecolor=style.PICKUP_COLOR, hatch="xx", label="kit pickup", **edge),
-        Patch(facecolor=style.lighten(first), label="task", **edge),
+        KitSwatch([style.lighten(c) for c in sample], edge, "task (its kit's colour, lighter)"),
         Patch(label="idle", **_idle_style()),
         Line2D([], [], color=style.MAKESPAN_COLOR, linestyle="--", label="makespan"),
     ]
     ncols = len(handles) if figure_size(ax)[0] >= 9.5 else math.ceil(len(handles) / 2)
     ax.legend(
         handles=handles,
+        labels=[h.get_label() for h in handles],
+        handler_map={KitSwatch: _swatch_handler()},
         loc="upper center",
         bbox_to_anchor=(0.5, -0.22),
         ncols=ncols,
         frameon=False,
     )
+
+
+def _task_list(ax: Axes, plan: Plan, colors: Sequence[Any], *, resize: bool) -> None:
+    """The tasks of each kit as a legend under the chart ("k: task, task"), in the kits'
+    colours, for charts whose task bars are too narrow to name. ``resize``: grow the figure
+    by the list's height (a figure made by :func:`plot_gantt`)."""
+    import textwrap
+
+    from matplotlib.patches import Patch
+
+    fig = cast("Figure", ax.get_figure(root=True))
+    width, height = figure_size(ax)
+    size = style.SMALL_SIZE
+    char_in = style.text_width_in("x", size)
+    wrap = max(12, int((width - 1.0) / char_in))
+    labels = [
+        textwrap.fill(f"{k}: {', '.join(kit.tasks)}", wrap) for k, kit in enumerate(plan.kits, 1)
+    ]
+    lines = [lab.split("\n") for lab in labels]
+    entry_in = max(style.text_width_in(x, size) for ls in lines for x in ls) + 0.45
+    ncols = max(1, min(len(labels), int((width - 0.3) // entry_in)))
+    rows = math.ceil(len(labels) / ncols)
+    tall = max(len(ls) for ls in lines)
+    handles = [Patch(facecolor=c, edgecolor="black", linewidth=0.4) for c in colors[: len(labels)]]
+    outside = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
+    fig.legend(
+        handles,
+        labels,
+        loc="outside lower center" if outside else "lower center",
+        ncols=ncols,
+        title="tasks by kit",
+        fontsize=size,
+        handlelength=1.0,
+        columnspacing=1.0,
+        frameon=False,
+    )
+    if resize:
+        fig.set_size_inches(width, height + rows * tall * 1.4 * size / 72 + 0.35)
 
 
 def _kit_colorbar(ax: Axes, n: int) -> None:

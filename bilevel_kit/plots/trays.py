@@ -4,7 +4,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+import re
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -33,6 +34,26 @@ def type_swatches(instance: Instance) -> dict[str, style.Swatch]:
     return dict(zip(ids, style.categorical(len(ids)), strict=True))
 
 
+def type_keys(instance: Instance) -> dict[str, str]:
+    """A short key per part type, for parts too small to carry the type's name: the initials
+    of the words of its id ("screw_short" -> "SS", "foot" -> "F"), numbered when types share
+    them ("C1", "C2"). The legend of part types gives each type's key."""
+    ids = sorted(instance.part_types)
+    initials = {
+        t: "".join(w[0] for w in re.split(r"[_\-\s.]+", t) if w).upper() or "?" for t in ids
+    }
+    out: dict[str, str] = {}
+    for t in ids:
+        same = [u for u in ids if initials[u] == initials[t]]
+        out[t] = initials[t] if len(same) == 1 else f"{initials[t]}{same.index(t) + 1}"
+    return out
+
+
+def type_label(type_id: str, key: str) -> str:
+    """A part type's legend entry: its id and its key."""
+    return f"{type_id} ({key})"
+
+
 def type_colors(instance: Instance) -> dict[str, Any]:
     """The colour of each part type's :func:`type_swatches` (types beyond the ten colours of
     the palette differ from earlier types by their hatch)."""
@@ -59,14 +80,16 @@ def _label_angle(theta: float, w: float, h: float) -> float:
     return 90.0 if a == -90.0 else a
 
 
-def _part_label(part: str, long_in: float, short_in: float, size: float) -> str | None:
-    """The part id if it fits inside the part (``long_in`` x ``short_in`` inches), else its
-    trailing copy number ("foot-3" -> "3"; the fill already gives the type), else None."""
-    if size / 72 * 1.2 > short_in:
-        return None
-    short = part.rstrip("0123456789")
-    candidates = [part] + ([part[len(short) :]] if short and short != part else [])
-    return next((c for c in candidates if style.text_width_in(c, size) + 0.02 <= long_in), None)
+def _fits(text: str, long_in: float, short_in: float, size: float) -> bool:
+    """Whether ``text`` fits inside a part of ``long_in`` x ``short_in`` inches, along its
+    long side."""
+    return size / 72 * 1.2 <= short_in and style.text_width_in(text, size) + 0.02 <= long_in
+
+
+def _part_label(type_id: str, key: str, long_in: float, short_in: float, size: float) -> str | None:
+    """What names a part inside it: its type where that fits, else the type's key
+    (:func:`type_keys`), else None (the part is named on a leader outside it)."""
+    return next((c for c in (type_id, key) if _fits(c, long_in, short_in, size)), None)
 
 
 def kit_fitness(instance: Instance, kit: Kit) -> float | None:
@@ -110,10 +133,11 @@ def plot_tray(
 ) -> Axes:
     """The kit's tray layout: the tray outline and each placement as a rotated rectangle
     (:func:`bilevel_kit.geometry.corners`) filled by part type (:func:`type_swatches`) and
-    labelled with its part id where the label fits inside the part, or else its copy number
-    (small parts stay unlabelled; labels never leave the axes). The default title gives the
-    number of parts, the kit fitness (:func:`kit_fitness`) and the tasks. ``legend=False``
-    leaves out the legend of part types."""
+    named by its type: the type's id where it fits inside the part, else the type's short key
+    (:func:`type_keys`), else the key on a leader beside the part (one leader for neighbouring
+    parts of a type, "SS x2"). The legend gives each type's fill and key. The default title
+    gives the number of parts, the kit fitness (:func:`kit_fitness`) and the tasks.
+    ``legend=False`` leaves out the legend of part types."""
     W, H = instance.tray.width, instance.tray.height
     if ax is None:
         fig_w = 5.5
@@ -134,8 +158,9 @@ def plot_tray(
     if legend:
         used = sorted({p.type for p in kit.layout})
         if used:
+            keys = type_keys(instance)
             ax.legend(
-                handles=[_type_patch(swatches.get(t), t) for t in used],
+                handles=[_type_patch(swatches.get(t), type_label(t, keys[t])) for t in used],
                 title="part type",
                 loc="upper left",
                 bbox_to_anchor=(1.02, 1.0),
@@ -174,13 +199,16 @@ def _inches_per_mm(ax: Axes) -> float:
 def _draw_placements(
     ax: Axes, instance: Instance, kit: Kit, swatches: dict[str, style.Swatch]
 ) -> None:
-    """Each placement as a polygon filled by its type, labelled where the label fits (a size
-    smaller on a tray drawn under 1.5 inches)."""
+    """Each placement as a polygon filled by its type and named by its type: inside the part
+    where the type (or its key) fits, else on a leader (:func:`_draw_leaders`). A size
+    smaller on a tray drawn under 1.5 inches."""
     from matplotlib.patches import Polygon
 
     scale = _inches_per_mm(ax)
     W, H = instance.tray.width, instance.tray.height
     size = style.SMALL_SIZE if scale * min(W, H) >= 1.5 else style.SMALL_SIZE - 1
+    keys = type_keys(instance)
+    small: list[Placement] = []
     for p in kit.layout:
         sw = swatches.get(p.type)
         ax.add_patch(
@@ -196,20 +224,124 @@ def _draw_placements(
                 zorder=2,
             )
         )
-        label = _part_label(p.part, max(p.w, p.h) * scale, min(p.w, p.h) * scale, size)
-        if label is not None:
-            ax.text(
-                p.x,
-                p.y,
-                label,
-                ha="center",
-                va="center",
-                fontsize=size,
-                rotation=_label_angle(p.theta, p.w, p.h),
-                rotation_mode="anchor",
-                zorder=3,
-                clip_on=True,
-            )
+        key = keys.get(p.type, p.type)
+        label = _part_label(p.type, key, max(p.w, p.h) * scale, min(p.w, p.h) * scale, size)
+        if label is None:
+            small.append(p)
+            continue
+        ax.text(
+            p.x,
+            p.y,
+            label,
+            ha="center",
+            va="center",
+            fontsize=size,
+            rotation=_label_angle(p.theta, p.w, p.h),
+            rotation_mode="anchor",
+            zorder=3,
+            clip_on=True,
+            gid=f"label:part:{p.part}",
+        )
+    _draw_leaders(ax, instance, _clusters(small, 0.08 * max(W, H)), keys, size)
+
+
+def _clusters(parts: Sequence[Placement], reach: float) -> list[list[Placement]]:
+    """Parts of one type grouped when their centres are within ``reach`` mm of another part
+    of the group (single linkage), so that two screws side by side share one leader."""
+    groups: list[list[Placement]] = []
+    for p in parts:
+        near = [
+            g
+            for g in groups
+            if g[0].type == p.type and any(math.hypot(p.x - q.x, p.y - q.y) <= reach for q in g)
+        ]
+        merged = [p] + [q for g in near for q in g]
+        groups = [g for g in groups if g not in near] + [merged]
+    return [sorted(g, key=lambda q: q.part) for g in groups]
+
+
+#: A label box in points on the page of a tray: (left, bottom, right, top).
+_Box = tuple[float, float, float, float]
+
+
+def _draw_leaders(
+    ax: Axes,
+    instance: Instance,
+    groups: list[list[Placement]],
+    keys: dict[str, str],
+    size: float,
+) -> None:
+    """The key of each group of small parts ("SS", or "SS x2" for two), boxed, beside the
+    group on a line to its centre: towards the tray's centre where that box is free, else
+    turned or moved further out (:func:`_leader_offset`), so that no two boxes overlap."""
+    pts_per_mm = 72.0 * _inches_per_mm(ax)
+    placed: list[_Box] = []
+    for g in groups:
+        x = sum(q.x for q in g) / len(g)
+        y = sum(q.y for q in g) / len(g)
+        text = keys.get(g[0].type, g[0].type) + (f" x{len(g)}" if len(g) > 1 else "")
+        box = (72.0 * style.text_width_in(text, size) + 4.0, 1.4 * size + 3.0)
+        offset = _leader_offset(ax, instance, (x, y), box, size, pts_per_mm, placed)
+        ax.annotate(
+            text,
+            (x, y),
+            xytext=offset,
+            textcoords="offset points",
+            ha="center",
+            va="center",
+            fontsize=size,
+            zorder=4,
+            annotation_clip=True,
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "0.4", "lw": 0.4},
+            arrowprops={"arrowstyle": "-", "lw": 0.6, "color": "0.2", "shrinkA": 0, "shrinkB": 0},
+            gid="label:parts:" + ",".join(q.part for q in g),
+        )
+
+
+def _leader_offset(
+    ax: Axes,
+    instance: Instance,
+    anchor: tuple[float, float],
+    box: tuple[float, float],
+    size: float,
+    pts_per_mm: float,
+    placed: list[_Box],
+) -> tuple[float, float]:
+    """Offset (points) of a leader label of ``box`` (width, height in points) from ``anchor``
+    (mm): the first of the directions towards the tray's centre, then turned by 30, 60 and
+    90 degrees either way, at 2.6, then 4 and 5.5 font sizes, whose box overlaps no box in
+    ``placed`` and stays inside the axes; the first candidate when none does. The chosen box
+    is added to ``placed``."""
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    ax_, ay = (anchor[0] - x0) * pts_per_mm, (anchor[1] - y0) * pts_per_mm
+    limits = (0.0, 0.0, (x1 - x0) * pts_per_mm, (y1 - y0) * pts_per_mm)
+    dx, dy = instance.tray.width / 2 - anchor[0], instance.tray.height / 2 - anchor[1]
+    base = math.atan2(dy, dx) if (dx, dy) != (0.0, 0.0) else math.pi / 4
+    w, h = box
+    candidates = [
+        (r * size * math.cos(base + t), r * size * math.sin(base + t))
+        for r in (2.6, 4.0, 5.5)
+        for t in (0.0, *(sign * math.radians(a) for a in (30, 60, 90) for sign in (1, -1)))
+    ]
+    for ox, oy in candidates:
+        cand = (ax_ + ox - w / 2, ay + oy - h / 2, ax_ + ox + w / 2, ay + oy + h / 2)
+        inside = (
+            cand[0] >= limits[0]
+            and cand[1] >= limits[1]
+            and cand[2] <= limits[2]
+            and cand[3] <= limits[3]
+        )
+        if inside and not any(_overlap(cand, other) for other in placed):
+            placed.append(cand)
+            return ox, oy
+    ox, oy = candidates[0]
+    placed.append((ax_ + ox - w / 2, ay + oy - h / 2, ax_ + ox + w / 2, ay + oy + h / 2))
+    return ox, oy
+
+
+def _overlap(a: _Box, b: _Box) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
 def _tray_title(instance: Instance, kit: Kit) -> str:
@@ -223,7 +355,9 @@ def _tray_title(instance: Instance, kit: Kit) -> str:
 
 
 @styled
-def plot_trays(instance: Instance, plan: Plan, ncols: int | None = None) -> Figure:
+def plot_trays(
+    instance: Instance, plan: Plan, ncols: int | None = None, *, method: str | None = None
+) -> Figure:
     """One :func:`plot_tray` subplot per kit (in delivery order), titled with the kit's number,
     tasks and fitness, and one legend of the part types used by the plan; returns the Figure
     (unused grid cells are hidden). All trays share one scale; tick labels and axis labels
@@ -231,7 +365,8 @@ def plot_trays(instance: Instance, plan: Plan, ncols: int | None = None) -> Figu
     ``ncols`` defaults to about the square root of the number of kits (at least 3, at most
     :data:`TRAY_COLUMNS`); cells shrink from 3.4 to 1.7 inches as columns are added, so 100
     kits stay one readable page. The margins are fixed in inches (no layout engine), which
-    keeps a 100-tray figure quick to draw."""
+    keeps a 100-tray figure quick to draw. The title names the instance (and ``method`` when
+    given)."""
     n = len(plan.kits)
     if ncols is None:
         ncols = min(TRAY_COLUMNS, max(3, math.ceil(math.sqrt(n))))
@@ -239,7 +374,8 @@ def plot_trays(instance: Instance, plan: Plan, ncols: int | None = None) -> Figu
     extent = _extent(instance, (p for kit in plan.kits for p in kit.layout))
     cell = float(np.clip(12.0 / ncols, *TRAY_CELL))
     used = sorted({p.type for kit in plan.kits for p in kit.layout})
-    grid = _TrayGrid(n, ncols, cell, extent, used)
+    keys = type_keys(instance)
+    grid = _TrayGrid(n, ncols, cell, extent, [type_label(t, keys[t]) for t in used])
     fig, flat = grid.figure()
     for k, kit in enumerate(plan.kits):
         _draw_tray_cell(instance, kit, k, flat[k], grid)
@@ -252,15 +388,16 @@ def plot_trays(instance: Instance, plan: Plan, ncols: int | None = None) -> Figu
     if used:
         swatches = type_swatches(instance)
         fig.legend(
-            handles=[_type_patch(swatches.get(t), t) for t in used],
+            handles=[_type_patch(swatches.get(t), type_label(t, keys[t])) for t in used],
             title="part type",
             loc="upper right",
             bbox_to_anchor=(1.0, 1 - (grid.top + grid.hgap) / grid.height),
             frameon=False,
         )
     W, H = instance.tray.width, instance.tray.height
+    head = instance.name if method is None else f"{instance.name} / {method}"
     fig.suptitle(
-        f"{instance.name}: tray layouts of {plural(n, 'kit')} ({W:g} x {H:g} mm; "
+        f"{head}: tray layouts of {plural(n, 'kit')} ({W:g} x {H:g} mm; "
         "kit fitness, bigger is better)",
         y=1 - 0.12 / grid.height,
         va="top",
@@ -281,7 +418,7 @@ class _TrayGrid:
         ncols: int,
         cell: float,
         extent: tuple[float, float, float, float],
-        used: list[str],
+        legend: list[str],
     ) -> None:
         self.n, self.ncols = n, ncols
         self.nrows = max(1, math.ceil(n / ncols))
@@ -291,7 +428,7 @@ class _TrayGrid:
         x0, x1, y0, y1 = extent
         self.box_h = cell * (y1 - y0) / (x1 - x0)
         self.right = 0.3 + (
-            max(style.text_width_in(t, style.LEGEND_SIZE) for t in used) + 0.5 if used else 0
+            max(style.text_width_in(t, style.LEGEND_SIZE) for t in legend) + 0.5 if legend else 0
         )
         self.hgap = 2.6 * self.title_size / 72 + 0.2
         self.width = self.left + ncols * cell + (ncols - 1) * self.wgap + self.right

@@ -275,10 +275,14 @@ def test_compare_table_files_and_resume(capsys, tmp_path, root, monkeypatch):
     assert sorted(p.name for p in figs.iterdir()) == [
         "stool_compare.png",
         "stool_single-task_gantt.png",
+        "stool_single-task_trays.png",
         "stool_whole-assembly_gantt.png",
+        "stool_whole-assembly_trays.png",
         "tiny_compare.png",
         "tiny_single-task_gantt.png",
+        "tiny_single-task_trays.png",
         "tiny_whole-assembly_gantt.png",
+        "tiny_whole-assembly_trays.png",
     ]
     # a second run reuses every saved cell: no method is called again
     import bilevel_kit.methods as methods

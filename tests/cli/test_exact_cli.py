@@ -55,9 +55,19 @@ def test_pack_unknown_within_the_time_limit_exits_3(tmp_path, capsys):
     assert ": feasible in" in capsys.readouterr().out
 
 
-def test_pack_instance_tasks_and_bad_input(tmp_path, capsys, root):
+def test_pack_instance_tasks_and_bad_input(tmp_path, capsys, root, monkeypatch):
+    from bilevel_kit import plots
+
     inst = str(root / "instances/hrc_table.json")
     png = tmp_path / "l.png"
+    titles: list[str] = []
+    save = plots.save_figure
+
+    def keep_title(fig, path, **kw):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(plots, "save_figure", keep_title)
     assert (
         main(
             [
@@ -76,6 +86,10 @@ def test_pack_instance_tasks_and_bad_input(tmp_path, capsys, root):
         == 0
     )
     assert "true Euclidean fitness" in capsys.readouterr().out and png.exists()
+    # the figure says what was packed, its fitness and how (not just "hrc_table: feasible")
+    (title,) = titles
+    assert title.startswith("hrc_table, tasks foot1, conn1: 5 parts, kit fitness ")
+    assert "mm\nCP-SAT feasible, objective fitness, 1 mm grid" in title
     assert main(["pack", inst, "--tasks", "foot1,nope"]) == 2
     assert "unknown task(s) nope" in capsys.readouterr().err
     bad = _pack_file(tmp_path, 100, [{"id": "a", "width": -1, "height": 3}], "bad.json")

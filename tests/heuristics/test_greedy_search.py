@@ -14,12 +14,9 @@ from strategies import part_types_and_tasks
 from bilevel_kit import check, solve
 from bilevel_kit.heuristics.cross_entropy import CEParams
 from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
-from bilevel_kit.heuristics.greedy_search import (
-    _Frontier,
-    _smallest,
-    _unique_rows,
-    fitness_upper_bounds,
-)
+from bilevel_kit.heuristics.prefix.bounds import fitness_upper_bounds
+from bilevel_kit.heuristics.prefix.frontier import Frontier, smallest
+from bilevel_kit.heuristics.prefix.levels import unique_rows
 from bilevel_kit.instance import Instance, from_dict
 from bilevel_kit.plan import evaluate
 
@@ -172,7 +169,7 @@ def test_smallest_is_the_stable_sorts_first_k():
         values = rng.integers(0, 5, n).astype(float)  # many ties
         values[rng.random(n) < 0.1] = -np.inf
         want = np.sort(np.lexsort((np.arange(n), values))[:k])
-        assert _smallest(values, k).tolist() == want.tolist()
+        assert smallest(values, k).tolist() == want.tolist()
 
 
 def test_unique_rows_match_numpy():
@@ -180,7 +177,7 @@ def test_unique_rows_match_numpy():
     for big in (3, 2**40):  # packed keys, and rows too wide to pack
         counts = rng.integers(0, 4, size=(300, 3))
         counts[:, 0] *= big
-        keys, inverse = _unique_rows(counts)
+        keys, inverse = unique_rows(counts)
         want_keys, want_inverse = np.unique(counts, axis=0, return_inverse=True)
         assert sorted(map(tuple, keys.tolist())) == sorted(map(tuple, want_keys.tolist()))
         assert (keys[inverse] == counts).all() and len(keys) == len(want_keys)
@@ -192,7 +189,7 @@ def test_frontier_pops_in_heap_order():
     bound = rng.integers(0, 20, 600).astype(float)
     stage = rng.integers(0, 2, 600)
     level, row = rng.integers(0, 4, 600), np.arange(600)
-    queue = _Frontier(bound, stage, level, row)
+    queue = Frontier(bound, stage, level, row)
     heap = list(zip(bound.tolist(), stage.tolist(), level.tolist(), row.tolist(), strict=True))
     heapq.heapify(heap)
     popped = 0
@@ -221,14 +218,15 @@ def test_one_type_fitness_bound_by_count_is_the_rows(table):
 def _compiled_and_python_runs(inst: Instance, params: GreedyParams, seed: int) -> list[tuple]:
     """A plan with the rest search's compiled core loop wherever it can run, and with the
     Python loop: (kits, scores, counters) of each."""
-    from bilevel_kit.heuristics import _rest_kernel, greedy_search
+    from bilevel_kit.heuristics import _rest_kernel
+    from bilevel_kit.heuristics.prefix import rests
 
     if _rest_kernel.kernel() is None:
         pytest.skip("numba is not available")
     runs = []
     for compiled in (True, False):
         with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(greedy_search, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+            mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
             if not compiled:
                 mp.setattr(_rest_kernel, "kernel", lambda: None)
             policy = GreedyCEPolicy(inst, params, seed)
@@ -297,27 +295,28 @@ def test_compiled_rest_search_on_generated_graphs(family, size, max_rest):
 
 @pytest.mark.parametrize(("family", "size"), [("intree", 60), ("series-parallel", 60)])
 def test_unlocked_rows_are_the_per_row_rule(family, size, table, monkeypatch):
-    """The level-at-once unlocked children (numpy) equal :meth:`_unlocked_after` row by row,
-    on graphs where prefixes unlock many tasks (in-trees: joins with several predecessors)."""
+    """The level-at-once unlocked children (numpy) equal :meth:`Precedence.unlocked_after` row
+    by row, on graphs where prefixes unlock many tasks (in-trees: joins with several
+    predecessors)."""
     from bilevel_kit.generate import generate
-    from bilevel_kit.heuristics.greedy_search import PrefixSearch
+    from bilevel_kit.heuristics.prefix.levels import Precedence
 
-    original = PrefixSearch._unlocked_rows
+    original = Precedence.unlocked_rows
     checked = [0, 0]  # rows, rows with unlocked children
 
     def spy(self, p_unl, par, child, tasks, undone):
         out = original(self, p_unl, par, child, tasks, undone)
-        n = len(self.r)
+        n = self.n
         assert out.shape[0] == len(child) and (out.shape[1] == 0 or (out < n).any(axis=0).all())
         for k in range(len(child)):
             parent = tuple(int(u) for u in p_unl[par[k]] if u < n)
-            want = self._unlocked_after(parent, tuple(tasks[k].tolist()), int(child[k]), undone)
+            want = self.unlocked_after(parent, tuple(tasks[k].tolist()), int(child[k]), undone)
             assert tuple(int(u) for u in out[k] if u < n) == want
             checked[1] += bool(want)
         checked[0] += len(child)
         return out
 
-    monkeypatch.setattr(PrefixSearch, "_unlocked_rows", spy)
+    monkeypatch.setattr(Precedence, "unlocked_rows", spy)
     for inst in (from_dict(generate(family, size, seed=1)), table):
         res = solve(inst, "greedy-ce", seed=0, samples=20, elite=5, max_iter=5)
         assert check(inst, res.plan) == []

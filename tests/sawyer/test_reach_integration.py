@@ -50,9 +50,13 @@ def test_checker_reports_unreachable_placements(half):
     assert [x.kind for x in check(half, good) if x.kind != "missing_task"] == []
 
 
-@pytest.mark.parametrize("method", ["single-task", "greedy-ce"])
-def test_plans_respect_reachability(half, method):
-    res = solve(half, method, check=True)
+@pytest.mark.parametrize(
+    ("method", "params"),
+    [("single-task", {}), ("greedy-ce", {}), ("greedy-ce", {"snap": True})],
+    ids=["single-task", "greedy-ce", "greedy-ce-snap"],
+)
+def test_plans_respect_reachability(half, method, params):
+    res = solve(half, method, check=True, **params)
     assert res.extra["violations"] == []
     g = reach_grid(half)
     for kit in res.plan.kits:
@@ -95,17 +99,31 @@ def test_motion_robot_times(root):
     assert again == inst  # the file keeps the nominal pick times, loading recomputes
 
 
-def test_reach_cli_draws_a_kit(root, tmp_path, capsys):
+def test_reach_cli_draws_a_kit(root, tmp_path, capsys, monkeypatch):
     inst_path = tmp_path / "half.json"
     inst_path.write_text(json.dumps(_doc(root, 900)))
     sol = tmp_path / "s.json"
     assert main(["solve", str(inst_path), "-m", "greedy-ce", "-o", str(sol)]) == 0
     png = tmp_path / "reach.png"
     capsys.readouterr()
+    from bilevel_kit import plots
+
+    titles: list[str] = []
+    save = plots.save_figure
+
+    def keep_title(fig, path, **kw):
+        titles.extend(ax.get_title() for ax in fig.axes if ax.get_title())
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(plots, "save_figure", keep_title)
     code = main(["reach", str(inst_path), "--solution", str(sol), "--kit", "1", "--png", str(png)])
     out = capsys.readouterr().out
     assert code == 0 and "reachable 44.3%" in out and "0 unreachable" in out
     assert png.read_bytes()[:4] == b"\x89PNG"
+    # the figure names the instance and the kit drawn on it
+    (title,) = titles
+    assert title.startswith("hrc_table: Sawyer reachability, 44% of 30 x 20 cells\n")
+    assert "kit 1 of s.json: " in title and "0 unreachable" in title
 
 
 def test_reachability_needs_no_station_section(root):

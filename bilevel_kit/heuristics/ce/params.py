@@ -56,6 +56,9 @@ class CEParams:
     #: Smoothing of the covariance update, Sigma <- b * Sigma_elite + (1 - b) * Sigma
     #: (1: the paper's rule; 0.3 beat 0.2, 0.5, 0.7 and 1 on the 28-part table kit).
     cov_smoothing: float = 0.3
+    #: Turn each angle of the answer to the nearest quarter turn where the layout stays valid
+    #: and its fitness does not drop (:mod:`bilevel_kit.heuristics.ce.snap`).
+    snap: bool = False
 
     def __post_init__(self) -> None:
         if self.samples < 2 or not 2 <= self.elite <= self.samples:
@@ -81,7 +84,8 @@ class Arrangement:
     when there is no layout). ``iterations``, ``converged`` and ``trace`` (best fitness after
     each iteration) describe the last CE run performed. ``source`` names where the layout came
     from: ``ce``, ``ce+start`` (CE from the caller's start), ``ce+packer-start``, any of these
-    with ``+repair``, ``packer``, or, without a layout, ``area-bound``/``too-large``.
+    with ``+repair``, ``packer``, each possibly with ``+snap``, or, without a layout,
+    ``area-bound``/``too-large``.
     """
 
     layout: tuple[Placement, ...]
