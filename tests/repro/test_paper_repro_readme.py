@@ -75,3 +75,20 @@ def test_a_changed_csv_is_caught(tmp_path: Path) -> None:
     summary.write_text("\n".join(lines) + "\n")
     (diff,) = check(tmp_path)  # the count is quoted in paper_repro/README.md
     assert "0 of" in diff and "README.md (rendered from the CSVs)" in diff
+
+
+def test_every_result_file_comes_from_a_rerun_step() -> None:
+    """paper_repro/rerun.py copies every committed CSV (none is made by hand) and the timing
+    table names only its steps."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("rerun", ROOT / "paper_repro" / "rerun.py")
+    assert spec is not None and spec.loader is not None
+    rerun = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(rerun)
+    copied = {dst for _, _, copies in rerun.STEPS.values() for dst in copies.values()}
+    csvs = {d for d in copied if not d.startswith("figures/")}
+    assert csvs | {"timing.csv"} == {p.name for p in RESULTS.glob("*.csv")}
+    for dst in copied - csvs:
+        assert (ROOT / "docs" / dst).exists(), dst
+    assert {r["run"] for r in read_rows(RESULTS / "timing.csv")} <= set(rerun.STEPS)
