@@ -166,6 +166,8 @@ def trends(
     from scipy.stats import kendalltau
 
     grid = [r for r in records if r["cell"]["mat"] is not None]
+    if len({r["cell"]["mat"] for r in grid}) < 2:
+        return []  # one MAT (e.g. a single-cell run): no trend in MAT to test
     out = []
     for subj, base in pairs:
         if base not in CLAIMS or not grid:

@@ -169,6 +169,8 @@ def test_trend_slope_and_verdict_from_replications():
     assert total["slope_per_30s"] == pytest.approx(-3.0, abs=0.05)
     assert total["ci_low"] < total["slope_per_30s"] < total["ci_high"] < 0
     assert total["verdict"] == "supported" and total["kendall_tau"] < 0
+    one_mat = [r for r in records if r["cell"]["mat"] == 60.0]
+    assert fig6_stats.trends(one_mat, [("optimized", "single-task")]) == []
 
 
 # -- beyond the paper: intervals -----------------------------------------------------------------
