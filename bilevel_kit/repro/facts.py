@@ -313,6 +313,9 @@ def fig6_facts(prefix: str, imp: Rows, ver: Rows, trends: Rows) -> Facts:
         out[f"{k}.ci"] = f"[{f(r['ci_low'], 2)}, {f(r['ci_high'], 2)}]"
         out[f"{k}.tau"] = f(r["kendall_tau"], 2)
         out[f"{k}.verdict"] = r["verdict"]
+        out[f"{k}.tau_p"] = f"{_num(r['kendall_p']):.3f}".lstrip("0")
+        peak = r.get("peak_mat")
+        out[f"{k}.peak"] = f"{_num(peak):g} s" if peak not in (None, "") else "-"
     return out
 
 

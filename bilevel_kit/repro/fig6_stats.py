@@ -10,9 +10,11 @@ trends as regressions, and the power of the paper's test.
   ``100 (baseline_r - subject_r) / mean(baseline)`` of every grid cell regressed on MAT and
   MTTF by least squares, with standard errors clustered by replication (the same seeds run in
   every cell); the MAT slope per 30 s (the grid's step) with its 95 % interval, and Kendall's
-  tau of the 16 cell means against MAT as a rank check. A claim is *supported* when the
-  slope's interval lies on the claimed side of 0, *contradicted* when on the other, else
-  *not shown*.
+  tau of the 16 cell means against MAT. A claim is *supported* when both agree with it (the
+  slope's interval on the claimed side of 0 and tau significant with the claimed sign),
+  *contradicted* when both disagree, else *not shown*: a slope alone is carried by the ends of
+  the grid and says nothing about where the gain is largest (``peak_mat``: the MAT whose cells'
+  mean improvement is largest, reported beside it).
 * **Power.** The replications per policy the paper's unpaired test would need to detect a
   cell's observed difference with 80 % power: Tukey's critical value for three groups at
   ``3 (R - 1)`` degrees of freedom, a noncentral t with the cell's pooled SD of the three
@@ -158,6 +160,26 @@ def _cluster_ols(
     return float(fit.params[1]), float(lo), float(hi), float(fit.pvalues[1])
 
 
+def trend_verdict(sign: int, lo: float, hi: float, tau: float, tau_p: float) -> str:
+    """supported / contradicted / not shown (module docstring): the slope's 95 % interval and
+    the cells' rank trend must agree."""
+    slope_side = 1 if lo > 0 else -1 if hi < 0 else 0
+    rank_side = (1 if tau > 0 else -1) if tau_p < ALPHA else 0
+    if slope_side == rank_side == sign:
+        return "supported"
+    if slope_side == rank_side == -sign:
+        return "contradicted"
+    return "not shown"
+
+
+def peak_mat(cell_mat: Sequence[float], cell_pct: Sequence[float]) -> float:
+    """The MAT whose cells' mean improvement is largest."""
+    by_mat: dict[float, list[float]] = {}
+    for m, v in zip(cell_mat, cell_pct, strict=True):
+        by_mat.setdefault(m, []).append(v)
+    return max(by_mat, key=lambda m: float(np.mean(by_mat[m])))
+
+
 def trends(
     records: Sequence[Mapping[str, Any]], pairs: Sequence[tuple[str, str]]
 ) -> list[dict[str, Any]]:
@@ -192,13 +214,7 @@ def trends(
                 np.concatenate(reps),
             )
             tau, tau_p = kendalltau(cell_mat, cell_pct)
-            verdict = (
-                "supported"
-                if sign * lo > 0 and sign * hi > 0
-                else "contradicted"
-                if sign * lo < 0 and sign * hi < 0
-                else "not shown"
-            )
+            verdict = trend_verdict(sign, lo, hi, float(tau), float(tau_p))
             out.append(
                 {
                     "panel": f"{METRIC_LABELS[m]}, {LABELS.get(subj, subj)} over "
@@ -211,6 +227,7 @@ def trends(
                     "p": p,
                     "kendall_tau": float(tau),
                     "kendall_p": float(tau_p),
+                    "peak_mat": peak_mat(cell_mat, cell_pct),
                     "cells": len(grid),
                     "reps": len(ys[0]),
                     "verdict": verdict,
@@ -226,8 +243,10 @@ __all__ = [
     "WORSE",
     "add_directions",
     "holm",
+    "peak_mat",
     "power",
     "reps_for_power",
+    "trend_verdict",
     "trends",
     "verdicts",
 ]

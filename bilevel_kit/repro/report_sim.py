@@ -113,6 +113,7 @@ def trends_markdown(rows: Sequence[Row]) -> str:
             f"{f(r['slope_per_30s'], 2)} [{f(r['ci_low'], 2)}, {f(r['ci_high'], 2)}]",
             _p(r["p"]),
             f"{f(r['kendall_tau'], 2)} (p {_p(r['kendall_p'])})",
+            _num_text(r.get("peak_mat")),
             str(r["verdict"]),
         ]
         for r in rows
@@ -123,9 +124,15 @@ def trends_markdown(rows: Sequence[Row]) -> str:
         "MAT slope, points per 30 s [95 % CI]",
         "p",
         "Kendall's tau of the cells",
+        "largest at MAT (s)",
         "verdict",
     ]
     return "\n".join(markdown_lines(head, body))
+
+
+def _num_text(x: Any) -> str:
+    """``90`` for 90.0 or "90.0"; ``-`` when missing."""
+    return "-" if x in (None, "") else f"{float(x):g}"
 
 
 def _p(p: Any) -> str:

@@ -173,6 +173,15 @@ def test_trend_slope_and_verdict_from_replications():
     assert fig6_stats.trends(one_mat, [("optimized", "single-task")]) == []
 
 
+def test_a_trend_is_supported_only_when_slope_and_ranks_agree():
+    v = fig6_stats.trend_verdict
+    assert v(1, 3.8, 5.9, 0.5, 0.01) == "supported"
+    assert v(1, 3.8, 5.9, 0.2, 0.30) == "not shown"  # slope from the grid's ends only
+    assert v(1, -2.0, -1.0, -0.6, 0.001) == "contradicted"
+    assert v(-1, -0.5, 0.4, -0.6, 0.001) == "not shown"
+    assert fig6_stats.peak_mat([30, 30, 60, 60, 90], [-5, -3, 10, 12, 8]) == 60
+
+
 # -- beyond the paper: intervals -----------------------------------------------------------------
 
 
