@@ -15,6 +15,7 @@ from .common import (
     add_param_option,
     add_seed,
     add_time_limit,
+    instance_overrides,
     load_instance,
     positive_int,
     print_violations,
@@ -129,7 +130,7 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
     if args.out:
         from ..solution import write
 
-        write(args.out, result)
+        write(args.out, result, instance_overrides(args))
     if figures:
         from ..plots import save_figure
 
@@ -153,6 +154,16 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
         f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
         f"  time {result.wall_time_s:.3f} s"
     )
+    j = result.extra.get("plan_objective_J")
+    if result.status_objective != "makespan" and j is not None:
+        # the status is about J, not the makespan: show the numbers it refers to
+        j_bound = result.extra.get("plan_objective_J_bound")
+        j_gap = result.extra.get("plan_objective_J_gap")
+        lines.append(
+            f"  {result.status} refers to J (the paper's F summed over the kits): J {_fmt(j)}"
+            f"  J bound {_fmt(j_bound)}"
+            f"  J gap {'-' if j_gap is None else f'{100 * j_gap:.2f}%'}"
+        )
     if quiet or result.plan is None or result.timeline is None:
         return "\n".join(lines)
     lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
