@@ -190,6 +190,7 @@ _KNOWN = _ANNOTATIONS | {
     "required",
     "properties",
     "additionalProperties",
+    "oneOf",
 }
 
 
@@ -229,6 +230,9 @@ def _compile(schema: Mapping[str, Any]) -> Check:
         tests.append(_array_test(schema))
     if {"properties", "required", "additionalProperties"} & set(schema):
         tests.append(_object_test(schema))
+    if "oneOf" in schema:  # exactly one branch holds (the solution's ``trays``)
+        branches = [_compile(s) for s in schema["oneOf"]]
+        tests.append(lambda v: sum(b(v) for b in branches) == 1)
     return _all_of(tests) if tests else lambda v: True
 
 
