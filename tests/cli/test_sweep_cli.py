@@ -77,7 +77,9 @@ def test_ctrl_c_stops_quickly_and_keeps_finished_cells(tmp_path, jobs):
     assert proc.returncode == EXIT_INTERRUPTED, text[-2000:]
     assert "bilevel-kit: interrupted" in text and "(interrupted)" in text
     assert "Traceback" not in text  # the workers leave Ctrl-C to the client
-    assert stop < 5, stop  # ~0.5 s here; generous on a loaded machine
+    # ~0.5-1.2 s measured (docs/cli.md); the bound is what the mechanism needs (the workers
+    # are stopped, not waited for), not the goal: a busy machine took 12.3 s against 5 s
+    assert stop < 20, stop
     kept = [p for p in out.glob("cells/*.json") if not p.name.startswith(".")]
     assert 1 <= len(kept) < 5
     assert all(json.loads(p.read_text())["runs"] for p in kept)
