@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from bilevel_kit.instance import Instance, from_dict, load
-from bilevel_kit.models import packing as cpsat_packing
+from bilevel_kit.models import packing_oracle as cpsat_packing
 from bilevel_kit.models.cpsat import solve
 from bilevel_kit.validate import check
 

@@ -21,7 +21,7 @@ from typing import Any
 from bilevel_kit.instance import load
 from bilevel_kit.models import cpsat as cs
 from bilevel_kit.models import milp as ms
-from bilevel_kit.models import packing as cpsat_packing
+from bilevel_kit.models import packing_oracle as cpsat_packing
 from bilevel_kit.plan import evaluate
 from bilevel_kit.validate import check
 

@@ -12,12 +12,22 @@ Families:
   chair-like product built from the same HRC model-set parts.
 * ``intree``: a random assembly tree of ``size`` tasks (each task feeds one later task).
 * ``series-parallel``: a random series-parallel graph of ``size`` tasks.
+* ``wide``: ``size`` tasks in many short independent chains (1 to 4 tasks each).
+* ``sparse``: a sparse random graph of ``size`` tasks over 6 part types: each task has a
+  one-in-five chance of an arc to a task up to 40 positions later.
+* ``stool``: ``size`` units of the stool of Fig. 2 (``instances/stool.json``).
 
 ``tightness`` sets the tray for the random families: tray area = total part area / tightness
 (1.0: the whole product exactly fills the tray by area; larger values force more kits). It and
-``seed`` apply to the random families only (``bilevel-kit generate`` refuses them for ``table``
-and ``mixed``). A tightness so high that some task's parts do not fit the tray on their own is
-an error: no method could solve that instance.
+``seed`` apply to the random families only (``bilevel-kit generate`` refuses them for
+``table``, ``mixed`` and ``stool``). ``tray`` replaces the family's tray (the paper's 300 x 200
+mm, or the one ``tightness`` gives), ``trays`` its trays in circulation (the table: 1, the
+others: unlimited) and ``name`` its name. A tray so small that some task's parts do not fit it
+on their own is an error: no method could solve that instance.
+
+:func:`command_line` is the command that makes a document; the description quotes it and
+``bilevel-kit generate`` stores it as the instance's ``generated_by`` (docs/formats.md), so
+every generated file says how to make it again.
 """
 
 from __future__ import annotations
@@ -25,6 +35,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -32,16 +43,59 @@ import numpy as np
 
 from .errors import UsageError
 
-FAMILIES = ("table", "mixed", "intree", "series-parallel")
+FAMILIES = ("table", "mixed", "stool", "intree", "series-parallel", "wide", "sparse")
+#: The families built from the paper's products (sized in units, no seed or tightness).
+PRODUCTS = ("table", "mixed", "stool")
+#: Each random family's number in its random stream's seed (fixed: files stay reproducible).
+_STREAM = {"intree": 2, "series-parallel": 3, "wide": 4, "sparse": 5}
+DEFAULT_TIGHTNESS = 0.6
 _ROOT = Path(__file__).resolve().parent.parent
 _SD_RATIO = 61.14 / 374.78
 
 
-def _table_doc() -> dict[str, Any]:
-    path = _ROOT / "instances" / "hrc_table.json"
+def _product_doc(file: str = "hrc_table.json") -> dict[str, Any]:
+    path = _ROOT / "instances" / file
     if path.exists():
-        return json.loads(path.read_text())
-    raise UsageError(f"generate: the table family needs {path}")
+        doc: dict[str, Any] = json.loads(path.read_text())
+        return doc
+    raise UsageError(f"generate: this family needs {path}")
+
+
+def _table_doc() -> dict[str, Any]:
+    return _product_doc("hrc_table.json")
+
+
+def command_line(
+    family: str,
+    size: int,
+    seed: int = 0,
+    tightness: float | None = None,
+    delivery_time: float | None = None,
+    *,
+    trays: int | str | None = None,
+    tray: tuple[float, float] | None = None,
+    name: str | None = None,
+) -> str:
+    """The ``bilevel-kit generate`` command that makes this document (a random family always
+    names its seed, tightness and delivery time; the other options only when given)."""
+    words = ["bilevel-kit", "generate", family, "--size", str(size)]
+    if family in PRODUCTS:
+        if delivery_time is not None:
+            words += ["--d", f"{delivery_time:g}"]
+    else:
+        t = DEFAULT_TIGHTNESS if tightness is None else tightness
+        d = 5.0 if delivery_time is None else delivery_time
+        if tray is None:
+            words += ["--seed", str(seed), "--tightness", f"{t:g}", "--d", f"{d:g}"]
+        else:
+            words += ["--seed", str(seed), "--d", f"{d:g}"]
+    if trays is not None:
+        words += ["--trays", str(trays)]
+    if tray is not None:
+        words += ["--tray", f"{tray[0]:g}x{tray[1]:g}"]
+    if name is not None:
+        words += ["--name", name]
+    return " ".join(words)
 
 
 def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
@@ -53,6 +107,20 @@ def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
         doc["delivery_time"] = float(delivery_time)
     doc["description"] = (
         f"{size} units of the paper's table (bilevel-kit generate table --size {size})."
+    )
+    return doc
+
+
+def stool(size: int, delivery_time: float | None = None) -> dict[str, Any]:
+    """``size`` units of the stool of Fig. 2."""
+    doc = _product_doc("stool.json")
+    doc["name"] = f"stool_u{size}"
+    doc["units"] = size
+    if delivery_time is not None:
+        doc["delivery_time"] = float(delivery_time)
+    doc["description"] = (
+        f"{size} units of the stool of the paper's Fig. 2: a1 'insert screws to top' precedes "
+        f"a2 and a3, the legs (bilevel-kit generate stool --size {size})."
     )
     return doc
 
@@ -181,18 +249,37 @@ def _series_parallel(
     return ea + eb, sa + sb, ta + tb
 
 
+def _random_edges(rng: np.random.Generator, family: str, ids: list[str]) -> list[list[str]]:
+    """The precedence arcs of a random family over ``ids`` (see the module docstring)."""
+    n = len(ids)
+    if family == "intree":
+        # task j > 0 feeds a random earlier-numbered parent: the root t0 is the final assembly
+        return [[ids[j], ids[int(rng.integers(0, j))]] for j in range(1, n)]
+    if family == "series-parallel":
+        return _series_parallel(rng, ids)[0]
+    edges = []
+    if family == "wide":  # consecutive runs of 1 to 4 tasks are chains
+        start = 0
+        while start < n:
+            end = min(n, start + int(rng.integers(1, 5)))
+            edges += [[ids[j], ids[j + 1]] for j in range(start, end - 1)]
+            start = end
+        return edges
+    for j in range(n - 1):  # sparse: P = 1/5 of one arc to one of the next 40 tasks
+        if rng.random() < 0.2:
+            edges.append([ids[j], ids[j + int(rng.integers(1, min(40, n - 1 - j) + 1))]])
+    return edges
+
+
 def random_graph(
     family: str, size: int, seed: int, tightness: float = 0.6, delivery_time: float = 5.0
 ) -> dict[str, Any]:
-    """A random in-tree or series-parallel product of ``size`` tasks."""
-    rng = np.random.default_rng(np.random.SeedSequence([seed, size, FAMILIES.index(family)]))
-    types = _random_parts(rng, int(rng.integers(2, 5)))
+    """A random product of ``size`` tasks: an in-tree, a series-parallel graph, short chains
+    (``wide``) or a sparse graph (``sparse``)."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, size, _STREAM[family]]))
+    types = _random_parts(rng, 6 if family == "sparse" else int(rng.integers(2, 5)))
     ids = [f"t{j}" for j in range(size)]
-    if family == "intree":
-        # task j > 0 feeds a random earlier-numbered parent: the root t0 is the final assembly
-        edges = [[f"t{j}", f"t{int(rng.integers(0, j))}"] for j in range(1, size)]
-    else:
-        edges, _, _ = _series_parallel(rng, ids)
+    edges = _random_edges(rng, family, ids)
     tasks = []
     area = 0.0
     for tid in ids:
@@ -229,33 +316,76 @@ def generate(
     family: str,
     size: int,
     seed: int = 0,
-    tightness: float = 0.6,
+    tightness: float | None = None,
     delivery_time: float | None = None,
+    *,
+    trays: int | str | None = None,
+    tray: tuple[float, float] | None = None,
+    name: str | None = None,
 ) -> dict[str, Any]:
     """An instance document of the given family (see the module docstring); ``seed`` and
-    ``tightness`` only shape the random families."""
+    ``tightness`` only shape the random families, ``trays`` (an integer >= 1 or
+    ``"unlimited"``), ``tray`` (width, height in mm) and ``name`` replace the family's."""
     if family not in FAMILIES:
         raise UsageError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
     if size < 1:
         raise UsageError("--size must be >= 1")
-    if not (tightness > 0 and math.isfinite(tightness)):
+    if tightness is not None and not (tightness > 0 and math.isfinite(tightness)):
         raise UsageError(f"--tightness must be a finite number > 0, got {tightness!r}")
+    if tightness is not None and tray is not None:
+        raise UsageError("give --tray or --tightness, not both (both set the tray)")
     if family == "table":
-        return table(size, delivery_time)
-    if family == "mixed":
-        return mixed(size, delivery_time)
-    doc = random_graph(
-        family, size, seed, tightness, 5.0 if delivery_time is None else delivery_time
+        doc = table(size, delivery_time)
+    elif family == "mixed":
+        doc = mixed(size, delivery_time)
+    elif family == "stool":
+        doc = stool(size, delivery_time)
+    else:
+        t = DEFAULT_TIGHTNESS if tightness is None else tightness
+        d = 5.0 if delivery_time is None else delivery_time
+        doc = random_graph(family, size, seed, t, d)
+    _apply_options(doc, trays, tray, name)
+    cmd = command_line(
+        family, size, seed, tightness, delivery_time, trays=trays, tray=tray, name=name
     )
-    _check_solvable(doc, tightness)
+    doc["description"] = re.sub(r"\(bilevel-kit generate [^)]*\)", f"({cmd})", doc["description"])
+    if family not in PRODUCTS or tray is not None:
+        _check_solvable(doc, tightness, tray)
     return doc
 
 
-def _check_solvable(doc: dict[str, Any], tightness: float) -> None:
+def _apply_options(
+    doc: dict[str, Any],
+    trays: int | str | None,
+    tray: tuple[float, float] | None,
+    name: str | None,
+) -> None:
+    """``trays``, ``tray`` and ``name`` written into ``doc`` (ranges checked on loading)."""
+    if trays == "unlimited":
+        doc.pop("trays", None)
+    elif trays is not None:
+        if isinstance(trays, bool) or not isinstance(trays, int) or trays < 1:
+            raise UsageError(f"--trays must be an integer >= 1 or 'unlimited', got {trays!r}")
+        doc["trays"] = trays
+    if tray is not None:
+        doc["tray"] = {"width": float(tray[0]), "height": float(tray[1])}
+    if name is not None:
+        if not name:
+            raise UsageError("--name must not be empty")
+        doc["name"] = name
+
+
+def _check_solvable(
+    doc: dict[str, Any], tightness: float | None, tray: tuple[float, float] | None
+) -> None:
     """Every task's parts fit the tray on their own, else no plan exists (a kit holds at least
-    one task): the area bound first, then the packing oracle for the few that pass it."""
+    one task): the area bound first, then the packing oracle for the few that pass it. Only a
+    proof refuses (docs/formulations.md#what-optimal-means): one at any angle means no method
+    can solve the instance, one for 0/90-degree layouts that the exact models and the
+    baselines cannot (only parts at other angles might fit); an undecided answer passes."""
     from .instance import from_dict
-    from .models.packing import kit_fits
+    from .models.packing import ANY_ANGLE
+    from .models.packing_oracle import kit_verdict
 
     inst = from_dict(doc, "<generated>")
     tried: set[frozenset[tuple[str, int]]] = set()
@@ -266,9 +396,20 @@ def _check_solvable(doc: dict[str, Any], tightness: float) -> None:
             continue
         tried.add(key)
         area = sum(inst.part_types[p].area * n for p, n in counts.items())
-        if area > inst.tray.area or kit_fits(inst, counts) is False:
+        fit = None if area > inst.tray.area else kit_verdict(inst, counts, 2.0)
+        if fit is None or fit.fits is False:
+            what = (
+                "--tray" if tray is not None else f"--tightness {tightness or DEFAULT_TIGHTNESS:g}"
+            )
+            fix = "a larger --tray" if tray is not None else "a lower --tightness"
+            how = (
+                ", so no method can solve this instance"
+                if fit is None or fit.scope == ANY_ANGLE
+                else " at 0 or 90 degrees, so neither the exact models nor the baselines can "
+                "solve this instance"
+            )
             raise UsageError(
-                f"--tightness {tightness:g}: the parts of task {task.id} do not fit the "
-                f"{inst.tray.width:g} x {inst.tray.height:g} mm tray on their own, so no "
-                "method can solve this instance; use a lower --tightness"
+                f"{what}: the parts of task {task.id} do not fit the "
+                f"{inst.tray.width:g} x {inst.tray.height:g} mm tray on their own{how}; "
+                f"use {fix}"
             )

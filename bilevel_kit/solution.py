@@ -172,44 +172,82 @@ def schema() -> dict[str, Any]:
 @dataclass(frozen=True)
 class LoadedSolution:
     """A solution file: its plan, and what it claims (times, metrics, objective, bound, gap,
-    status), all of which the checker recomputes."""
+    status), all of which the checker recomputes; ``number_faults``: the numbers the strict
+    reader refused (:class:`_Numbers`), violations of their own."""
 
     document: dict[str, Any]
     plan: Plan
     reported_kits: tuple[KitTimes, ...] | None
     reported_metrics: dict[str, float] | None
     claims: Claims = field(default_factory=Claims)
+    number_faults: tuple[Violation, ...] = ()
 
     def check(self, instance: Instance) -> list[Violation]:
         """The independent checker on the plan and on every number the file states."""
-        return check(
+        found = check(
             instance,
             self.plan,
             reported_kits=self.reported_kits,
             reported_metrics=self.reported_metrics,
             claims=self.claims,
         )
+        return [*self.number_faults, *found]
+
+
+#: The largest magnitude a number of a solution may have (lengths in mm, times in s): far
+#: beyond any plan of an instance in range (docs/formats.md#ranges), and small enough that
+#: the checker's sums, products and tolerances stay exact-enough floats.
+MAX_NUMBER = 1e18
+
+
+class _Numbers:
+    """The one strict reader of a solution's numbers: a JSON number (any size of integer)
+    becomes a float when it is finite and at most :data:`MAX_NUMBER` in magnitude; any other
+    is a ``bad_number`` violation naming its JSON path, and reads as NaN (the checks then
+    skip it), never an exception."""
+
+    def __init__(self) -> None:
+        self.faults: list[Violation] = []
+
+    def __call__(self, value: Any, where: str) -> float:
+        try:
+            out = float(value)
+        except OverflowError:  # an integer beyond the float range
+            out = math.inf
+        if math.isfinite(out) and abs(out) <= MAX_NUMBER:
+            return out
+        digits = len(str(abs(value))) if isinstance(value, int) else None
+        shown = f"a {digits}-digit integer" if digits is not None else f"{out:g}"
+        self.faults.append(
+            Violation("bad_number", f"{where}: {shown} is out of range (|x| <= {MAX_NUMBER:g})")
+        )
+        return math.nan
+
+    def optional(self, value: Any, where: str) -> float | None:
+        """A claim that may be null; a refused number reads as not stated."""
+        if value is None:
+            return None
+        out = self(value, where)
+        return None if math.isnan(out) else out
 
 
 def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
     """Validate a parsed solution document; a kit with some but not all of the five times, or
     times on some kits only, raises :class:`SolutionError` naming the missing field."""
     validate_document(doc, source, schema(), SolutionError)
+    num = _Numbers()
     kits = []
     times = []
     timed = [any(k in kd for k in _TIME_KEYS) for kd in doc["kits"]]
     for i, kd in enumerate(doc["kits"]):
+        where = f"$.kits[{i}]"
         layout = tuple(
             Placement(
                 p["part"],
                 p["type"],
-                float(p["x"]),
-                float(p["y"]),
-                float(p["theta"]),
-                float(p["w"]),
-                float(p["h"]),
+                *(num(p[k], f"{where}.layout[{j}].{k}") for k in ("x", "y", "theta", "w", "h")),
             )
-            for p in kd["layout"]
+            for j, p in enumerate(kd["layout"])
         )
         kits.append(Kit(tuple(kd["tasks"]), layout))
         if any(timed):
@@ -221,19 +259,48 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
                     f"missing time field {missing[0]!r} (a solution gives all five times of "
                     "every kit, or none)",
                 )
-            times.append(KitTimes(*(float(kd[k]) for k in _TIME_KEYS)))
+            times.append(KitTimes(*(num(kd[k], f"{where}.{k}") for k in _TIME_KEYS)))
+    metrics = doc.get("metrics")
+    if metrics is not None:  # a refused metric is left out (its violation says why)
+        read = {k: num(v, f"$.metrics.{k}") for k, v in metrics.items()}
+        metrics = {k: v for k, v in read.items() if not math.isnan(v)}
+    stated = {k: num.optional(doc.get(k), f"$.{k}") for k in ("objective", "bound", "gap")}
     claims = Claims(
         status=doc["status"],
-        objective=doc.get("objective"),
-        bound=doc.get("bound"),
-        gap=doc.get("gap"),
+        objective=stated["objective"],
+        bound=stated["bound"],
+        gap=stated["gap"],
         has_gap="gap" in doc,
         status_objective=doc.get("status_objective", "makespan"),
-        timeline=doc.get("timeline_params"),
+        timeline=_timeline(doc.get("timeline_params"), num),
+        refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
     )
     return LoadedSolution(
-        doc, Plan(tuple(kits)), tuple(times) if times else None, doc.get("metrics"), claims
+        doc,
+        Plan(tuple(kits)),
+        tuple(times) if times else None,
+        metrics,
+        claims,
+        tuple(num.faults),
     )
+
+
+def _timeline(params: dict[str, Any] | None, num: _Numbers) -> dict[str, Any] | None:
+    """``timeline_params`` with its numbers read strictly (``trays`` stays an integer)."""
+    if params is None:
+        return None
+    where = "$.timeline_params"
+    trays = params["trays"]
+    if trays is not None and math.isnan(num(trays, f"{where}.trays")):
+        trays = math.nan
+    return {
+        "delivery_time": num(params["delivery_time"], f"{where}.delivery_time"),
+        "kit_overhead": {
+            k: num(params["kit_overhead"][k], f"{where}.kit_overhead.{k}")
+            for k in ("robot", "human")
+        },
+        "trays": trays,
+    }
 
 
 def read(path: str | Path) -> LoadedSolution:

@@ -2,7 +2,10 @@
 
 ``segmentations`` enumerates every precedence-feasible order of an instance's tasks cut into
 consecutive kits, each distinct segmentation once; ``fits`` decides a kit exactly with the
-CP-SAT packer (area first; memoised per part multiset). Only for instances of <= 7 tasks.
+CP-SAT packer (area first; memoised per part multiset) for 0/90-degree layouts on the 1 mm grid
+(the test instances' sizes are whole millimetres, so the grid is exact). Only for instances of
+<= 7 tasks. The brute force is the optimum over 0/90-degree plans, which is what an exact
+model's own verdict speaks of (``model_verdict``, docs/formulations.md#what-optimal-means).
 """
 
 from __future__ import annotations
@@ -66,3 +69,30 @@ def best_makespan(inst) -> tuple[float, Plan | None]:
             if ms < best[0]:
                 best = (ms, plan)
     return best
+
+
+def model_verdict(out) -> tuple[bool, float | None]:
+    """An exact model's own verdict and bound over the plans it models: every valid plan when
+    its exclusions all hold at any angle (``status`` optimal, ``bound``), else the 0/90-degree
+    plans (``optimal_axis_aligned``, ``bound_axis_aligned``); and the invariants between them:
+    "optimal" only for a proof at any angle, ``bound`` never above the 0/90-degree bound."""
+    extra = out.extra
+    if out.status == "optimal":
+        assert extra["proof_scope"] == "any angle", extra
+    if extra.get("proof_scope") == "any angle" or "optimal_axis_aligned" not in extra:
+        return out.status == "optimal", out.bound
+    axis = extra.get("bound_axis_aligned")
+    assert axis is None or out.bound <= axis + 1e-9, extra
+    return bool(extra["optimal_axis_aligned"]), axis
+
+
+def assert_model_optimal(out, opt: float, tol: float = 1e-9) -> None:
+    """The model proved ``opt`` (the brute force over 0/90-degree plans) optimal for the
+    plans it models, and its ``bound`` holds for every plan (it is at most ``opt``)."""
+    import pytest
+
+    ok, bound = model_verdict(out)
+    assert ok, (out.status, out.extra)
+    assert out.extra["makespan"] == pytest.approx(opt, abs=tol)
+    assert bound == pytest.approx(opt, abs=tol)
+    assert out.bound <= opt + tol

@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from . import (
+    bench,
     check,
     compare,
     execute,
@@ -32,6 +33,7 @@ from . import (
     solve,
 )
 from .common import (
+    EXIT_CODES,
     EXIT_INVALID,
     EXIT_OK,
     EXIT_UNKNOWN,
@@ -43,6 +45,7 @@ from .common import (
 
 __all__ = [
     "COMMANDS",
+    "EXIT_CODES",
     "EXIT_INVALID",
     "EXIT_OK",
     "EXIT_UNKNOWN",
@@ -70,6 +73,7 @@ class Command(Protocol):
 COMMANDS: dict[str, Command] = {
     "solve": solve,
     "compare": compare,
+    "bench": bench,
     "simulate": simulate,
     "repro": repro,
     "pack": pack,
@@ -99,8 +103,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="bilevel-kit",
         description="Just-in-time robotic kitting: solve, compare and check kitting plans.",
-        epilog="exit codes: 0 ok, 1 invalid solution, 2 bad input or usage, 3 unknown "
-        "within the time limit, 4 no layout on this grid (pack)\n\nmethods:\n" + listing,
+        epilog="exit codes:\n"
+        + "\n".join(f"  {code:<4} {meaning}" for code, meaning in EXIT_CODES.items())
+        + "\n\nmethods:\n"
+        + listing,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(

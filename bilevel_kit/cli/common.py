@@ -35,6 +35,17 @@ MAX_SEED = 2**31 - 1
 EXIT_FAILED = 5
 #: Ctrl-C: the sweep stopped, every finished cell is kept (128 + SIGINT).
 EXIT_INTERRUPTED = 130
+#: Every exit code a command uses, with its meaning: ``bilevel-kit --help`` lists them, and
+#: the README's list is tested against this one (tests/cli/test_cli.py).
+EXIT_CODES: dict[int, str] = {
+    EXIT_OK: "ok",
+    EXIT_INVALID: "invalid solution (check, solve --check, compare) or a placement out of reach",
+    EXIT_USAGE: "bad input or usage (one line on stderr, nothing written)",
+    EXIT_UNKNOWN: "no definite answer within the time limit",
+    EXIT_NO_GRID_LAYOUT: "pack: no layout on this grid, which is not a proof that none exists",
+    EXIT_FAILED: "a sweep (compare, simulate, repro) finished but some cells failed",
+    EXIT_INTERRUPTED: "interrupted by Ctrl-C (a sweep keeps its finished cells)",
+}
 #: The environment variable naming a running Dask scheduler (as Dask itself reads it).
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 

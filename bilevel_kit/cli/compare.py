@@ -136,6 +136,7 @@ def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
 def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
     """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan."""
     from ..experiments import format_markdown, format_table, write_csv
+    from ..experiments.compare import inconsistencies
 
     print(format_table(records))
     for r in records:
@@ -149,13 +150,17 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
         from ..atomic import write_text
 
         write_text(args.md, format_markdown(records))
+    code = EXIT_OK
     if any(
         r.get("valid") is False and r["status"] != "error" and r["makespan"] is not None
         for r in records
     ):
         print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
-        return EXIT_INVALID
-    return EXIT_OK
+        code = EXIT_INVALID
+    for line in inconsistencies(records):  # false claims: never printed as normal
+        print(f"INCONSISTENT: {line}", file=sys.stderr)
+        code = EXIT_INVALID
+    return code
 
 
 def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, Any]) -> None:

@@ -72,9 +72,12 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     except BilevelKitError as exc:  # a failed cell: its error and its configuration
         return {**record, "status": "error", "error": str(exc), "cell": asdict(cell)}
     from ..solution import result_to_dict
+    from ..validate import CLAIM_KINDS
 
     m = res.metrics or {}
     violations = res.extra.get("violations", [])
+    claims = [v for v in violations if v["kind"] in CLAIM_KINDS]
+    violations = [v for v in violations if v["kind"] not in CLAIM_KINDS]
     return {
         **record,
         "status": res.status_text,
@@ -88,6 +91,8 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         # None: the method returned no plan (unknown/infeasible), which is not an invalid plan
         "valid": None if res.plan is None else not violations,
         "violations": len(violations),
+        # the result's status, bound and gap against its own makespan (the checker's claims)
+        "false_claims": [f"[{v['kind']}] {v['message']}" for v in claims],
         "solution": result_to_dict(res),
     }
 
@@ -99,16 +104,52 @@ def _file_of(record: dict[str, Any]) -> str:
 
 def add_best_bound_gap(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
     """Add ``best_bound`` (max bound over the rows of the same instance file) and ``gap`` to
-    it (fraction)."""
+    it (fraction). A best bound above the makespan of a valid plan of the same file is no
+    bound: its rows get ``inconsistent`` (the message :func:`inconsistencies` lists) and no
+    best bound or gap."""
+    from ..validate import TIME_TOL
+
     rows = list(records)
     best: dict[str, float] = {}
+    low: dict[str, float] = {}  # the least makespan of a valid plan
     for r in rows:
+        f = _file_of(r)
         if r.get("bound") is not None:
-            f = _file_of(r)
             best[f] = max(best.get(f, r["bound"]), r["bound"])
+        if r.get("valid") is True and r.get("makespan") is not None:
+            low[f] = min(low.get(f, r["makespan"]), r["makespan"])
     for r in rows:
-        b = best.get(_file_of(r))
+        f = _file_of(r)
+        b, ms = best.get(f), r.get("makespan")
+        if b is not None and f in low and b > low[f] + max(TIME_TOL, 1e-9 * low[f]):
+            r["inconsistent"] = _inconsistency(rows, f, b, low[f])
+            b = None
         r["best_bound"] = b
-        ms = r.get("makespan")
         r["gap"] = None if b is None or not ms else max(0.0, (ms - b) / ms)
     return rows
+
+
+def _inconsistency(rows: list[dict[str, Any]], f: str, bound: float, makespan: float) -> str:
+    """Which methods claim the bound, and which found the plan below it."""
+    same = [r for r in rows if _file_of(r) == f]
+    claim = sorted({str(r["method"]) for r in same if r.get("bound") == bound})
+    plan = sorted(
+        {str(r["method"]) for r in same if r.get("valid") is True and r.get("makespan") == makespan}
+    )
+    return (
+        f"{same[0].get('instance', f)}: the bound {bound:.6g} s of {', '.join(claim)} is above "
+        f"the makespan {makespan:.6g} s of a valid plan of {', '.join(plan)}: a lower bound "
+        "cannot be"
+    )
+
+
+def inconsistencies(records: Iterable[dict[str, Any]]) -> list[str]:
+    """Every false claim of a comparison, one line each: a best bound above a valid plan's
+    makespan (:func:`add_best_bound_gap`), and a row's own status, bound or gap against its
+    makespan (the checker's claims)."""
+    out: list[str] = []
+    for r in records:
+        if r.get("inconsistent") and r["inconsistent"] not in out:
+            out.append(r["inconsistent"])
+        out += [f"{r['instance']} / {r['method']}: {c}" for c in r.get("false_claims") or ()]
+    return out

@@ -107,6 +107,8 @@ def table_rows(records: Sequence[dict[str, Any]]) -> tuple[list[str], list[list[
         [
             "no plan"
             if k == "valid" and r.get("valid") is None and r.get("status") != "error"
+            else "INCONSISTENT"
+            if k == "best_bound" and r.get("inconsistent")
             else _cell_text(r.get(k), f)
             for k, _, f in COMPARE_COLUMNS
         ]

@@ -39,6 +39,10 @@ def schema() -> dict[str, Any]:
                 "items": {"type": "string"},
                 "description": "Every number that had to be assumed, and why.",
             },
+            "generated_by": {
+                "type": "string",
+                "description": "the command that made this instance (bilevel-kit generate ...)",
+            },
             "tray": _tray_schema(),
             "delivery_time": {**_NONNEG, "default": 0.0, "description": "d in the paper (s)"},
             "kit_overhead": _kit_overhead_schema(),

@@ -113,6 +113,8 @@ class Instance:
     units: int = 1
     description: str = ""
     assumptions: tuple[str, ...] = ()
+    #: The command that made a generated instance (``bilevel-kit generate ...``), else "".
+    generated_by: str = ""
     #: Sawyer station geometry (:class:`bilevel_kit.sawyer.Station`), None if not given.
     station: Any = None
     #: Enforce Sawyer reachability of every placement (packers, CE and the checker).
@@ -292,6 +294,8 @@ class Instance:
             doc["description"] = self.description
         if self.assumptions:
             doc["assumptions"] = list(self.assumptions)
+        if self.generated_by:
+            doc["generated_by"] = self.generated_by
         doc["tray"] = {"width": self.tray.width, "height": self.tray.height}
         doc["delivery_time"] = self.delivery_time
         doc["kit_overhead"] = {"robot": self.kit_overhead_robot, "human": self.kit_overhead_human}

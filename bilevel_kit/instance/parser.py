@@ -99,6 +99,7 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         units=int(doc.get("units", 1)),
         description=doc.get("description", ""),
         assumptions=tuple(doc.get("assumptions", ())),
+        generated_by=doc.get("generated_by", ""),
         station=station,
         reachability=bool(doc.get("reachability", False)),
         reach_resolution=float(doc.get("reach_resolution", 10.0)),

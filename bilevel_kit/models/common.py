@@ -16,8 +16,10 @@ from typing import Any, TypeVar
 
 from ..instance import Instance, topological_order
 from ..plan import Kit, Placement, Plan, Timeline, evaluate
-from . import packing
+from . import packing_oracle
 from .budget import Budget
+from .packing import ANY_ANGLE, AXIS_ALIGNED
+from .packing_oracle import Fit
 
 T = TypeVar("T")
 
@@ -168,15 +170,32 @@ class Packer:
         self.pack_tl = pack_tl
         self.budget = budget
         self.reach = reach_grid(instance)
+        self.known: list[tuple[dict[str, int], packing_oracle.TypedLayout]] = []
 
     def _tl(self, limit: float | None = None) -> float:
         limit = self.pack_tl if limit is None else limit
         return max(0.02, min(limit, self.budget.remaining()))
 
-    def counts(
-        self, counts: Mapping[str, int], limit: float | None = None
-    ) -> tuple[bool | None, Any]:
-        return packing.fit_counts(
+    def learn(self, counts: Mapping[str, int], layout: Sequence[Placement]) -> None:
+        """A valid layout of ``counts`` known from elsewhere (a warm start's kit, which may
+        have parts at any angle): this packer answers "fits" for it and its sub-multisets."""
+        typed: packing_oracle.TypedLayout = {}
+        for p in layout:
+            typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
+        self.known.append(({k: n for k, n in counts.items() if n > 0}, typed))
+
+    def verdict(self, counts: Mapping[str, int], limit: float | None = None) -> Fit:
+        """The oracle's answer (:func:`.packing_oracle.fit_verdict`): "no" only with a proof;
+        "fits" at once for a multiset within one of :meth:`learn`'s."""
+        for known, typed in self.known:
+            if all(known.get(k, 0) >= n for k, n in counts.items() if n > 0):
+                return Fit(True, {k: typed[k][:n] for k, n in counts.items() if n > 0})
+        return self.grid_verdict(counts, limit)
+
+    def grid_verdict(self, counts: Mapping[str, int], limit: float | None = None) -> Fit:
+        """The oracle's answer alone: its layouts lie on a packing grid at 0 or 90 degrees
+        (what the embedded model's hints need), never one of :meth:`learn`'s."""
+        return packing_oracle.fit_verdict(
             self.instance.tray,
             self.instance.part_types,
             dict(counts),
@@ -185,17 +204,25 @@ class Packer:
             reach=self.reach,
         )
 
+    def counts(
+        self, counts: Mapping[str, int], limit: float | None = None
+    ) -> tuple[bool | None, Any]:
+        fit = self.verdict(counts, limit)
+        return fit.fits, fit.layout
+
     def fits(self, tasks: Sequence[str]) -> bool | None:
         return self.counts(dict(self.instance.kit_parts(tasks)))[0]
 
-    def task_not_fitting(self) -> str | None:
-        """A task whose parts alone provably do not fit the tray (then no plan exists); stops
-        (None) once the budget has expired."""
+    def task_not_fitting(self) -> tuple[str, str] | None:
+        """A task whose parts alone provably do not fit the tray, with the proof's scope (then
+        no plan exists, or none with 0/90-degree layouts); stops (None) once the budget has
+        expired."""
         for t in self.instance.tasks:
             if self.budget.expired():
                 return None
-            if self.fits([t.id]) is False:
-                return t.id
+            fit = self.verdict(self.instance.kit_parts([t.id]))
+            if fit.fits is False:
+                return t.id, fit.scope or AXIS_ALIGNED
         return None
 
     def split(self, kit: Sequence[str]) -> list[list[str]] | None:
@@ -216,9 +243,12 @@ class Packer:
             out.append(cur)
         return out
 
-    def minimal_nofit(self, counts: Mapping[str, int], until: float) -> dict[str, int]:
+    def minimal_nofit(
+        self, counts: Mapping[str, int], until: float, scope: str = AXIS_ALIGNED
+    ) -> dict[str, int]:
         """Deletion filter: drop parts (smallest types first) while the rest provably does not
-        fit; stops early at ``until`` (a larger non-fitting multiset is still a valid cut)."""
+        fit, with a proof of ``scope`` (one for every layout stays one); stops early at
+        ``until`` (a larger non-fitting multiset is still a valid cut)."""
         cur = {k: n for k, n in counts.items() if n > 0}
         for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
             while cur.get(t, 0) > 0 and time.perf_counter() < until:
@@ -226,7 +256,8 @@ class Packer:
                 trial[t] -= 1
                 if trial[t] == 0:
                     del trial[t]
-                if not trial or self.counts(trial)[0] is not False:
+                fit = self.verdict(trial) if trial else Fit(True)
+                if fit.fits is not False or (scope == ANY_ANGLE and fit.scope != ANY_ANGLE):
                     break
                 cur = trial
         return cur
@@ -238,7 +269,7 @@ class Packer:
 
         ok, typed = self.counts(self.instance.kit_parts(tasks))
         if ok and typed is not None:
-            return packing.typed_to_placements(self.instance, tasks, typed)
+            return packing_oracle.typed_to_placements(self.instance, tasks, typed)
         if self.reach is not None:
             return None
         items = [
@@ -253,8 +284,10 @@ class Packer:
 class NoGoodCuts:
     """The cuts of a logic-based Benders loop (``cpsat`` and ``milp``): a part multiset that
     does not fit is cut from every kit by ``add``, once; shrunk first to a minimal non-fitting
-    multiset when the misfit is proven. A cut from a packing that timed out is unproven (a
-    heuristic: after one, the master's bound is no proof); ``unproven`` counts them."""
+    multiset when the misfit is proven. A cut from an unknown packing (a time limit, or a "no"
+    of an inexact packing grid) is unproven (a heuristic: after one, the master's bound is no
+    proof); ``unproven`` counts them, ``axis_only`` the cuts proven for 0/90-degree layouts
+    only (after one, the bound holds for such plans only: :attr:`scope`)."""
 
     def __init__(
         self,
@@ -269,12 +302,23 @@ class NoGoodCuts:
         self.add = add
         self.seen: set[frozenset[tuple[str, int]]] = set()
         self.unproven = 0
+        self.axis_only = 0
 
-    def cut(self, counts: Mapping[str, int], proven: bool) -> bool:
-        """Cut ``counts`` (shrunk when ``proven``) unless the same cut was added before."""
+    @property
+    def scope(self) -> str | None:
+        """For which plans the master is a relaxation: every plan (:data:`.packing.ANY_ANGLE`),
+        those with 0/90-degree layouts (:data:`.packing.AXIS_ALIGNED`), or None (an unproven
+        cut: no proof at all)."""
+        if self.unproven:
+            return None
+        return AXIS_ALIGNED if self.axis_only else ANY_ANGLE
+
+    def cut(self, counts: Mapping[str, int], scope: str | None) -> bool:
+        """Cut ``counts`` (shrunk when proven, ``scope`` not None) unless the same cut was
+        added before."""
         mini = (
-            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, self.margin))
-            if proven
+            self.packer.minimal_nofit(counts, self.budget.share(1 / 4, self.margin), scope)
+            if scope is not None
             else dict(counts)
         )
         key = frozenset(mini.items())
@@ -282,22 +326,22 @@ class NoGoodCuts:
             return False
         self.seen.add(key)
         self.add(mini)
+        self.unproven += scope is None
+        self.axis_only += scope == AXIS_ALIGNED
         return True
 
-    def cut_kits(self, kits: Iterable[Mapping[str, int]], verdicts: Iterable[bool | None]) -> int:
-        """Cut the part multisets of the kits that do not fit (verdict False) or may not (None,
-        unproven); how many cuts are new."""
+    def cut_kits(self, kits: Iterable[Mapping[str, int]], verdicts: Iterable[Fit]) -> int:
+        """Cut the part multisets of the kits that do not fit (a proven "no") or may not
+        (unknown: unproven); how many cuts are new."""
         new = 0
-        for counts, ok in zip(kits, verdicts, strict=True):
-            if ok is not True:
-                added = self.cut(counts, ok is False)
-                new += added
-                self.unproven += int(added and ok is None)
+        for counts, fit in zip(kits, verdicts, strict=True):
+            if fit.fits is not True:
+                new += self.cut(counts, fit.scope if fit.fits is False else None)
         return new
 
     def seed_pairs(self) -> None:
-        """Cut every pair of tasks (distinct part multisets) that does not fit together, while
-        a tenth of the time left lasts."""
+        """Cut every pair of tasks (distinct part multisets) that provably does not fit
+        together, while a tenth of the time left lasts."""
         instance = self.packer.instance
         seed_until = self.budget.share(0.1, self.margin)
         reps = list(
@@ -307,8 +351,29 @@ class NoGoodCuts:
             if time.perf_counter() > seed_until:
                 break
             counts = instance.kit_parts([a, b])
-            if self.packer.counts(counts)[0] is False:
-                self.cut(counts, True)
+            fit = self.packer.verdict(counts)
+            if fit.fits is False:
+                self.cut(counts, fit.scope or AXIS_ALIGNED)
+
+
+def scope_claims(scope: str | None) -> dict[str, Any]:
+    """What a model's proof covers (docs/formulations.md#what-optimal-means), as ``extra``
+    entries: ``proof_scope`` and, when it is not every plan, a ``status_reason``."""
+    if scope == ANY_ANGLE:
+        return {"proof_scope": ANY_ANGLE}
+    if scope == AXIS_ALIGNED:
+        return {
+            "proof_scope": AXIS_ALIGNED,
+            "status_reason": "a kit was excluded by a proof for 0/90-degree layouts only and "
+            "parts at other angles may fit it: the model's optimality and bound "
+            "(optimal_axis_aligned, bound_axis_aligned) hold for 0/90-degree plans, 'bound' "
+            "for every plan",
+        }
+    return {
+        "proof_scope": None,
+        "status_reason": "a kit was excluded without a proof (a packing time limit, or no "
+        "layout on an inexact packing grid); the bound is the last one proven",
+    }
 
 
 def johnson_topological_order(instance: Instance) -> list[str]:

@@ -5,10 +5,15 @@ rounded *up* and the tray *down*, so a grid-feasible layout is truly non-overlap
 the tray: each part is drawn centred in its (possibly slightly larger) grid cell. When every
 size is a multiple of the resolution the grid is exact: integer sizes admit an integer-position
 packing whenever any packing exists (bottom-left compaction), so "infeasible" is then a proof
-for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution": every
+for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution". Every
 infeasible answer records in ``extra["proof"]`` whether it is a proof (an exact grid without
 reachability, or a reason that holds at true sizes: a part larger than the tray, or more part
-area than tray area). ``bilevel-kit pack`` reports the others as "no layout on this grid".
+area than tray area) and in ``extra["proof_scope"]`` which layouts it rules out
+(:data:`ANY_ANGLE`: every layout the checker accepts, parts at any angle; :data:`AXIS_ALIGNED`:
+the layouts whose parts lie at 0 or 90 degrees, docs/formulations.md#what-optimal-means).
+``bilevel-kit pack`` reports the others as "no layout on this grid";
+:func:`exact_resolution` gives the grid on which every size is exact, which the oracle
+(:mod:`.packing_oracle`) uses to confirm such an answer.
 
 **Model.** Every part has a lower-left corner (x, y). A rotatable, non-square part has two
 optional rectangles, one per orientation (0 and 90 degrees), whose presence literals are
@@ -48,9 +53,8 @@ when a cell is a whole number of half-grid units, else an element constraint) an
 reachable cells, or one column span per row when the rows are contiguous, allows them
 (:mod:`.packing_reach`).
 
-**Oracle.** :func:`fit_counts` / :func:`kit_fits` answer "does this part multiset fit" with
-memoisation (monotone: sub-multisets of a fitting one fit, super-multisets of a non-fitting one
-do not), the pre-search tests, the toolkit's shelf packer on the grid, then CP-SAT.
+**Oracle.** :mod:`.packing_oracle` answers "does this part multiset fit" with memoisation and
+says what a "no" proves.
 """
 
 from __future__ import annotations
@@ -62,7 +66,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..instance import DEFAULT_WEIGHTS, Instance, PartType
+from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
 from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
 
@@ -70,6 +74,15 @@ if TYPE_CHECKING:
     from ..reachability import ReachGrid
 
 _EPS = 1e-9
+
+#: Proof scopes of an infeasible answer (module docstring, "Grid"): no layout at all, parts at
+#: any angle (what the checker accepts) ...
+ANY_ANGLE = "any angle"
+#: ... or no layout whose parts lie at 0 or 90 degrees (a layout at other angles may exist).
+AXIS_ALIGNED = "0/90 degrees"
+#: The finest exact grid :func:`exact_resolution` offers: a tray side of at most this many
+#: grid units (finer grids are "absurd": the answer stays unproven).
+MAX_EXACT_UNITS = 1_000_000
 
 #: OR-Tools 9.15 workaround. With its default ``no_overlap_2d_boolean_relations_limit`` (10),
 #: CP-SAT sometimes (about 3% of seeds with 2-8 workers) reported OPTIMAL for a worse
@@ -134,6 +147,33 @@ def grid_down(v: float, resolution: float) -> int:
 def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
     """True when every value is a multiple of ``resolution`` (up to float noise)."""
     return all(abs(v / resolution - round(v / resolution)) < 1e-6 for v in values)
+
+
+def exact_resolution(values: Sequence[float]) -> float | None:
+    """The coarsest grid (mm) of which every value is a multiple: the greatest common divisor
+    of the values as fractions with denominators up to 10^6 (152.4, 12.7 and 300 give 0.1);
+    None when a value is no such fraction or the largest value would span more than
+    :data:`MAX_EXACT_UNITS` units (module docstring, "Grid")."""
+    from fractions import Fraction
+
+    fracs = []
+    for v in values:
+        f = Fraction(v).limit_denominator(10**6)
+        if f <= 0 or abs(float(f) - v) > 1e-9 * max(1.0, abs(v)):
+            return None
+        fracs.append(f)
+    if not fracs:
+        return None
+    num = 0
+    den = 1
+    for f in fracs:
+        den = den * f.denominator // math.gcd(den, f.denominator)
+    for f in fracs:
+        num = math.gcd(num, f.numerator * (den // f.denominator))
+    step = Fraction(num, den)
+    if max(fracs) / step > MAX_EXACT_UNITS:
+        return None
+    return float(step)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -290,7 +330,10 @@ def _before_search(
         # the tests ignore reachability, which only removes layouts: on an exact grid the
         # answer is a proof with or without a reach map
         done.extra["reason"] = why
-        done.extra["proof"] = grid.exact or _infeasible_at_true_sizes(tray, items)
+        scope = _true_size_scope(tray, items)
+        if grid.exact and why == "area":
+            scope = ANY_ANGLE  # the grid areas are the true areas
+        _set_proof(done.extra, items, grid.exact or scope is not None, scope)
         return done("infeasible", None)
     if objective == "feasible":
         shelf = _shelf(grid.sizes, grid.W, grid.H)
@@ -427,8 +470,8 @@ def _answer(
 
     done.extra["cpsat_status"] = solver.status_name(st)
     if st == cp_model.INFEASIBLE:
-        proof = grid.exact and grid.tables is None
-        done.extra["proof"] = proof or _infeasible_at_true_sizes(tray, items)
+        scope = _true_size_scope(tray, items)
+        _set_proof(done.extra, items, (grid.exact and grid.tables is None) or bool(scope), scope)
         return done("infeasible", None)
     if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return done("unknown", None)
@@ -452,16 +495,39 @@ def _answer(
     )
 
 
-def _infeasible_at_true_sizes(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> bool:
-    """A reason no layout exists at all, grid or not: a part that fits the tray in neither
-    0/90-degree orientation, or more part area than tray area."""
+def _true_size_scope(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> str | None:
+    """A reason no layout exists, grid or not, and its scope: more part area than tray area
+    or two inscribed disks without room (:func:`.packing_bounds.disks_collide`):
+    :data:`ANY_ANGLE`; a part that fits the tray in neither 0/90-degree orientation:
+    :data:`AXIS_ALIGNED` (a long part may still fit along the diagonal); None without one."""
+    from .packing_bounds import disks_collide
+
+    if sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS):
+        return ANY_ANGLE
+    if disks_collide([(pt.width, pt.height) for _, pt in items], tray.width, tray.height):
+        return ANY_ANGLE
     for _, pt in items:
         fits = pt.width <= tray.width and pt.height <= tray.height
         if pt.rotatable:
             fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
         if not fits:
-            return True
-    return sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS)
+            return AXIS_ALIGNED
+    return None
+
+
+def _set_proof(
+    extra: dict[str, Any], items: Sequence[tuple[str, PartType]], proof: bool, scope: str | None
+) -> None:
+    """``extra["proof"]`` and its ``proof_scope`` (module docstring, "Grid"): a proof for
+    0/90-degree layouts rules out every layout when no part may rotate (a part that may not
+    rotate lies at 0 or 180 degrees, the same footprint)."""
+    extra["proof"] = proof
+    if not proof:
+        extra["proof_scope"] = None
+    elif scope == ANY_ANGLE or all(not pt.rotatable for _, pt in items):
+        extra["proof_scope"] = ANY_ANGLE
+    else:
+        extra["proof_scope"] = AXIS_ALIGNED
 
 
 def add_lex_less(
@@ -497,172 +563,3 @@ def _to_layout(
             )
         )
     return tuple(out)
-
-
-# ---------------------------------------------------------------------------------------------
-# Memoised oracle on part multisets
-# ---------------------------------------------------------------------------------------------
-
-#: Layout of a multiset by part type: per type, a list of (x, y, theta) centres.
-TypedLayout = dict[str, list[tuple[float, float, float]]]
-
-
-@dataclass
-class _FitCache:
-    """Known answers for one (tray, part types, resolution): monotone in the multiset, so a
-    sub-multiset of a fitting one fits, and a super-multiset of a non-fitting one does not."""
-
-    fits: list[tuple[dict[str, int], TypedLayout]] = field(default_factory=list)
-    nofit: list[dict[str, int]] = field(default_factory=list)
-    unknown: dict[frozenset[tuple[str, int]], float] = field(default_factory=dict)
-    solves: int = 0
-
-
-_CACHES: dict[tuple[Any, ...], _FitCache] = {}
-
-
-def _cache_for(
-    tray: _Rect, part_types: Mapping[str, PartType], resolution: float, reach: ReachGrid | None
-) -> _FitCache:
-    key = (
-        tray.width,
-        tray.height,
-        resolution,
-        tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in part_types.values())),
-        None
-        if reach is None
-        else (reach.reachable.tobytes(), reach.reachable.shape, reach.cell_size),
-    )
-    return _CACHES.setdefault(key, _FitCache())
-
-
-def _leq(a: Mapping[str, int], b: Mapping[str, int]) -> bool:
-    return all(b.get(k, 0) >= n for k, n in a.items())
-
-
-def fit_counts(
-    tray: _Rect,
-    part_types: Mapping[str, PartType],
-    counts: Mapping[str, int],
-    *,
-    time_limit: float = 2.0,
-    resolution: float = 1.0,
-    workers: int = 2,
-    seed: int = 0,
-    reach: ReachGrid | None = None,
-) -> tuple[bool | None, TypedLayout | None]:
-    """Whether a part multiset fits, with a layout by type when it does (memoised).
-
-    Order of checks: cached answers (using monotonicity), the pre-search tests of
-    :mod:`~bilevel_kit.models.packing_bounds`, the shelf heuristic, then CP-SAT. ``None`` =
-    unknown within ``time_limit``; an unknown answer is retried only with a longer limit.
-    """
-    counts = {k: int(n) for k, n in counts.items() if n > 0}
-    cache = _cache_for(tray, part_types, resolution, reach)
-    for known, layout in cache.fits:
-        if _leq(counts, known):
-            return True, {k: layout[k][:n] for k, n in counts.items()}
-    for known in cache.nofit:
-        if _leq(known, counts):
-            return False, None
-    key = frozenset(counts.items())
-    if cache.unknown.get(key, -1.0) >= time_limit:
-        return None, None
-    from ..heuristics.shelf import kit_items
-
-    items = kit_items(part_types, counts)
-    cache.solves += 1
-    res = pack(
-        tray,
-        items,
-        objective="feasible",
-        resolution=resolution,
-        time_limit=time_limit,
-        workers=workers,
-        seed=seed,
-        reach=reach,
-    )
-    if res.status == "infeasible":
-        cache.nofit.append(counts)
-        return False, None
-    if res.layout is None:
-        cache.unknown[key] = time_limit
-        return None, None
-    typed: TypedLayout = {}
-    for p in res.layout:
-        typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
-    cache.fits.append((counts, typed))
-    return True, typed
-
-
-def kit_fits(
-    instance: Instance,
-    part_counts: Mapping[str, int],
-    time_limit: float = 2.0,
-    *,
-    resolution: float = 1.0,
-) -> bool | None:
-    """Cheap memoised oracle: do these parts (type -> count) fit on the instance's tray?"""
-    return _fit_on_tray(instance, part_counts, time_limit, resolution)[0]
-
-
-def _fit_on_tray(
-    instance: Instance, counts: Mapping[str, int], time_limit: float, resolution: float
-) -> tuple[bool | None, TypedLayout | None]:
-    """:func:`fit_counts` on the instance's tray and part types, within the robot's reach."""
-    from ..reachability import reach_grid
-
-    return fit_counts(
-        instance.tray,
-        instance.part_types,
-        counts,
-        time_limit=time_limit,
-        resolution=resolution,
-        reach=reach_grid(instance),
-    )
-
-
-def kit_layout(
-    instance: Instance,
-    task_ids: Sequence[str],
-    *,
-    time_limit: float = 2.0,
-    resolution: float = 1.0,
-) -> tuple[Placement, ...] | None:
-    """A non-overlapping layout for the parts of these tasks (part ids ``task:type:j``), or
-    None when they do not fit or the answer is unknown."""
-    ok, typed = _fit_on_tray(instance, instance.kit_parts(task_ids), time_limit, resolution)
-    if not ok or typed is None:
-        return None
-    return typed_to_placements(instance, task_ids, typed)
-
-
-def typed_to_placements(
-    instance: Instance, task_ids: Sequence[str], typed: TypedLayout
-) -> tuple[Placement, ...]:
-    """Hand out the slots of a by-type layout to the tasks' parts, in task order."""
-    used = dict.fromkeys(typed, 0)
-    out = []
-    for tid in task_ids:
-        for ptype, n in instance.task_by_id[tid].parts:
-            pt = instance.part_types[ptype]
-            for j in range(1, n + 1):
-                x, y, theta = typed[ptype][used[ptype]]
-                used[ptype] += 1
-                out.append(
-                    Placement(
-                        part=f"{tid}:{ptype}:{j}",
-                        type=ptype,
-                        x=x,
-                        y=y,
-                        theta=theta,
-                        w=pt.width,
-                        h=pt.height,
-                    )
-                )
-    return tuple(out)
-
-
-def clear_cache() -> None:
-    """Forget every memoised packing answer (tests, benchmarks)."""
-    _CACHES.clear()

@@ -24,6 +24,16 @@ every test below is valid with and without rotation.
   used, in integer form on :math:`x \in \{0..C\}`: the identity (the area bound);
   :math:`f_0^\lambda` (sizes below :math:`\lambda` count 0, above :math:`C - \lambda` count C);
   Fekete-Schepers :math:`u^{(k)}`; and Carlier-Clautiaux-Moukrim :math:`f_{CCM}^\lambda`.
+
+The tests above assume 0/90-degree layouts. One test holds at **any angle** (true sizes in mm,
+:func:`disks_collide`): a w x h part contains the disk of diameter min(w, h) around its centre
+whatever its rotation, and that disk lies in the tray, so its centre lies in the tray shrunk by
+the radius (and a part whose disk is wider than the tray fits at no angle). Two parts do not
+overlap, so neither do their disks: the centres are at least
+:math:`r_i + r_j` apart, while the shrunk trays allow at most
+:math:`\sqrt{(W - r_i - r_j)^2 + (H - r_i - r_j)^2}`. This distance falls as
+:math:`s = r_i + r_j` grows, so the two largest disks decide; two 60 mm squares on a 100 mm
+tray fail it (56.6 < 60), at any angles.
 """
 
 from __future__ import annotations
@@ -123,6 +133,21 @@ def tall_parts_too_wide(sizes: Sizes, W: int, H: int) -> bool:
     tall = sum(min(ow for ow, _ in o) for o in orients if o and all(2 * oh > H for _, oh in o))
     wide = sum(min(oh for _, oh in o) for o in orients if o and all(2 * ow > W for ow, _ in o))
     return tall > W or wide > H
+
+
+def disks_collide(sizes: Sequence[tuple[float, float]], W: float, H: float) -> bool:
+    """True when no layout exists at any angle by the inscribed disks (module docstring): a
+    part's disk wider than the tray (its width in every direction is at least its smaller
+    side), or the two largest disks with no room to lie apart. ``sizes``: true (w, h) in mm."""
+    radii = sorted((min(w, h) / 2.0 for w, h in sizes), reverse=True)
+    if not radii:
+        return False
+    if 2.0 * radii[0] > min(W, H) * (1 + 1e-12):
+        return True
+    if len(radii) < 2:
+        return False
+    s = radii[0] + radii[1]  # <= min(W, H): both disks fit on their own
+    return (W - s) ** 2 + (H - s) ** 2 < s * s * (1 - 1e-9)
 
 
 def infeasibility_reason(sizes: Sizes, W: int, H: int) -> str | None:

@@ -28,6 +28,10 @@ Fitting is monotone (a segment that does not fit stays unfit when it grows), so 
 fitting segment from each start is found with O(n) packing calls (two pointers; past a
 deadline the segments stop growing, so the cut stays valid but may be coarser), and the
 recursion costs O(n L^2) for segments of at most L tasks, vectorised over one of the L's.
+"Fits" is the caller's predicate: the exact models pass the packing oracle's "a layout is
+known", so a segment the oracle cannot decide in time counts as unfit. The cut is then exact
+among the segments known to fit: a valid plan and an upper bound (the models' first
+incumbent), never a claim of optimality (docs/formulations.md#what-optimal-means).
 With T != 1 trays the recursion is not the timeline: its cut is then only a candidate that the
 caller scores with :func:`bilevel_kit.plan.evaluate` like any other.
 """

@@ -17,18 +17,21 @@ The artists carry ``gid`` tags so that tests and callers can find them again:
   small parts on a leader).
 * Comparison: ``makespan:<method>`` (the dot), ``noplan:<method>`` (text), ``bound`` (line);
   ``human_idle`` (bars of the idle panel).
+* KitBench: ``profile:<method>`` (step lines), ``gap:<method>`` (scatter collections).
 
 Bars of zero duration (no delivery time, no pickup overhead ...) are not drawn. A label that
 does not fit inside its bar or part goes beside it on a leader line; a Gantt chart whose task
 bars are too narrow even for that lists the tasks by kit under the chart.
 
 One module per figure family: :mod:`.gantt`, :mod:`.trays`, :mod:`.comparison` (methods
-compared, gaps to the bound) and :mod:`.convergence`; :mod:`.common` holds what they share
+compared, gaps to the bound), :mod:`.convergence` and :mod:`.bench` (KitBench's performance
+profile and gap against size); :mod:`.common` holds what they share
 (:func:`save_figure`). Import every name from here.
 """
 
 from __future__ import annotations
 
+from .bench import plot_gap_vs_size, plot_profile
 from .common import save_figure
 from .comparison import plot_comparison, plot_gaps
 from .convergence import plot_convergence
@@ -55,7 +58,9 @@ __all__ = [
     "plot_comparison",
     "plot_convergence",
     "plot_gantt",
+    "plot_gap_vs_size",
     "plot_gaps",
+    "plot_profile",
     "plot_tray",
     "plot_trays",
     "save_figure",

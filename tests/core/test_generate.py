@@ -89,3 +89,71 @@ def test_committed_generated_set_is_reproducible(root):
             float(opts["--d"]) if "--d" in opts else None,
         )
         assert again == doc, path.name
+
+
+def test_wide_is_short_independent_chains():
+    inst = from_dict(generate("wide", 60, seed=3))
+    succ = {a: b for a, b in inst.precedence}
+    assert len(succ) == len(inst.precedence)  # every task feeds at most one
+    preds = [b for _, b in inst.precedence]
+    assert len(preds) == len(set(preds))  # and is fed by at most one: chains
+    heads = [t.id for t in inst.tasks if t.id not in set(preds)]
+    lengths = []
+    for head in heads:
+        n, t = 1, head
+        while t in succ:
+            n, t = n + 1, succ[t]
+        lengths.append(n)
+    assert sum(lengths) == 60 and max(lengths) <= 4 and len(heads) >= 15
+
+
+def test_sparse_arcs_reach_at_most_40_ahead_over_six_part_types():
+    doc = generate("sparse", 400, seed=1)
+    assert len(doc["part_types"]) == 6
+    gaps = [int(b[1:]) - int(a[1:]) for a, b in doc["precedence"]]
+    assert all(1 <= g <= 40 for g in gaps)
+    assert 0.12 * 400 < len(gaps) < 0.28 * 400  # one in five tasks has an arc
+    assert len({a for a, _ in doc["precedence"]}) == len(gaps)  # at most one arc each
+
+
+def test_stool_units():
+    inst = from_dict(generate("stool", 4, delivery_time=10))
+    assert inst.n_tasks == 12 and inst.delivery_time == 10 and inst.trays is None
+
+
+def test_trays_tray_and_name_options():
+    doc = generate("table", 2, trays="unlimited", tray=(160.0, 120.0), name="t2")
+    inst = from_dict(doc)
+    assert inst.trays is None and (inst.tray.width, inst.tray.height) == (160, 120)
+    assert inst.name == "t2"
+    assert "--trays unlimited --tray 160x120 --name t2" in doc["description"]
+    assert from_dict(generate("intree", 10, seed=1, trays=1)).trays == 1
+    with pytest.raises(UsageError, match="not both"):
+        generate("intree", 10, tightness=2, tray=(100.0, 100.0))
+    with pytest.raises(UsageError, match="a larger --tray"):
+        generate("table", 1, tray=(160.0, 50.0))  # a leg and a foot bracket do not fit
+
+
+def test_cli_stores_the_command_and_it_makes_the_same_file(tmp_path):
+    import shlex
+
+    out = tmp_path / "a.json"
+    args = ["sparse", "--size", "30", "--seed", "4", "--tightness", "3", "--trays", "1"]
+    assert main(["generate", *args, "--name", "s30", "--out", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    cmd = doc["generated_by"]
+    assert cmd == (
+        "bilevel-kit generate sparse --size 30 --seed 4 --tightness 3 --d 5 --trays 1 --name s30"
+    )
+    assert list(doc)[:4] == ["format", "name", "description", "generated_by"]
+    assert load(out).generated_by == cmd and load(out).to_dict()["generated_by"] == cmd
+    again = tmp_path / "b.json"
+    assert main([*shlex.split(cmd)[1:], "--out", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()
+
+
+def test_cli_refuses_seed_for_the_stool(capsys):
+    assert main(["generate", "stool", "--size", "2", "--seed", "3"]) == 2
+    assert "--seed applies to the random families" in capsys.readouterr().err
+    assert main(["generate", "table", "--size", "1", "--tray", "300"]) == 2
+    assert "expected WIDTHxHEIGHT" in capsys.readouterr().err

@@ -32,6 +32,8 @@ def test_table_instance_numbers(table):
 def test_every_shipped_instance_validates_against_schema(root):
     validator = jsonschema.Draft202012Validator(schema())
     for path in sorted((root / "instances").rglob("*.json")):
+        if "solutions" in path.parent.parts:  # KitBench's best-known plans: solution files
+            continue
         validator.validate(json.loads(path.read_text()))
         load(path)
 

@@ -142,10 +142,22 @@ def test_reported_times(tiny, valid):
 def test_baselines_are_valid_on_every_instance(method, root):
     from bilevel_kit import load
 
+    from bilevel_kit.errors import KitDoesNotFit
+
+    checked = 0
     for path in sorted((root / "instances").glob("*.json")):
         inst = load(path)
-        out = method(inst)
+        try:
+            out = method(inst)
+        except KitDoesNotFit:
+            # only a proof excuses a baseline: a unit's parts cover more than the tray
+            assert method is whole_assembly, path.name
+            area = sum(inst.part_types[p].area * n for p, n in inst.kit_parts([t.id for t in inst.tasks]).items())
+            assert area > inst.tray.area, path.name
+            continue
         assert check(inst, out.plan) == [], path.name
+        checked += 1
+    assert checked >= 3
 
 
 def _all_pairs_reference(parts, width, height):

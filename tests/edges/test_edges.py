@@ -490,6 +490,105 @@ ROWS: dict[str, Row] = {
 }
 
 
+# --- issue 23, items 1 and 4 (claims of the exact models, the checker's numbers) -----------
+# Kept in a block of their own: another change adds rows to ROWS above.
+
+BIG = int("9" * 400)
+
+
+def _claims_optimal(doc: Doc) -> None:
+    """The tiny single-task solution claimed optimal with a bound equal to its makespan (the
+    claim is wrong, but consistent in itself: what is checked is the objective's name)."""
+    doc.update(status="optimal", bound=doc["objective"], gap=0.0)
+
+
+def offgrid_text(side: float = 50.25, tray: float = 100.5) -> str:
+    """Two squares that fill the tray's width exactly: one kit on the exact 0.75 mm grid,
+    none on the 1 mm grid (tests/models/test_grid_claims.py)."""
+    part = {"type": "a", "count": 1}
+    return json.dumps(
+        {
+            "format": "bilevel-kit/1",
+            "name": "offgrid",
+            "tray": {"width": tray, "height": 60.0},
+            "delivery_time": 10.0,
+            "kit_overhead": {"robot": 10.0, "human": 0.0},
+            "part_types": [{"id": "a", "width": side, "height": side, "pick_time": 3.0}],
+            "tasks": [
+                {"id": t, "parts": [part], "human_time": {"mean": 10.0}} for t in ("t1", "t2")
+            ],
+            "precedence": [["t1", "t2"]],
+        }
+    )
+
+
+ISSUE_23A_ROWS: dict[str, Row] = {
+    **{
+        f"status_objective {name!r} with optimal": invalid_solution(
+            _all(_claims_optimal, _set("status_objective", name)),
+            "[status_mismatch]",
+            "names no known objective",
+        )
+        for name in ("", "banana", "J ", "Makespan")
+    },
+    **{
+        f"400-digit integer in {path}": invalid_solution(
+            _set(path, BIG), "[bad_number]", "a 400-digit integer is out of range"
+        )
+        for path in (
+            "objective",
+            "bound",
+            "gap",
+            "metrics.makespan",
+            "metrics.human_idle",
+            "metrics.n_kits",
+            "kits.0.robot_start",
+            "kits.2.human_end",
+            "kits.0.layout.0.x",
+            "kits.0.layout.0.y",
+            "kits.0.layout.0.theta",
+            "kits.0.layout.0.w",
+            "kits.0.layout.0.h",
+            "timeline_params.delivery_time",
+            "timeline_params.kit_overhead.robot",
+            "timeline_params.trays",
+        )
+    },
+    "negative 400-digit coordinate": invalid_solution(
+        _set("kits.1.layout.0.y", -BIG), "[bad_number] $.kits[1].layout[0].y"
+    ),
+    "coordinate 1e300": invalid_solution(
+        _set("kits.0.layout.0.x", 1e300), "[bad_number] $.kits[0].layout[0].x: 1e+300"
+    ),
+    "kit time -1e300": invalid_solution(_set("kits.1.arrive", -1e300), "[bad_number]"),
+    "objective 1e300 optimal": invalid_solution(
+        _all(_claims_optimal, _set("objective", 1e300)), "[bad_number] $.objective"
+    ),
+    "cpsat off the packing grid": row(
+        "solve {i} -m cpsat --time-limit 20 --check -q",
+        0,
+        "optimal",
+        "makespan 46.00",
+        i=offgrid_text(),
+    ),
+    "cpsat without an exact grid": row(
+        "solve {i} -m cpsat -p hint=none --time-limit 20 --check -q",
+        0,
+        "feasible",
+        "makespan 56.00",
+        "bound 46.00",
+        i=offgrid_text(50.1234567, 100.2469134),
+    ),
+    "cpsat coarse packing grid": row(
+        "solve {table} -m cpsat -p pack_resolution=160 --time-limit 30 --check -q",
+        0,
+        "optimal",
+        "makespan 435.08",
+    ),
+}
+ROWS.update(ISSUE_23A_ROWS)
+
+
 def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
     """Every path under ``folder`` with its size and mtime (what "nothing written" compares)."""
     out = {}

@@ -6,7 +6,7 @@ import itertools
 import random
 
 import pytest
-from brute import fits, segmentations
+from brute import fits, model_verdict, segmentations
 from strategies import random_doc
 
 from bilevel_kit.instance import from_dict
@@ -99,10 +99,12 @@ def test_matches_brute_force_with_releases(seed):
     assert release_bound(inst, sc) * sc.res <= opt + 1e-9
     for mode in ("embedded", "benders"):
         out = cs.solve(inst, tray=mode, releases=rel, **FAST)
-        assert out.status == "optimal", (mode, out.extra)
+        proven, bound = model_verdict(out)  # among 0/90-degree plans, like the brute force
+        assert proven, (mode, out.extra)
         assert out.extra["release_makespan"] == pytest.approx(opt, abs=1e-9)
-        assert out.bound == pytest.approx(opt, abs=1e-9)
-        assert out.extra["gap"] == 0.0
+        assert bound == pytest.approx(opt, abs=1e-9)
+        assert out.bound <= opt + 1e-9
+        assert (out.extra["gap"] == 0.0) == (out.status == "optimal")
         plan = out.plan
         kits = [k.tasks for k in plan.kits]
         assert released_makespan(inst, kits, rel) == pytest.approx(opt, abs=1e-9)
@@ -124,7 +126,7 @@ def test_releases_only_delay():
     ids = [t.id for t in inst.tasks]
     late = cs.solve(inst, tray="benders", releases={ids[-1]: 500.0}, **FAST)
     assert late.extra["release_makespan"] > plain.extra["makespan"] + 400
-    assert late.status == "optimal"
+    assert model_verdict(late)[0]
 
 
 @pytest.mark.parametrize("seed", range(4))

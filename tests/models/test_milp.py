@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 import pytest
-from brute import best_makespan
+from brute import assert_model_optimal, best_makespan, model_verdict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -118,12 +118,10 @@ def test_milp_equals_brute_force_and_cpsat(inst):
     t0 = time.perf_counter()
     out = ms.solve(inst, time_limit=20.0)
     wall = time.perf_counter() - t0
-    assert out.status == "optimal", out.extra
     makespan = assert_contract(inst, out, 20.0, wall)
-    assert makespan == pytest.approx(opt, abs=1e-6)
-    assert out.bound == pytest.approx(opt, abs=1e-5)
+    assert_model_optimal(out, opt, tol=1e-5)  # among 0/90-degree plans, like the brute force
     ref = cs.solve(inst, time_limit=20.0, workers=2)
-    assert ref.status == "optimal"
+    assert model_verdict(ref)[0]
     assert evaluate(inst, ref.plan).makespan == pytest.approx(makespan, abs=1e-6)
 
 

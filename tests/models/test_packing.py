@@ -8,6 +8,7 @@ import pytest
 from bilevel_kit import geometry
 from bilevel_kit.instance import PartType, Tray
 from bilevel_kit.models import packing as pk
+from bilevel_kit.models import packing_oracle as po
 
 pytest.importorskip("ortools")
 
@@ -234,19 +235,19 @@ def test_fitness_reports_true_euclidean_next_to_l1_surrogate():
 
 
 def test_kit_fits_memoises_and_uses_monotonicity(table):
-    pk.clear_cache()
+    po.clear_cache()
     parts = table.kit_parts([t.id for t in table.tasks])
-    assert pk.kit_fits(table, parts, 5.0) is True
-    cache = next(iter(pk._CACHES.values()))
+    assert po.kit_fits(table, parts, 5.0) is True
+    cache = next(iter(po._CACHES.values()))
     solves = cache.solves
-    assert pk.kit_fits(table, parts, 5.0) is True
-    assert pk.kit_fits(table, {"leg": 2, "foot": 1}, 5.0) is True  # a sub-multiset
+    assert po.kit_fits(table, parts, 5.0) is True
+    assert po.kit_fits(table, {"leg": 2, "foot": 1}, 5.0) is True  # a sub-multiset
     assert cache.solves == solves
     # 32 legs: 32 x 153 x 13 grid mm^2 = 63648 > 60000 mm^2 of tray, refused by area
-    assert pk.kit_fits(table, {"leg": 32}, 5.0) is False
-    assert pk.kit_fits(table, {"leg": 33, "foot": 1}, 5.0) is False  # a super-multiset
+    assert po.kit_fits(table, {"leg": 32}, 5.0) is False
+    assert po.kit_fits(table, {"leg": 33, "foot": 1}, 5.0) is False  # a super-multiset
     assert cache.solves == solves + 1
-    layout = pk.kit_layout(table, ["foot1", "conn1"], time_limit=5.0)
+    layout = po.kit_layout(table, ["foot1", "conn1"], time_limit=5.0)
     assert sorted(p.part for p in layout) == [
         "conn1:connector:1",
         "conn1:screw_short:1",

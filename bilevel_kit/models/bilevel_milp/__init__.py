@@ -46,6 +46,9 @@ a -> b -> c then b is too: b's kit lies between theirs), and must fit the tray. 
 enumerated by growth from singletons (every convex set arises from a smaller one by adding a
 maximal element), pruned by the exact area bound (total part area <= tray area, necessary for
 any layout); a kit is a column when its multiset fits (oracle "fits" or a valid CE layout).
+A candidate left out without a proof that holds at any angle (the oracle's proof may hold for
+0/90-degree layouts only, or be missing: docs/formulations.md#what-optimal-means) could be a
+column of a plan at other angles, so the status is then at most "feasible".
 
 **MILP.** Positions k = 0..K-1 (K = n), ``z[c,k]`` = column c is kit k, only where possible
 (:math:`k \ge 1` if c has ancestors outside it; :math:`k \le n - |c| - |\mathrm{desc}(c)
@@ -85,13 +88,18 @@ chain an interval or nothing), all of which fit its tray, 104 distinct multisets
 relaxation is weak: root bound about 132 against J* = 195.6, so branching does the work).
 Random instances of up to 6 tasks solve in well under a second.
 
-**Result.** ``status`` refers to J: optimal (proven) / feasible / infeasible / unknown.
+**Result.** ``status`` refers to J: optimal (proven over every kit that fits, each left-out
+candidate proven not to fit at any angle) / feasible / infeasible (a task whose own kit
+provably fits at no angle) / unknown.
 ``bound`` is the closed-form *makespan* bound (the method does not minimise makespan).
 ``extra`` keys:
 
 * ``plan_objective_J`` (J of the plan, by :func:`paper_objective`), ``plan_objective_J_milp``
   (J as the MILP computed it), ``plan_objective_J_bound`` (the MILP's bound on J*),
-  ``plan_objective_J_gap`` (``|J - bound| / max(1, |J|)``), ``makespan`` (of the plan);
+  ``plan_objective_J_gap`` (``|J - bound| / max(1, |J|)``), ``makespan`` (of the plan),
+  ``optimal_over_columns`` (the MILP proved J optimal over its columns);
+* ``excluded_axis_aligned``, ``excluded_unproven``: candidates left out on a proof for
+  0/90-degree layouts only, or without a proof; ``status_reason`` when they cost the status;
 * ``solver``, ``lower``, ``candidates`` (convex kits within the tray area), ``columns`` (those
   that fit), ``multisets`` (kit values computed), ``binaries``, ``termination``;
 * ``start_objective`` and ``local_search_objective``: J of the warm-start plan before and

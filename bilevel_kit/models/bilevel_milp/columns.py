@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -84,9 +85,15 @@ class Column:
 
 
 def build_columns(
-    instance: Instance, kits: Sequence[frozenset[str]], lower: LowerLevel, budget: Budget
+    instance: Instance,
+    kits: Sequence[frozenset[str]],
+    lower: LowerLevel,
+    budget: Budget,
+    excluded: Counter[str | None] | None = None,
 ) -> list[Column] | None:
-    """Columns (kits that fit, with their data); None when the budget runs out first."""
+    """Columns (kits that fit, with their data); None when the budget runs out first.
+    ``excluded`` counts the candidates left out by the scope of the proof that they do not fit
+    (None: not proven, docs/formulations.md#what-optimal-means)."""
     ids = [t.id for t in instance.tasks]
     n = len(ids)
     anc = instance.ancestors
@@ -101,6 +108,8 @@ def build_columns(
             return None
         val = lower.value(instance.kit_parts(s))
         if not val.fits:
+            if excluded is not None:
+                excluded[val.proof] += 1
             continue
         r, h = kit_durations(instance, list(s))
         anc_out = set().union(*(anc[t] for t in s)) - s

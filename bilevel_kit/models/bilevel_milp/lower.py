@@ -12,7 +12,7 @@ from ...errors import UsageError
 from ...fitness import layout_fitness as layout_fitness_value
 from ...instance import Instance
 from ...plan import Kit, Placement
-from .. import packing
+from .. import packing, packing_oracle
 
 LOWER_MODES = ("ce", "best")
 
@@ -23,12 +23,15 @@ Multiset = tuple[tuple[str, int], ...]
 class KitValue:
     """The lower level's answer for one part multiset: ``fits`` (some valid layout is known),
     the best ``fitness`` (``-inf`` if none), its ``layout`` (part ids ``type-j``) and where it
-    came from (``ce``, ``cpsat`` or ``oracle``)."""
+    came from (``ce``, ``cpsat`` or ``oracle``); without a layout, ``proof`` is the scope of
+    the oracle's proof that none exists (:mod:`..packing_oracle`), None when it is not proven.
+    """
 
     fits: bool
     fitness: float
     layout: tuple[Placement, ...]
     source: str
+    proof: str | None = None
 
 
 class LowerLevel:
@@ -91,10 +94,11 @@ class LowerLevel:
         if arr.fits:
             cands.append((arr.fitness, arr.layout, "ce"))
         fit_tl, cut = self._limit(2.0)
-        ok, typed = packing.fit_counts(
+        verdict = packing_oracle.fit_verdict(
             inst.tray, inst.part_types, dict(key), time_limit=fit_tl, reach=self._reach
         )
-        if ok and typed is not None:
+        typed = verdict.layout
+        if verdict.fits and typed is not None:
             layout = tuple(
                 Placement(
                     f"{t}-{j + 1}", t, x, y, th, inst.part_types[t].width, inst.part_types[t].height
@@ -122,7 +126,7 @@ class LowerLevel:
             fit, layout, src = max(cands, key=lambda c: c[0])
             val = KitValue(True, float(fit), layout, src)
         else:
-            val = KitValue(False, float("-inf"), (), "none")
+            val = KitValue(False, float("-inf"), (), "none", verdict.scope)
         if not cut:
             self._values[key] = val
         else:

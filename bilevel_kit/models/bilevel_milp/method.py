@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import Counter
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -18,6 +19,7 @@ from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..milp.model import human_order
 from ..milp.solver import SolveInfo, ensure_ortools, make_solver, run_solver
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .columns import MAX_COLUMNS, Column, build_columns, enumerate_kits
 from .lower import LowerLevel
 from .model import build_model, chosen_kits, set_start
@@ -146,7 +148,15 @@ def run(
     if plan is None:
         return r.finish(None, Status.INFEASIBLE if info.infeasible else Status.UNKNOWN)
     _plan_extra(r, plan, info)
-    return r.finish(plan, Status.OPTIMAL if info.optimal else Status.FEASIBLE)
+    proven = not r.extra["excluded_unproven"] and not r.extra["excluded_axis_aligned"]
+    r.extra["optimal_over_columns"] = info.optimal
+    if info.optimal and not proven:
+        r.extra["status_reason"] = (
+            "some candidate kits were left out without a proof for every layout (parts at "
+            "other angles, or a packing the oracle could not decide, may fit them): J is "
+            "optimal over the columns only"
+        )
+    return r.finish(plan, Status.OPTIMAL if info.optimal and proven else Status.FEASIBLE)
 
 
 #: The registered method ``bilevel-milp``: :func:`run` warm-started from greedy-ce's plan.
@@ -185,18 +195,38 @@ def _columns(r: _Run, kits: Sequence[frozenset[str]]) -> list[Column] | Status:
     """The columns with the lower level's values; the run's status (and a ``reason``) when
     there is no plan to look for."""
     lower_level, extra = r.lower_level, r.extra
-    cols = build_columns(r.instance, kits, lower_level, r.budget.cut(MARGIN))
-    extra.update(multisets=lower_level.n_values, lower_level_s=lower_level.time_s)
+    excluded: Counter[str | None] = Counter()
+    cols = build_columns(r.instance, kits, lower_level, r.budget.cut(MARGIN), excluded)
+    extra.update(
+        multisets=lower_level.n_values,
+        lower_level_s=lower_level.time_s,
+        excluded_unproven=excluded[None],
+        excluded_axis_aligned=excluded[AXIS_ALIGNED],
+    )
     extra["lower_level_cut"] = lower_level.n_cut  # updated later: the plan's values may cut too
     if cols is None:
         extra["reason"] = "time limit reached while computing the kits' lower-level values"
         return Status.UNKNOWN
     extra["columns"] = len(cols)
     covered = set().union(*(c.tasks for c in cols)) if cols else set()
-    if len(covered) < r.instance.n_tasks:
-        extra["reason"] = "some task fits in no kit"
-        return Status.INFEASIBLE
+    alone = [t.id for t in r.instance.tasks if t.id not in covered]
+    if alone:  # no plan, if the task's own kit is proven not to fit at any angle
+        proofs = [_alone_proof(r, t) for t in alone]
+        extra["reason"] = f"task {alone[0]!r} fits in no kit" + (
+            "" if all(p == ANY_ANGLE for p in proofs) else " found (not a proof for every layout)"
+        )
+        return Status.INFEASIBLE if all(p == ANY_ANGLE for p in proofs) else Status.UNKNOWN
     return cols
+
+
+def _alone_proof(r: _Run, task: str) -> str | None:
+    """The scope of the proof that ``task``'s parts alone do not fit (more part area than
+    tray area rules out every layout)."""
+    counts = r.instance.kit_parts([task])
+    area = sum(r.instance.part_types[p].area * n for p, n in counts.items())
+    if area > r.instance.tray.area:
+        return ANY_ANGLE
+    return r.lower_level.value(counts).proof
 
 
 def _start(r: _Run, warm_plan: Plan | str, ce_params: Any) -> Plan:

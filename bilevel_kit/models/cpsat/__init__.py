@@ -1,25 +1,25 @@
 """The exact whole-horizon schedule as a CP-SAT model (registered method ``cpsat``).
 
 One module per step: :mod:`.scaling` (integer time grid), :mod:`.model` (the schedule model),
-:mod:`.tray` (embedded rectangles, Benders cuts), :mod:`.embedded` and :mod:`.benders` (the two
-ways to solve it), :mod:`.method` (the registered entry, its options and the Python
-:func:`solve`). The formulation is in docs/formulations.md; the result and its ``extra`` keys
-are listed in :mod:`.method`. Importing this package loads no OR-Tools.
+:mod:`.tray` (embedded rectangles, Benders cuts, the tray mode), :mod:`.embedded` and
+:mod:`.benders` (the two ways to solve it), :mod:`.warm` (the warm start), :mod:`.method` (the
+registered entry, its options and the Python :func:`solve`). The formulation is in
+docs/formulations.md; the result and its ``extra`` keys are listed in :mod:`.method`.
+Importing this package loads no OR-Tools.
 """
 
 from .method import (
-    AUTO_EMBEDDED_MAX_RECTS,
-    HINT_METHODS,
     OBJECTIVES,
     TRAY_MODES,
     CpsatOptions,
     ScheduleOptions,
-    best_heuristic_plan,
     cpsat,
     run,
     solve,
 )
 from .scaling import Scaled, released_makespan, scale_times
+from .tray import AUTO_EMBEDDED_MAX_RECTS
+from .warm import HINT_METHODS, best_heuristic_plan
 
 __all__ = [
     "AUTO_EMBEDDED_MAX_RECTS",

@@ -15,6 +15,8 @@ import math
 from typing import Any
 
 from ..common import NoGoodCuts, kit_order
+from ..packing import ANY_ANGLE
+from ..packing_oracle import WHY_TIME, Fit
 from .context import MARGIN, Context, Model, State
 from .model import canonical, extract_kits, hint
 from .scaling import scaled_objective
@@ -30,7 +32,12 @@ def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]
         it += 1
         if not loop.iterate(solver):
             break
-    loop.state.info = {"benders_iterations": it, "unproven_cuts": loop.cuts.unproven}
+    loop.state.info = {
+        "benders_iterations": it,
+        "unproven_cuts": loop.cuts.unproven,
+        "axis_aligned_cuts": loop.cuts.axis_only,
+    }
+    loop.state.scope = loop.cuts.scope
     return loop.state
 
 
@@ -48,21 +55,21 @@ class _Benders:
         ids = self.ctx.ids
         return dict(self.ctx.instance.kit_parts([ids[i] for i in kit]))
 
-    def verdicts(self, kits: list[list[int]]) -> list[bool | None]:
-        """Does each kit fit (None: unknown within the packing time limit)?"""
+    def verdicts(self, kits: list[list[int]]) -> list[Fit]:
+        """Does each kit fit (the oracle's answer; unknown past the time limit)?"""
         packer = self.ctx.packer
-        out: list[bool | None] = []
+        out: list[Fit] = []
         for kit in kits:
             if self.ctx.left() <= 0:  # out of time: the rest stays unknown
-                out.append(None)
+                out.append(Fit(None, why=WHY_TIME))
                 continue
             counts = self.counts(kit)
-            ok = packer.counts(counts)[0]
-            if ok is None:  # a hard packing: one more try with a longer limit
-                ok = packer.counts(
+            fit = packer.verdict(counts)
+            if fit.fits is None:  # a hard packing: one more try with a longer limit
+                fit = packer.verdict(
                     counts, max(packer.pack_tl, min(10 * packer.pack_tl, self.ctx.left() / 3))
-                )[0]
-            out.append(ok)
+                )
+            out.append(fit)
         return out
 
     def repair(self, kits: list[list[int]]) -> None:
@@ -97,10 +104,8 @@ class _Benders:
             hint(mdl, self.ctx.sc, state.kits)
         solver.parameters.max_time_in_seconds = self.ctx.left()
         live = self.ctx.live
-        if live is not None:
-            live.bound_valid = (
-                self.cuts.unproven == 0
-            )  # after an unproven cut the bound is no proof
+        if live is not None:  # the master's bound holds for every plan only with such cuts
+            live.bound_valid = self.cuts.scope == ANY_ANGLE
             live.tracker.report(stage=f"CP-SAT Benders, {self.mdl.n_cuts} cuts")
         st = solver.solve(mdl.model, self.ctx.callback)
         state.status_name = solver.status_name(st)
@@ -108,25 +113,22 @@ class _Benders:
             # the master holds C <= U, so without an unproven cut the incumbent is optimal
             state.infeasible = state.kits is None and self.cuts.unproven == 0
             if state.kits is not None and self.cuts.unproven == 0:
-                state.proven, state.lower = True, state.obj
+                self.proved()
             return False
         if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
             return False
-        if self.cuts.unproven == 0:  # after an unproven cut the master bound is no proof
-            bound = math.ceil(solver.best_objective_bound - 1e-6)
-            state.lower = bound if state.lower is None else max(state.lower, bound)
+        self.record_bound(math.ceil(solver.best_objective_bound - 1e-6))
         kits = extract_kits(mdl, solver)
         verdicts = self.verdicts(kits)
-        if all(v is True for v in verdicts):
+        if all(v.fits is True for v in verdicts):
             obj = round(solver.objective_value)
             if state.obj is None or obj <= state.obj:
                 self.improve(kits, obj)
             best = obj if state.obj is None else state.obj
-            state.proven = (st == cp_model.OPTIMAL and self.cuts.unproven == 0) or (
+            if (st == cp_model.OPTIMAL and self.cuts.unproven == 0) or (
                 state.lower is not None and state.lower >= best
-            )
-            if state.proven:
-                state.lower = state.obj
+            ):
+                self.proved()
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.ctx.left() <= 0.01:  # no time for another master solve: no cuts, no repair
             return False
@@ -134,6 +136,23 @@ class _Benders:
         if self.ctx.left() > 0:
             self.repair(kits)
         if state.obj is not None and state.lower is not None and state.lower >= state.obj:
-            state.proven = True
+            self.proved()
             return False
         return bool(new)  # nothing new to cut: only possible with unknown packings
+
+    def record_bound(self, bound: int) -> None:
+        """A master's bound: a proof for 0/90-degree plans while every cut is proven, and for
+        every plan while every cut holds at any angle (:attr:`.common.NoGoodCuts.scope`)."""
+        state, scope = self.state, self.cuts.scope
+        if scope is None:  # after an unproven cut the master bound is no proof
+            return
+        state.lower = bound if state.lower is None else max(state.lower, bound)
+        if scope == ANY_ANGLE:
+            state.lower_any = bound if state.lower_any is None else max(state.lower_any, bound)
+
+    def proved(self) -> None:
+        """The incumbent is optimal for the plans the cuts' scope covers."""
+        state = self.state
+        state.proven, state.lower = True, state.obj
+        if self.cuts.scope == ANY_ANGLE:
+            state.lower_any = state.obj

@@ -11,6 +11,7 @@ from ...plan import Placement
 from ...progress import Tracker
 from ..budget import Budget
 from ..common import Packer
+from ..packing import ANY_ANGLE
 from .scaling import Scaled
 
 #: One embedded rectangle: (part type, copy j, x var, y var, rotation: 0, 1 or the two
@@ -70,6 +71,10 @@ class Context:
     packer: Packer
     budget: Budget
     pack_res: float
+    #: Which plans the embedded model's tray holds (docs/formulations.md#what-optimal-means):
+    #: every plan when the instance's parts all fit one tray, the 0/90-degree ones on an exact
+    #: packing grid, else None (a grid that rounds sizes up proves nothing).
+    embed_scope: str | None = None
     #: The live progress (None: nobody listens) and the solution callback it gives the solver.
     live: Live | None = None
     callback: Any = None  # a CpSolverSolutionCallback (OR-Tools is imported lazily)
@@ -85,14 +90,19 @@ class Context:
 
 @dataclass
 class State:
-    """What a run ends with: the best kits (objective ``obj``), the proven lower bound
-    ``lower`` (scaled objective units), whether ``obj`` is proven optimal."""
+    """What a run ends with: the best kits (objective ``obj``), the lower bound ``lower``
+    (scaled objective units) proven for 0/90-degree plans, ``lower_any`` proven for every plan,
+    whether ``obj`` is proven optimal (``infeasible``: no plan) among the plans of ``scope``
+    (docs/formulations.md#what-optimal-means: every plan, 0/90-degree plans, or None: no
+    proof)."""
 
     kits: list[list[int]] | None
     obj: int | None
     lower: int | None = None
     proven: bool = False
     infeasible: bool = False
+    lower_any: int | None = None
+    scope: str | None = ANY_ANGLE
     layouts: list[tuple[Placement, ...]] | None = None
     status_name: str = "UNKNOWN"
     info: dict[str, Any] = field(default_factory=dict)

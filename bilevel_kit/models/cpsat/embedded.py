@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from ..packing import ANY_ANGLE
 from .context import Context, Model, State
 from .model import extract_kits, hint
 from .scaling import scaled_objective
@@ -36,11 +37,19 @@ def run_embedded(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int
         if state.obj is None or obj <= state.obj:
             state.kits, state.obj = kits, obj
             state.layouts = embedded_layouts(ctx.instance, mdl, solver, kits, ctx.packer.res)
-        state.lower = math.ceil(solver.best_objective_bound - 1e-6)
+        _bound(state, ctx.embed_scope, math.ceil(solver.best_objective_bound - 1e-6))
         state.proven = st == cp_model.OPTIMAL
     elif st == cp_model.INFEASIBLE:
         # C <= U holds for the incumbent, so this only happens without one
         state.infeasible = incumbent is None
         state.proven = incumbent is not None
-        state.lower = state.obj
+        _bound(state, ctx.embed_scope, state.obj)
     return state
+
+
+def _bound(state: State, scope: str | None, lower: int | None) -> None:
+    """The model's bound, with the scope of its tray (:attr:`.context.Context.embed_scope`):
+    a proof for every plan, for 0/90-degree plans only, or none."""
+    state.scope = scope
+    state.lower = None if scope is None else lower
+    state.lower_any = lower if scope == ANY_ANGLE else None

@@ -10,11 +10,16 @@ of master solutions with the packing oracle and cuts those that do not fit (:mod
 rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
 kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
 enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
-with Benders on a loaded machine), else ``benders``. Embedded models run with
+with Benders on a loaded machine) and the embedded tray proves optimality for every plan
+(:func:`embed_scope`: all the instance's parts fit one tray, or none may rotate and the grid is
+exact), else ``benders``. Embedded models run with
 :data:`~bilevel_kit.models.packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
-"optimal" and the model's bound are with respect to plans whose kits fit on the packing grid;
-the closed-form bounds of :mod:`bilevel_kit.bounds`, which the bound never undercuts, hold for
-every plan. Times are scaled to integers (:mod:`.scaling`).
+"optimal" and ``bound`` speak of every plan the checker accepts (parts at any angle); the
+model's own optimum and bound hold for the plans its exclusions were proven for, which may be
+the 0/90-degree plans only (``optimal_axis_aligned``, ``bound_axis_aligned``,
+docs/formulations.md#what-optimal-means). The closed-form bounds of :mod:`bilevel_kit.bounds`,
+which the bound never undercuts, hold for every plan. Times are scaled to integers
+(:mod:`.scaling`).
 
 **Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
 checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
@@ -52,8 +57,13 @@ order with a non-overlapping layout. ``extra`` keys:
 * ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
   of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
   chains), ``hint_used`` (the given plan was a valid start);
-* ``benders_iterations``, ``unproven_cuts`` (Benders only), ``cuts``, ``cpsat_status``,
+* ``benders_iterations``, ``unproven_cuts``, ``axis_aligned_cuts`` (Benders only: cuts without
+  a proof, and with one for 0/90-degree layouts only), ``cuts``, ``cpsat_status``,
   ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
+* ``proof_scope`` (``any angle``, ``0/90 degrees`` or None), ``status_reason`` (why the status
+  is weaker than the model's verdict), ``optimal_axis_aligned`` and ``bound_axis_aligned`` (the
+  model's verdict and bound among 0/90-degree plans), ``infeasible_axis_aligned`` (no such
+  plan; status unknown);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
   scaled times); ``idle_bound`` for ``objective="human_idle"``;
@@ -81,7 +91,7 @@ from ...instance import Instance
 from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
-from .. import packing
+from .. import packing, packing_oracle
 from ..budget import Budget, check_model_memory, too_slow_to_build
 from ..common import (
     Packer,
@@ -93,10 +103,14 @@ from ..common import (
     plan_extra,
     quick_plan,
     reduced_edges,
+    scope_claims,
 )
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
+from .tray import embed_scope, tray_mode
+from .warm import MIN_RUN, best_heuristic_plan
 
 if TYPE_CHECKING:
     from .live import Live as LiveProgress
@@ -105,23 +119,10 @@ TrayMode = Literal["auto", "embedded", "benders"]
 Objective = Literal["makespan", "human_idle"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
-#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
-AUTO_EMBEDDED_MAX_RECTS = 300
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
-#: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
-HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
 #: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
 HINT_SHARE = 0.3
-#: The least time (s) a step is given even when the budget is spent (it returns at once).
-MIN_RUN = 0.05
-#: A warm-start heuristic that would get less than this (s) is skipped (if a plan is known).
-MIN_HINT = 0.3
-#: Seconds per task kept back from a heuristic's share of the warm start for its run past its
-#: own ``time_limit``. Measured +4.4 s at 500 and +7.5-10 s at 1,000 tasks for greedy-ce before
-#: its incremental timeline, +0.5-1.4 s at 1,000 tasks since (bench/results/scale.md): now a
-#: conservative margin, kept because the scale benchmark's cpsat rows were measured with it.
-HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
 #: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
 #: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
 BYTES_PER_CELL = 6_000
@@ -236,49 +237,6 @@ def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
     return closed_form_plan(instance, packer) is not None
 
 
-def best_heuristic_plan(
-    instance: Instance,
-    methods: Sequence[str] = HINT_METHODS,
-    seed: int = 0,
-    time_limit: float | None = None,
-) -> tuple[Plan | None, str | None]:
-    """The plan of lowest makespan among heuristic methods (a warm start for exact models);
-    methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
-    all: each gets what is left of it, and once it is spent the remaining methods are
-    skipped (unless no plan is known yet)."""
-    import time
-
-    from ...errors import BilevelKitError
-    from ...methods import get_method
-
-    end = None if time_limit is None else time.perf_counter() + time_limit
-    best: tuple[float, Plan, str] | None = None
-    for name in methods:
-        left = None if end is None else end - time.perf_counter()
-        if left is not None and left <= 0 and best is not None:
-            break
-        if left is not None:  # keep back the method's overrun past its own limit
-            left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
-            if left <= MIN_HINT and best is not None:
-                continue
-        try:
-            spec = get_method(name)
-            fn = spec.load()
-            tl = None if left is None else max(MIN_RUN, left)
-            if spec.options:
-                out = fn(instance, spec.parse({}), seed=seed, time_limit=tl)
-            else:
-                out = fn(instance, seed=seed)
-        except BilevelKitError:
-            continue
-        if out.plan is None:
-            continue
-        ms = evaluate(instance, out.plan).makespan
-        if best is None or ms < best[0]:
-            best = (ms, out.plan, name)
-    return (best[1], best[2]) if best else (None, None)
-
-
 def solve(
     instance: Instance,
     *,
@@ -330,11 +288,11 @@ class _Report:
     def __init__(self, budget: Budget, extra: dict[str, Any]) -> None:
         self.budget = budget
         self.extra = extra
-        self.solves_before = sum(c.solves for c in packing._CACHES.values())
+        self.solves_before = packing_oracle.pack_solves()
 
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         extra = self.extra
-        extra["pack_solves"] = sum(c.solves for c in packing._CACHES.values()) - self.solves_before
+        extra["pack_solves"] = packing_oracle.pack_solves() - self.solves_before
         extra["wall_time_s"] = self.budget.elapsed()
         return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
 
@@ -369,10 +327,9 @@ def run(
             "hint_used": False,
         },
     )
-    unfit = packer.task_not_fitting()  # then no plan exists
+    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
     if unfit is not None:
-        report.extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
-        return report.finish(None, Status.INFEASIBLE, None)
+        return _no_plan(instance, unfit, report)
     ctx = _context(instance, sc, options, packer, budget, report.extra)
     incumbent = _incumbent(ctx, hint, pack_tl, report.extra)
     live = _start_live(ctx, incumbent)
@@ -380,7 +337,7 @@ def run(
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
-    mode = _tray_mode(instance, options.tray, K)
+    mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
         tray_mode=mode,
         max_kits=K,
@@ -411,7 +368,26 @@ def _context(
     sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
     groups = chain_groups_idx(n, _edges(instance), sig)
     extra["symmetric_chains"] = sum(len(g) for g in groups)
-    return Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+    ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
+    ctx.embed_scope = embed_scope(instance, packer)
+    return ctx
+
+
+def _no_plan(instance: Instance, unfit: tuple[str, str], report: _Report) -> MethodOutput:
+    """A task whose parts alone do not fit: no plan at all (infeasible) when that is proven
+    at any angle, else none with 0/90-degree layouts (unknown: one at other angles may
+    exist)."""
+    task, scope = unfit
+    if scope == ANY_ANGLE:
+        report.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
+        return report.finish(None, Status.INFEASIBLE, None)
+    report.extra.update(
+        reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
+        "(a layout at other angles may exist)",
+        infeasible_axis_aligned=True,
+        proof_scope=AXIS_ALIGNED,
+    )
+    return report.finish(None, Status.UNKNOWN, best_bound(instance))
 
 
 def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
@@ -447,7 +423,8 @@ def _proven_without_model(
     if upper is not None and sc.rel and upper <= release_bound(instance, sc):
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
         extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
-        return _conclude(ctx, None, State(incumbent, upper, upper, proven=True), report)
+        state = State(incumbent, upper, upper, proven=True, lower_any=upper)
+        return _conclude(ctx, None, state, report)
     return None
 
 
@@ -508,13 +485,16 @@ def _solve_model(
     if live is not None:
         live.mdl = mdl
         ctx.callback = live.attach(solver, solutions_are_plans=mode == "embedded")
+        live.bound_valid = mode != "embedded" or ctx.embed_scope == ANY_ANGLE
     state = _search(ctx, mdl, solver, mode, incumbent)
     extra.update(state.info)
     extra["cpsat_status"] = state.status_name
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
-        if state.infeasible:
+        if state.infeasible and state.scope == ANY_ANGLE:
             return report.finish(None, Status.INFEASIBLE, None)
+        if state.infeasible and state.scope == AXIS_ALIGNED:
+            extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
         return report.finish(None, Status.UNKNOWN, best_bound(instance))
     return _conclude(ctx, mdl, state, report)
 
@@ -548,6 +528,11 @@ def _incumbent(
     idx = instance.index
     candidates: list[list[list[int]]] = []
     if hint is not None and sorted(hint.task_order) == sorted(ids):
+        from ...validate import check
+
+        if not check(instance, hint):  # its layouts are valid: its kits fit, at any angle
+            for kit in hint.kits:
+                packer.learn(instance.kit_parts(kit.tasks), kit.layout)
         hk = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
@@ -589,17 +574,6 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     return K
 
 
-def _tray_mode(instance: Instance, tray: str, K: int) -> str:
-    """``tray`` with ``auto`` resolved (module docstring)."""
-    if tray != "auto":
-        return tray
-    n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
-    small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
-    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
-    # (bench/results/cpsat_trays.csv)
-    return "embedded" if small and instance.tray_limit is None else "benders"
-
-
 def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
     """The plan of the run's best kits with its status and makespan bound in seconds."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
@@ -607,22 +581,38 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     plan = _plan_of(ctx, state.kits, state.layouts, ctx.packer)
     real = evaluate(instance, plan)
     closed = best_bound(instance)
-    lower = state.lower
-    lower_s = None if lower is None else round(lower * sc.res, 9)  # a multiple of res >= 1e-4
+    lower_s = None if state.lower is None else round(state.lower * sc.res, 9)  # >= 1e-4
+    any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
     idle_bound = None
     if ctx.objective == "makespan":
-        bound_s = closed if lower_s is None else max(closed, lower_s)
-        optimal = state.proven and (sc.exact or (real.makespan <= bound_s + 1e-6 and not sc.rel))
+        bound_s = closed if any_s is None else max(closed, any_s)  # every plan (module doc)
+        bound_axis = closed if lower_s is None else max(closed, lower_s)
+        exact = sc.exact or (real.makespan <= bound_axis + 1e-6 and not sc.rel)
+        optimal_axis = state.proven and state.scope is not None and exact
+        optimal = (optimal_axis and state.scope == ANY_ANGLE) or (
+            real.makespan <= bound_s + 1e-6 and not sc.rel
+        )
+        extra.update(bound_axis_aligned=bound_axis, optimal_axis_aligned=optimal_axis)
     else:
-        if lower is not None and sc.exact and mdl is not None:
-            idle_bound = round((lower + mdl.obj_const) * sc.res, 9)
+        idle_axis = None
+        if sc.exact and mdl is not None:  # the model's bounds on human idle, in s
+            if state.lower is not None:
+                idle_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
+            if state.lower_any is not None:
+                idle_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
         w_min = (
             sum(instance.human_time(i) for i in ctx.ids)
             + min_kits(instance) * instance.kit_overhead_human
         )
         bound_s = closed if idle_bound is None else max(closed, idle_bound + w_min)
-        optimal = state.proven and sc.exact
-        extra["idle_bound"] = idle_bound
+        optimal_axis = state.proven and sc.exact and state.scope is not None
+        optimal = optimal_axis and state.scope == ANY_ANGLE
+        extra.update(
+            idle_bound=idle_bound,
+            idle_bound_axis_aligned=idle_axis,
+            optimal_axis_aligned=optimal_axis,
+        )
+    extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
     missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
@@ -660,6 +650,6 @@ def _plan_of(
         elif packer is not None:
             ok, typed = packer.counts(dict(instance.kit_parts(tasks)))
             if ok and typed is not None:
-                layout = packing.typed_to_placements(instance, tasks, typed)
+                layout = packing_oracle.typed_to_placements(instance, tasks, typed)
         out.append(Kit(tasks, layout))
     return Plan(tuple(out))

@@ -23,7 +23,11 @@ from ...instance import Instance
 from ...plan import Placement
 from .. import packing
 from ..common import Packer
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import Model
+
+#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
+AUTO_EMBEDDED_MAX_RECTS = 300
 
 #: Lower-left grid corner and rotation of every part of a plan: task index -> (type, copy j)
 #: -> (x, y, turned).
@@ -88,6 +92,48 @@ def embed_tray(
             m.add_no_overlap_2d(per_kit_x[k], per_kit_y[k])
 
 
+def embed_scope(instance: Instance, packer: Packer) -> str | None:
+    """Which plans a tray embedded on ``packer``'s grid holds
+    (docs/formulations.md#what-optimal-means): every plan when all the instance's parts fit
+    one tray on that grid (then the model excludes no kit); else the 0/90-degree plans when
+    the grid is exact (every size a multiple of it, no reach map); else None: the model's
+    bound proves nothing."""
+    from ...heuristics.shelf import kit_items
+
+    every = instance.kit_parts([t.id for t in instance.tasks])
+    whole = packing.pack(
+        instance.tray,
+        kit_items(instance.part_types, every),
+        resolution=packer.res,
+        time_limit=min(packer.pack_tl, 0.5, max(0.01, packer.budget.remaining())),
+        reach=packer.reach,
+    )
+    if whole.layout is not None:
+        return ANY_ANGLE
+    sizes = [instance.tray.width, instance.tray.height]
+    sizes += [v for pt in instance.part_types.values() for v in (pt.width, pt.height)]
+    if packer.reach is not None or not packing.is_grid_exact(sizes, packer.res):
+        return None
+    if all(not instance.part_types[p].rotatable for p in every):
+        return ANY_ANGLE  # such parts lie at 0 or 180 degrees only
+    return AXIS_ALIGNED
+
+
+def tray_mode(instance: Instance, tray: str, K: int, scope: str | None) -> str:
+    """``tray`` with ``auto`` resolved (module docstring); ``scope``: what an embedded tray
+    would prove (:func:`embed_scope`). Embedded only when it proves optimality for every plan:
+    otherwise Benders, whose cuts each carry their own proof (many hold at any angle: area,
+    inscribed disks) and whose oracle confirms a misfit of an inexact grid on the exact one."""
+    if tray != "auto":
+        return tray
+    n_rects = sum(c for t in instance.tasks for _, c in t.parts) * K
+    small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
+    small = small and scope == ANY_ANGLE
+    # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
+    # (bench/results/cpsat_trays.csv)
+    return "embedded" if small and instance.tray_limit is None else "benders"
+
+
 def add_cut(mdl: Model, counts: dict[str, int]) -> None:
     """Forbid the multiset ``counts`` (and every super-multiset) in every kit."""
     m = mdl.model
@@ -119,8 +165,9 @@ def grid_corners(
     res = packer.res
     out: Corners = {}
     for kit in kits:
-        ok, typed = packer.counts(dict(instance.kit_parts([instance.tasks[i].id for i in kit])))
-        if not ok or typed is None:
+        fit = packer.grid_verdict(instance.kit_parts([instance.tasks[i].id for i in kit]))
+        typed = fit.layout
+        if not fit.fits or typed is None:
             return None
         slot = dict.fromkeys(typed, 0)
         for i in kit:

@@ -6,14 +6,18 @@ LP-based branch and bound (HiGHS by default, any Pyomo solver by name, :mod:`.so
 cross-checks the CP-SAT model. It shares only the packing oracle with it.
 
 **Tray (logic-based Benders).** The master holds the area relaxation. Each kit of an
-incumbent is checked with the memoised packing oracle :func:`..packing.fit_counts`; a
-part multiset M that provably does not fit is shrunk by a deletion filter to a minimal
-non-fitting one and cut from **every** kit (:func:`.model.add_cut`). The master is re-solved
+incumbent is checked with the memoised packing oracle
+(:func:`..packing_oracle.fit_verdict`); a part multiset M that provably does not fit is shrunk by
+a deletion filter to a minimal non-fitting one (with a proof of the same scope) and cut from
+**every** kit (:func:`.model.add_cut`). The master is re-solved
 until its optimum packs (then it is optimal for the full problem) or the time is up; kits that
 do not fit are split greedily to keep an incumbent. ``tray="auto"`` first seeds cuts for every
 pair of tasks that does not fit; ``"benders"`` starts from the area relaxation alone. "Fits"
-means what the oracle means: an axis-aligned layout on its grid, the same notion as the CP-SAT
-model. The incumbent (the quick plan, then the best packable plan) is the MIP start.
+means what the oracle means: an axis-aligned layout on its grid (a "no" confirmed on the exact
+grid), the same notion as the CP-SAT model; "optimal" and ``bound`` speak of every plan the
+checker accepts, the master's own verdict and bound of the plans its cuts were proven for
+(docs/formulations.md#what-optimal-means). The incumbent (the quick plan, then the best
+packable plan) is the MIP start.
 
 **Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
 master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
@@ -29,8 +33,10 @@ the closed-form bounds). ``extra`` keys:
   ``build_time_s``, ``wall_time_s``;
 * ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
   bound of :mod:`bilevel_kit.bounds` (no model is built: it is optimal);
-* ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``termination`` (the last
-  master solve's), ``master_time_s`` (its wall time);
+* ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``axis_aligned_cuts``,
+  ``termination`` (the last master solve's), ``master_time_s`` (its wall time);
+* ``proof_scope``, ``status_reason``, ``optimal_axis_aligned``, ``bound_axis_aligned``,
+  ``infeasible_axis_aligned``: as for ``cpsat`` (what the cuts' proofs cover);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the master's bound, or None); ``idle_bound`` for
   ``objective="human_idle"``;
@@ -66,7 +72,10 @@ from ..common import (
     pack_time_limit,
     plan_extra,
     quick_plan,
+    scope_claims,
 )
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from ..packing_oracle import WHY_TIME, Fit
 from .model import (
     Master,
     add_cut,
@@ -162,18 +171,27 @@ def run(
         unproven_cuts=0,
         time_limit_enforced=options.solver == "highs" or options.solver in SOLVER_OPTIONS,
     )
-    unfit = packer.task_not_fitting()  # then no plan exists
+    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
     if unfit is not None:
-        r.extra["reason"] = f"the parts of task {unfit!r} alone do not fit the tray"
-        return r.finish(None, Status.INFEASIBLE, None)
+        task, scope = unfit
+        if scope == ANY_ANGLE:
+            r.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
+            return r.finish(None, Status.INFEASIBLE, None)
+        r.extra.update(
+            reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
+            "(a layout at other angles may exist)",
+            infeasible_axis_aligned=True,
+            proof_scope=AXIS_ALIGNED,
+        )
+        return r.finish(None, Status.UNKNOWN, closed)
     inc, inc_obj, upper, K = _incumbent(r, pack_tl)
     if upper is not None and upper <= closed + TOL:
         # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         r.extra.update(build_time_s=0.0, termination="closed_form_bound")
-        return _conclude(r, inc, None, Status.OPTIMAL)
+        return _conclude(r, inc, None, None, ANY_ANGLE, proven=True)
     if not _buildable(r, K):
-        return _conclude(r, inc, None, Status.FEASIBLE)
+        return _conclude(r, inc, None, None, ANY_ANGLE, proven=False)
     return _solve_master(r, K, upper, inc, inc_obj, opt, seed, solver_options)
 
 
@@ -266,30 +284,52 @@ def _solve_master(
     if options.tray == "auto":
         loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
+    scope = loop.cuts.scope
     r.extra.update(
         iterations=loop.iterations,
         cuts=master.n_cuts,
         unproven_cuts=loop.cuts.unproven,
+        axis_aligned_cuts=loop.cuts.axis_only,
         termination=None if info is None else info.termination,
         master_time_s=None if info is None else info.wall_time_s,
     )
     if loop.inc is None:
-        if loop.infeasible:
+        if loop.infeasible and scope == ANY_ANGLE:
             return r.finish(None, Status.INFEASIBLE, None)
+        if loop.infeasible:  # no plan with 0/90-degree layouts; one at other angles may exist
+            r.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
         return r.finish(None, Status.UNKNOWN, r.closed)
-    return _conclude(r, loop.inc, loop.lower, Status.OPTIMAL if loop.proven else Status.FEASIBLE)
+    return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
 def _conclude(
-    r: _Run, kits: list[list[str]] | None, lower: float | None, status: Status
+    r: _Run,
+    kits: list[list[str]] | None,
+    lower: float | None,
+    lower_any: float | None,
+    scope: str | None,
+    *,
+    proven: bool,
 ) -> MethodOutput:
-    """The plan of ``kits`` with ``status`` and its makespan bound (from the master's bound
-    ``lower``, if any); unknown when there are no kits or some kit has no layout in time."""
+    """The plan of ``kits``, proven optimal (``proven``) among the plans of ``scope``
+    (docs/formulations.md#what-optimal-means), with its makespan bound from the master's
+    bounds ``lower`` (for 0/90-degree plans) and ``lower_any`` (for every plan); unknown when
+    there are no kits or some kit has no layout in time."""
     plan = None if kits is None else _with_layouts(r.instance, kits, r.packer, r.extra)
     if plan is None:
         return r.finish(None, Status.UNKNOWN, r.closed)
-    bound = _makespan_bound(r.instance, plan, r.closed, lower, r.options.objective, r.extra)
-    return r.finish(plan, status, bound)
+    objective = r.options.objective
+    bound = _makespan_bound(r.instance, plan, r.closed, lower_any, objective, r.extra)
+    real = evaluate(r.instance, plan).makespan
+    optimal = (proven and scope == ANY_ANGLE) or (
+        objective == "makespan" and real <= bound + TOL * max(1.0, real)
+    )
+    r.extra["optimal_axis_aligned"] = proven and scope is not None
+    if objective == "makespan":
+        axis = r.closed if lower is None else max(r.closed, lower)
+        r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
+    r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
+    return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
 
 
 def _with_layouts(
@@ -400,6 +440,7 @@ class _Benders:
         self.inc_obj = inc_obj
         self.cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
         self.lower: float | None = None
+        self.lower_any: float | None = None
         self.proven = False
         self.infeasible = False
         self.iterations = 0
@@ -417,8 +458,9 @@ class _Benders:
             self.iterations += 1
             if self.inc is not None:
                 set_start(self.master, self.instance, self.inc)
-            # the master's bound is a proof only while every cut is; its solutions are no plans
-            proof = self.cuts.unproven == 0
+            # the master's bound holds for every plan only while every cut does (its scope);
+            # its solutions are no plans
+            proof = self.cuts.scope == ANY_ANGLE
             stage = f"MILP ({self.options.solver}), {self.master.n_cuts} cuts"
             self.live.model_values(None, None, stage)
             info = run_solver(
@@ -434,7 +476,7 @@ class _Benders:
                 on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
             )
             go_on = self.step(info)
-            self.live.model_values(self.inc_obj, self.lower)
+            self.live.model_values(self.inc_obj, self.lower_any)
             if not go_on:
                 break
         return info
@@ -446,21 +488,23 @@ class _Benders:
             # the master holds C <= U: without unproven cuts the incumbent is optimal
             if self.cuts.unproven == 0:
                 if self.inc is not None:
-                    self.proven, self.lower = True, self.inc_obj
+                    self.proved()
                 else:
                     self.infeasible = True
             return False
-        if self.cuts.unproven == 0 and info.bound is not None:
-            self.lower = info.bound if self.lower is None else max(self.lower, info.bound)
+        if info.bound is not None:
+            self.record_bound(info.bound)
         if not info.has_solution:
             return False
         kits = extract(self.master)
         verdicts = self.verdicts(kits)
-        if all(v is True for v in verdicts):
+        if all(v.fits is True for v in verdicts):
             obj = objective_value(instance, kits, objective)
             if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
                 self.inc, self.inc_obj = kits, obj
             self.proven = info.optimal and self.cuts.unproven == 0
+            if self.proven and self.cuts.scope == ANY_ANGLE:
+                self.lower_any = self.lower
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
             return False
@@ -469,23 +513,39 @@ class _Benders:
             self.repair(kits)
         inc_obj, lower = self.inc_obj, self.lower
         if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
-            self.proven = True
+            self.proved()
             return False
         return bool(new)  # nothing new to cut: only possible with unknown packings
 
-    def verdicts(self, kits: list[list[str]]) -> list[bool | None]:
-        """Does each kit fit (None: unknown within the packing time limit)?"""
-        out: list[bool | None] = []
+    def record_bound(self, bound: float) -> None:
+        """A master's bound: a proof for 0/90-degree plans while every cut is proven, and for
+        every plan while every cut holds at any angle (:attr:`..common.NoGoodCuts.scope`)."""
+        scope = self.cuts.scope
+        if scope is None:  # after an unproven cut the master bound is no proof
+            return
+        self.lower = bound if self.lower is None else max(self.lower, bound)
+        if scope == ANY_ANGLE:
+            self.lower_any = bound if self.lower_any is None else max(self.lower_any, bound)
+
+    def proved(self) -> None:
+        """The incumbent is optimal for the plans the cuts' scope covers."""
+        self.proven, self.lower = True, self.inc_obj
+        if self.cuts.scope == ANY_ANGLE:
+            self.lower_any = self.inc_obj
+
+    def verdicts(self, kits: list[list[str]]) -> list[Fit]:
+        """Does each kit fit (the oracle's answer; unknown past the time limit)?"""
+        out: list[Fit] = []
         pack_tl = self.packer.pack_tl
         for kit in kits:
             if self.left() <= 0:  # out of time: the rest stays unknown
-                out.append(None)
+                out.append(Fit(None, why=WHY_TIME))
                 continue
             counts = self.instance.kit_parts(kit)
-            ok = self.packer.counts(counts)[0]
-            if ok is None:  # a hard packing: one more try with a longer limit
-                ok = self.packer.counts(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))[0]
-            out.append(ok)
+            fit = self.packer.verdict(counts)
+            if fit.fits is None:  # a hard packing: one more try with a longer limit
+                fit = self.packer.verdict(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))
+            out.append(fit)
         return out
 
     def repair(self, kits: list[list[str]]) -> None:

@@ -1,0 +1,61 @@
+"""Rewrite the KitBench tables of docs/kitbench.md and instances/kitbench/README.md from
+instances/kitbench/index.csv; with --figures, also redraw a run's profile and gap-versus-size
+figures into docs/figures/.
+
+python bench/kitbench_docs.py [--check] [--figures RUN_DIR LABEL]
+
+--check: exit 1 when a page disagrees with the index (tests/experiments/test_kitbench_library.py
+checks the same). --figures out/kitbench-10s 10s: docs/figures/kitbench-profile-10s.png and
+docs/figures/kitbench-gap-size-10s.png from that run's cells and the current records.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from bilevel_kit.experiments.kitbench import Library, read_cells, render_blocks  # noqa: E402
+from bilevel_kit.experiments.kitbench.run import result_rows, write_figures  # noqa: E402
+
+PAGES = (ROOT / "docs" / "kitbench.md", ROOT / "instances" / "kitbench" / "README.md")
+
+
+def figures(run: Path, label: str, library: Library) -> list[Path]:
+    """The run's two figures against the current records, as docs/figures/kitbench-*-LABEL."""
+    manifest = json.loads((run / "run.json").read_text())
+    rows = result_rows(library.read(), read_cells(run))
+    out = ROOT / "docs" / "figures"
+    paths = write_figures(rows, manifest["methods"], out, manifest["time_limit"], "tmp-")
+    final = []
+    for path, kind in zip(paths, ("profile", "gap-size"), strict=True):
+        target = out / f"kitbench-{kind}-{label}.png"
+        path.replace(target)
+        final.append(target)
+    return final
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true")
+    ap.add_argument("--figures", nargs=2, metavar=("RUN_DIR", "LABEL"))
+    args = ap.parse_args()
+    library = Library.at(ROOT / "instances" / "kitbench")
+    records = library.read()
+    stale = []
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        new = render_blocks(text, records)
+        if new != text:
+            stale.append(page)
+            if not args.check:
+                page.write_text(new, encoding="utf-8")
+    if args.check and stale:
+        raise SystemExit(f"out of date: {', '.join(str(p) for p in stale)}")
+    if args.figures:
+        for path in figures(Path(args.figures[0]), args.figures[1], library):
+            print(f"wrote {path}")

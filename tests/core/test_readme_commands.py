@@ -1,0 +1,348 @@
+"""Every command the README and the tutorial show runs, and exits as they say.
+
+The commands are read from the documents, not copied here, so the test follows any rewrite:
+every fenced ``bash`` (or ``sh``/``shell``) block is split into commands (a trailing ``\\``
+continues a line, ``&&`` chains stay one command, ``#`` starts a comment), and every
+``python`` block is one script. The commands of one document run in order, in one temporary
+folder that holds a copy of the repository files they name (``instances/`` always), so a
+later command may read what an earlier one wrote, as a reader's would.
+
+A comment on a command line steers the test:
+
+* ``# readme-test: skip REASON``: do not run it (it needs a file of the reader's own, ...);
+* ``# readme-test: exit=N``: it is shown failing on purpose and must exit with ``N``.
+
+Otherwise a command must exit 0. What the test changes, and why:
+
+* **Not run, shell syntax and named paths checked only**: creating a virtual environment or
+  installing with pip (the test runs in an installed environment already; a path such a
+  command names, ``-e '.[dev]'`` included, must exist); the test suite itself, the CI script,
+  the linters and the type checker (CI runs them, and running them here would recurse); the
+  documentation build and server (tests/core/test_docs_render.py builds the site); a command
+  put in the background (``&``: a service, such as a Dask scheduler) and a command that needs
+  one (``--scheduler``).
+* ``.venv/bin/TOOL`` is the tool installed next to the Python running the tests, and that
+  folder comes first on ``PATH``, so ``bilevel-kit`` is the one under test.
+* **Optional arguments** shown in brackets (``[--kit K]``) are left out, except ``[--quick]``,
+  which is kept: it is the fast form.
+* **Parsed, not run**: the ``repro`` studies. Their arguments go through the CLI's own
+  parser (a misspelt option fails), but a study takes 15-120 s even with ``--quick``
+  (measured under load), and tests/repro/ and tests/cli/ run each quick study end to end.
+* **Fast options**, so the whole file runs in minutes: ``--methods all`` becomes
+  ``single-task,greedy-ce,cpsat`` (``bilevel-milp`` alone spends its 60 s default limit and
+  ``milp`` starts a HiGHS child, both tested elsewhere); ``--time-limit`` is capped at 10 s;
+  replications at 2 (``--reps``, and ``simulate`` without ``--reps`` gets ``--reps 2``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCUMENTS = ["README.md", "docs/tutorial.md"]
+BIN = Path(sys.executable).parent
+SHELL_BLOCKS = ("bash", "sh", "shell")
+
+MARKER = re.compile(r"readme-test:\s*(?P<what>skip|exit=(?P<code>\d+))\s*(?P<why>.*)")
+#: Commands that are not run, and why (the first match wins).
+NOT_RUN = [
+    (re.compile(r"(?:^|\s)-m venv\b|\bpip install\b"), "sets up an environment"),
+    (re.compile(r"\bpytest\b|\.ci/run\b"), "runs the test suite or CI"),
+    (re.compile(r"\bruff\b|\bmypy\b"), "a linter or type checker (CI runs it)"),
+    (re.compile(r"\bmkdocs\b"), "builds or serves the docs (test_docs_render.py builds them)"),
+    (re.compile(r"&\s*$"), "starts a background service"),
+    (re.compile(r"--scheduler\b"), "needs a running Dask scheduler"),
+]
+#: Commands whose arguments are parsed by the CLI's own parser but which are not run, and why.
+PARSE_ONLY = [
+    (
+        re.compile(r"\bbilevel-kit\s+repro\b"),
+        "a study: 15-120 s even with --quick; tests/repro/ and tests/cli/ run each quick study",
+    ),
+]
+FAST_METHODS = "single-task,greedy-ce,cpsat"
+MAX_TIME_LIMIT = 10.0
+MAX_REPS = 2
+
+
+@dataclass(frozen=True)
+class Command:
+    document: str
+    line: int
+    shown: str  # as the document shows it (continuations joined, comment removed)
+    kind: str  # "bash" or "python"
+    expected: int = 0
+    skip: str | None = None
+
+    @property
+    def id(self) -> str:
+        return f"{self.document}:{self.line}"
+
+
+def _strip_comment(line: str) -> tuple[str, str]:
+    """(code, comment) of one shell line: a ``#`` outside quotes after a blank starts it."""
+    quote = ""
+    for i, ch in enumerate(line):
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "'\"":
+            quote = ch
+        elif ch == "#" and (i == 0 or line[i - 1].isspace()):
+            return line[:i].rstrip(), line[i + 1 :].strip()
+    return line.rstrip(), ""
+
+
+def _blocks(text: str) -> list[tuple[str, int, list[str]]]:
+    """(language, first line number, lines) of every fenced code block."""
+    out, lang, start, lines = [], None, 0, []  # type: ignore[var-annotated]
+    for n, line in enumerate(text.splitlines(), 1):
+        fence = re.match(r"^\s*```\s*([\w+-]*)", line)
+        if fence and lang is None:
+            lang, start, lines = fence[1].lower(), n + 1, []
+        elif fence:
+            out.append((lang, start, lines))
+            lang = None
+        elif lang is not None:
+            lines.append(line)
+    return out
+
+
+def _marked(comment: str) -> tuple[int, str | None]:
+    marker = MARKER.search(comment)
+    if not marker:
+        return 0, None
+    if marker["what"] == "skip":
+        return 0, marker["why"] or "marked skip"
+    return int(marker["code"]), None
+
+
+def commands(document: str) -> list[Command]:
+    return commands_in((ROOT / document).read_text(encoding="utf-8"), document)
+
+
+def commands_in(text: str, document: str) -> list[Command]:
+    out = []
+    for lang, start, lines in _blocks(text):
+        if lang == "python":
+            markers = [_marked(line) for line in lines if "readme-test:" in line]
+            expected, skip = markers[0] if markers else (0, None)
+            out.append(Command(document, start, "\n".join(lines), "python", expected, skip))
+            continue
+        if lang not in SHELL_BLOCKS:
+            continue
+        pending, first = "", start
+        for n, raw in enumerate(lines, start):
+            code, comment = _strip_comment(raw)
+            if not pending:
+                first = n
+            if code.endswith("\\"):
+                pending += code[:-1] + " "
+                continue
+            shown = " ".join((pending + code).split())
+            pending = ""
+            if shown:
+                expected, skip = _marked(comment)
+                out.append(Command(document, first, shown, "bash", expected, skip))
+    return out
+
+
+ALL = [c for d in DOCUMENTS for c in commands(d)]
+
+
+def _not_run(segment: str) -> str | None:
+    return next((why for pattern, why in NOT_RUN if pattern.search(segment)), None)
+
+
+def runnable(command: Command) -> tuple[str, list[str], list[str]]:
+    """The shell line to run (substitutions applied), the segments only parsed, and the
+    segments left out with why."""
+    kept, parsed, left_out = [], [], []
+    for segment in re.split(r"\s*&&\s*", command.shown):
+        why = _not_run(segment)
+        if why:
+            left_out.append(f"{segment}  ({why})")
+        elif any(pattern.search(segment) for pattern, _ in PARSE_ONLY):
+            parsed.append(fast(segment))
+        else:
+            kept.append(fast(segment))
+    return " && ".join(kept), parsed, left_out
+
+
+def parse_only(segment: str) -> None:
+    """Parse a ``bilevel-kit`` command's arguments as the CLI would, without running it."""
+    from bilevel_kit.cli import build_parser
+
+    tokens = shlex.split(segment)
+    start = next(i for i, t in enumerate(tokens) if t.endswith("bilevel-kit"))
+    try:
+        build_parser().parse_args(tokens[start + 1 :])
+    except SystemExit as exc:
+        pytest.fail(f"the CLI rejects {segment!r} (exit {exc.code})")
+
+
+def fast(segment: str) -> str:
+    """One command with the substitutions of the module docstring."""
+    segment = re.sub(r"(?<![\w/.])\.venv/bin/", f"{BIN}/", segment)
+    segment = re.sub(r"\[\s*--quick\s*\]", "--quick", segment)
+    segment = re.sub(r"\s*\[[^\]]*\]", "", segment)
+    segment = re.sub(r"--methods(\s+|=)all\b", rf"--methods\g<1>{FAST_METHODS}", segment)
+
+    def cap(match: re.Match[str], most: float) -> str:
+        value = min(float(match[2]), most)
+        return f"{match[1]}{value:g}"
+
+    limit = r"(--time-limit[\s=]+)(\d+(?:\.\d+)?)"
+    segment = re.sub(limit, lambda m: cap(m, MAX_TIME_LIMIT), segment)
+    segment = re.sub(r"(--reps[\s=]+)(\d+)", lambda m: cap(m, MAX_REPS), segment)
+    if re.search(r"\bbilevel-kit\s+simulate\b", segment) and "--reps" not in segment:
+        segment = re.sub(r"(\bbilevel-kit\s+simulate\b)", rf"\1 --reps {MAX_REPS}", segment)
+    return segment
+
+
+def _repository_paths(line: str) -> list[Path]:
+    """Paths a command names inside the repository: those whose first part is a top-level
+    file or folder of it (``instances/x.json``, ``tests/extending/example_plugin``)."""
+    paths = []
+    for token in shlex.split(line, comments=True):
+        value = token.split("=", 1)[-1] if token.startswith("-") else token
+        head = value.split("/")[0]
+        if "/" in value and head not in ("", ".", "..", ".venv", "out") and (ROOT / head).exists():
+            paths.append(Path(value.rstrip("/")))
+    return paths
+
+
+def _extras() -> set[str]:
+    text = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    section = text.split("[project.optional-dependencies]")[1].split("\n[")[0]
+    return set(re.findall(r"^(\w[\w-]*)\s*=", section, re.M))
+
+
+def check_paths(line: str) -> list[str]:
+    """What a command names in the repository that does not exist."""
+    missing = [str(p) for p in _repository_paths(line) if not (ROOT / p).exists()]
+    missing += [f"extra [{e}]" for e in re.findall(r"\.\[([\w-]+)\]", line) if e not in _extras()]
+    return missing
+
+
+@pytest.fixture(scope="module")
+def workdirs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """One folder per document, holding ``instances/`` and what its commands wrote."""
+    out = {}
+    for document in DOCUMENTS:
+        folder = tmp_path_factory.mktemp(Path(document).stem)
+        shutil.copytree(ROOT / "instances", folder / "instances")
+        out[document] = folder
+    return out
+
+
+def _copy_named(line: str, folder: Path) -> None:
+    for path in _repository_paths(line):
+        source, target = ROOT / path, folder / path
+        if source.exists() and not target.exists():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            if source.is_dir():
+                shutil.copytree(source, target)
+            else:
+                shutil.copy2(source, target)
+
+
+def _environment() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
+    env["MPLBACKEND"] = "Agg"
+    return env
+
+
+def test_documents_show_commands() -> None:
+    """The parser finds the README's main job and the tutorial's steps."""
+    shown = [c.shown for c in ALL]
+    assert any("bilevel-kit compare instances/hrc_table.json" in s for s in shown)
+    assert any("instances/tutorial_shelf.json" in s for s in shown)
+    assert all(not c.shown.endswith("\\") for c in ALL)
+
+
+def test_parsing_and_substitution_rules() -> None:
+    text = "\n".join(
+        [
+            "```bash",
+            "bilevel-kit solve a/b.json --time-limit 600 \\",
+            "    --out 'x # y.json'   # a comment",
+            "bilevel-kit pack mine.json  # readme-test: skip not ours",
+            "bilevel-kit check x.json  # readme-test: exit=1",
+            "python3.11 -m venv .venv && .venv/bin/bilevel-kit compare i.json --methods all",
+            "bilevel-kit simulate i.json [--jobs 2] && bilevel-kit repro fig6 [--quick]",
+            "```",
+            "```text",
+            "not a command",
+            "```",
+        ]
+    )
+    solve, pack, check, compare, chain = commands_in(text, "doc.md")
+    assert solve.shown == "bilevel-kit solve a/b.json --time-limit 600 --out 'x # y.json'"
+    assert (solve.line, solve.expected, solve.skip) == (2, 0, None)
+    assert fast(solve.shown).startswith("bilevel-kit solve a/b.json --time-limit 10 ")
+    assert pack.skip == "not ours" and check.expected == 1
+    line, parsed, left_out = runnable(compare)
+    assert line == f"{BIN}/bilevel-kit compare i.json --methods {FAST_METHODS}"
+    assert parsed == [] and left_out == ["python3.11 -m venv .venv  (sets up an environment)"]
+    line, parsed, _ = runnable(chain)
+    assert line == "bilevel-kit simulate --reps 2 i.json"
+    assert parsed == ["bilevel-kit repro fig6 --quick"]
+    parse_only(parsed[0])
+    with pytest.raises(pytest.fail.Exception, match="the CLI rejects"):
+        parse_only("bilevel-kit repro fig6 --no-such-option")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ALL, ids=[c.id for c in ALL])
+def test_command_runs(command: Command, workdirs: dict[str, Path]) -> None:
+    folder = workdirs[command.document]
+    if command.kind == "python":
+        if command.skip:
+            pytest.skip(command.skip)
+        compile(command.shown, command.id, "exec")
+        done = subprocess.run(
+            [sys.executable, "-c", command.shown],
+            cwd=folder,
+            env=_environment(),
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+    else:
+        syntax = subprocess.run(["bash", "-n", "-c", command.shown], capture_output=True)
+        assert syntax.returncode == 0, f"{command.id}: not valid shell: {command.shown}"
+        missing = check_paths(command.shown)
+        assert not missing, f"{command.id}: names what the repository lacks: {missing}"
+        line, parsed, left_out = runnable(command)
+        if command.skip:
+            pytest.skip(command.skip)
+        for segment in parsed:
+            parse_only(segment)
+        if not line:
+            why = [w for pattern, w in PARSE_ONLY if parsed and pattern.search(parsed[0])]
+            pytest.skip("; ".join(left_out + why))
+        _copy_named(line, folder)
+        done = subprocess.run(
+            ["bash", "-c", line],
+            cwd=folder,
+            env=_environment(),
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
+    report = json.dumps({"ran": command.shown, "stdout": done.stdout[-2000:]}, indent=1)
+    assert done.returncode == command.expected, (
+        f"{command.id}: exit {done.returncode}, expected {command.expected}\n"
+        f"{report}\nstderr: {done.stderr[-3000:]}"
+    )
