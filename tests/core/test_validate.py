@@ -141,7 +141,6 @@ def test_reported_times(tiny, valid):
 @pytest.mark.parametrize("method", [single_task, whole_assembly])
 def test_baselines_are_valid_on_every_instance(method, root):
     from bilevel_kit import load
-
     from bilevel_kit.errors import KitDoesNotFit
 
     checked = 0
@@ -152,7 +151,10 @@ def test_baselines_are_valid_on_every_instance(method, root):
         except KitDoesNotFit:
             # only a proof excuses a baseline: a unit's parts cover more than the tray
             assert method is whole_assembly, path.name
-            area = sum(inst.part_types[p].area * n for p, n in inst.kit_parts([t.id for t in inst.tasks]).items())
+            area = sum(
+                inst.part_types[p].area * n
+                for p, n in inst.kit_parts([t.id for t in inst.tasks]).items()
+            )
             assert area > inst.tray.area, path.name
             continue
         assert check(inst, out.plan) == [], path.name

@@ -130,3 +130,28 @@ def proven_bound(
     sources = {k: on_grid(v, grid) for k, v in sources.items()}
     source = max(sources, key=lambda k: (sources[k], k == "kit_lp"))
     return ProvenBound(sources[source], source, sources, per, stop, grid)
+
+
+#: The share of a run's time limit the exact models give :func:`proven_bound` (at least
+#: :data:`MIN_BOUND_S`, never more than a tenth of what is left).
+BOUND_SHARE, MIN_BOUND_S = 0.05, 0.2
+
+
+def for_model(
+    instance: Instance, time_limit: float, left: float, upper: float | None
+) -> ProvenBound:
+    """:func:`proven_bound` within an exact model's share of its run (:data:`BOUND_SHARE` of
+    ``time_limit``, at least :data:`MIN_BOUND_S`, at most a tenth of the ``left`` seconds)."""
+    share = min(max(BOUND_SHARE * time_limit, MIN_BOUND_S), 0.1 * max(0.0, left))
+    return proven_bound(instance, time_limit=share, upper=upper, lp=share > 0.02)
+
+
+def scaled_kit_bounds(bound: ProvenBound, res: float, exact: bool) -> dict[int, int]:
+    """The kit-count LP bounds on a model's integer time grid of ``res`` s: rounded up when
+    the grid holds every time (``exact``: the makespan is a multiple of ``res``), else down
+    (then the model's times are rounded down and its bound stays valid, docs/formulations.md)."""
+    out = {}
+    for m, v in bound.per_kits.items():
+        if math.isfinite(v):
+            out[m] = math.ceil(v / res - 1e-6) if exact else math.floor(v / res + 1e-9)
+    return out
