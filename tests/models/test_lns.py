@@ -56,3 +56,29 @@ def test_lns_options_are_checked(tiny):
         solve(tiny, "lns", window=1)
     with pytest.raises(UsageError, match="lns"):
         solve(tiny, "lns", start="all")
+
+
+@pytest.mark.parametrize("trays", [1, 2, 3, None])
+@pytest.mark.parametrize("seed", range(5))
+def test_suffix_response_equals_the_timeline(seed, trays):
+    """The window's objective: the suffix's max-plus response to the window's end state is
+    exactly the plan's makespan on the integer times, at every cut point."""
+    import random
+
+    from bilevel_kit.models.cpsat.scaling import scale_times, scaled_makespan, scaled_timeline
+    from bilevel_kit.models.lns.state import kit_times, tail_response
+
+    inst = from_dict(random_doc(seed, trays, n=9))
+    sc = scale_times(inst, 0.1, True)
+    rng = random.Random(seed)
+    order = list(range(inst.n_tasks))
+    cuts = sorted(rng.sample(range(1, len(order)), 4))
+    kits = [order[a:b] for a, b in zip([0, *cuts], [*cuts, len(order)], strict=True)]
+    total = scaled_makespan(sc, kits)
+    for k1 in range(1, len(kits) + 1):
+        tl = scaled_timeline(sc, kits[:k1])
+        starts = [e - kit_times(sc, k)[1] for (_, _, e), k in zip(tl, kits[:k1], strict=True)]
+        state = {"A": tl[-1][1], "E": tl[-1][2]}
+        state.update({f"HS{j}": starts[-j] for j in range(1, len(starts) + 1)})
+        form = tail_response(sc, kits[k1:], k1)
+        assert max(state[v] + c for v, c in form.items()) == total, (k1, form)

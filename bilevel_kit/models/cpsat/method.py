@@ -117,6 +117,7 @@ from ..common import (
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
+from .proven import bound_source, known_bound, proven_kit_cap, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .tray import embed_scope, tray_mode
 from .warm import MIN_RUN, best_heuristic_plan
@@ -345,7 +346,8 @@ def run(
     upper = None
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
-    _strong_bound(ctx, incumbent, report.extra)
+    start = None if incumbent is None else _plan_of(ctx, incumbent, None)
+    strong_bound(ctx, None if start is None else evaluate(instance, start).makespan, report.extra)
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
     mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
@@ -360,47 +362,9 @@ def run(
         return proven
     if not _buildable(instance, K, budget, report.extra, incumbent is not None):
         if incumbent is None:
-            return report.finish(None, Status.UNKNOWN, _bound_s(ctx))
+            return report.finish(None, Status.UNKNOWN, known_bound(ctx))
         return _conclude(ctx, None, State(incumbent, upper), report)
     return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
-
-
-def _strong_bound(ctx: Context, incumbent: list[list[int]] | None, extra: dict[str, Any]) -> None:
-    """The proven makespan bound of :mod:`bilevel_kit.models.relax` into ``ctx.proven``
-    (makespan objective without release times only), within its share of the time limit."""
-    if ctx.objective != "makespan" or any(ctx.sc.rel):
-        return
-    from ..relax import for_model
-
-    t0 = ctx.budget.elapsed()
-    upper = None if incumbent is None else evaluate(ctx.instance, _plan_of(ctx, incumbent, None))
-    ctx.proven = for_model(
-        ctx.instance,
-        ctx.budget.time_limit,
-        ctx.budget.remaining(),
-        None if upper is None else upper.makespan,
-    )
-    extra.update(
-        bound_sources=ctx.proven.sources,
-        bound_lp_kits=dict(ctx.proven.per_kits),
-        bound_time_s=ctx.budget.elapsed() - t0,
-    )
-
-
-def _bound_s(ctx: Context) -> float:
-    """The best proven makespan bound known before the model (s), for every plan."""
-    closed = best_bound(ctx.instance)
-    return closed if ctx.proven is None else max(closed, ctx.proven.value)
-
-
-def _source(ctx: Context, any_s: float | None) -> str:
-    """Which bound is the best: ``model`` (the model's, for every plan), the source of
-    :mod:`..relax`'s proven bound, or ``closed_form``."""
-    if any_s is not None and any_s > _bound_s(ctx) + 1e-9:
-        return "model"
-    if ctx.proven is not None and ctx.proven.value >= best_bound(ctx.instance) - 1e-9:
-        return str(ctx.proven.source)
-    return "closed_form"
 
 
 def _context(
@@ -538,7 +502,7 @@ def _solve_model(
         objective=options.objective,
         pack_res=options.pack_resolution,
         groups=ctx.groups,
-        kit_bounds=_scaled_kit_bounds(ctx),
+        kit_bounds=scaled_kit_bounds(ctx),
     )
     extra["build_time_s"] = budget.elapsed()
     ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun
@@ -561,17 +525,8 @@ def _solve_model(
             return report.finish(None, Status.INFEASIBLE, None)
         if state.infeasible and state.scope == AXIS_ALIGNED:
             extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
-        return report.finish(None, Status.UNKNOWN, _bound_s(ctx))
+        return report.finish(None, Status.UNKNOWN, known_bound(ctx))
     return _conclude(ctx, mdl, state, report)
-
-
-def _scaled_kit_bounds(ctx: Context) -> dict[int, int] | None:
-    """The kit-count LP bounds on the model's grid (None: none computed)."""
-    if ctx.proven is None:
-        return None
-    from ..relax import scaled_kit_bounds
-
-    return scaled_kit_bounds(ctx.proven, ctx.sc.res, ctx.sc.exact)
 
 
 def _edges(instance: Instance) -> list[tuple[int, int]]:
@@ -634,11 +589,7 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     K = n
     if upper is None:
         return K
-    if ctx.proven is not None and sc.exact:  # no plan of more kits beats U (models.relax)
-        from ..relax import closed_at
-
-        cap = ctx.proven.kit_cap(upper * sc.res + 1e-6, closed_at(ctx.instance))
-        K = K if cap is None else max(1, min(K, cap))
+    K = proven_kit_cap(ctx, upper, K)
     edges = _edges(ctx.instance)
     has_pred = {b for _, b in edges}
     has_succ = {a for a, _ in edges}
@@ -665,10 +616,10 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
     idle_bound = None
     if ctx.objective == "makespan":
-        strong = _bound_s(ctx)  # the closed forms and models.relax: every plan
+        strong = known_bound(ctx)  # the closed forms and models.relax: every plan
         bound_s = strong if any_s is None else max(strong, any_s)  # every plan (module doc)
         bound_axis = strong if lower_s is None else max(strong, lower_s)
-        extra["bound_source"] = _source(ctx, any_s)
+        extra["bound_source"] = bound_source(ctx, any_s)
         exact = sc.exact or (real.makespan <= bound_axis + 1e-6 and not sc.rel)
         optimal_axis = state.proven and state.scope is not None and exact
         optimal = (optimal_axis and state.scope == ANY_ANGLE) or (
