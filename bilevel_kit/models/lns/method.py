@@ -5,7 +5,7 @@ A matheuristic (docs/formulations.md, "Large-neighbourhood search"):
 1. **Start** from the best quick plan: the baselines (single-task, whole-assembly), the cuts of
    the topological order (fixed sizes and the exact one-tray cut of :mod:`..segment`), the
    Johnson-priority order's, and (``start="auto"``) greedy-ce's plan within ``start_share`` of
-   the time limit.
+   the time limit (when that is at least 2 s).
 2. **Bound**: the best proven lower bound of :mod:`..relax` (closed forms, heads and tails, the
    kit-count LP; at most ``bound_share`` of the time limit). It is the result's ``bound``,
    never the search's own incumbent; a plan that meets it is optimal and ends the run.

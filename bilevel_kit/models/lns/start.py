@@ -3,7 +3,8 @@
 The baselines (single-task, whole-assembly); the topological order and the Johnson-priority
 order (:func:`..common.johnson_topological_order`), each cut into kits of a fixed number of
 tasks (split further where a kit does not fit) and cut exactly for one tray (:mod:`..segment`:
-exact with one tray, a candidate otherwise); and greedy-ce within its share of the time limit.
+exact with one tray, a candidate otherwise); and greedy-ce within its share of the time limit
+(when that share is at least :data:`GREEDY_MIN_S`).
 Fits are decided by :class:`.fit.FastFit`.
 """
 
@@ -27,6 +28,9 @@ CUT_SHARE = 0.25
 #: greedy-ce starts only up to this many tasks (beyond, within its share of a time limit it
 #: leaves most tasks in single-task kits).
 GREEDY_TASKS = 200
+#: greedy-ce starts only when its share is at least this (s): its first call in a process loads
+#: its compiled kernels (measured 3-5 s under load: 5.4 s for a 1 s share on 12 stool tasks).
+GREEDY_MIN_S = 2.0
 #: After its budget, the exact cut keeps growing segments with the shelf packer alone for this
 #: many times the budget's length.
 SHELF_GRACE = 0.25
@@ -60,8 +64,8 @@ def start_plans(
         cuts = Budget(budget.time_limit, start=budget.start, deadline=_part(end, part))
         for label, kits in _cuts(instance, order, fit, cuts):
             out.append((f"{name} {label}", Plan(tuple(Kit(tuple(k)) for k in kits))))
-    if greedy and share > 0 and instance.n_tasks <= GREEDY_TASKS and not budget.expired():
-        left = min(share * budget.time_limit, budget.remaining())
+    left = min(share * budget.time_limit, budget.remaining())
+    if greedy and left >= GREEDY_MIN_S and instance.n_tasks <= GREEDY_TASKS:
         try:
             plan, _ = best_heuristic_plan(instance, ("greedy-ce",), seed=seed, time_limit=left)
         except BilevelKitError:
