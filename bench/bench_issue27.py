@@ -39,6 +39,15 @@ def cli() -> str:
     return str(Path(sys.executable).parent / "bilevel-kit")
 
 
+def hint_run(work: Path) -> None:
+    """cpsat warm-started from lns (option hint=lns) on the small instances."""
+    cmd = [cli(), "bench", "run", "--filter", FILTERS["small"], "--methods", "cpsat"]
+    cmd += ["-p", "cpsat:hint=lns", "--time-limit", "10", "--jobs", "2"]
+    cmd += ["--out", str(work / "small_hint_lns"), "-q"]
+    print(" ".join(cmd), flush=True)
+    subprocess.run(cmd, cwd=ROOT, check=True)
+
+
 def run(work: Path) -> list[str]:
     """The two bench runs and the memory runs; the memory lines."""
     for name, expr in FILTERS.items():
@@ -77,6 +86,10 @@ def load_rows(work: Path) -> list[dict[str, Any]]:
     for name in FILTERS:
         with (work / name / "results.csv").open() as f:
             rows += [{**r, "code": "after"} for r in csv.DictReader(f)]
+    hinted = work / "small_hint_lns" / "results.csv"
+    if hinted.exists():
+        with hinted.open() as f:
+            rows += [{**r, "code": "hint=lns"} for r in csv.DictReader(f)]
     for r in rows:
         r["tasks"] = int(r["tasks"])
         ms, bound = _num(r["makespan"]), _num(r["bound"])
@@ -194,8 +207,57 @@ def report(rows: list[dict[str, Any]], memory: list[str]) -> str:
         )
     out += ["", "## Goals", ""]
     out += goals(rows, cell, ms, lb, tasks, fam, after_names)
+    out += hint_section(cell, sorted(after_names, key=lambda n: (fam[n], tasks[n])), tasks, fam)
     out += ["", "## Peak memory (1,000 tasks)", ""] + [f"- {line}" for line in memory]
     return "\n".join(out) + "\n"
+
+
+def hint_section(
+    cell: dict[Any, dict[str, Any]], names: list[str], tasks: dict[str, int], fam: dict[str, str]
+) -> list[str]:
+    """cpsat with its default warm start against cpsat warm-started from lns (``--hint-run``)."""
+    pairs = [
+        (n, cell[(n, "cpsat", "after")], cell[(n, "cpsat", "hint=lns")])
+        for n in names
+        if (n, "cpsat", "after") in cell and (n, "cpsat", "hint=lns") in cell
+    ]
+    if not pairs:
+        return []
+    out = ["", "## cpsat warm-started from lns (`-p cpsat:hint=lns`, 10 s, <= 130 tasks)", ""]
+    better = worse = 0
+    gaps: dict[str, list[float]] = {"default": [], "hint=lns": []}
+    opt = {"default": 0, "hint=lns": 0}
+    for _, a, b in pairs:
+        ga, gb = a["own_gap"], b["own_gap"]
+        if ga is not None and gb is not None:
+            gaps["default"].append(ga)
+            gaps["hint=lns"].append(gb)
+            better += gb < ga - 1e-6
+            worse += gb > ga + 1e-6
+        opt["default"] += a["status"] == "optimal"
+        opt["hint=lns"] += b["status"] == "optimal"
+    for key in ("default", "hint=lns"):
+        g = gaps[key]
+        out.append(
+            f"- cpsat {key}: median own gap {_pct(statistics.median(g))} %, mean "
+            f"{_pct(statistics.mean(g))} %, {opt[key]} proven optimal, "
+            f"{sum(x <= 0.01 + 1e-9 for x in g)} within 1 % of {len(g)}"
+        )
+    out.append(f"- hint=lns smaller gap on {better} instances, larger on {worse}")
+    return out
+
+
+def after_gap(cell: dict[Any, dict[str, Any]], n: str) -> float | None:
+    """The certified gap of running the three methods after: the best plan among them against
+    the best of their bounds (every bound is proven for every plan)."""
+    plans = [cell[(n, m, "after")] for m in ("cpsat", "milp", "lns") if (n, m, "after") in cell]
+    ms = [_num(r["makespan"]) for r in plans if r["valid"] == "True"]
+    lb = [_num(r["bound"]) for r in plans]
+    ms_ok = [v for v in ms if v is not None]
+    lb_ok = [v for v in lb if v is not None]
+    if not ms_ok or not lb_ok:
+        return None
+    return max(0.0, 1 - max(lb_ok) / min(ms_ok))
 
 
 def goals(rows, cell, ms, lb, tasks, fam, names) -> list[str]:
@@ -210,17 +272,13 @@ def goals(rows, cell, ms, lb, tasks, fam, names) -> list[str]:
         for n in sorted(names, key=lambda n: tasks[n]):
             if tasks[n] > limit:
                 continue
-            gaps = [
-                cell[(n, m, "after")]["own_gap"]
-                for m in ("cpsat", "milp", "lns")
-                if (n, m, "after") in cell and cell[(n, m, "after")]["own_gap"] is not None
-            ]
-            g = min(gaps) if gaps else None
-            if g is None or g > thr + 1e-9:
+            g = after_gap(cell, n)
+            if g is None or g > thr + 1e-6:
                 miss.append(f"{n} ({_pct(g)} %)")
         total = sum(1 for n in names if tasks[n] <= limit)
         out.append(
-            f"- {what} at 10 s (the issue asks 60 s): {total - len(miss)} of {total}; "
+            f"- {what} at 10 s (the issue asks 60 s; best plan of cpsat, milp, lns against "
+            f"their best bound): {total - len(miss)} of {total}; "
             f"missed: {', '.join(miss) if miss else 'none'}"
         )
     above = {}
@@ -254,7 +312,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--skip-run", action="store_true", help="report from an earlier --work")
     ap.add_argument("--work", type=Path, default=ROOT / "out/issue27")
+    ap.add_argument("--hint-run", action="store_true", help="only run cpsat with hint=lns")
     args = ap.parse_args()
+    if args.hint_run:
+        hint_run(args.work)
+        return
     memory = (
         run(args.work)
         if not args.skip_run

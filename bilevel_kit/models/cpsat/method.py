@@ -572,7 +572,8 @@ def _incumbent(
         qp = closed_form_plan(instance, first)
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
             return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
-    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
+    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.next(0.1), ctx.pack_res)
     qp = quick_plan(instance, quick)
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])

@@ -159,8 +159,7 @@ def solve(
     hint: str = "none",
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
-    method's);
-    ``solver_options`` are passed to the solver."""
+    method's); ``solver_options`` are passed to the solver."""
     params = {"solver": solver, "objective": objective, "tray": tray, "log": log, "hint": hint}
     options = parse_options(MilpOptions, params, "milp")
     return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
