@@ -4,13 +4,16 @@ Keys other tools can rely on: ``method``, ``status``, ``objective`` (makespan, s
 ``gap``, ``seed``, ``params``, ``wall_time_s``, ``metrics`` {``makespan``, ``human_idle``,
 ``robot_idle``, ``n_kits``} and ``kits`` [{``tasks``, ``robot_start``, ``robot_end``,
 ``arrive``, ``human_start``, ``human_end``, ``layout`` [{``part``, ``type``, ``x``, ``y``,
-``theta``, ``w``, ``h``}]}]. Lengths in mm, angles in degrees, times in s.
+``theta``, ``w``, ``h``}]}]. Lengths in mm, angles in degrees, times in s. ``overrides``:
+the instance overrides the plan was solved with (``--units``, ``--trays``, ...), which
+``bilevel-kit check`` applies again (docs/formats.md).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -43,8 +46,10 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
-def result_to_dict(result: Result) -> dict[str, Any]:
-    """The JSON document of a :class:`~bilevel_kit.methods.Result`."""
+def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The JSON document of a :class:`~bilevel_kit.methods.Result`; ``overrides`` (the
+    instance overrides it was solved with) is recorded so that the checker can rebuild the
+    same instance."""
     kits = []
     if result.plan is not None and result.timeline is not None:
         for kit, times in zip(result.plan.kits, result.timeline.kits, strict=True):
@@ -55,7 +60,7 @@ def result_to_dict(result: Result) -> dict[str, Any]:
                     "layout": [p.to_dict() for p in kit.layout],
                 }
             )
-    return {
+    doc: dict[str, Any] = {
         "format": FORMAT,
         "instance": result.instance,
         "method": result.method,
@@ -72,12 +77,15 @@ def result_to_dict(result: Result) -> dict[str, Any]:
         "kits": kits,
         "extra": _jsonable(result.extra),
     }
+    if overrides:
+        doc["overrides"] = _jsonable(dict(overrides))
+    return doc
 
 
-def write(path: str | Path, result: Result) -> None:
+def write(path: str | Path, result: Result, overrides: Mapping[str, Any] | None = None) -> None:
     """Write a solution file atomically; a non-finite number is refused (it is not JSON)."""
     try:
-        text = json.dumps(result_to_dict(result), indent=2, allow_nan=False)
+        text = json.dumps(result_to_dict(result, overrides), indent=2, allow_nan=False)
     except ValueError:
         raise SolutionError(
             str(path), "$", "non-finite number in the result; not written"
@@ -87,6 +95,19 @@ def write(path: str | Path, result: Result) -> None:
 
 _NUM = {"type": "number"}
 _OPT_NUM = {"type": ["number", "null"]}
+#: The instance overrides a solution records (the override options of solve and compare).
+_OVERRIDES = {
+    "type": "object",
+    "description": "the instance overrides the plan was solved with; check applies them",
+    "additionalProperties": False,
+    "properties": {
+        "delivery_time": {"type": "number", "minimum": 0},
+        "weights": {"type": "object", "additionalProperties": {"type": "number", "minimum": 0}},
+        "horizon": {"type": "integer", "minimum": 1},
+        "units": {"type": "integer", "minimum": 1},
+        "trays": {"oneOf": [{"type": "integer", "minimum": 1}, {"const": "unlimited"}]},
+    },
+}
 
 
 def schema() -> dict[str, Any]:
@@ -165,6 +186,7 @@ def schema() -> dict[str, Any]:
             "metrics": metrics,
             "kits": {"type": "array", "items": kit},
             "extra": {"type": "object"},
+            "overrides": _OVERRIDES,
         },
     }
 
@@ -181,6 +203,11 @@ class LoadedSolution:
     reported_metrics: dict[str, float] | None
     claims: Claims = field(default_factory=Claims)
     number_faults: tuple[Violation, ...] = ()
+
+    @property
+    def overrides(self) -> dict[str, Any]:
+        """The instance overrides the file records (empty for files written without any)."""
+        return dict(self.document.get("overrides") or {})
 
     def check(self, instance: Instance) -> list[Violation]:
         """The independent checker on the plan and on every number the file states."""

@@ -1,20 +1,25 @@
-"""Rewrite the result tables of paper_repro/README.md from the CSVs in paper_repro/results/.
+"""Render paper_repro/README.md, docs/reproduction.md and the reproduction section of README.md
+from their templates (paper_repro/templates/) and the committed CSVs in paper_repro/results/.
 
 python paper_repro/render_readme.py [--check]
+
+--check writes nothing and exits 1 with a diff when a document disagrees with its template and
+the CSVs (what tests/repro/test_paper_repro_readme.py checks).
 """
 
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # a plain checkout works too
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # a plain checkout works too
 
-from bilevel_kit.repro.report import render_readme
+from bilevel_kit.repro.template import check, write_all  # noqa: E402
 
 if __name__ == "__main__":
-    here = Path(__file__).resolve().parent
-    readme = here / "README.md"
-    text = readme.read_text()
-    new = render_readme(text, here / "results")
     if "--check" in sys.argv[1:]:
-        raise SystemExit(0 if new == text else "README.md disagrees with results/")
-    readme.write_text(new)
+        diffs = check(ROOT)
+        if diffs:
+            raise SystemExit("\n\n".join(diffs))
+    else:
+        for path in write_all(ROOT):
+            print(f"rendered {path.relative_to(ROOT)}")

@@ -41,7 +41,7 @@ EXIT_CODES: dict[int, str] = {
     EXIT_OK: "ok",
     EXIT_INVALID: "invalid solution (check, solve --check, compare) or a placement out of reach",
     EXIT_USAGE: "bad input or usage (one line on stderr, nothing written)",
-    EXIT_UNKNOWN: "no definite answer within the time limit",
+    EXIT_UNKNOWN: "no definite answer within the time limit (compare: a method gave no plan)",
     EXIT_NO_GRID_LAYOUT: "pack: no layout on this grid, which is not a proof that none exists",
     EXIT_FAILED: "a sweep (compare, simulate, repro) finished but some cells failed",
     EXIT_INTERRUPTED: "interrupted by Ctrl-C (a sweep keeps its finished cells)",
@@ -394,13 +394,25 @@ def load_instance(args: argparse.Namespace) -> Instance:
 # ---------------------------------------------------------------------------------------------
 
 
-def print_violations(lines: list[str], stream: IO[str], limit: int = 20) -> None:
-    """``INVALID: n violation(s)`` and the first ``limit`` of them."""
+def print_violations(lines: list[str], stream: IO[str], limit: int = 20, per_kind: int = 3) -> None:
+    """``INVALID: n violation(s)`` and the violations, root causes first (the checker lists
+    kinds in that order: a precedence or parts error before the kit times it shifts). When
+    there are more than ``limit``, each kind shows its first ``per_kind`` lines and a count
+    of the rest, so one root cause is never buried under its consequences."""
     print(f"INVALID: {len(lines)} violation(s)", file=stream)
-    for line in lines[:limit]:
-        print(f"  {line}", file=stream)
-    if len(lines) > limit:
-        print(f"  ... and {len(lines) - limit} more", file=stream)
+    if len(lines) <= limit:
+        for line in lines:
+            print(f"  {line}", file=stream)
+        return
+    groups: dict[str, list[str]] = {}
+    for line in lines:
+        kind = line[1 : line.index("]")] if line.startswith("[") and "]" in line else ""
+        groups.setdefault(kind, []).append(line)
+    for kind, group in groups.items():
+        for line in group[:per_kind]:
+            print(f"  {line}", file=stream)
+        if len(group) > per_kind:
+            print(f"  ... and {len(group) - per_kind} more [{kind}]", file=stream)
 
 
 @contextlib.contextmanager

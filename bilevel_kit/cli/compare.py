@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
+    EXIT_UNKNOWN,
     add_instance_overrides,
     add_output,
     add_seed,
@@ -110,6 +111,9 @@ def run(args: argparse.Namespace) -> int:
         for path in args.instances
         for m in methods
     ]
+    from .solve import compile_notice
+
+    compile_notice(methods)
     with sweep_session(args) as session:
         raw = run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
         records = add_best_bound_gap(_named(c, r) for c, r in zip(cells, raw, strict=True))
@@ -134,7 +138,8 @@ def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
 
 
 def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
-    """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan."""
+    """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan
+    or a false claim, else 3 when a method gave no plan."""
     from ..experiments import format_markdown, format_table, write_csv
     from ..experiments.compare import inconsistencies
 
@@ -160,6 +165,11 @@ def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
     for line in inconsistencies(records):  # false claims: never printed as normal
         print(f"INCONSISTENT: {line}", file=sys.stderr)
         code = EXIT_INVALID
+    missing = [r for r in records if r["status"] != "error" and r.get("makespan") is None]
+    for r in missing:  # a time limit without a plan is not success either
+        print(f"NO PLAN: {r['instance']} / {r['method']} ({r['status']})", file=sys.stderr)
+    if missing and code == EXIT_OK:
+        code = EXIT_UNKNOWN
     return code
 
 

@@ -44,6 +44,14 @@ def find(name: str) -> Registered:
 
     if name not in REGISTRY and name in POLICIES:
         return POLICIES.spec(name)
+    if name not in REGISTRY:
+        from ..errors import UsageError
+
+        policies = [p for p in POLICIES if p not in REGISTRY]
+        raise UsageError(
+            f"unknown method or policy {name!r}; methods: {', '.join(REGISTRY)}; "
+            f"simulation policies: {', '.join(policies)}"
+        )
     return get_method(name)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -86,8 +87,16 @@ def run(args: argparse.Namespace) -> int:
     instance, counts, tasks = _read_target(args)
     from ..heuristics.shelf import kit_items
     from ..models.packing import pack
+    from ..progress import is_terminal
     from ..reachability import reach_grid
 
+    if is_terminal(sys.stderr):  # CP-SAT may take the whole limit: say what runs meanwhile
+        limit = "" if args.time_limit is None else f", up to {args.time_limit:g} s"
+        print(
+            f"packing {sum(counts.values())} parts with CP-SAT ({args.objective}{limit}) ...",
+            file=sys.stderr,
+            flush=True,
+        )
     res = pack(
         instance.tray,
         kit_items(instance.part_types, counts),

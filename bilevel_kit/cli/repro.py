@@ -22,9 +22,13 @@ from .common import (
 
 HELP = "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon and adaptive studies"
 DESCRIPTION = (
-    "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}, fitted "
-    "on a calibration cohort to 3 of the paper's numbers, then 200 fresh studies of 18 give "
-    "every other paper number a median and 95% prediction interval. fig6: MAT x MTTF grid of "
+    "calibrate: fit the robot's speed, the human's pickup time and the participant x condition "
+    "SD to 3 of the paper's numbers on a calibration cohort, with a parametric bootstrap; its "
+    "CSVs (committed in paper_repro/results/) are the one calibration every other experiment "
+    "reads (--calibration DIR: another one). "
+    "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}; 200 "
+    "fresh studies of 18 give every paper number a median and 95% prediction interval, with "
+    "and without the calibration's uncertainty. fig6: MAT x MTTF grid of "
     "the shop-floor simulation (10 tables per run), percent improvement heatmaps with ANOVA + "
     "Tukey marks; saved per cell (resumable). --jobs/--scheduler run the cells (fig6 grid "
     "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. "
@@ -38,7 +42,7 @@ DESCRIPTION = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("experiment", choices=("user-study", "fig6", "horizon", "adaptive"))
+    p.add_argument("experiment", choices=("calibrate", "user-study", "fig6", "horizon", "adaptive"))
     p.add_argument(
         "--quick",
         action="store_true",
@@ -72,6 +76,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "horizon: of the delay cells (default 60)",
     )
     add_delivery_time(p, "fig6: delivery time (default: the instance's)")
+    p.add_argument(
+        "--calibration",
+        metavar="DIR",
+        help="user-study, fig6, horizon, adaptive: the folder of the calibration's CSVs "
+        "(default: the committed one, paper_repro/results/)",
+    )
+    p.add_argument(
+        "--draws",
+        type=positive_int,
+        metavar="B",
+        help="calibrate: parametric bootstrap draws (default 50; 3 with --quick)",
+    )
     p.add_argument(
         "--with-cpsat",
         action="store_true",
@@ -128,12 +144,12 @@ def numbers(text: str) -> tuple[float, ...]:
 
 def run(args: argparse.Namespace) -> int:
     with sweep_session(args) as session:
+        if session.progress is None:  # a long run shows its bar even when stderr is a file
+            session.progress = True
         return sweep_exit(session, _run(args))
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from .. import repro
     from ..paths import check_outputs
 
@@ -142,6 +158,10 @@ def _run(args: argparse.Namespace) -> int:
     out = args.out or default
     run: dict[str, Any] = {"quick": args.quick, "jobs": args.jobs, "seed": args.seed}
     grid = {"mats": args.mats, "mttfs": args.mttfs}  # the Figure 6 delay cells
+    if args.experiment == "calibrate":
+        res = repro.run_calibration(out, draws=args.draws, **run)
+        return _report(res)
+    run["calibration"] = args.calibration
     if args.experiment == "adaptive":
         from ..repro.adaptive import run_adaptive
 
@@ -175,6 +195,13 @@ def _run(args: argparse.Namespace) -> int:
             **grid,
             **run,
         )
+    return _report(res)
+
+
+def _report(res: dict[str, Any]) -> int:
+    """Print the run's Markdown summary and the files it wrote."""
+    from pathlib import Path
+
     md = res.get("files", {}).get("markdown")
     if md and Path(md).exists():
         print(Path(md).read_text().rstrip())

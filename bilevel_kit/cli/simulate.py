@@ -113,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
         ReplicationCell(instance, args.policy, params, s)
         for s in range(args.seed, args.seed + args.reps)
     ]
+    from .solve import compile_notice
+
+    compile_notice([args.policy])
     with sweep_session(args) as session:
         records = run_cells(cells, replication_cell, desc=f"simulate {args.policy}")
     failed = [r for r in records if is_failed(r)]
@@ -137,6 +140,18 @@ def run(args: argparse.Namespace) -> int:
     return sweep_exit(session, EXIT_OK)
 
 
+#: Each summary row's unit and meaning, printed under the table (docs/simulation.md).
+SIM_LEGEND = {
+    "makespan": ("s", "until the human finishes the last task"),
+    "human_idle": ("s", "the human waiting for a kit"),
+    "robot_idle": ("s", "the robot not kitting (includes robot_wait and robot_blocked)"),
+    "n_kits": ("", "kits delivered"),
+    "robot_wait": ("s", "the robot waiting for a feeder to deliver a missing part"),
+    "n_waits": ("", "times the robot had to wait for a part"),
+    "robot_blocked": ("s", "the robot waiting for a tray to come back (the trays limit)"),
+}
+
+
 def _print_summary(name: str, args: argparse.Namespace, records: list[dict[str, Any]]) -> None:
     import statistics
 
@@ -145,7 +160,11 @@ def _print_summary(name: str, args: argparse.Namespace, records: list[dict[str, 
     for col in SIM_COLUMNS:
         vals = [float(r[col]) for r in records]
         sd = statistics.stdev(vals) if len(vals) > 1 else 0.0
+        label = f"{col} ({SIM_LEGEND[col][0]})" if SIM_LEGEND[col][0] else col
         print(
-            f"  {col:<14} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
+            f"  {label:<18} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
             f"min {min(vals):10.2f}   max {max(vals):10.2f}"
         )
+    print("where:")
+    for col in SIM_COLUMNS:
+        print(f"  {col:<14} {SIM_LEGEND[col][1]}")

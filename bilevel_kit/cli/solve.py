@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING
+from collections.abc import Iterable
+from typing import IO, TYPE_CHECKING
 
 from .common import (
     EXIT_INVALID,
@@ -15,6 +16,7 @@ from .common import (
     add_param_option,
     add_seed,
     add_time_limit,
+    instance_overrides,
     load_instance,
     positive_int,
     print_violations,
@@ -88,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
     instance = load_instance(args)
+    if not args.quiet:
+        compile_notice([args.method])
     with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
         result = solve(
             instance,
@@ -129,7 +133,7 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
     if args.out:
         from ..solution import write
 
-        write(args.out, result)
+        write(args.out, result, instance_overrides(args))
     if figures:
         from ..plots import save_figure
 
@@ -153,6 +157,16 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
         f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
         f"  time {result.wall_time_s:.3f} s"
     )
+    j = result.extra.get("plan_objective_J")
+    if result.status_objective != "makespan" and j is not None:
+        # the status is about J, not the makespan: show the numbers it refers to
+        j_bound = result.extra.get("plan_objective_J_bound")
+        j_gap = result.extra.get("plan_objective_J_gap")
+        lines.append(
+            f"  {result.status} refers to J (the paper's F summed over the kits): J {_fmt(j)}"
+            f"  J bound {_fmt(j_bound)}"
+            f"  J gap {'-' if j_gap is None else f'{100 * j_gap:.2f}%'}"
+        )
     if quiet or result.plan is None or result.timeline is None:
         return "\n".join(lines)
     lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
@@ -186,3 +200,26 @@ def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:
         f"{t['layout_source']}",
     )
     return ax.figure
+
+
+#: The one note of a first run: numba compiles the cross-entropy kernels once per install.
+COMPILE_NOTE = (
+    "note: compiling the cross-entropy kernels (first run after an install: about 15 s, "
+    "once; numba caches them)"
+)
+
+
+def compile_notice(needed: Iterable[str], stream: IO[str] | None = None) -> None:
+    """Say on a terminal that a slow first compile is coming, rather than stay silent for
+    ~15 s; ``needed``: the methods or policies about to run (the paper's cross-entropy lower
+    level compiles: greedy-ce and the optimized policies)."""
+    from ..progress import is_terminal
+
+    stream = sys.stderr if stream is None else stream
+    uses_ce = any(n == "greedy-ce" or n.startswith("optimized") for n in needed)
+    if not uses_ce or not is_terminal(stream):
+        return
+    from ..heuristics._kernels import cache_missing
+
+    if cache_missing():
+        print(COMPILE_NOTE, file=stream, flush=True)

@@ -26,6 +26,7 @@ import contextlib
 import dataclasses
 import json
 import sys
+import threading
 import time
 import traceback
 import uuid
@@ -407,6 +408,7 @@ def run_sweep(
         disable=None if progress is None else not progress,
         file=sys.stderr,
     )
+    ticker = _Ticker(bar)  # the bar's clock moves during a long cell, not only between cells
     try:
         for j, rec in executor.run(Guarded(fn), [cells[i] for i in todo]):
             i = todo[j]
@@ -424,6 +426,7 @@ def run_sweep(
         report.interrupted = True
         raise
     finally:
+        ticker.stop()
         bar.close()
         if owned is not None:
             owned.close()
@@ -433,6 +436,28 @@ def run_sweep(
             if session.summary:
                 print(report.line(), file=sys.stderr, flush=True)
     return [r for r in records if r is not None], report
+
+
+class _Ticker:
+    """Redraws a shown progress bar once a second from a daemon thread, so its elapsed time
+    ticks while one long cell runs (tqdm redraws only when a cell finishes)."""
+
+    def __init__(self, bar: Any, every: float = 1.0) -> None:
+        self._bar = bar
+        self._stop = threading.Event()
+        self._thread = None
+        if not bar.disable:
+            self._thread = threading.Thread(target=self._run, args=(every,), daemon=True)
+            self._thread.start()
+
+    def _run(self, every: float) -> None:
+        while not self._stop.wait(every):
+            self._bar.refresh()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
 
 
 class SweepOptions(TypedDict, total=False):

@@ -93,7 +93,7 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         "violations": len(violations),
         # the result's status, bound and gap against its own makespan (the checker's claims)
         "false_claims": [f"[{v['kind']}] {v['message']}" for v in claims],
-        "solution": result_to_dict(res),
+        "solution": result_to_dict(res, cell.overrides),
     }
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -538,6 +539,23 @@ def njit() -> Callable[[Callable[..., Any]], Any] | None:
     except ImportError:
         return None
     return numba.njit(cache=True, nogil=True)
+
+
+def cache_missing() -> bool:
+    """True when numba will compile the kernels on their first call (no on-disk cache yet: the
+    first run after an install takes ~15 s longer), so that a command can say so instead of
+    staying silent. numba caches beside the sources, or under ``NUMBA_CACHE_DIR``."""
+    if njit() is None:
+        return False
+    import os
+
+    here = Path(__file__).parent / "__pycache__"
+    places = [here]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        places.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+    func = getattr(_ce_block, "py_func", _ce_block)  # numba names its index by the source line
+    index = f"_kernels._ce_block-{func.__code__.co_firstlineno}.py*.nbi"
+    return not any(any(p.rglob(index)) for p in places if p.is_dir())
 
 
 def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:

@@ -5,17 +5,20 @@ Policies: ``optimized`` (the paper's, task means), ``optimized-adaptive`` (the p
 of the speed factor, :mod:`bilevel_kit.sim.pace`) and ``optimized-oracle`` (the true factor),
 on the same seeds (common random numbers). One participant builds every table of a run (the
 within-subject model's way: ``participant_cv = 0`` and the factor as ``session_factor``), each
-task with independent lognormal noise ``task_cv``. Participant groups: the 10 %, 50 % and 90 %
-quantiles of the factor's distribution (lognormal, mean 1, the paper's CV 61.14 / 374.78:
+task with independent lognormal noise ``task_cv`` (the calibration's ``within_cv``). The robot's
+speed and ``o_H`` are the one calibration's (:mod:`.calibrated`). Participant groups: the
+10 %, 50 % and 90 % quantiles of the factor's distribution (lognormal, mean 1, the paper's CV:
 fast, median, slow) and a sample of the whole population. Supply: none, and one Figure 6 cell
 (legs and feet fed at MAT 60 s, MTTF 60 s, 30 s repair, feeders start empty).
 
 Per group and metric (the paper's idle time, makespan - task times, whose differences between
 policies equal the makespan's since every policy sees the same task times; the simulator's idle
 time, where taking the parts off the tray is work; the makespan), the share of
-the gap the adaptive policy closes is ``(fixed - adaptive) / (fixed - oracle)``, reported only
-where the oracle beats the fixed policy by more than twice the standard error of the paired
-difference (otherwise there is no gap to close, and the row says so).
+the gap the adaptive policy closes is ``(fixed - adaptive) / (fixed - oracle)`` with a 95 %
+bootstrap interval over the runs, reported only where the oracle beats the fixed policy
+significantly (the 95 % t-interval of the paired gap above 0; otherwise there is no gap to
+close, and the row says so). "Fixed - adaptive" carries its 95 % t-interval: an interval
+containing 0 is "no significant difference", never "no loss".
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import json
 import math
 import statistics
 import time
+import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -39,6 +43,7 @@ from ..experiments.tables import markdown_lines, write_csv
 from ..instance import load
 from ..sim import SimParams, TimingModel, effective_instance, make_policy, simulate
 from ..sim.timing import PAPER_CV
+from .calibrated import load_calibration
 from .common import FIG6_REPAIR, FIG6_SUPPLIED, FIG6_UNITS, load_instance, paper_idle
 
 FIXED, ADAPTIVE, ORACLE = "optimized", "optimized-adaptive", "optimized-oracle"
@@ -47,10 +52,6 @@ POLICIES = (FIXED, ADAPTIVE, ORACLE)
 GROUPS: dict[str, float | None] = {"fast": 0.1, "median": 0.5, "slow": 0.9, "population": None}
 #: The delay cell (MAT, MTTF) of Figure 6's grid; None: no supply process.
 DELAYS: tuple[tuple[float, float] | None, ...] = (None, (60.0, 60.0))
-#: Per-task noise (assumed): the order of the fitted within-participant CV (0.154).
-TASK_CV = 0.15
-#: The user study's fitted robot speed and o_H (paper_repro/results/user_study_parameters.csv).
-FITTED = {"robot_scale": 1.2469, "kit_overhead_human": 2.6523}
 REPS = 10
 #: Metrics: the paper's idle time (pickups count as idle; with common random numbers its
 #: differences between policies equal the makespan's), the simulator's (pickups are work).
@@ -127,39 +128,93 @@ def adaptive_cell(cell: AdaptiveCell) -> dict[str, Any]:
     return {"key": cell.key(), "cell": asdict(cell), "runs": runs, "wall_s": wall}
 
 
+#: Bootstrap resamples of the runs for the share's 95 % interval.
+BOOTSTRAP = 2000
+
+
+def _t_interval(x: np.ndarray) -> tuple[float, float, float]:
+    """Mean, and the 95 % t-interval of the mean of paired differences ``x``."""
+    from scipy.stats import t
+
+    n, m = len(x), float(x.mean())
+    if n < 2:
+        return m, m, m
+    half = float(t.ppf(0.975, n - 1) * x.std(ddof=1) / math.sqrt(n))
+    return m, m - half, m + half
+
+
+def share_interval(
+    gap: np.ndarray, closed: np.ndarray, rng: np.random.Generator, resamples: int = BOOTSTRAP
+) -> tuple[float | None, float | None]:
+    """95 % percentile bootstrap interval of ``mean(closed) / mean(gap)`` over resampled runs
+    (pairs kept); None when more than 2.5 % of the resamples have no positive gap (the ratio
+    is then unbounded)."""
+    idx = rng.integers(0, len(gap), (resamples, len(gap)))
+    g, c = gap[idx].mean(axis=1), closed[idx].mean(axis=1)
+    ok = g > 1e-9
+    if ok.mean() < 0.975:
+        return None, None
+    ratio = c[ok] / g[ok]
+    return float(np.quantile(ratio, 0.025)), float(np.quantile(ratio, 0.975))
+
+
 def summarize(record: Mapping[str, Any]) -> list[dict[str, Any]]:
-    """Rows of ``adaptive.csv``: per metric, the three means, the gap, the share closed."""
+    """Rows of ``adaptive.csv``: per metric, the three means, the gap (fixed - oracle) and what
+    the adaptive policy closes of it (fixed - adaptive), each with its 95 % t-interval, and
+    the share closed with its 95 % bootstrap interval where the gap is significant (its
+    interval above 0)."""
     cell, runs = record["cell"], record["runs"]
     factors = cell["factors"]
+    delay = "none" if cell["mat"] is None else f"MAT {cell['mat']:g}, MTTF {cell['mttf']:g}"
     out = []
     for metric in METRICS:
         v = {p: np.asarray(runs[p][metric], float) for p in POLICIES}
-        gap_runs = v[FIXED] - v[ORACLE]
-        closed_runs = v[FIXED] - v[ADAPTIVE]
+        gap_runs, closed_runs = v[FIXED] - v[ORACLE], v[FIXED] - v[ADAPTIVE]
         n = len(gap_runs)
-        se = float(gap_runs.std(ddof=1) / math.sqrt(n)) if n > 1 else 0.0
-        se_closed = float(closed_runs.std(ddof=1) / math.sqrt(n)) if n > 1 else 0.0
-        gap, closed = float(gap_runs.mean()), float(closed_runs.mean())
-        share = closed / gap if gap > max(2 * se, 1e-9) else None
+        gap, gap_lo, gap_hi = _t_interval(gap_runs)
+        closed, closed_lo, closed_hi = _t_interval(closed_runs)
+        rng = np.random.default_rng(zlib.crc32(f"{delay}|{cell['group']}|{metric}".encode()))
+        share = closed / gap if gap_lo > 0 else None
+        lo, hi = share_interval(gap_runs, closed_runs, rng) if share is not None else (None, None)
         out.append(
             {
-                "delay": "none"
-                if cell["mat"] is None
-                else f"MAT {cell['mat']:g}, MTTF {cell['mttf']:g}",
+                "delay": delay,
                 "group": cell["group"],
                 "factor": "sampled" if cell["group"] == "population" else round(factors[0], 4),
                 "runs": n,
                 "metric": metric,
                 **{f"mean_{p}": round(float(v[p].mean()), 2) for p in POLICIES},
                 "gap_fixed_minus_oracle": round(gap, 2),
-                "se_gap": round(se, 2),
+                "se_gap": round(_se(gap_runs), 2),
+                "gap_low": round(gap_lo, 2),
+                "gap_high": round(gap_hi, 2),
                 "fixed_minus_adaptive": round(closed, 2),
-                "se_fixed_minus_adaptive": round(se_closed, 2),
+                "se_fixed_minus_adaptive": round(_se(closed_runs), 2),
+                "closed_low": round(closed_lo, 2),
+                "closed_high": round(closed_hi, 2),
                 "share_closed": None if share is None else round(share, 3),
+                "share_low": None if lo is None else round(lo, 3),
+                "share_high": None if hi is None else round(hi, 3),
                 **{f"kits_{p}": round(float(np.mean(runs[p]["n_kits"])), 1) for p in POLICIES},
             }
         )
     return out
+
+
+def _se(x: np.ndarray) -> float:
+    return float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else 0.0
+
+
+def calibrated(calibration: str | Path | None, instance: str) -> dict[str, float]:
+    """The one calibration's robot speed and ``o_H``, and its participant x condition SD as
+    the per-task noise ``task_cv`` (assumed: a task varies around the participant's pace as a
+    session varies around the participant's speed)."""
+    cal = load_calibration(calibration, instance)
+    return {
+        "robot_scale": cal.robot_scale,
+        "kit_overhead_human": cal.kit_overhead_human,
+        "task_cv": round(cal.within_cv, 6),
+    }
 
 
 def _cells(
@@ -179,25 +234,42 @@ def _cells(
     return cells
 
 
+def _blank(x: Any) -> bool:
+    return x is None or x == ""
+
+
+def share_text(r: Mapping[str, Any]) -> str:
+    """``90 % [81, 97]``, or why there is no share (no significant gap, or an unbounded
+    interval)."""
+    if _blank(r["share_closed"]):
+        return "no gap"
+    share = f"{100 * float(r['share_closed']):.0f} %"
+    if _blank(r.get("share_low")):
+        return f"{share} [unbounded]"
+    return f"{share} [{100 * float(r['share_low']):.0f}, {100 * float(r['share_high']):.0f}]"
+
+
 def format_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
-    """One table: per supply setting and group, the metrics of the three policies and the
-    share of the gap closed (rows as :func:`summarize` returns them or as read back from
-    ``adaptive.csv``: the README renders its table from the committed file)."""
-    head = ["supply", "group (factor)", "metric", "fixed", "adaptive", "oracle", "gap",
-            "closed", "share"]  # fmt: skip
+    """One table: per supply setting and group, the metrics of the three policies, the gap and
+    what the adaptive policy closes (mean [95 % t-interval]) and the share closed (its 95 %
+    bootstrap interval); rows as :func:`summarize` returns them or as read back from
+    ``adaptive.csv`` (the README renders its table from the committed file)."""
+    head = ["supply", "group (factor)", "metric", "fixed", "adaptive", "oracle",
+            "gap [95 % CI]", "closed [95 % CI]", "share [95 % bootstrap]"]  # fmt: skip
     body = []
     for r in rows:
-        share = r["share_closed"]
-        num = {k: float(r[k]) for k in r if k.startswith(("mean_", "gap_", "se_", "fixed_"))}
+        num = {k: float(r[k]) for k in r if k.startswith(("mean_", "gap_", "closed_", "fixed_"))}
         body.append(
             [
                 r["delay"],
                 f"{r['group']} ({r['factor']})",
                 METRICS[r["metric"]],
                 *(f"{num[f'mean_{p}']:.1f}" for p in POLICIES),
-                f"{num['gap_fixed_minus_oracle']:.1f} ± {num['se_gap']:.1f}",
-                f"{num['fixed_minus_adaptive']:.1f} ± {num['se_fixed_minus_adaptive']:.1f}",
-                "no gap" if share in (None, "") else f"{100 * float(share):.0f} %",
+                f"{num['gap_fixed_minus_oracle']:.1f} [{num['gap_low']:.1f}, "
+                f"{num['gap_high']:.1f}]",
+                f"{num['fixed_minus_adaptive']:.1f} [{num['closed_low']:.1f}, "
+                f"{num['closed_high']:.1f}]",
+                share_text(r),
             ]
         )
     return "\n".join(markdown_lines(head, body))
@@ -213,6 +285,7 @@ def run_adaptive(
     instance: str | Path | None = None,
     units: int | None = None,
     timing: Mapping[str, Any] | None = None,
+    calibration: str | Path | None = None,
     progress: bool | None = None,
 ) -> dict[str, Any]:
     """The adaptive-policy study (module docstring). ``reps`` runs per fixed-factor group
@@ -226,7 +299,7 @@ def run_adaptive(
     units = units if units is not None else (QUICK_UNITS if quick else FIG6_UNITS)
     if reps < 2 or units < 1 or jobs < 1:
         raise UsageError(f"need reps >= 2, units >= 1, jobs >= 1; got {reps}, {units}, {jobs}")
-    tm = {"participant_cv": 0.0, "task_cv": TASK_CV, **FITTED, **(timing or {})}
+    tm = {"participant_cv": 0.0, **calibrated(calibration, path), **(timing or {})}
     cells = _cells(path, reps, 3 * reps, units, seed, tm)
     out = Path(out_dir)
     records, computed = run_cells_counted(
@@ -240,8 +313,8 @@ def run_adaptive(
         f"Adaptive pace{' (QUICK: a reduced run)' if quick else ''}: {units} tables per run, "
         f"{reps} runs per fixed group, {3 * reps} sampled participants; task_cv {tm['task_cv']}."
         " Idle: the paper's (makespan - task times). gap = fixed - oracle, closed = fixed - "
-        "adaptive (mean ± SE over paired runs); share = closed / gap where the gap exceeds "
-        "2 SE.\n\n"
+        "adaptive (mean and 95 % t-interval over paired runs); share = closed / gap (95 % "
+        "bootstrap interval) where the gap is significant.\n\n"
     )
     files["markdown"] = out / "adaptive.md"
     atomic.write_text(files["markdown"], head + format_markdown(rows) + "\n")

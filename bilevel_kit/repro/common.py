@@ -4,7 +4,9 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import hashlib
+import sys
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -37,9 +39,13 @@ __all__ = [
     "QUICK_MTTFS",
     "QUICK_REPS",
     "QUICK_UNITS",
+    "READOFF",
+    "RESULTS_DIR",
     "SHORT",
     "SINGLE",
     "WHOLE",
+    "announce",
+    "file_digest",
     "load_instance",
     "paper_idle",
     "participant_seeds",
@@ -47,6 +53,9 @@ __all__ = [
 
 #: The paper's table (the repository's copy; ``paper_repro`` lives next to it).
 DEFAULT_INSTANCE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
+#: The committed results of the reproductions (``paper_repro/results``), among them the one
+#: calibration every study reads (:mod:`.calibrated`).
+RESULTS_DIR = Path(__file__).resolve().parents[2] / "paper_repro" / "results"
 
 WHOLE, SINGLE, OPT = "whole-assembly", "single-task", "optimized"
 #: The study's conditions and the policies of Figure 6, in the paper's order.
@@ -67,6 +76,23 @@ PAPER_CI: dict[str, dict[str, tuple[float, float]]] = {
     "idle": {SINGLE: (-184.465, -158.586), OPT: (-186.020, -160.141)},
 }
 PAPER_ACTIVE = (374.78, 61.14)  # mean, SD of the human's active time per table
+
+
+def _readoff() -> float:
+    """Half-width (s) of the read-off uncertainty of a Fig. 5 bar: the largest gap between the
+    difference of two read-off bars and the exact centre of the paper's Tukey interval for that
+    difference (four checks: ST-WA and OPT-WA, total and idle; a Tukey interval is centred on
+    the difference of the two means)."""
+    gaps = [
+        abs(PAPER_MEANS[m][c] - PAPER_MEANS[m][WHOLE] - sum(PAPER_CI[m][c]) / 2)
+        for m in PAPER_CI
+        for c in PAPER_CI[m]
+    ]
+    return max(gaps)
+
+
+#: Read-off half-width of the Fig. 5 means (s): a paper mean ``v`` stands for ``[v - h, v + h]``.
+READOFF = _readoff()
 
 #: (metric, condition, paper value) the calibration fits; the rest are predictions.
 DEFAULT_TARGETS: tuple[tuple[str, str, float], ...] = (
@@ -118,6 +144,20 @@ def load_instance(instance: str | Path | Instance | None) -> tuple[Instance, str
             "instances/hrc_table.json, or pass instance=PATH)"
         )
     return load(path), str(path)
+
+
+def file_digest(path: str | Path) -> str:
+    """The first 12 hex digits of a file's SHA-1: cell keys and the calibration's provenance
+    name an instance by its content, not its path."""
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()[:12]
+
+
+def announce(what: str, cells: Sequence[Any], cell_dir: Path, detail: str) -> None:
+    """One line on stderr before a sweep: how many cells there are and how many must be
+    computed (the rest are read back), so a long run is never silent before its bar."""
+    todo = sum(not (cell_dir / f"{c.key()}.json").exists() for c in cells)
+    state = "all saved" if todo == 0 else f"{todo} to compute"
+    print(f"{what}: {len(cells)} cells ({detail}), {state}", file=sys.stderr, flush=True)
 
 
 def participant_seeds(seed: int, n: int) -> list[int]:

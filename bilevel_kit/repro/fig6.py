@@ -14,7 +14,7 @@ import hashlib
 import json
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -23,15 +23,14 @@ import numpy as np
 from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import is_failed, run_cells_counted, write_json
-from ..experiments.tables import markdown_lines, write_csv
+from ..experiments.tables import write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
 from ..options import NoOptions
 from ..plots import save_figure
 from ..sim import POLICIES, SimParams, TimingModel, replicate
-from .calibration import CALIBRATION, calibrate, draw_cohort
+from .calibrated import load_calibration
 from .common import (
-    CALIBRATION_STUDIES,
     CONDITIONS,
     FIG6_GRID,
     FIG6_REPAIR,
@@ -42,22 +41,19 @@ from .common import (
     METRIC_LABELS,
     METRICS,
     OPT,
-    PAPER_N,
     QUICK_MATS,
     QUICK_MTTFS,
     QUICK_REPS,
     SINGLE,
-    STUDY_DELIVERY,
     WHOLE,
+    announce,
+    file_digest,
     load_instance,
     paper_idle,
     participant_seeds,
 )
+from .fig6_stats import add_directions, pooled_sd, reps_for_power, trends, verdicts
 from .stats import oneway, paired_p, stars, tukey_pairs
-
-
-def _file_digest(path: str) -> str:
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()[:12]
 
 
 @dataclass(frozen=True)
@@ -88,7 +84,7 @@ class Fig6Cell:
         """A stable file name: the grid point plus a digest of the whole configuration and
         of the instance file's content (not its path, so a moved checkout still resumes)."""
         cfg = {k: v for k, v in asdict(self).items() if k != "instance"}
-        cfg["instance_sha1"] = _file_digest(self.instance)
+        cfg["instance_sha1"] = file_digest(self.instance)
         blob = json.dumps(cfg, sort_keys=True, default=str)
         return f"{self.label}__{hashlib.sha1(blob.encode()).hexdigest()[:10]}"
 
@@ -217,41 +213,11 @@ def summarize_cell(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def format_fig6_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
-    """Each comparison as a MAT x MTTF Markdown table of ``% stars``."""
-    grid = [r for r in rows if r["mat"] is not None]
-    mats = sorted({r["mat"] for r in grid})
-    mttfs = sorted({r["mttf"] for r in grid})
-    ref = next((r for r in rows if r["mat"] is None), None)
-    pols = [k.split(":", 1)[1] for k in rows[0] if k.startswith("total_mean:")]
-    out: list[str] = []
-    for subj, base in comparisons(pols):
-        name = f"{subj}_over_{base}"
-        for m in METRICS:
-            out.append(
-                f"**{METRIC_LABELS[m]}, {LABELS.get(subj, subj)} over "
-                f"{LABELS.get(base, base)} (%)**"
-            )
-            out.append("")
-            table = []
-            for a in mats:
-                cells = [f"{a:g}"]
-                for b in mttfs:
-                    r = next((x for x in grid if x["mat"] == a and x["mttf"] == b), None)
-                    if r is None or r[f"pct_{m}:{name}"] is None:
-                        cells.append("-")
-                    else:
-                        v, stars = r[f"pct_{m}:{name}"], r[f"stars_{m}:{name}"]
-                        cells.append(f"{v:.1f} {stars}".strip())
-                table.append(cells)
-            out += markdown_lines(["MAT \\ MTTF", *(f"{v:g}" for v in mttfs)], table)
-            if ref is not None and ref[f"pct_{m}:{name}"] is not None:
-                out.append("")
-                out.append(
-                    f"No delay (reference): {ref[f'pct_{m}:{name}']:.1f} "
-                    f"{ref[f'stars_{m}:{name}']}".rstrip()
-                )
-            out.append("")
-    return "\n".join(out)
+    """Each comparison as a MAT x MTTF Markdown table of ``% stars`` and the paired test's
+    direction (:func:`.report_sim.fig6_markdown` of :func:`improvements`)."""
+    from .report_sim import fig6_markdown
+
+    return fig6_markdown(improvements(rows))
 
 
 def _grid_defaults(
@@ -276,15 +242,18 @@ def _grid_defaults(
 
 def improvements(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Long format, one row per panel and cell: the percent improvement, the Tukey p, the
-    paper's stars, the paired-test p (``fig6_improvements.csv``)."""
+    paper's stars, the paired-test p, the direction under each test and the replications the
+    paper's test would need for 80 % power (:mod:`.fig6_stats`; ``fig6_improvements.csv``)."""
     pols = [k.split(":", 1)[1] for k in rows[0] if k.startswith("total_mean:")]
     out: list[dict[str, Any]] = []
     for subj, base in comparisons(pols):
         name = f"{subj}_over_{base}"
+        family = [p for p in CONDITIONS if p in pols] if subj in CONDITIONS else pols
         for m in METRICS:
             panel = f"{METRIC_LABELS[m]}, {LABELS.get(subj, subj)} over {LABELS.get(base, base)}"
             for r in rows:
                 pct = r[f"pct_{m}:{name}"]
+                diff = r[f"{m}_mean:{base}"] - r[f"{m}_mean:{subj}"]
                 out.append(
                     {
                         "panel": panel,
@@ -297,39 +266,10 @@ def improvements(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                         "anova_p": r[f"anova_p_{m}:{'paper' if subj in CONDITIONS else 'all'}"],
                         "stars": r[f"stars_{m}:{name}"],
                         "p_paired": r[f"p_paired_{m}:{name}"],
+                        "r80": reps_for_power(diff, pooled_sd(r, m, family)),
                     }
                 )
-    return out
-
-
-def verdicts(long_rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per panel, over the delay cells (not the reference): how many are significant with the
-    paper's test (ANOVA p < .05 and Tukey p < .05, no correction over the cells, as the paper
-    reports per cell), how many survive Holm's correction over the panel's cells, how many by
-    the paired t-test; the verdict on "significant for most scenarios" (more than half)."""
-    from statsmodels.stats.multitest import multipletests
-
-    out: list[dict[str, Any]] = []
-    for panel in dict.fromkeys(r["panel"] for r in long_rows):
-        cells = [r for r in long_rows if r["panel"] == panel and r["mat"] is not None]
-        sig = [bool(r["stars"]) for r in cells]
-        ps = np.array([1.0 if r["p_tukey"] is None else r["p_tukey"] for r in cells])
-        gate = np.array([r["anova_p"] is not None and r["anova_p"] < 0.05 for r in cells])
-        holm = multipletests(ps, alpha=0.05, method="holm")[0] & gate if len(ps) else []
-        paired = [r["p_paired"] is not None and r["p_paired"] < 0.05 for r in cells]
-        better = sum(bool(s) and (r["pct"] or 0) > 0 for s, r in zip(sig, cells, strict=True))
-        n = len(cells)
-        out.append(
-            {
-                "panel": panel,
-                "cells": n,
-                "significant": int(sum(sig)),
-                "significant_better": int(better),
-                "significant_holm": int(np.sum(holm)),
-                "significant_paired": int(sum(paired)),
-                "verdict": "yes" if better > n / 2 else "no",
-            }
-        )
+    add_directions(out)
     return out
 
 
@@ -352,34 +292,41 @@ def _check_fig6(
 
 
 def _write_fig6_outputs(
-    out: Path, rows: Sequence[Mapping[str, Any]], policies: Sequence[str], quick: bool
+    out: Path,
+    rows: Sequence[Mapping[str, Any]],
+    records: Sequence[Mapping[str, Any]],
+    policies: Sequence[str],
+    quick: bool,
 ) -> dict[str, Path]:
-    """The CSV, Markdown and figures of Figure 6 (one extra figure per extra policy)."""
+    """The CSVs (cells, improvements, verdicts, trends), Markdown and figures of Figure 6 (one
+    extra figure per extra policy)."""
     from .plots import plot_fig6
-    from .report import verdicts_markdown
+    from .report_sim import fig6_markdown, trends_markdown, verdicts_markdown
 
     long_rows = improvements(rows)
     verdict = verdicts(long_rows)
+    trend = trends(records, comparisons(policies))
     files = {
         "csv": write_csv(out / "fig6_cells.csv", rows, exclude=(), line_end="\n"),
-        "improvements_csv": write_csv(
-            out / "fig6_improvements.csv", long_rows, exclude=(), line_end="\n"
-        ),
-        "verdicts_csv": write_csv(out / "fig6_verdicts.csv", verdict, exclude=(), line_end="\n"),
         "markdown": out / "fig6.md",
         "figure": save_figure(plot_fig6(rows, quick=quick), out / "fig6.png", dpi=130),
     }
+    for name, table in (("improvements", long_rows), ("verdicts", verdict), ("trends", trend)):
+        if table:
+            path = out / f"fig6_{name}.csv"
+            files[f"{name}_csv"] = write_csv(path, table, exclude=(), line_end="\n")
     r0 = rows[0]
     head = (
         f"Figure 6{' (QUICK: a reduced run, fewer cells and replications)' if quick else ''}: "
         f"R = {r0['reps']} replications, {r0['units']} tables per run. \\* p < .05, "
         "\\*\\* p < .001: one-way ANOVA over the three policies, then Tukey HSD (per cell, no "
-        "correction over the cells, as the paper).\n\n"
+        "correction over the cells, as the paper); ▲/▼: significantly better/worse by the "
+        "paired t-test after Holm over the panel's cells.\n\n"
     )
-    atomic.write_text(
-        out / "fig6.md",
-        head + format_fig6_markdown(rows) + "\n" + verdicts_markdown(verdict) + "\n",
-    )
+    parts = [head + fig6_markdown(long_rows), verdicts_markdown(verdict)]
+    if trend:
+        parts.append(trends_markdown(trend))
+    atomic.write_text(out / "fig6.md", "\n\n".join(parts) + "\n")
     for x in policies:
         if x not in CONDITIONS and OPT in policies:
             fig = plot_fig6(rows, subject=x, baselines=(OPT,), quick=quick)
@@ -389,21 +336,39 @@ def _write_fig6_outputs(
 
 
 def calibrated_timing(
-    inst: Instance, quick: bool, trays: int | str | None = None, calibration_seed: int = 0
+    calibration: str | Path | None = None, instance: str | Path | None = None
 ) -> tuple[TimingModel, dict[str, Any]]:
-    """Figure 6's timing: step 1 of the user study's protocol (the co-located study, d = 0)
-    fits the robot's speed and ``o_H`` on the calibration cohort (2 studies and a coarser grid
-    when ``quick``); one participant per table with the paper's total SD. Returns the timing
-    and the calibration's record."""
-    cal = calibrate(
-        inst,
-        draw_cohort(calibration_seed, 2 if quick else CALIBRATION_STUDIES, PAPER_N, CALIBRATION),
-        trays=trays,
-        delivery_time=STUDY_DELIVERY,
-        f_target=None,
-        grid=3 if quick else 5,
-    )
-    return replace(TimingModel(), **cal["values"]), cal
+    """Figure 6's timing: the one calibration's robot speed and ``o_H``
+    (:func:`.calibrated.load_calibration`, default the committed one; fitted on the co-located
+    study, d = 0), one participant per table with the paper's total SD. Returns the timing and
+    the calibration's values and source (for the run's JSON)."""
+    cal = load_calibration(calibration, instance)
+    keep = ("robot_scale", "kit_overhead_human", "within_cv", "instance_sha1", "quick", "source")
+    return cal.timing(), {k: getattr(cal, k) for k in keep}
+
+
+def _common(
+    path: str,
+    seed: int,
+    reps: int,
+    policies: Sequence[str],
+    units: int,
+    delivery_time: float | None,
+    trays: int | str | None,
+    timing: TimingModel,
+    ce: CEParams | None,
+) -> dict[str, Any]:
+    """The fields every cell of a run shares."""
+    return {
+        "instance": path,
+        "seeds": tuple(participant_seeds(seed, reps)),
+        "policies": tuple(policies),
+        "units": int(units),
+        "delivery_time": delivery_time,
+        "trays": trays,
+        "timing": asdict(timing),
+        "ce": asdict(ce) if ce is not None else None,
+    }
 
 
 def run_fig6(
@@ -421,7 +386,7 @@ def run_fig6(
     units: int | None = None,
     trays: int | str | None = None,
     timing: TimingModel | None = None,
-    calibration_seed: int = 0,
+    calibration: str | Path | None = None,
     ce: CEParams | None = None,
     policy_options: Mapping[str, Any] | None = None,
     progress: bool | None = None,
@@ -431,8 +396,8 @@ def run_fig6(
     Defaults: MAT, MTTF in {30, 60, 90, 120} s, 10 tables per run, ``reps`` = 30 replications
     (``None``: 30, or 3 when ``quick``), the instance's delivery time (``delivery_time``
     overrides it), the instance's trays (the study's table: one; ``trays`` overrides it, e.g.
-    ``"unlimited"``), and the timing calibrated on the user study (:func:`calibrate` with
-    participants of ``calibration_seed``; pass ``timing`` to skip).
+    ``"unlimited"``), and the timing of the one calibration (:func:`calibrated_timing`:
+    ``calibration`` a folder, default the committed one; or pass ``timing``).
     ``quick``: the same experiment, smaller: MAT {30, 120} x MTTF {60}, 3 replications (still
     10 tables per run and the paper's CE); every output says it was quick.
     ``policies``: the paper's three by default; an extra registered policy (e.g.
@@ -456,20 +421,13 @@ def run_fig6(
     _check_fig6(inst, policies, jobs, policy_options or {})
     cal: dict[str, Any] | None = None
     if timing is None:
-        timing, cal = calibrated_timing(inst, quick, trays, calibration_seed)
-    common: dict[str, Any] = {
-        "instance": path,
-        "seeds": tuple(participant_seeds(seed, reps)),
-        "policies": policies,
-        "units": int(units),
-        "delivery_time": delivery_time,
-        "trays": trays,
-        "timing": asdict(timing),
-        "ce": asdict(ce) if ce is not None else None,
-        "policy_options": dict(policy_options or {}),
-    }
+        timing, cal = calibrated_timing(calibration, path)
+    common = _common(path, seed, reps, policies, units, delivery_time, trays, timing, ce)
+    common["policy_options"] = dict(policy_options or {})
     cells = [Fig6Cell(mat=None, mttf=None, **common)]
     cells += [Fig6Cell(mat=float(a), mttf=float(b), **common) for a in mats for b in mttfs]
+    if progress is not False:
+        announce("fig6", cells, out / "cells", f"R = {reps}, {len(policies)} policies")
     records, computed = run_cells_counted(
         cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress, desc="fig6 cells"
     )
@@ -499,7 +457,7 @@ def run_fig6(
     if failed:
         files = {"csv": write_csv(out / "fig6_cells.csv", rows, exclude=(), line_end="\n")}
     else:
-        files = _write_fig6_outputs(out, rows, policies, quick)
+        files = _write_fig6_outputs(out, rows, records, policies, quick)
     result["wall_s"] = time.perf_counter() - t0
     result["files"] = {k: str(v) for k, v in {**files, "json": out / "fig6.json"}.items()}
     write_json(out / "fig6.json", result)

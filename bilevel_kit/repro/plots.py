@@ -23,13 +23,15 @@ def plot_user_study(
     quick: bool = False,
     studies: int | None = None,
 ) -> Axes:
-    """The analogue of Fig. 5 (top): per condition our median study mean with its 95 %
-    prediction interval (error bar) and, beside it (not on it), the paper's bar, hatched.
-    ``table``: the prediction table (:func:`.user_study.prediction_table`)."""
+    """The analogue of Fig. 5 (top): per condition our median study mean with two 95 %
+    prediction intervals (thick: the participants' variation alone; thin, capped: with the
+    calibration's uncertainty) and, beside it (not on it), the paper's bar, hatched, with its
+    read-off range. Fitted and implied means are labelled (they are not predictions).
+    ``table``: the prediction table (:func:`.predictions.prediction_table`)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(7.0, 4.0))
+        _, ax = plt.subplots(figsize=(7.6, 4.8), layout="constrained")
     colors = {OPT: "#2e7d32", SINGLE: "#1565c0", WHOLE: "#c62828"}
     by = {r["quantity"]: r for r in table}
     conds = (OPT, SINGLE, WHOLE)
@@ -40,47 +42,84 @@ def plot_user_study(
             if r is None:
                 continue
             x = g + (i - (len(conds) - 1) / 2) * width
-            med, lo, hi = float(r["median"]), float(r["pi_low"]), float(r["pi_high"])
-            ax.bar(
-                x - width * 0.22,
-                med,
-                width * 0.44,
-                yerr=[[med - lo], [hi - med]],
-                capsize=3,
-                color=colors[c],
-                label=f"{LABELS[c]} (ours)" if g == 0 else None,
-                gid=f"bar:{m}:{c}",
-            )
-            ax.bar(
-                x + width * 0.22,
-                float(r["paper"]),
-                width * 0.44,
-                color="white",
-                edgecolor=colors[c],
-                hatch="///",
-                label="paper (Fig. 5)" if g == 0 and i == 0 else None,
-                gid=f"paper:{m}:{c}",
-            )
-            if r["role"] == "fitted":
-                ax.annotate(
-                    "fitted",
-                    (x, hi),
-                    xytext=(0, 3),
-                    textcoords="offset points",
-                    ha="center",
-                    fontsize=7,
-                )
+            _user_study_pair(ax, r, x, width, colors[c], first=g == 0, label=LABELS[c])
     ax.set_xticks([0, 1], ["Total task time", "Human idle time"])
     ax.set_ylabel("time per table (s)")
     n = f"{studies} simulated studies" if studies else "simulated studies"
     ax.set_title(
-        f"User study: our median study mean, error bars = 95 % prediction interval over {n} "
-        f"of 18\n(hatched: the paper's value){' - QUICK run' if quick else ''}",
-        fontsize=9,
+        f"User study: our median study mean per condition over {n} of 18 participants\n"
+        "error bars, 95 % prediction intervals: thick = participants only, "
+        "thin = with calibration uncertainty\n"
+        f"hatched: the paper's Fig. 5 bar (± its read-off){' - QUICK run' if quick else ''}",
+        fontsize=8.5,
     )
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper right")
     return ax
+
+
+def _user_study_pair(
+    ax: Axes, r: Mapping[str, Any], x: float, width: float, color: str, *, first: bool, label: str
+) -> None:
+    """Our bar (two intervals) and the paper's hatched bar beside it for one condition."""
+    med = float(r["median"])
+    lo, hi = float(r["pi_low"]), float(r["pi_high"])
+    clo = lo if r.get("cal_low") in (None, "") else float(r["cal_low"])
+    chi = hi if r.get("cal_high") in (None, "") else float(r["cal_high"])
+    xo, xp = x - width * 0.22, x + width * 0.22
+    gid = str(r["quantity"])
+    m = "idle" if "idle" in gid else "total"
+    cond = next(c for c, name in LABELS.items() if name in gid)
+    ax.bar(
+        xo,
+        med,
+        width * 0.44,
+        color=color,
+        label=f"{label} (ours)" if first else None,
+        gid=f"bar:{m}:{cond}",
+    )
+    ax.errorbar(
+        xo,
+        med,
+        yerr=[[max(med - clo, 0.0)], [max(chi - med, 0.0)]],
+        fmt="none",
+        ecolor="black",
+        elinewidth=0.9,
+        capsize=3,
+    )
+    ax.errorbar(
+        xo,
+        med,
+        yerr=[[max(med - lo, 0.0)], [max(hi - med, 0.0)]],
+        fmt="none",
+        ecolor="black",
+        elinewidth=3.0,
+        capsize=0,
+    )
+    h = float(r.get("readoff") or 0.0)
+    paper = float(r["paper"])
+    ax.bar(
+        xp,
+        paper,
+        width * 0.44,
+        color="white",
+        edgecolor=color,
+        hatch="///",
+        yerr=[[h], [h]],
+        capsize=2,
+        label="paper (Fig. 5)" if first and cond == OPT else None,
+        gid=f"paper:{m}:{cond}",
+    )
+    kind = str(r.get("kind") or r.get("role") or "")
+    if kind in ("fitted", "implied"):
+        ax.annotate(
+            kind,
+            (x, max(chi, paper + h)),
+            xytext=(0, 3),
+            textcoords="offset points",
+            ha="center",
+            fontsize=7,
+        )
 
 
 def plot_fig6_panel(
@@ -107,11 +146,12 @@ def plot_fig6_panel(
     mttfs = sorted({r["mttf"] for r in grid})
     z = np.full((len(mats), len(mttfs)), np.nan)
     marks = [["" for _ in mttfs] for _ in mats]
-    for r in grid:
+    paired = _paired_marks(grid, metric, name)
+    for r, arrow in zip(grid, paired, strict=True):
         i, j = mats.index(r["mat"]), mttfs.index(r["mttf"])
         v = r.get(f"pct_{metric}:{name}")
         z[i, j] = np.nan if v is None else v
-        marks[i][j] = r.get(f"stars_{metric}:{name}", "")
+        marks[i][j] = f"{r.get(f'stars_{metric}:{name}', '')} {arrow}".strip()
     if span is None:
         span = _span(rows, [(metric, f"{subject}_over_{baseline}")])
     im = ax.imshow(
@@ -148,6 +188,16 @@ def plot_fig6_panel(
     if colorbar:
         ax.figure.colorbar(im, ax=ax, label="improvement (%)")
     return ax
+
+
+def _paired_marks(grid: Sequence[Mapping[str, Any]], metric: str, name: str) -> list[str]:
+    """▲/▼ where the paired t-test after Holm over the panel's cells finds the subject
+    significantly better/worse (:mod:`.fig6_stats`), else nothing."""
+    from .fig6_stats import BETTER, WORSE, direction, holm
+
+    sig = holm([r.get(f"p_paired_{metric}:{name}") for r in grid])
+    dirs = [direction(s, r.get(f"pct_{metric}:{name}")) for s, r in zip(sig, grid, strict=True)]
+    return [{BETTER: "▲", WORSE: "▼"}.get(d, "") for d in dirs]
 
 
 def _span(rows: Sequence[Mapping[str, Any]], panels: Sequence[tuple[str, str]]) -> float:
@@ -189,7 +239,8 @@ def plot_fig6(
         0.01,
         f"R = {r0.get('reps', '?')} replications per cell, {r0.get('units', '?')} tables per run."
         " * p < .05, ** p < .001: one-way ANOVA over the three policies, then Tukey HSD"
-        " (per cell, no correction over cells)."
+        " (per cell, no correction over cells).\n▲/▼: significantly better/worse by the paired"
+        " t-test over the replications, after Holm over the panel's cells."
         + ("  QUICK run: fewer cells and replications." if quick else ""),
         fontsize=8,
         gid="fig6:note",
@@ -197,33 +248,22 @@ def plot_fig6(
     return fig
 
 
-def _time_axis(ax: Axes, label: str, values: Sequence[float]) -> Axes:
-    """A second y axis for wall times: log scale when they span a decade or more."""
-    twin = ax.twinx()
-    pos = [v for v in values if v and v > 0]
-    if pos and max(pos) / min(pos) >= 10.0:
-        twin.set_yscale("log")
-        twin.set_ylim(min(pos) / 2.0, max(pos) * 2.0)
-    twin.set_ylabel(label)
-    return twin
-
-
-def _style_legend(ax: Axes, handles: list[Any], what: str, time_what: str) -> None:
-    """The series' colours plus what a solid and a dotted line mean."""
-    from matplotlib.lines import Line2D
-
-    handles = [
-        *handles,
-        Line2D([], [], color="black", linestyle="-", marker="o", label=what),
-        Line2D([], [], color="black", linestyle=":", label=time_what),
-    ]
+def _legend_below(ax: Axes, handles: list[Any]) -> None:
+    """The series' legend under ``ax`` (the lines share their colours with the panel below)."""
     ax.legend(
         handles=handles,
         fontsize=style.SMALL_SIZE,
         loc="upper center",
-        bbox_to_anchor=(0.5, -0.14),
+        bbox_to_anchor=(0.5, -0.2),
         ncols=3,
     )
+
+
+def _log_if_wide(ax: Axes, values: Sequence[float]) -> None:
+    """A log y axis when positive ``values`` span a decade or more."""
+    pos = [v for v in values if v and v > 0]
+    if pos and max(pos) / min(pos) >= 10.0:
+        ax.set_yscale("log")
 
 
 @style.styled
@@ -234,40 +274,25 @@ def plot_horizon_gap(
 ) -> Axes:
     """Part A of the horizon study: the gap (%) of greedy-ce's makespan to the exact reference
     against the horizon N, one line per instance (hollow markers: the reference is CP-SAT's
-    lower bound, not a proven optimum), ``mean`` (N -> mean gap) as a thick black line, and
-    the plan's wall time (dotted) on a second axis."""
+    lower bound, not a proven optimum) and ``mean`` (N -> mean gap) as a thick black line.
+    The plan times are a panel of their own (:func:`plot_horizon_time`): one y axis per
+    panel, so no line reads against the wrong axis."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     names = list(dict.fromkeys(str(r["instance_file"]) for r in rows))
-    swatches = style.categorical(len(names))
-    twin = _time_axis(ax, "plan time (s), dotted", [r["plan_time_s"] for r in rows])
     handles = []
-    for name, sw in zip(names, swatches, strict=True):
+    for name, sw in zip(names, style.categorical(len(names)), strict=True):
         rs = sorted((r for r in rows if r["instance_file"] == name), key=lambda r: r["horizon"])
         pts = [(r["horizon"], r["gap_pct"]) for r in rs if r["gap_pct"] is not None]
         bound = any(r["reference"] == "bound" for r in rs)
-        label = f"{rs[0]['instance']}" + (" (vs bound)" if bound else "")
         if pts:
             x, y = zip(*pts, strict=True)
-            ax.plot(
-                x,
-                y,
-                marker="o",
-                color=sw.color,
-                markerfacecolor="white" if bound else sw.color,
-                gid=f"gap:{name}",
-            )
-        twin.plot(
-            [r["horizon"] for r in rs],
-            [r["plan_time_s"] for r in rs],
-            linestyle=":",
-            color=sw.color,
-            linewidth=1.0,
-            gid=f"time:{name}",
-        )
+            face = "white" if bound else sw.color
+            ax.plot(x, y, marker="o", color=sw.color, markerfacecolor=face, gid=f"gap:{name}")
+        label = f"{rs[0]['instance']}" + (" (vs bound)" if bound else "")
         handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
     if mean:
         ax.plot(list(mean), list(mean.values()), color="black", lw=2.4, gid="gap:mean")
@@ -277,58 +302,101 @@ def plot_horizon_gap(
     ax.set_title("greedy-ce: makespan gap against the horizon N")
     ax.grid(alpha=0.3)
     ax.set_xticks(sorted({int(r["horizon"]) for r in rows}))
-    _style_legend(ax, handles, "gap (solid)", "plan time (dotted)")
+    ax.legend(handles=handles, fontsize=style.SMALL_SIZE, ncols=2)
+    return ax
+
+
+@style.styled
+def plot_horizon_time(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
+    """Part A's plan times (s) against N, one line per instance in the gap panel's colours."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 3.2), layout="constrained")
+    names = list(dict.fromkeys(str(r["instance_file"]) for r in rows))
+    for name, sw in zip(names, style.categorical(len(names)), strict=True):
+        rs = sorted((r for r in rows if r["instance_file"] == name), key=lambda r: r["horizon"])
+        x = [r["horizon"] for r in rs]
+        ax.plot(x, [r["plan_time_s"] for r in rs], marker=".", color=sw.color, gid=f"time:{name}")
+    _log_if_wide(ax, [r["plan_time_s"] for r in rows])
+    ax.set_xlabel("greedy horizon N (tasks per window)")
+    ax.set_ylabel("plan time (s)")
+    ax.set_title("greedy-ce: wall time of one plan")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_xticks(sorted({int(r["horizon"]) for r in rows}))
     return ax
 
 
 @style.styled
 def plot_horizon_window(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
     """Part B of the horizon study: cpsat-rolling's improvement in total time over Optimized
-    in the same runs (%, positive: faster) against its window, one line per delay cell, and
-    the planning time per decision (dotted; Optimized's as a dash-dot level) on a second
-    axis."""
+    in the same runs (%, positive: faster) against its window, one line per delay cell, with
+    the 95 % interval of the paired gain as error bars."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     labels = list(dict.fromkeys(str(r["label"]) for r in rows))
-    swatches = style.categorical(len(labels))
-    twin = _time_axis(
-        ax, "planning time per decision (s), dotted", [r["plan_s_per_decision"] for r in rows]
-    )
     handles = []
-    for label, sw in zip(labels, swatches, strict=True):
+    for k, (label, sw) in enumerate(zip(labels, style.categorical(len(labels)), strict=True)):
+        roll = sorted(
+            (r for r in rows if r["label"] == label and r["window"] is not None),
+            key=lambda r: r["window"],
+        )
+        x = [r["window"] + 0.25 * (k - (len(labels) - 1) / 2) for r in roll]
+        y = [r["total_pct_over_optimized"] for r in roll]
+        lo = [r.get("total_pct_ci_low") for r in roll]
+        hi = [r.get("total_pct_ci_high") for r in roll]
+        ax.plot(x, y, marker="o", color=sw.color, gid=f"window:{label}")
+        if all(v is not None for v in lo + hi):
+            err = [
+                [v - a for v, a in zip(y, lo, strict=True)],
+                [b - v for v, b in zip(y, hi, strict=True)],
+            ]
+            ax.errorbar(x, y, yerr=err, fmt="none", ecolor=sw.color, capsize=3, lw=1.0)
+        handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
+    ax.axhline(0.0, color="black", linewidth=0.8)
+    ax.set_xlabel("cpsat-rolling window (tasks)")
+    ax.set_ylabel("total time, gain over Optimized (%)")
+    ax.set_title("cpsat-rolling against Optimized (N = 5), same runs; bars: 95 % CI")
+    ax.grid(alpha=0.3)
+    ax.set_xticks(sorted({int(r["window"]) for r in rows if r["window"] is not None}))
+    ax.legend(handles=handles, fontsize=style.SMALL_SIZE)
+    return ax
+
+
+@style.styled
+def plot_horizon_decision(rows: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
+    """Part B's planning time per decision (s) against the window, one line per delay cell in
+    the window panel's colours; Optimized's as a dashed level of the same colour."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 3.2), layout="constrained")
+    labels = list(dict.fromkeys(str(r["label"]) for r in rows))
+    for label, sw in zip(labels, style.categorical(len(labels)), strict=True):
         rs = [r for r in rows if r["label"] == label]
         roll = sorted((r for r in rs if r["window"] is not None), key=lambda r: r["window"])
         ax.plot(
             [r["window"] for r in roll],
-            [r["total_pct_over_optimized"] for r in roll],
-            marker="o",
-            color=sw.color,
-            gid=f"window:{label}",
-        )
-        twin.plot(
-            [r["window"] for r in roll],
             [r["plan_s_per_decision"] for r in roll],
-            linestyle=":",
+            marker=".",
             color=sw.color,
-            linewidth=1.0,
         )
         for r in rs:
             if r["window"] is None:
-                twin.axhline(r["plan_s_per_decision"], color=sw.color, linestyle="-.", lw=0.8)
-        handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
-    ax.axhline(0.0, color="black", linewidth=0.8)
+                ax.axhline(r["plan_s_per_decision"], color=sw.color, linestyle="--", lw=0.9)
+    _log_if_wide(ax, [r["plan_s_per_decision"] for r in rows])
     ax.set_xlabel("cpsat-rolling window (tasks)")
-    ax.set_ylabel("total time, improvement over Optimized (%)")
-    ax.set_title("cpsat-rolling against Optimized (N = 5) in the same runs")
-    ax.grid(alpha=0.3)
+    ax.set_ylabel("planning time per decision (s)")
+    ax.set_title("planning time per decision")
+    ax.grid(alpha=0.3, which="both")
     ax.set_xticks(sorted({int(r["window"]) for r in rows if r["window"] is not None}))
-    handles.append(
-        Line2D([], [], color="black", linestyle="-.", lw=0.8, label="Optimized, s per decision")
-    )
-    _style_legend(ax, handles, "improvement (solid)", "s per decision (dotted)")
+    dashed = Line2D([], [], color="black", linestyle="--", lw=0.9, label="Optimized (N = 5)")
+    solid = Line2D([], [], color="black", marker=".", label="cpsat-rolling")
+    ax.legend(handles=[solid, dashed], fontsize=style.SMALL_SIZE)
     return ax
 
 
@@ -341,14 +409,27 @@ def plot_horizon(
     mean: Mapping[int, float] | None = None,
 ) -> Figure:
     """The horizon study's figure: the gap against N (``mean``: the mean over the instances)
-    and, with Part B, the window panel."""
+    above the plan times and, with Part B, the window's gain above its planning time; every
+    panel has one y axis."""
     import matplotlib.pyplot as plt
 
     n = 1 + bool(window_rows)
-    fig, axes = plt.subplots(1, n, figsize=(6.6 * n, 4.6), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(
+        2,
+        n,
+        figsize=(6.6 * n, 7.6),
+        squeeze=False,
+        layout="constrained",
+        height_ratios=(1.5, 1.0),
+        sharex="col",
+    )
     plot_horizon_gap(rows, ax=axes[0][0], mean=mean)
+    plot_horizon_time(rows, ax=axes[1][0])
     if window_rows:
         plot_horizon_window(window_rows, ax=axes[0][1])
+        plot_horizon_decision(window_rows, ax=axes[1][1])
+    for ax in axes[0]:
+        ax.set_xlabel("")
     if quick:
         fig.suptitle("QUICK run: a reduced grid (fewer instances, N, windows, replications)")
     return fig

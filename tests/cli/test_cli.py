@@ -67,7 +67,11 @@ def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
     table = root / "instances/hrc_table.json"
     code, text, _ = run(capsys, "check", table, out, "--trays", "unlimited")
     assert code == 0 and text.startswith("valid: 12 kits, 12 tasks")
-    code, text, _ = run(capsys, "check", table, out)  # the file's own one-tray protocol
+    code, text, _ = run(capsys, "check", table, out)  # the file records --trays unlimited
+    assert code == 0 and text.startswith("valid: 12 kits, 12 tasks")
+    del doc["overrides"]  # a file without the record is checked on the instance's one tray
+    out.write_text(json.dumps(doc))
+    code, text, _ = run(capsys, "check", table, out)
     assert code == 1
     assert "[instance_mismatch] the solution was computed with trays = unlimited" in text
 
@@ -352,7 +356,7 @@ def test_methods_name_lists_options_with_type_default_and_meaning(capsys, monkey
 
 def test_methods_unknown_name_exits_2(capsys):
     code, _, err = run(capsys, "methods", "nope")
-    assert code == 2 and err.count("\n") == 1 and "unknown method 'nope'" in err
+    assert code == 2 and err.count("\n") == 1 and "unknown method or policy 'nope'" in err
 
 
 def test_trays_override(capsys, root):
@@ -435,3 +439,120 @@ def test_methods_name_describes_a_simulation_policy(capsys):
     ]
     code, text, _ = run(capsys, "methods", "optimized")
     assert code == 0 and text.splitlines()[1:] == ["takes no options"]
+
+
+def test_solution_records_overrides_and_check_applies_them(capsys, tmp_path, root):
+    """A plan solved with --units 2 --trays unlimited checks valid without repeating them;
+    a contradicting option is refused, and a file without the record gets a hint."""
+    table = root / "instances/hrc_table.json"
+    out = tmp_path / "u2.json"
+    args = ("--method", "single-task", "--units", 2, "--trays", "unlimited", "--out", out)
+    assert run(capsys, "solve", table, *args)[0] == 0
+    doc = json.loads(out.read_text())
+    assert doc["overrides"] == {"units": 2, "trays": "unlimited"}
+    code, text, err = run(capsys, "check", table, out)
+    assert code == 0 and text.startswith("valid: 24 kits, 24 tasks")
+    assert "applying the solution's overrides: trays=unlimited, units=2" in err
+    # the same value again is fine; a different one is a usage error naming the field
+    assert run(capsys, "check", table, out, "--units", 2)[0] == 0
+    code, _, err = run(capsys, "check", table, out, "--units", 3)
+    assert code == 2 and err.count("\n") == 1
+    assert "$.overrides.units: the plan was solved with units=2, but --units 3" in err
+    # an older file without the record: the violations, and a hint that names the option
+    del doc["overrides"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(doc))
+    code, text, err = run(capsys, "check", table, old)
+    assert code == 1 and "[unknown_task]" in text and "--units U" in err
+    assert run(capsys, "check", table, old, "--units", 2, "--trays", "unlimited")[0] == 0
+    # no override given: the key is left out, so earlier files and new ones read alike
+    plain = tmp_path / "plain.json"
+    assert run(capsys, "solve", table, "--method", "single-task", "--out", plain)[0] == 0
+    assert "overrides" not in json.loads(plain.read_text())
+
+
+def test_check_puts_the_root_cause_first_and_summarises_its_consequences(capsys, tmp_path, root):
+    """Two kits swapped: the two precedence errors come first; the 62 shifted kit times are
+    summarised (3 shown, the rest counted) instead of filling the listing."""
+    table = root / "instances/hrc_table.json"
+    out = tmp_path / "s.json"
+    assert run(capsys, "solve", table, "--method", "single-task", "--out", out)[0] == 0
+    doc = json.loads(out.read_text())
+    times = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
+    a, b = doc["kits"][0], doc["kits"][5]
+    for k in ("tasks", "layout"):
+        a[k], b[k] = b[k], a[k]
+    assert all(k in a for k in times)
+    out.write_text(json.dumps(doc))
+    code, text, _ = run(capsys, "check", table, out)
+    lines = text.splitlines()
+    assert code == 1 and lines[0].startswith("INVALID: ")
+    assert lines[1].startswith("  [precedence]") and lines[2].startswith("  [precedence]")
+    shown = [x for x in lines if x.startswith("  [times_inconsistent]")]
+    assert len(shown) == 3
+    more = [x for x in lines if x.endswith("more [times_inconsistent]")]
+    assert len(more) == 1 and int(more[0].split()[2]) >= 40
+
+
+NOTHING = """
+from dataclasses import dataclass
+
+from bilevel_kit import MethodOutput
+from bilevel_kit.methods import Status
+
+
+@dataclass(frozen=True)
+class NoOptions:
+    pass
+
+
+def nothing(instance, options, *, seed=0, time_limit=None):
+    return MethodOutput(None, Status.UNKNOWN)
+"""
+
+
+def test_compare_exits_3_when_a_method_gives_no_plan(capsys, tmp_path, root, monkeypatch):
+    """A "no plan" row is not success: exit 3 and a NO PLAN line naming the row; an invalid
+    plan or a false claim (exit 1) would win over it."""
+    from bilevel_kit.methods import REGISTRY, register
+
+    (tmp_path / "bk_nothing.py").write_text(NOTHING)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    register("nothing", "bk_nothing:nothing", "gives up at once", "bk_nothing:NoOptions")
+    try:
+        table = root / "instances/hrc_table.json"
+        code, text, err = run(capsys, "compare", table, "--methods", "single-task,nothing")
+        assert code == 3
+        assert err.splitlines()[-1] == "NO PLAN: hrc_table / nothing (unknown)"
+        assert "no plan" in text or "-" in text
+        code, _, err = run(capsys, "compare", table, "--methods", "single-task")
+        assert code == 0 and "NO PLAN" not in err
+    finally:
+        REGISTRY.remove("nothing")
+
+
+def test_a_status_about_j_prints_j_and_its_bound(tiny):
+    """bilevel-milp's status refers to J, so its summary shows J, the J bound and the J gap
+    (the makespan's bound and gap on the first line are not what "optimal" is about)."""
+    from dataclasses import replace
+
+    from bilevel_kit.cli.solve import summary
+    from bilevel_kit.methods import solve
+
+    res = solve(tiny, "single-task")
+    assert "refers to J" not in summary(tiny, res, True)
+    extra = {
+        "plan_objective_J": 11.375,
+        "plan_objective_J_bound": 11.0,
+        "plan_objective_J_gap": 0.033,
+    }
+    res = replace(res, status_objective="J", extra={**res.extra, **extra})
+    line = summary(tiny, res, True).splitlines()[1]
+    assert line.endswith("J 11.38  J bound 11.00  J gap 3.30%")
+
+
+def test_methods_with_an_unknown_name_lists_methods_and_policies(capsys):
+    code, _, err = run(capsys, "methods", "nonexistent")
+    assert code == 2 and err.count("\n") == 1
+    assert "unknown method or policy 'nonexistent'; methods: single-task," in err
+    assert "simulation policies: " in err and "optimized" in err and "cpsat-rolling" in err

@@ -12,7 +12,7 @@ from bilevel_kit.experiments.compare import CompareCell
 from bilevel_kit.instance import load
 from bilevel_kit.repro import horizon
 from bilevel_kit.repro.common import DEFAULT_INSTANCE
-from bilevel_kit.repro.plots import plot_horizon_gap
+from bilevel_kit.repro.plots import plot_horizon, plot_horizon_gap, plot_horizon_time
 from bilevel_kit.sim import TimingModel
 
 TABLE = str(DEFAULT_INSTANCE)
@@ -138,7 +138,34 @@ def test_plot_draws_into_given_axes_with_units():
     assert plot_horizon_gap(rows, ax=ax) is ax
     assert ax.get_ylabel() == "gap to exact reference (%)"
     assert "(tasks" in ax.get_xlabel()
-    twin = next(a for a in fig.axes if a is not ax)
-    assert twin.get_yscale() == "log" and "(s)" in twin.get_ylabel()
+    assert fig.axes == [ax]  # one y axis per panel: the plan times are a panel of their own
     assert [line.get_gid() for line in ax.lines] == ["gap:a.json"]
+    plt.close(fig)
+    fig, ax = plt.subplots()
+    assert plot_horizon_time(rows, ax=ax) is ax
+    assert ax.get_yscale() == "log" and ax.get_ylabel() == "plan time (s)"
+    plt.close(fig)
+
+
+def test_figure_panels_have_one_y_axis_each():
+    import matplotlib.pyplot as plt
+
+    plan = [
+        {"instance": "a", "instance_file": "a.json", "horizon": n, "gap_pct": g, "plan_time_s": t,
+         "reference": "optimum"}
+        for n, g, t in ((1, 5.0, 0.01), (2, 3.0, 0.5))
+    ]  # fmt: skip
+    window = [
+        {"label": "no delay", "window": w, "total_pct_over_optimized": g,
+         "total_pct_ci_low": g - 1, "total_pct_ci_high": g + 1, "plan_s_per_decision": t}
+        for w, g, t in ((None, 0.0, 0.002), (4, 1.0, 0.01), (8, 2.0, 0.1))
+    ]  # fmt: skip
+    fig = plot_horizon(plan, window)
+    assert len(fig.axes) == 4  # gap, plan time, gain, time per decision: no twin axes
+    assert {a.get_ylabel() for a in fig.axes} == {
+        "gap to exact reference (%)",
+        "plan time (s)",
+        "total time, gain over Optimized (%)",
+        "planning time per decision (s)",
+    }
     plt.close(fig)

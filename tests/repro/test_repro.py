@@ -101,10 +101,11 @@ def study(tmp_path_factory):
 def test_user_study_quick_summary_and_files(study):
     out, res = study
     table = res["table"]
-    roles = [r["role"] for r in table]
-    # 6 means, 2 F, 8 Tukey interval ends; fitted: two idle means and F of total time
-    assert len(table) == 16 and roles.count("fitted") == 3
-    fitted = {r["quantity"] for r in table if r["role"] == "fitted"}
+    kinds = [r["kind"] for r in table]
+    # 6 means, 2 F, 4 Tukey centres, 2 Tukey half-widths (one per metric: equal for every pair)
+    assert len(table) == 14
+    assert (kinds.count("fitted"), kinds.count("implied"), kinds.count("predicted")) == (3, 4, 7)
+    fitted = {r["quantity"] for r in table if r["kind"] == "fitted"}
     assert fitted == {
         "mean human idle time, Whole Assembly (s)",
         "mean human idle time, Single Task (s)",
@@ -112,15 +113,16 @@ def test_user_study_quick_summary_and_files(study):
     }
     for r in table:
         assert r["pi_low"] <= r["median"] <= r["pi_high"]
-        assert r["inside"] == (r["pi_low"] - 0.01 <= r["paper"] <= r["pi_high"] + 0.01)
-        assert r["studies"] == res["n_studies"]
-    assert res["inside"] == dict(
-        zip(("inside", "predicted"), repro.inside_count(table), strict=True)
-    )
-    assert res["inside"]["predicted"] == 13
+        assert r["cal_low"] <= r["cal_high"]
+        h = r["readoff"]
+        lo, hi = r["cal_low"], r["cal_high"]
+        assert r["inside"] == (lo - 0.01 <= r["paper"] + h and r["paper"] - h <= hi + 0.01)
+        assert r["studies"] == res["n_studies"] and r["cal_studies"] == res["cal_studies"]
+    assert res["inside"]["predicted"] == 7 and res["inside"]["independent"] == 4
+    assert res["cal_studies"] >= res["n_studies"]
     assert res["delivery_time"] == 0.0 and res["trays"] == 1
-    for name in ("runs_csv", "summary_csv", "parameters_csv", "markdown", "json", "figure"):
-        assert Path(res["files"][name]).is_file()
+    for name in ("runs_csv", "table", "parameters", "summary", "within", "markdown", "json"):
+        assert Path(res["files"][name]).is_file(), name
     assert Path(res["files"]["figure"]).read_bytes()[:8] == PNG_MAGIC
     rows = (out / "user_study_runs.csv").read_text().splitlines()
     assert len(rows) == 1 + 3 * repro.PAPER_N * res["n_studies"]
@@ -128,18 +130,26 @@ def test_user_study_quick_summary_and_files(study):
     assert "quick" in (out / "user_study.md").read_text()
 
 
-def test_user_study_calibration_hits_its_targets(study):
+def test_user_study_uses_the_committed_calibration(study):
     _, res = study
-    cal = res["calibration"]
-    assert set(cal["values"]) == {"robot_scale", "kit_overhead_human"}
-    assert cal["cohort"]["seed"] == 0 and cal["cohort"]["studies"] == 2
-    means = [t for t in cal["targets"] if t["condition"]]
-    assert len(means) == 2
-    for t in means:
-        assert abs(t["residual"]) < 0.5, t
-    (f,) = [t for t in cal["targets"] if not t["condition"]]
-    assert f["paper"] == pytest.approx(57.60)
-    assert 0 < res["design"]["within_cv"] < 0.16
+    cal = repro.load_calibration()
+    assert res["timing"]["robot_scale"] == cal.robot_scale
+    assert res["timing"]["kit_overhead_human"] == cal.kit_overhead_human
+    assert res["design"]["within_cv"] == cal.within_cv
+    assert res["draws_used"] == min(3, len(cal.draws))
+
+
+def test_within_rows_explain_the_model(study):
+    _, res = study
+    by = {(r["quantity"], r["metric"]): r for r in res["within"]}
+    shares = [r["ours"] for r in res["within"] if r["quantity"].startswith("share of a")]
+    assert sum(shares) == pytest.approx(1.0, abs=1e-3)
+    for m in ("total", "idle"):
+        f = by[("F from the medians", m)]
+        assert f["paper"] == repro.PAPER_F[m]
+        cond = by[("MS conditions (median over studies)", m)]["ours"]
+        err = by[("MS residual (participant x condition)", m)]["ours"]
+        assert f["ours"] == pytest.approx(cond / err, rel=1e-3)
 
 
 def test_user_study_same_seed_same_results(study, tmp_path):

@@ -10,6 +10,7 @@ from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ... import progress
 from ...bounds import best_bound
 from ...errors import UsageError
 from ...instance import Instance
@@ -129,6 +130,8 @@ def run(
     _check_size(instance, options.max_tasks)
     ensure_ortools()
     opt = make_solver(options.solver)
+    live = progress.tracker("J", unit="")  # the terminal's live line: which step runs now
+    live.report(stage="enumerating kits")
     kits = enumerate_kits(instance, options.max_columns)
     lower_level = values or LowerLevel(
         instance,
@@ -139,10 +142,13 @@ def run(
     )
     r = _Run(instance, options, budget, seed, lower_level, best_bound(instance))
     r.extra.update(solver=options.solver, lower=options.lower, candidates=len(kits))
+    live.report(stage=f"lower level of {len(kits)} candidate kits")
     cols = _columns(r, kits)
     if isinstance(cols, Status):
         return r.finish(None, cols)
+    live.report(stage="warm start (greedy-ce, local search)")
     start = None if warm_plan is None else _start(r, warm_plan, ce_params)
+    live.report(stage=f"MILP over {len(cols)} columns ({options.solver})")
     m, keys, info = _solve_milp(r, cols, start, opt, solver_options)
     plan = _incumbent(r, m, keys, cols, info, start)
     if plan is None:
