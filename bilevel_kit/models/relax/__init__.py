@@ -126,7 +126,8 @@ def proven_bound(
         )
         per = {m: on_grid(v, grid) for m, v in scan.per_kits.items()}
         stop = scan.stop
-        sources["kit_lp"] = scan.value
+        if per:  # no LP solved in time: its value is a closed form's, named as such
+            sources["kit_lp"] = scan.value
     sources = {k: on_grid(v, grid) for k, v in sources.items()}
     source = max(sources, key=lambda k: (sources[k], k == "kit_lp"))
     return ProvenBound(sources[source], source, sources, per, stop, grid)
