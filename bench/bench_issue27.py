@@ -140,7 +140,8 @@ def report(rows: list[dict[str, Any]], memory: list[str]) -> str:
         "over both codes and the library's record against the best bound of all. The machine "
         "has 2 cores shared with other sessions (load average 4-12 during the runs), so a "
         "10 s solve often got less than a core: cells differ from run to run (lns at 1,000 tasks: "
-        "table_u83 1 % above the best known in a first pass, 66 % in this one).",
+        "table_u83 1 % above the best known in a first pass, 64-66 % in the later ones; the "
+        "1,000-task rows are from a third pass, after the LP size check of models.relax).",
         "",
     ]
     out += ["## Per family and size (mean / max of the own certified gap, %; proven optimal)", ""]
