@@ -8,7 +8,62 @@ import json
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+if TYPE_CHECKING:
+    from ..instance import Instance
+    from ..methods import Result
+
+
+class SolveCell(Protocol):
+    """What a comparison cell and a benchmark cell share: one solve of one instance file."""
+
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+
+    @property
+    def instance(self) -> str: ...
+    @property
+    def instance_sha256(self) -> str: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def time_limit(self) -> float | None: ...
+    @property
+    def params(self) -> dict[str, Any]: ...
+
+
+def cell_key(cell: SolveCell, unkeyed: tuple[str, ...]) -> str:
+    """A stable file-name key: the instance's stem, method and seed, and a digest of every
+    field but ``unkeyed`` (sorted JSON, so equal cells share a key)."""
+    config = {k: v for k, v in asdict(cell).items() if k not in unkeyed}
+    blob = json.dumps(config, sort_keys=True, default=str)
+    digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
+    return f"{Path(cell.instance).stem}__{cell.method}__s{cell.seed}__{digest}"
+
+
+def cell_head(cell: SolveCell, name: str) -> dict[str, Any]:
+    """A cell record's first fields: the instance (``name``, file, digest) and the solve's
+    configuration."""
+    return {
+        "instance": name,
+        "instance_file": cell.instance,
+        "instance_sha256": cell.instance_sha256,
+        "method": cell.method,
+        "seed": cell.seed,
+        "time_limit": cell.time_limit,
+        "params": dict(cell.params),
+    }
+
+
+def solve_cell(inst: Instance, cell: SolveCell) -> Result:
+    """The cell's solve, with the checker's verdict."""
+    from ..methods import solve
+
+    return solve(
+        inst, cell.method, seed=cell.seed, time_limit=cell.time_limit, check=True, **cell.params
+    )
 
 
 @dataclass(frozen=True)
@@ -33,10 +88,7 @@ class CompareCell:
         The digest covers the instance file's bytes, not its path, so an edited file never
         reuses a saved result; the file's stem only makes the name readable.
         """
-        config = {k: v for k, v in asdict(self).items() if k != "instance"}
-        blob = json.dumps(config, sort_keys=True, default=str)
-        digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
-        return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
+        return cell_key(self, ("instance",))
 
 
 def file_digest(path: str | Path) -> str:
@@ -52,23 +104,11 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     """Solve one cell and return its record (metrics, status, bound, checker verdict)."""
     from ..errors import BilevelKitError
     from ..instance import load
-    from ..methods import solve
 
     inst = load(cell.instance).with_overrides(**cell.overrides)
-    record: dict[str, Any] = {
-        "instance": inst.name,
-        "instance_file": cell.instance,
-        "instance_sha256": cell.instance_sha256,
-        "method": cell.method,
-        "seed": cell.seed,
-        "time_limit": cell.time_limit,
-        "params": dict(cell.params),
-        "n_tasks": inst.n_tasks,
-    }
+    record: dict[str, Any] = {**cell_head(cell, inst.name), "n_tasks": inst.n_tasks}
     try:
-        res = solve(
-            inst, cell.method, seed=cell.seed, time_limit=cell.time_limit, check=True, **cell.params
-        )
+        res = solve_cell(inst, cell)
     except BilevelKitError as exc:  # a failed cell: its error and its configuration
         return {**record, "status": "error", "error": str(exc), "cell": asdict(cell)}
     from ..solution import result_to_dict

@@ -10,6 +10,7 @@ import pytest
 from brute import assert_model_optimal, best_makespan, model_verdict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import binding_types
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
@@ -22,11 +23,7 @@ if importlib.util.find_spec("highspy") is None:  # never import it here: see sol
     pytest.skip("highspy is not installed", allow_module_level=True)
 
 TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
-TYPES = [
-    {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
-    {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
-    {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
-]
+TYPES = binding_types()
 
 
 # ---------------------------------------------------------------------------------------------
