@@ -49,6 +49,15 @@ def binding_types() -> list[dict[str, Any]]:
     ]
 
 
+def binding_parts(draw: st.DrawFn) -> list[tuple[str, int]]:
+    """One task's parts among :func:`binding_types`: 1-2 distinct types, 1-2 squares, one of
+    any other type, as (type, count)."""
+    kinds = draw(
+        st.lists(st.sampled_from(["big", "bar", "sq"]), min_size=1, max_size=2, unique=True)
+    )
+    return [(k, draw(st.integers(1, 2)) if k == "sq" else 1) for k in kinds]
+
+
 def random_doc(
     seed: int,
     n: int | None = None,

@@ -10,7 +10,7 @@ import pytest
 from brute import segmentations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from strategies import binding_types
+from strategies import binding_parts, binding_types
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
@@ -117,14 +117,9 @@ def small_instances(draw, max_n: int = 5):
     half = st.integers(1, 40).map(lambda v: v / 2)
     tasks = []
     for i in range(n):
-        kinds = draw(
-            st.lists(st.sampled_from(["big", "bar", "sq"]), min_size=1, max_size=2, unique=True)
-        )
         task = {
             "id": f"t{i}",
-            "parts": [
-                {"type": k, "count": draw(st.integers(1, 2)) if k == "sq" else 1} for k in kinds
-            ],
+            "parts": [{"type": k, "count": c} for k, c in binding_parts(draw)],
             "human_time": {"mean": draw(half)},
         }
         if draw(st.booleans()):

@@ -10,7 +10,7 @@ import pytest
 from brute import assert_model_optimal, best_makespan, model_verdict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from strategies import binding_types
+from strategies import binding_parts, binding_types
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
@@ -60,12 +60,7 @@ def small_instances(draw, max_n: int = 6):
     """Random instances: <= max_n tasks, a DAG (edges i -> j, i < j), d > 0, overheads > 0."""
     n = draw(st.integers(3, max_n))
     half = st.integers(1, 40).map(lambda v: v / 2)
-    parts = []
-    for _ in range(n):
-        kinds = draw(
-            st.lists(st.sampled_from(["big", "bar", "sq"]), min_size=1, max_size=2, unique=True)
-        )
-        parts.append([(k, draw(st.integers(1, 2)) if k == "sq" else 1) for k in kinds])
+    parts = [binding_parts(draw) for _ in range(n)]
     human = [draw(half) for _ in range(n)]
     robot = [draw(st.one_of(st.none(), half)) for _ in range(n)]
     pairs = [(a, b) for a in range(n) for b in range(a + 1, n)]

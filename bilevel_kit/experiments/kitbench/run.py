@@ -20,9 +20,9 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
-from ..compare import cell_head, cell_key, file_digest, solve_cell
+from ..compare import SolveCell
 from .library import OPTIMAL_RTOL, SHARES, Library, Record, now, trays_text
 
 #: The ``format`` of a bench cell record (what ``bench update`` accepts).
@@ -30,7 +30,7 @@ CELL_FORMAT = "kitbench-cell/1"
 
 
 @dataclass(frozen=True)
-class BenchCell:
+class BenchCell(SolveCell):
     """One solve of one library instance with one method."""
 
     instance: str  # path of the instance file
@@ -41,14 +41,8 @@ class BenchCell:
     instance_sha256: str = ""  # the file's digest, filled in when the cell is made
     commit: str = ""  # the code's version: recorded, not part of the key
 
-    def __post_init__(self) -> None:
-        if not self.instance_sha256:
-            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
-
-    def key(self) -> str:
-        """A stable file-name key: the digest of the instance's bytes, the method, seed, time
-        limit and options (not the path or the commit: a rerun with new code resumes)."""
-        return cell_key(self, ("instance", "commit"))
+    #: a rerun with new code resumes
+    unkeyed: ClassVar[tuple[str, ...]] = ("instance", "commit")
 
 
 def bench_cell(cell: BenchCell) -> dict[str, Any]:
@@ -61,12 +55,12 @@ def bench_cell(cell: BenchCell) -> dict[str, Any]:
     inst = load(cell.instance)
     record: dict[str, Any] = {
         "format": CELL_FORMAT,
-        **cell_head(cell, inst.name),
+        **cell.head(inst.name),
         "tasks": inst.n_tasks,
         "commit": cell.commit,
     }
     try:
-        res = solve_cell(inst, cell)
+        res = cell.solve(inst)
     except (UsageError, KitDoesNotFit) as exc:
         return {**record, "status": "refused", "error": str(exc), "date": now()}
     except BilevelKitError as exc:
