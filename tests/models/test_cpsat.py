@@ -10,6 +10,7 @@ import pytest
 from brute import assert_model_optimal, best_makespan, fits, model_verdict
 from flowshop import jobs_doc
 from strategies import random_doc
+from timing import allowed
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
@@ -271,7 +272,7 @@ def test_time_limit_is_honoured(table):
     t0 = time.perf_counter()
     out = cs.solve(inst, time_limit=3.0, workers=2)
     wall = time.perf_counter() - t0
-    assert wall < 3.0 + 1.0
+    assert wall <= allowed(3.0)
     assert out.status in ("optimal", "feasible")
     assert_valid_plan(inst, out)
     assert out.extra["tray_mode"] == "benders"

@@ -12,6 +12,7 @@ import pytest
 from brute import best_makespan
 from flowshop import flow_makespan, jobs_doc, johnson_order
 from test_exact_trays import random_doc
+from timing import load_factor
 
 from bilevel_kit import bounds, check, solve
 from bilevel_kit.instance import from_dict
@@ -77,7 +78,7 @@ def test_johnson_special_case_is_proven_by_both_models(n):
             if method == "cpsat"
             else solve(inst, method, time_limit=60.0)
         )
-        assert time.perf_counter() - t0 < 5.0
+        assert time.perf_counter() - t0 < 5.0 * load_factor()  # proven at once, not by search
         assert res.status == "optimal"
         assert res.objective == pytest.approx(ref) and res.bound == pytest.approx(ref)
         assert check(inst, res.plan) == []
