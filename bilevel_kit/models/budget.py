@@ -88,32 +88,21 @@ def check_model_memory(owner: str, cells: int, bytes_per_cell: float, what: str)
     in bytes. ``bytes_per_cell`` is measured per solver (bench/results/scale.md)."""
     from ..errors import UsageError
 
-    need = BASE_MEMORY + cells * bytes_per_cell
-    if need > MEMORY_LIMIT:
-        raise UsageError(
-            f"{owner}: the model would have {cells:,} {what}, about {need / 2**30:.1f} GB, above "
-            f"the {MEMORY_LIMIT / 2**30:g} GB memory limit; use greedy-ce, or fewer tasks "
-            "(--units, --horizon)"
-        )
-    return need
+    refusal = memory_refusal(owner, cells, bytes_per_cell, what)
+    if refusal is not None:
+        raise UsageError(f"{refusal}; use greedy-ce, or fewer tasks (--units, --horizon)")
+    return BASE_MEMORY + cells * bytes_per_cell
 
 
-def memory_reason(
-    owner: str, cells: int, smallest: int, bytes_per_cell: float, what: str
-) -> str | None:
-    """The memory verdict of a model of ``cells`` variables whose kit count came from the
-    incumbent, ``smallest`` the variables at the fewest kits any plan could need (the closed
-    bound's kit cap): a :class:`UsageError` when even that model is over the limit (the size
-    decides, never the time limit), else the ``reason`` this model is not built (a better
-    incumbent would make it smaller), or None when it fits."""
-    check_model_memory(owner, smallest, bytes_per_cell, what)
+def memory_refusal(owner: str, cells: int, bytes_per_cell: float, what: str) -> str | None:
+    """Why a model of ``cells`` task x kit variables is too large for :data:`MEMORY_LIMIT`
+    (None: it is not). An exact method holding a plan returns that plan instead of failing."""
     need = BASE_MEMORY + cells * bytes_per_cell
     if need <= MEMORY_LIMIT:
         return None
     return (
-        f"a model of {cells:,} task x kit variables (the incumbent's kit count) would need "
-        f"about {need / 2**30:.1f} GB, above the {MEMORY_LIMIT / 2**30:g} GB memory limit; "
-        "the incumbent is returned (a longer time limit may find one with fewer kits)"
+        f"{owner}: the model would have {cells:,} {what}, about {need / 2**30:.1f} GB, above "
+        f"the {MEMORY_LIMIT / 2**30:g} GB memory limit"
     )
 
 
