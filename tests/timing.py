@@ -23,3 +23,10 @@ def allowed(limit: float, slack: float | None = None) -> float:
     slack (default ``max(2 s, 5 %)``) times :func:`load_factor`."""
     base = max(2.0, 0.05 * limit) if slack is None else slack
     return limit + base * load_factor()
+
+
+#: The time limit of a test that asserts a proof (optimal, or equal to a brute force): a
+#: safety net, not a speed claim. The proofs take seconds on a quiet machine; on a busy one
+#: the same search takes several times longer, and a tight limit would turn it into a
+#: "feasible" that the test reads as a wrong answer.
+PROOF_LIMIT = 120.0

@@ -10,7 +10,7 @@ import pytest
 from brute import assert_model_optimal, best_makespan, fits, model_verdict
 from flowshop import jobs_doc
 from strategies import random_doc
-from timing import allowed
+from timing import PROOF_LIMIT, allowed
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
@@ -19,7 +19,7 @@ from bilevel_kit.plan import Kit, Plan, evaluate
 
 pytest.importorskip("ortools")
 
-FAST = {"workers": 2, "time_limit": 20.0}
+FAST = {"workers": 2, "time_limit": PROOF_LIMIT}
 
 
 # ---------------------------------------------------------------------------------------------

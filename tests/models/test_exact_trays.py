@@ -22,6 +22,7 @@ from flowshop import (
     jobs_doc,
     johnson_order,
 )
+from timing import PROOF_LIMIT
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import Instance, from_dict
@@ -77,7 +78,7 @@ def test_one_tray_one_task_per_kit_is_the_blocking_flow_shop(seed, n):
     a, b = random_jobs(seed, n)
     ref = blocking_makespan(a, b, gilmore_gomory_order(a, b))
     inst = from_dict(flow_doc(a, b, 1))
-    out = cs.solve(inst, time_limit=20.0, tray="benders")
+    out = cs.solve(inst, time_limit=PROOF_LIMIT, tray="benders")
     assert_exact(inst, out, ref)
     assert all(len(k.tasks) == 1 for k in out.plan.kits)
     assert bounds.best_bound(inst) <= ref + 1e-9
@@ -106,7 +107,7 @@ def test_milp_one_tray_equals_gilmore_gomory(seed, n):
     a, b = random_jobs(seed, n)
     ref = blocking_makespan(a, b, gilmore_gomory_order(a, b))
     inst = from_dict(flow_doc(a, b, 1))
-    assert_exact(inst, ms.solve(inst, time_limit=20.0), ref)
+    assert_exact(inst, ms.solve(inst, time_limit=PROOF_LIMIT), ref)
 
 
 @pytest.mark.parametrize(("seed", "n"), [(0, 6), (2, 8), (3, 10)])
@@ -116,11 +117,11 @@ def test_unlimited_trays_one_task_per_kit_is_johnson(seed, n):
     a, b = random_jobs(seed, n)
     ref = flow_makespan(a, b, johnson_order(a, b))
     inst = from_dict(flow_doc(a, b, None))
-    assert_exact(inst, cs.solve(inst, time_limit=20.0, tray="benders"), ref)
+    assert_exact(inst, cs.solve(inst, time_limit=PROOF_LIMIT, tray="benders"), ref)
     if HAVE_MILP:
         from bilevel_kit.models import milp as ms
 
-        assert_exact(inst, ms.solve(inst, time_limit=20.0), ref)
+        assert_exact(inst, ms.solve(inst, time_limit=PROOF_LIMIT), ref)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -137,7 +138,7 @@ def test_cpsat_both_modes_equal_brute_force(seed, trays):
     inst = from_dict(random_doc(seed, trays, n=7 if seed >= 5 else None))
     opt, _ = best_makespan(inst)
     for mode in ("embedded", "benders"):
-        out = cs.solve(inst, tray=mode, time_limit=20.0)
+        out = cs.solve(inst, tray=mode, time_limit=PROOF_LIMIT)
         assert out.extra["tray_mode"] == mode
         assert_exact(inst, out, opt)
     assert bounds.best_bound(inst) <= opt + 1e-9
@@ -150,7 +151,7 @@ def test_milp_equals_brute_force(seed, trays):
 
     inst = from_dict(random_doc(seed, trays))
     opt, _ = best_makespan(inst)
-    assert_exact(inst, ms.solve(inst, time_limit=20.0), opt)
+    assert_exact(inst, ms.solve(inst, time_limit=PROOF_LIMIT), opt)
 
 
 def test_the_tray_rule_binds_on_some_random_instance():

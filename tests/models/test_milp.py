@@ -11,7 +11,7 @@ from brute import assert_model_optimal, best_makespan, model_verdict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from strategies import binding_parts, binding_types
-from timing import allowed
+from timing import PROOF_LIMIT, allowed
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.instance import from_dict, load
@@ -109,11 +109,11 @@ def test_milp_equals_brute_force_and_cpsat(inst):
 
     opt = brute_force(inst)
     t0 = time.perf_counter()
-    out = ms.solve(inst, time_limit=20.0)
+    out = ms.solve(inst, time_limit=PROOF_LIMIT)
     wall = time.perf_counter() - t0
     makespan = assert_contract(inst, out, 20.0, wall)
     assert_model_optimal(out, opt, tol=1e-5)  # among 0/90-degree plans, like the brute force
-    ref = cs.solve(inst, time_limit=20.0, workers=2)
+    ref = cs.solve(inst, time_limit=PROOF_LIMIT, workers=2)
     assert model_verdict(ref)[0]
     assert evaluate(inst, ref.plan).makespan == pytest.approx(makespan, abs=1e-6)
 
@@ -123,12 +123,12 @@ def test_table_optimum_agrees_with_cpsat():
     from bilevel_kit.models import cpsat as cs
 
     inst = load(TABLE).with_overrides(trays="unlimited")
-    out = ms.solve(inst, time_limit=30.0)
+    out = ms.solve(inst, time_limit=PROOF_LIMIT)
     assert out.status == "optimal"
     assert assert_contract(inst, out) == pytest.approx(431.78, abs=1e-6)
     assert out.bound == pytest.approx(431.78, abs=1e-5)
     assert out.extra["solver"] == "highs"
-    ref = cs.solve(inst, time_limit=30.0)
+    ref = cs.solve(inst, time_limit=PROOF_LIMIT)
     assert ref.status == "optimal"
     assert evaluate(inst, ref.plan).makespan == pytest.approx(431.78, abs=1e-6)
 
@@ -155,7 +155,7 @@ def geometry_doc() -> dict:
 def test_benders_cuts_reach_the_brute_force_optimum(tray):
     inst = from_dict(geometry_doc())
     opt = brute_force(inst)
-    out = ms.solve(inst, time_limit=20.0, tray=tray)
+    out = ms.solve(inst, time_limit=PROOF_LIMIT, tray=tray)
     assert out.status == "optimal"
     assert assert_contract(inst, out) == pytest.approx(opt, abs=1e-6)
     assert out.extra["cuts"] >= 1  # the area relaxation alone would accept a non-fitting kit
@@ -175,8 +175,8 @@ def test_big_m_scales_with_the_data():
         p["pick_time"] *= 1000
     scaled["delivery_time"] *= 1000
     scaled["kit_overhead"] = {k: v * 1000 for k, v in scaled["kit_overhead"].items()}
-    a = ms.solve(from_dict(base), time_limit=20.0)
-    b = ms.solve(from_dict(scaled), time_limit=20.0)
+    a = ms.solve(from_dict(base), time_limit=PROOF_LIMIT)
+    b = ms.solve(from_dict(scaled), time_limit=PROOF_LIMIT)
     assert a.status == b.status == "optimal"
     assert b.extra["makespan"] == pytest.approx(1000 * a.extra["makespan"], rel=1e-9)
 
@@ -185,8 +185,8 @@ def test_human_idle_objective_with_no_human_overhead_has_the_same_optimum():
     doc = geometry_doc()
     doc["kit_overhead"]["human"] = 0.0
     inst = from_dict(doc)
-    a = ms.solve(inst, time_limit=20.0)
-    b = ms.solve(inst, time_limit=20.0, objective="human_idle")
+    a = ms.solve(inst, time_limit=PROOF_LIMIT)
+    b = ms.solve(inst, time_limit=PROOF_LIMIT, objective="human_idle")
     assert a.status == b.status == "optimal"
     assert b.extra["makespan"] == pytest.approx(a.extra["makespan"], abs=1e-6)
     assert_contract(inst, b)
@@ -231,7 +231,7 @@ def test_registered_method_goes_through_methods_solve(monkeypatch):
         spec = MethodSpec("milp", "bilevel_kit.models.milp:solve", "MILP")
         monkeypatch.setitem(REGISTRY, "milp", spec)
     inst = from_dict(geometry_doc())
-    res = solve(inst, "milp", time_limit=20.0, check=True)
+    res = solve(inst, "milp", time_limit=PROOF_LIMIT, check=True)
     assert res.status == "optimal"
     assert res.extra["violations"] == []
     assert res.objective == pytest.approx(brute_force(inst), abs=1e-6)
@@ -243,7 +243,7 @@ def test_options_and_python_entry_share_the_validation():
     assert get_method("milp").options_class() is ms.MilpOptions
     with pytest.raises(UsageError, match="objective"):
         ms.solve(from_dict(geometry_doc()), objective="idle", time_limit=5.0)
-    out = ms.milp(from_dict(geometry_doc()), ms.MilpOptions(), seed=0, time_limit=20.0)
+    out = ms.milp(from_dict(geometry_doc()), ms.MilpOptions(), seed=0, time_limit=PROOF_LIMIT)
     assert out.status is Status.OPTIMAL
 
 
