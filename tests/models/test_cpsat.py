@@ -366,3 +366,21 @@ def test_options_dataclass_and_hint_validation(stool):
     out = cs.cpsat(stool, cs.CpsatOptions(hint="single-task"), seed=0, time_limit=10.0)
     assert out.status is Status.OPTIMAL
     assert out.extra["hint_method"] == "single-task"
+
+
+def test_a_time_limited_warm_start_skips_greedy_ce_while_its_kernels_would_compile(
+    table, monkeypatch
+):
+    """The first call after an install compiles the CE kernels (15-60 s): under a time limit
+    the warm start keeps a baseline's plan instead of overrunning; once cached it runs."""
+    from bilevel_kit.heuristics import _kernels
+    from bilevel_kit.models.cpsat.warm import best_heuristic_plan
+
+    monkeypatch.setattr(_kernels, "cache_missing", lambda: True)
+    _, source = best_heuristic_plan(table, seed=0, time_limit=20.0)
+    assert source == "single-task"  # 466.69 s; greedy-ce's 463.78 s would win
+    _, source = best_heuristic_plan(table, seed=0, time_limit=None)
+    assert source == "greedy-ce"  # without a limit nothing is skipped
+    monkeypatch.setattr(_kernels, "cache_missing", lambda: False)
+    _, source = best_heuristic_plan(table, seed=0, time_limit=20.0)
+    assert source == "greedy-ce"

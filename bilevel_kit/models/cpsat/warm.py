@@ -46,6 +46,8 @@ def best_heuristic_plan(
             left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
             if left <= MIN_HINT and best is not None:
                 continue
+            if name == "greedy-ce" and best is not None and _kernels_would_compile():
+                continue  # the first call after an install compiles for ~15-60 s: not in budget
         try:
             spec = get_method(name)
             fn = spec.load()
@@ -62,3 +64,11 @@ def best_heuristic_plan(
         if best is None or ms < best[0]:
             best = (ms, out.plan, name)
     return (best[1], best[2]) if best else (None, None)
+
+
+def _kernels_would_compile() -> bool:
+    """Would greedy-ce compile its CE kernels on this call (no numba cache yet)? A time-limited
+    warm start then skips it rather than overrun (docs/scaling.md#the-contract)."""
+    from ...heuristics._kernels import cache_missing
+
+    return cache_missing()
