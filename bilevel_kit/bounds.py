@@ -112,7 +112,15 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
 
 
 def best_bound(instance: Instance) -> float:
-    """The largest of the closed-form makespan bounds (seconds)."""
+    """The largest of the closed-form makespan bounds (seconds); with several stations, the
+    largest over the stations of their own (:func:`bilevel_kit.stations.station_instance`)."""
+    if instance.stations:
+        from .stations import station_instance
+
+        used = {t.station for t in instance.tasks}
+        return max(
+            best_bound(station_instance(instance, s)) for s in instance.station_ids if s in used
+        )
     lb = lower_bounds(instance)
     return max(lb["human"], lb["robot"], lb["flow"])
 
