@@ -21,8 +21,9 @@ area relaxation (``sum_i a_i x[i,k] <= W H``, true areas) is in the model from t
 
 "optimal" is claimed only with an optimal model, exact times on the integer grid and every cut
 proven for parts at any angle (else the verdict is ``optimal_axis_aligned``, as for one
-station). The warm start and the upper bound ``C <= U`` come from the Single Task baseline,
-which interleaves stations by earliest need; its plan is returned when no better one is found.
+station). The hint and the upper bound ``C <= U`` come from the better of the baselines
+(which interleave stations by earliest need); that plan is returned when no better one is
+found.
 Only the makespan is modelled (``objective=makespan``); ``tray`` mode is always the Benders
 loop here.
 """
@@ -61,7 +62,7 @@ def solve_stations(
     instance: Instance, options: Any, *, seed: int = 0, time_limit: float | None = None
 ) -> MethodOutput:
     """The stations model of the module docstring, solved within ``time_limit``."""
-    from ...heuristics.baselines import single_task
+    from ...heuristics.baselines import single_task, whole_assembly
 
     if options.objective != "makespan":
         raise UsageError(
@@ -71,8 +72,7 @@ def solve_stations(
     n, S = instance.n_tasks, len(instance.station_ids)
     check_model_memory("cpsat", n * n * (S + 1), BYTES_PER_CELL, "task x kit x station cells")
     packer = Packer(instance, max(0.2, 0.05 * budget.time_limit), budget)
-    hint = single_task(instance).plan
-    assert hint is not None
+    hint = _warm_start(instance, single_task(instance).plan, whole_assembly)
     upper = evaluate(instance, hint).makespan
     closed = best_bound(instance)
     extra: dict[str, Any] = {"tray_mode": "benders", "objective": "makespan", "max_kits": n}
@@ -80,7 +80,7 @@ def solve_stations(
     best: Plan = hint
     proven, bound_model = False, None
     while not budget.expired():
-        model, scale, exact = _build(instance, upper, closed, cuts)
+        model, scale, exact = _build(instance, upper, closed, cuts, best)
         extra.update(time_scale=scale, times_exact=exact)
         status, kits, lower = _run(model, options, seed, budget)
         extra["cpsat_status"] = status
@@ -101,10 +101,28 @@ def solve_stations(
     return _conclude(instance, best, proven, bound_model, closed, cuts, extra)
 
 
+def _warm_start(instance: Instance, single: Plan | None, whole: Any) -> Plan:
+    """The better of the baselines' plans (Whole Assembly only when its kits fit)."""
+    from ...errors import KitDoesNotFit
+
+    assert single is not None
+    try:
+        other = whole(instance).plan
+    except KitDoesNotFit:
+        return single
+    better = evaluate(instance, other).makespan < evaluate(instance, single).makespan
+    return other if better else single
+
+
 def _build(
-    instance: Instance, upper: float, closed: float, cuts: list[tuple[frozenset[int], str | None]]
+    instance: Instance,
+    upper: float,
+    closed: float,
+    cuts: list[tuple[frozenset[int], str | None]],
+    hint: Plan,
 ) -> tuple[Any, int, bool]:
-    """The CP-SAT model (module docstring) with ``C <= upper`` and ``C >= closed``."""
+    """The CP-SAT model (module docstring) with ``C <= upper`` and ``C >= closed``, hinted
+    with the kits of ``hint``."""
     from ortools.sat.python import cp_model
 
     tasks = instance.tasks
@@ -126,6 +144,7 @@ def _build(
     u = [m.new_bool_var(f"u{k}") for k in range(K)]
     z = {s: [m.new_bool_var(f"z{s}_{k}") for k in range(K)] for s in ids}
     where = [ids.index(t.station) for t in tasks]
+    _hint(m, instance, hint, x, u, z)
     for i in range(n):
         m.add_exactly_one(x[i])
     for k in range(K):
@@ -166,6 +185,19 @@ def _build(
     _station_rules(m, instance, z, S, E, H, q)
     m.minimize(C)
     return (m, x, C), scale, exact
+
+
+def _hint(m: Any, instance: Instance, plan: Plan, x: Any, u: Any, z: Any) -> None:
+    """Hint the kits of ``plan`` (a valid plan: a complete first solution)."""
+    at = {t: k for k, kit in enumerate(plan.kits) for t in kit.tasks}
+    for i, t in enumerate(instance.tasks):
+        for k, v in enumerate(x[i]):
+            m.add_hint(v, at[t.id] == k)
+    for k in range(len(u)):
+        station = instance.station_of(plan.kits[k].tasks[0]) if k < len(plan.kits) else None
+        m.add_hint(u[k], station is not None)
+        for s, zs in z.items():
+            m.add_hint(zs[k], s == station)
 
 
 def _station_rules(m: Any, instance: Instance, z: Any, S: Any, E: Any, H: Any, q: Any) -> None:
