@@ -381,7 +381,13 @@ class Instance:
             if units < 1:
                 raise InstanceError(self.source, "$.units", "must be >= 1")
             changes["units"] = int(units)
-        return replace(self, **changes) if changes else self
+        out = replace(self, **changes) if changes else self
+        lost = [t.id for t in out.tasks if not t.station] if out.stations else []
+        if lost:  # docs/timeline.md#several-stations: every task on a station
+            raise InstanceError(
+                self.source, "$.units", f"task {lost[0]!r} is on no station with these units"
+            )
+        return out
 
     @property
     def tray_limit(self) -> int | None:

@@ -233,3 +233,15 @@ def test_committed_station_instances(root, name):
         res = solve(inst, method, check=True)
         assert res.extra["violations"] == []
         assert res.bound <= res.objective
+
+
+def test_overrides_with_stations():
+    inst = from_dict(_doc())
+    assert inst.with_overrides(delivery_time=3).station_params["A"].delivery_time == 3
+    assert inst.with_overrides(delivery_time=3).station_params["B"].delivery_time == 2
+    doc = _doc()
+    for t in doc["tasks"]:
+        del t["station"]
+    doc["stations"] = [{"id": "A", "serves": ["two@1"]}]
+    with pytest.raises(InstanceError, match="on no station"):
+        from_dict(doc, "s.json").with_overrides(units=2)
