@@ -211,7 +211,8 @@ def solve(
         bound = objective  # a proof of optimality is a bound equal to the objective
     extra = dict(out.extra)
     if instance.stations and timeline is not None:
-        extra["station_metrics"] = timeline.station_metrics()  # docs/timeline.md
+        per = timeline.station_metrics()  # docs/timeline.md, in the file's station order
+        extra["station_metrics"] = {s: per[s] for s in instance.station_ids if s in per}
     result_gap = gap(objective, bound)
     if check and out.plan is not None:
         from .validate import Claims
