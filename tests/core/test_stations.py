@@ -245,3 +245,82 @@ def test_overrides_with_stations():
     doc["stations"] = [{"id": "A", "serves": ["two@1"]}]
     with pytest.raises(InstanceError, match="on no station"):
         from_dict(doc, "s.json").with_overrides(units=2)
+
+
+def _reference(inst, plan):
+    """The rule of docs/timeline.md#several-stations, written out again: (robot_start,
+    arrive, human_start, human_end) per kit, and the makespan."""
+    prm = inst.station_params
+    free, out, past = 0.0, [], {}
+    for kit in plan.kits:
+        s = inst.station_of(kit.tasks[0])
+        p = prm[s]
+        mine = past.setdefault(s, [])
+        start = free
+        if p.tray_limit is not None and len(mine) >= p.tray_limit:
+            start = max(start, mine[-p.tray_limit][0] + p.kit_overhead_human)
+        r = inst.kit_overhead_robot + sum(inst.robot_time(t) for t in kit.tasks)
+        h = p.kit_overhead_human + sum(inst.human_time(t) for t in kit.tasks)
+        arrive = start + r + p.delivery_time
+        hs = max(arrive, mine[-1][1] if mine else 0.0)
+        mine.append((hs, hs + h))
+        out.append((start, arrive, hs, hs + h))
+        free = arrive
+    return out, max(e for _, _, _, e in out)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_evaluator_matches_the_rule_written_out(seed):
+    import random
+
+    import strategies
+
+    inst = from_dict(strategies.stations_doc(seed, 2 + seed % 2, n=6))
+    rng = random.Random(seed)
+    order = _topological(inst)
+    kits, cur = [], [order[0]]
+    for t in order[1:]:
+        if inst.station_of(t) == inst.station_of(cur[0]) and rng.random() < 0.5:
+            cur.append(t)
+        else:
+            kits.append(cur)
+            cur = [t]
+    kits.append(cur)
+    plan = _plan(*kits)
+    tl = evaluate(inst, plan)
+    want, makespan = _reference(inst, plan)
+    got = [(k.robot_start, k.arrive, k.human_start, k.human_end) for k in tl.kits]
+    flat = [v for row in got for v in row]
+    assert flat == pytest.approx([v for row in want for v in row])
+    assert tl.makespan == pytest.approx(makespan)
+    per = tl.station_metrics()
+    assert sum(m["human_idle"] for m in per.values()) == pytest.approx(tl.human_idle)
+
+
+def _topological(inst):
+    from bilevel_kit.instance import topological_order
+
+    return topological_order(inst)
+
+
+def test_one_declared_station_changes_no_committed_number(root):
+    """Every committed instance, declared as one station serving all its products: the same
+    times, bit for bit, for the baselines' plans."""
+    from bilevel_kit.errors import KitDoesNotFit
+    from bilevel_kit.methods import solve
+
+    paths = sorted((root / "instances").glob("*.json"))
+    paths += sorted((root / "instances" / "generated").glob("*.json"))
+    assert len(paths) >= 8
+    for path in paths:
+        plain = load(path)
+        doc = plain.to_dict()
+        doc["stations"] = [{"id": "S", "serves": sorted({t.product for t in plain.base_tasks})}]
+        one = from_dict(doc)
+        for method in ("single-task", "whole-assembly"):
+            try:
+                plan = solve(plain, method).plan
+            except KitDoesNotFit:  # a whole-assembly kit larger than the tray
+                continue
+            a, b = evaluate(plain, plan), evaluate(one, plan)
+            assert a.kits == b.kits and a.metrics() == b.metrics(), (path.name, method)
