@@ -14,6 +14,9 @@ The robot pushes the tray, so it is busy while it delivers. With ``T`` trays in 
 (the paper's study: one) the tray of kit k - T comes back once the human has retrieved its
 parts, ``o_H`` after starting it; the robot cannot start kit k before. Robot idle counts
 delivery as robot work.
+With several assembly stations (docs/timeline.md#several-stations) ``d``, ``o_H``, ``T`` and
+"the previous kit" of the human and of the tray rule are those of the kit's station; the
+robot is shared, so ``arrive_{k-1}`` is the previous kit of any station.
 Every solver, the checker, the simulator and the plots go through :func:`evaluate`.
 """
 
@@ -171,8 +174,11 @@ def kit_durations(
 
 def kit_station(instance: Instance, tasks: Sequence[str]) -> str:
     """The station of a kit: its first task's ("" without stations; the checker refuses a
-    kit that mixes stations, ``wrong_station``)."""
-    return instance.station_of(tasks[0]) if instance.stations and tasks else ""
+    kit that mixes stations, ``wrong_station``, and an empty kit, timed at the first
+    station)."""
+    if not instance.stations:
+        return ""
+    return instance.station_of(tasks[0]) if tasks else instance.station_ids[0]
 
 
 class TimelineBuilder:

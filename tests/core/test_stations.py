@@ -144,6 +144,11 @@ def test_checker_wrong_station_and_station_trays():
     inst = from_dict(_doc())
     kinds = {v.kind for v in check(inst, _plan(["a1", "b1"], ["a2"]))}
     assert kinds == {"wrong_station"}
+    from bilevel_kit.validate import Claims
+
+    empty = Plan((Kit(()), *_plan(["a1"], ["a2"], ["b1"]).kits))
+    kinds = {v.kind for v in check(inst, empty, claims=Claims(objective=1.0))}
+    assert "empty_kit" in kinds
     plan = _plan(["a1"], ["a2"], ["b1"])
     tl = evaluate(inst, plan)
     early = list(tl.kits)
