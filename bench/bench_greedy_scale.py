@@ -30,6 +30,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from bench_scale import slope as scale_slope
 from bench_scale import write_instance  # the scale benchmark's families
 from benchio import write_rows
 
@@ -88,17 +89,14 @@ def run_case(family: str, size: int, timeout: float, code: Path = ROOT) -> dict[
 
 
 def slope(rows: list[dict[str, object]]) -> float:
-    pts = [
-        (math.log(float(r["tasks"])), math.log(float(r["wall_s"])))
-        for r in rows
-        if "tasks" in r and math.isfinite(float(r["wall_s"])) and float(r["wall_s"]) > 0
-    ]
-    if len(pts) < 2:
-        return math.nan
-    mx = sum(p[0] for p in pts) / len(pts)
-    my = sum(p[1] for p in pts) / len(pts)
-    den = sum((p[0] - mx) ** 2 for p in pts)
-    return sum((p[0] - mx) * (p[1] - my) for p in pts) / den if den else math.nan
+    """The log-log slope of wall time against task count over the rows with a finite time."""
+    return scale_slope(
+        [
+            (float(r["tasks"]), float(r["wall_s"]))
+            for r in rows
+            if "tasks" in r and math.isfinite(float(r["wall_s"]))
+        ]
+    )
 
 
 def side_by_side(args: argparse.Namespace) -> None:

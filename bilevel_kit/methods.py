@@ -283,3 +283,9 @@ register(
     "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
     "bilevel_kit.models.bilevel_milp:BilevelMilpOptions",
 )
+register(
+    "lns",
+    "bilevel_kit.models.lns.method:lns",
+    "matheuristic: large-neighbourhood search, windows of kits re-optimised exactly by CP-SAT",
+    "bilevel_kit.models.lns.method:LnsOptions",
+)

@@ -16,6 +16,8 @@ from __future__ import annotations
 import itertools
 from collections.abc import Iterator
 
+import numpy as np
+
 from bilevel_kit.models import packing as pk
 from bilevel_kit.plan import Kit, Plan, evaluate
 
@@ -102,3 +104,25 @@ def assert_model_optimal(out, opt: float, tol: float = 1e-9) -> None:
     assert out.extra["makespan"] == pytest.approx(opt, abs=tol)
     assert bound == pytest.approx(opt, abs=tol)
     assert out.bound <= opt + tol
+
+
+def fits_on_grid(sizes: list[tuple[int, int, bool]], W: int, H: int) -> bool:
+    """Whether the ``(w, h, rotatable)`` rectangles fit a ``W`` x ``H`` tray: exhaustive search
+    over integer corners, independent of every packer (tiny trays only)."""
+    occ = np.zeros((H, W), dtype=bool)
+
+    def rec(k: int) -> bool:
+        if k == len(sizes):
+            return True
+        w, h, r = sizes[k]
+        for ww, hh in {(w, h), (h, w)} if r else {(w, h)}:
+            for x in range(W - ww + 1):
+                for y in range(H - hh + 1):
+                    if not occ[y : y + hh, x : x + ww].any():
+                        occ[y : y + hh, x : x + ww] = True
+                        if rec(k + 1):
+                            return True
+                        occ[y : y + hh, x : x + ww] = False
+        return False
+
+    return rec(0)

@@ -31,6 +31,42 @@ import itertools
 from collections.abc import Sequence
 
 
+def jobs_doc(
+    name: str,
+    a: Sequence[float],
+    b: Sequence[float],
+    *,
+    part: tuple[str, float] = ("p", 10.0),
+    tray: float = 100.0,
+    prefix: str = "j",
+    trays: int | None = None,
+) -> dict:
+    """An instance of these jobs: task ``prefix + i`` has robot time ``a_i``, human time
+    ``b_i`` and one square part ``part`` (id, side) on a square tray of side ``tray``; d = 0,
+    no overheads, no precedence, ``trays`` kit trays (unlimited when None)."""
+    pid, side = part
+    doc: dict = {
+        "format": "bilevel-kit/1",
+        "name": name,
+        "tray": {"width": tray, "height": tray},
+        "delivery_time": 0.0,
+        "kit_overhead": {"robot": 0.0, "human": 0.0},
+        "part_types": [{"id": pid, "width": side, "height": side, "pick_time": 1.0}],
+        "tasks": [
+            {
+                "id": f"{prefix}{i}",
+                "parts": [{"type": pid, "count": 1}],
+                "robot_time": a[i],
+                "human_time": {"mean": b[i]},
+            }
+            for i in range(len(a))
+        ],
+    }
+    if trays is not None:
+        doc["trays"] = trays
+    return doc
+
+
 def johnson_order(a: Sequence[float], b: Sequence[float]) -> list[int]:
     """Johnson's rule: an optimal F2||Cmax sequence (indices)."""
     first = sorted((i for i in range(len(a)) if a[i] <= b[i]), key=lambda i: (a[i], i))

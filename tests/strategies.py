@@ -39,6 +39,25 @@ def part_types_and_tasks(
     return types, tasks
 
 
+def binding_types() -> list[dict[str, Any]]:
+    """A fresh list of the three part types whose 50 x 40 part and 70 x 15 bar share a
+    100 x 60 tray only one way (fresh, so a test may edit its copy)."""
+    return [
+        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
+        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
+        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
+    ]
+
+
+def binding_parts(draw: st.DrawFn) -> list[tuple[str, int]]:
+    """One task's parts among :func:`binding_types`: 1-2 distinct types, 1-2 squares, one of
+    any other type, as (type, count)."""
+    kinds = draw(
+        st.lists(st.sampled_from(["big", "bar", "sq"]), min_size=1, max_size=2, unique=True)
+    )
+    return [(k, draw(st.integers(1, 2)) if k == "sq" else 1) for k in kinds]
+
+
 def random_doc(
     seed: int,
     n: int | None = None,
@@ -51,11 +70,7 @@ def random_doc(
     A share ``robot_share`` of the tasks get a robot time of ``robot_halves`` half-seconds."""
     rng = random.Random(seed)
     n = n or rng.randint(4, 6)
-    types = [
-        {"id": "big", "width": 50.0, "height": 40.0, "pick_time": 3.0, "rotatable": True},
-        {"id": "bar", "width": 70.0, "height": 15.0, "pick_time": 2.0, "rotatable": False},
-        {"id": "sq", "width": 30.0, "height": 30.0, "pick_time": 1.5, "rotatable": True},
-    ]
+    types = binding_types()
     tasks = []
     for i in range(n):
         kinds = rng.sample(["big", "bar", "sq"], rng.randint(1, 2))
@@ -105,3 +120,31 @@ def stations_doc(seed: int, n_stations: int, n: int | None = None) -> dict[str, 
         stations.append(st)
     doc["stations"] = stations
     return doc
+
+
+def one_task_doc(
+    name: str,
+    width: float,
+    height: float,
+    types: list[tuple[str, float, float, bool]],
+    parts: dict[str, int],
+    task: str = "t",
+) -> dict[str, Any]:
+    """One task ``task`` needing ``parts`` of the ``(id, width, height, rotatable)`` types
+    (pick time 1 s each) on a ``width`` x ``height`` tray: the kit-level tests' instance."""
+    return {
+        "format": "bilevel-kit/1",
+        "name": name,
+        "tray": {"width": width, "height": height},
+        "part_types": [
+            {"id": t, "width": w, "height": h, "pick_time": 1.0, "rotatable": r}
+            for t, w, h, r in types
+        ],
+        "tasks": [
+            {
+                "id": task,
+                "parts": [{"type": t, "count": n} for t, n in parts.items()],
+                "human_time": {"mean": 1.0},
+            }
+        ],
+    }

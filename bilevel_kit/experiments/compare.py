@@ -8,11 +8,67 @@ import json
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
+
+if TYPE_CHECKING:
+    from ..instance import Instance
+    from ..methods import Result
+
+
+class SolveCell:
+    """The base of the comparison and benchmark cells (frozen dataclasses, one solve of one
+    instance file each): the instance's digest, the key, the record's first fields, the solve."""
+
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+    #: Fields left out of :meth:`key`.
+    unkeyed: ClassVar[tuple[str, ...]] = ("instance",)
+    instance: str  # path of the instance file
+    instance_sha256: str  # the file's content digest, filled in when the cell is made
+    method: str
+    seed: int
+    time_limit: float | None
+    params: dict[str, Any]
+
+    def __post_init__(self) -> None:
+        if not self.instance_sha256:
+            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
+
+    def key(self) -> str:
+        """A stable file-name key for this cell's saved result: the instance's stem, method
+        and seed, and a digest of every field but :attr:`unkeyed`.
+
+        The digest covers the instance file's bytes, not its path, so an edited file never
+        reuses a saved result; the file's stem only makes the name readable.
+        """
+        config = {k: v for k, v in asdict(self).items() if k not in self.unkeyed}
+        blob = json.dumps(config, sort_keys=True, default=str)
+        digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
+        return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
+
+    def head(self, name: str) -> dict[str, Any]:
+        """A record's first fields: the instance (``name``, file, digest) and the solve's
+        configuration."""
+        return {
+            "instance": name,
+            "instance_file": self.instance,
+            "instance_sha256": self.instance_sha256,
+            "method": self.method,
+            "seed": self.seed,
+            "time_limit": self.time_limit,
+            "params": dict(self.params),
+        }
+
+    def solve(self, inst: Instance) -> Result:
+        """The cell's solve, with the checker's verdict."""
+        from ..methods import solve
+
+        return solve(
+            inst, self.method, seed=self.seed, time_limit=self.time_limit, check=True, **self.params
+        )
 
 
 @dataclass(frozen=True)
-class CompareCell:
+class CompareCell(SolveCell):
     """One solve of one instance with one method."""
 
     instance: str  # path of the instance file
@@ -22,21 +78,6 @@ class CompareCell:
     params: dict[str, Any] = field(default_factory=dict)
     overrides: dict[str, Any] = field(default_factory=dict)  # delivery_time, weights, ...
     instance_sha256: str = ""  # the file's content digest, filled in when the cell is made
-
-    def __post_init__(self) -> None:
-        if not self.instance_sha256:
-            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
-
-    def key(self) -> str:
-        """A stable file-name key for this cell's saved result.
-
-        The digest covers the instance file's bytes, not its path, so an edited file never
-        reuses a saved result; the file's stem only makes the name readable.
-        """
-        config = {k: v for k, v in asdict(self).items() if k != "instance"}
-        blob = json.dumps(config, sort_keys=True, default=str)
-        digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
-        return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
 
 
 def file_digest(path: str | Path) -> str:
@@ -52,23 +93,11 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
     """Solve one cell and return its record (metrics, status, bound, checker verdict)."""
     from ..errors import BilevelKitError
     from ..instance import load
-    from ..methods import solve
 
     inst = load(cell.instance).with_overrides(**cell.overrides)
-    record: dict[str, Any] = {
-        "instance": inst.name,
-        "instance_file": cell.instance,
-        "instance_sha256": cell.instance_sha256,
-        "method": cell.method,
-        "seed": cell.seed,
-        "time_limit": cell.time_limit,
-        "params": dict(cell.params),
-        "n_tasks": inst.n_tasks,
-    }
+    record: dict[str, Any] = {**cell.head(inst.name), "n_tasks": inst.n_tasks}
     try:
-        res = solve(
-            inst, cell.method, seed=cell.seed, time_limit=cell.time_limit, check=True, **cell.params
-        )
+        res = cell.solve(inst)
     except BilevelKitError as exc:  # a failed cell: its error and its configuration
         return {**record, "status": "error", "error": str(exc), "cell": asdict(cell)}
     from ..solution import result_to_dict

@@ -250,8 +250,10 @@ class PrefixSearch:
         )
         ep.levels, ep.beam = levels, beam
         ep.unique = [unique_rows(lv.counts) for lv in levels]
+        # the queue's bounds may be tighter than the beam's: the beam's choice of prefix sets
+        # is part of the decision, the queue's order is not (the tie rule decides)
         ep.parts = [
-            self._optimistic.parts(li + 1, length, lv.tasks, lv.counts, ctx)
+            self._optimistic.parts(li + 1, length, lv.tasks, lv.counts, ctx, tight=True)
             for li, lv in enumerate(levels)
         ]
         if self._rests.sums is not None and length > 1:

@@ -88,14 +88,22 @@ def check_model_memory(owner: str, cells: int, bytes_per_cell: float, what: str)
     in bytes. ``bytes_per_cell`` is measured per solver (bench/results/scale.md)."""
     from ..errors import UsageError
 
+    refusal = memory_refusal(owner, cells, bytes_per_cell, what)
+    if refusal is not None:
+        raise UsageError(f"{refusal}; use greedy-ce, or fewer tasks (--units, --horizon)")
+    return BASE_MEMORY + cells * bytes_per_cell
+
+
+def memory_refusal(owner: str, cells: int, bytes_per_cell: float, what: str) -> str | None:
+    """Why a model of ``cells`` task x kit variables is too large for :data:`MEMORY_LIMIT`
+    (None: it is not). An exact method holding a plan returns that plan instead of failing."""
     need = BASE_MEMORY + cells * bytes_per_cell
-    if need > MEMORY_LIMIT:
-        raise UsageError(
-            f"{owner}: the model would have {cells:,} {what}, about {need / 2**30:.1f} GB, above "
-            f"the {MEMORY_LIMIT / 2**30:g} GB memory limit; use greedy-ce, or fewer tasks "
-            "(--units, --horizon)"
-        )
-    return need
+    if need <= MEMORY_LIMIT:
+        return None
+    return (
+        f"{owner}: the model would have {cells:,} {what}, about {need / 2**30:.1f} GB, above "
+        f"the {MEMORY_LIMIT / 2**30:g} GB memory limit"
+    )
 
 
 def too_slow_to_build(budget: Budget, estimate_s: float, margin: float = 0.0) -> bool:

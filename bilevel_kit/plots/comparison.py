@@ -95,36 +95,32 @@ def _makespan_panel(
     color = style.PALETTE[0]
     for x, (r, v) in enumerate(zip(records, makespans, strict=True)):
         if v is None:
-            ax.annotate(
-                "no plan",
-                (x, base),
-                xytext=(0, 4),
-                textcoords="offset points",
-                ha="center",
-                va="bottom",
-                fontsize=style.SMALL_SIZE,
-                color="0.35",
-                gid=f"noplan:{r['method']}",
-            )
+            _note_above(ax, "no plan", (x, base), 4, color="0.35", gid=f"noplan:{r['method']}")
             continue
         ax.plot([x, x], [base, v], color=color, linewidth=2.5, solid_capstyle="butt")
         ax.plot([x], [v], marker="o", color=color, markersize=7, gid=f"makespan:{r['method']}")
         gap = record_gap(r)
         text = f"{v:.1f} s" + (f"\ngap {100 * gap:.1f} %" if gap is not None else "")
-        ax.annotate(
-            text,
-            (x, v),
-            xytext=(0, 6),
-            textcoords="offset points",
-            ha="center",
-            va="bottom",
-            fontsize=style.SMALL_SIZE,
-        )
+        _note_above(ax, text, (x, v), 6)
     ax.set_xlim(-0.6, len(records) - 0.4)
     ax.set_ylabel("makespan (s)")
     ax.grid(axis="y", alpha=0.3)
     ax.set_axisbelow(True)
     _makespan_legend(ax, records, makespans, bound)
+
+
+def _note_above(ax: Axes, text: str, xy: tuple[float, float], dy: float, **extra: Any) -> None:
+    """Small centred text ``dy`` points above the point ``xy``."""
+    ax.annotate(
+        text,
+        xy,
+        xytext=(0, dy),
+        textcoords="offset points",
+        ha="center",
+        va="bottom",
+        fontsize=style.SMALL_SIZE,
+        **extra,
+    )
 
 
 def _makespan_legend(

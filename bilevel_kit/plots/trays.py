@@ -73,6 +73,13 @@ def _type_patch(swatch: style.Swatch | None, label: str) -> Any:
     )
 
 
+def _type_legend(instance: Instance, used: list[str]) -> dict[str, Any]:
+    """The legend's handles (one swatch per part type in ``used``) and title."""
+    swatches, keys = type_swatches(instance), type_keys(instance)
+    handles = [_type_patch(swatches.get(t), type_label(t, keys[t])) for t in used]
+    return {"handles": handles, "title": "part type"}
+
+
 def _label_angle(theta: float, w: float, h: float) -> float:
     """Text rotation along the placement's long side, kept upright (-90, 90]."""
     a = theta if w >= h else theta + 90.0
@@ -158,10 +165,8 @@ def plot_tray(
     if legend:
         used = sorted({p.type for p in kit.layout})
         if used:
-            keys = type_keys(instance)
             ax.legend(
-                handles=[_type_patch(swatches.get(t), type_label(t, keys[t])) for t in used],
-                title="part type",
+                **_type_legend(instance, used),
                 loc="upper left",
                 bbox_to_anchor=(1.02, 1.0),
                 borderaxespad=0.0,
@@ -386,10 +391,8 @@ def plot_trays(
         flat[0].set_axis_off()
         flat[0].text(0.5, 0.5, "no kits", ha="center", va="center")
     if used:
-        swatches = type_swatches(instance)
         fig.legend(
-            handles=[_type_patch(swatches.get(t), type_label(t, keys[t])) for t in used],
-            title="part type",
+            **_type_legend(instance, used),
             loc="upper right",
             bbox_to_anchor=(1.0, 1 - (grid.top + grid.hgap) / grid.height),
             frameon=False,

@@ -78,24 +78,16 @@ def _user_study_pair(
         label=f"{label} (ours)" if first else None,
         gid=f"bar:{m}:{cond}",
     )
-    ax.errorbar(
-        xo,
-        med,
-        yerr=[[max(med - clo, 0.0)], [max(chi - med, 0.0)]],
-        fmt="none",
-        ecolor="black",
-        elinewidth=0.9,
-        capsize=3,
-    )
-    ax.errorbar(
-        xo,
-        med,
-        yerr=[[max(med - lo, 0.0)], [max(hi - med, 0.0)]],
-        fmt="none",
-        ecolor="black",
-        elinewidth=3.0,
-        capsize=0,
-    )
+    for low, high, line, cap in ((clo, chi, 0.9, 3), (lo, hi, 3.0, 0)):
+        ax.errorbar(
+            xo,
+            med,
+            yerr=[[max(med - low, 0.0)], [max(high - med, 0.0)]],
+            fmt="none",
+            ecolor="black",
+            elinewidth=line,
+            capsize=cap,
+        )
     h = float(r.get("readoff") or 0.0)
     paper = float(r["paper"])
     ax.bar(

@@ -8,16 +8,13 @@ and the user study's tables; :mod:`.report_sim` the simulation studies'.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from ..experiments.tables import markdown_lines
 from .fmt import f, nd_of, read_rows, yes
 from .predictions import FITTED, IMPLIED, PREDICTED
-from .report_sim import SIM_TABLES
-
-Row = Mapping[str, Any]
+from .report_sim import SIM_TABLES, Row, Tables
 
 
 def _kind(r: Row) -> str:
@@ -218,8 +215,8 @@ def within_markdown(rows: Sequence[Row]) -> str:
     return "\n".join(markdown_lines(["quantity", "metric", "ours", "paper"], body))
 
 
-def _tables() -> dict[str, tuple[str, Callable[[Sequence[Row]], str]]]:
-    own: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
+def _tables() -> Tables:
+    own: Tables = {
         "calibration": ("calibration.csv", calibration_markdown),
         "calibration_targets": ("calibration_targets.csv", calibration_targets_markdown),
         "user_study_predictions": ("user_study_predictions.csv", predictions_markdown),

@@ -15,6 +15,8 @@ from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
 
 Row = Mapping[str, Any]
+#: Table name -> (its CSV file, its renderer).
+Tables = dict[str, tuple[str, Callable[[Sequence[Row]], str]]]
 #: The paired test's direction after Holm, as a mark in a heatmap cell.
 MARKS = {BETTER: "▲", WORSE: "▼"}
 
@@ -204,7 +206,7 @@ def duration(s: Any) -> str:
     return _duration(float(s))
 
 
-SIM_TABLES: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
+SIM_TABLES: Tables = {
     "fig6_improvements": ("fig6_improvements.csv", fig6_markdown),
     "fig6_verdicts": ("fig6_verdicts.csv", verdicts_markdown),
     "fig6_trends": ("fig6_trends.csv", trends_markdown),
@@ -220,4 +222,4 @@ SIM_TABLES: dict[str, tuple[str, Callable[[Sequence[Row]], str]]] = {
     "timing": ("timing.csv", timing_markdown),
 }
 
-__all__ = ["SIM_TABLES", "duration", "yes"]
+__all__ = ["SIM_TABLES", "Row", "Tables", "duration", "yes"]

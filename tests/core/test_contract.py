@@ -16,6 +16,7 @@ FAST = {
     "greedy-ce": {"samples": 60, "elite": 10, "max_iter": 30},
     "cpsat": {"workers": 1},  # one worker: CP-SAT is deterministic for a given seed
     "bilevel-milp": {"lower": "ce", "pack_time_limit": 5.0},  # packing decided, not timed out
+    "lns": {"iterations": 20, "start": "quick"},  # a fixed number of windows: deterministic
 }
 SLOW = {("bilevel-milp", "hrc_table.json")}  # its column MILP needs minutes on the table
 

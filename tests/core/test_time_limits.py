@@ -9,9 +9,9 @@ import random
 import time
 
 import pytest
+from timing import allowed
 
 from bilevel_kit import check, solve
-from bilevel_kit.errors import UsageError
 from bilevel_kit.generate import generate
 from bilevel_kit.instance import from_dict
 from bilevel_kit.methods import REGISTRY, Status
@@ -20,8 +20,12 @@ pytest.importorskip("ortools")
 T = 4.0
 
 
-def allowed(t: float) -> float:
-    return t + max(2.0, 0.05 * t)
+@pytest.fixture(scope="module", autouse=True)
+def compiled_kernels(table):
+    """numba compiles the CE kernels on their first call after an install (about 15 s, which
+    the CLI announces and docs/scaling.md states); compile them once here, so that the
+    limits below measure the solves, not the compiler."""
+    solve(table, "greedy-ce")
 
 
 #: The instance per method: an in-tree of 60 tasks, except the MILP (20: it builds its model
@@ -59,22 +63,29 @@ def test_cpsat_warm_start_gets_a_share_of_the_budget():
     assert check(inst, res.plan) == []
 
 
-def test_a_model_over_the_memory_limit_is_refused_before_it_is_built(monkeypatch):
+def test_a_model_over_the_memory_limit_returns_its_incumbent_unbuilt(monkeypatch):
+    """Over the memory limit the model is not built; the incumbent (here the quick plan: no
+    warm start) is returned as feasible with the proven bound and the reason."""
     from bilevel_kit.models import budget
 
     monkeypatch.setattr(budget, "MEMORY_LIMIT", budget.BASE_MEMORY + 1000)
     inst = from_dict(generate("intree", 12, seed=1))
     for method in ("cpsat", "milp"):
-        with pytest.raises(UsageError, match=r"task x kit variables.*memory limit"):
-            solve(inst, method, time_limit=5.0, hint="none") if method == "cpsat" else solve(
-                inst, method, time_limit=5.0
-            )
+        opts = {"hint": "none"}
+        res = solve(inst, method, time_limit=5.0, **opts)
+        assert res.plan is not None and check(inst, res.plan) == []
+        assert res.bound is not None and res.bound <= res.objective + 1e-6
+        if res.status != Status.OPTIMAL:  # unless the quick plan meets the proven bound
+            assert res.status == Status.FEASIBLE
+            assert "task x kit variables" in res.extra["reason"]
+            assert "memory limit" in res.extra["reason"]
 
 
-def test_the_cli_exits_2_naming_the_size(tmp_path, monkeypatch, capsys):
+def test_the_cli_returns_the_incumbent_naming_the_size(tmp_path, monkeypatch, capsys):
     """1,000 tasks without overheads or delivery time, so no kit cap: the CP-SAT model
-    (~10^6 task x kit variables) is refused with exit 2, never built. (The closed-form
-    shortcut is switched off: on this human-bound in-tree the quick plan is already optimal.)"""
+    (~10^6 task x kit variables) is over the memory limit and never built; the quick plan is
+    returned as feasible (exit 0) with the reason. (The closed-form shortcut is switched off:
+    on this human-bound in-tree the quick plan is already optimal.)"""
     from bilevel_kit.cli import main
     from bilevel_kit.models.cpsat import method
 
@@ -83,10 +94,14 @@ def test_the_cli_exits_2_naming_the_size(tmp_path, monkeypatch, capsys):
     doc.update(delivery_time=0.0, kit_overhead={"robot": 0.0, "human": 0.0})
     path = tmp_path / "big.json"
     path.write_text(json.dumps(doc))
-    code = main(["solve", str(path), "-m", "cpsat", "--time-limit", "20", "-p", "hint=none"])
+    out_path = tmp_path / "res.json"
+    args = ["solve", str(path), "-m", "cpsat", "--time-limit", "20", "-p", "hint=none"]
+    code = main([*args, "--out", str(out_path)])
     err = capsys.readouterr().err
-    assert code == 2, err
-    assert "memory limit" in err and "task x kit variables" in err
+    assert code == 0, err
+    res = json.loads(out_path.read_text())
+    text = json.dumps(res)
+    assert "memory limit" in text and "task x kit variables" in text
 
 
 def perfect_packing(seed: int, n: int = 25) -> dict:

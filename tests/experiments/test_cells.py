@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+
+from toycells import Square, square
 
 from bilevel_kit.experiments import (
     DaskExecutor,
@@ -13,18 +14,6 @@ from bilevel_kit.experiments import (
     run_cells_counted,
     write_csv,
 )
-
-
-@dataclass(frozen=True)
-class Square:
-    x: int
-
-    def key(self) -> str:
-        return f"sq{self.x}"
-
-
-def square(cell: Square) -> dict[str, int]:
-    return {"x": cell.x, "y": cell.x * cell.x}
 
 
 def test_resume_computes_only_missing_cells(tmp_path):

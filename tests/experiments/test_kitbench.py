@@ -252,18 +252,23 @@ def test_update_refuses_a_bound_above_a_known_plan(lib_and_run, capsys):
     assert "it6: bound" in err and "above the best-known plan" in err
 
 
-def test_update_refuses_an_unknown_instance(lib_and_run, capsys):
+@pytest.mark.parametrize(
+    ("cell", "edit", "message"),
+    [
+        ("sp8", {"instance": "nowhere"}, "nowhere: unknown instance"),
+        (
+            "sp8",
+            {"instance_sha256": "0" * 64},
+            "sp8: the run solved another version of the instance file",
+        ),
+        ("it6", {"method": "my-own-method"}, "it6: a bound from 'my-own-method'"),
+    ],
+)
+def test_update_refuses_a_foreign_cell(lib_and_run, capsys, cell, edit, message):
+    """An unknown instance, another version of it, a bound from an unregistered method."""
     lib, run = lib_and_run
-    _edit(_cell(run, "sp8"), instance="nowhere")
-    err = _refused(lib, run, capsys)
-    assert "nowhere: unknown instance" in err
-
-
-def test_update_refuses_another_version_of_the_instance(lib_and_run, capsys):
-    lib, run = lib_and_run
-    _edit(_cell(run, "sp8"), instance_sha256="0" * 64)
-    err = _refused(lib, run, capsys)
-    assert "sp8: the run solved another version of the instance file" in err
+    _edit(_cell(run, cell), **edit)
+    assert message in _refused(lib, run, capsys)
 
 
 def test_update_refuses_a_misstated_makespan_and_foreign_files(lib_and_run, capsys):
@@ -274,13 +279,6 @@ def test_update_refuses_a_misstated_makespan_and_foreign_files(lib_and_run, caps
     err = _refused(lib, run, capsys)
     assert "it6: single-task's record says makespan" in err
     assert "not a bench run cell" in err
-
-
-def test_update_refuses_a_bound_from_an_unregistered_method(lib_and_run, capsys):
-    lib, run = lib_and_run
-    _edit(_cell(run, "it6"), method="my-own-method")
-    err = _refused(lib, run, capsys)
-    assert "it6: a bound from 'my-own-method'" in err
 
 
 def test_an_interrupted_update_leaves_the_library_as_it_was(lib_and_run, monkeypatch):

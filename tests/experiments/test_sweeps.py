@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from toycells import Div, invert
 
 from bilevel_kit.experiments import (
     DaskExecutor,
@@ -19,18 +19,6 @@ from bilevel_kit.experiments import (
 )
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-@dataclass(frozen=True)
-class Div:
-    x: int
-
-    def key(self) -> str:
-        return f"div{self.x}"
-
-
-def invert(cell: Div) -> dict[str, float]:
-    return {"x": cell.x, "y": 1 / cell.x}
 
 
 def test_a_raising_cell_is_recorded_with_its_config_and_retried_on_rerun(tmp_path, capsys):

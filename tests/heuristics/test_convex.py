@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from strategies import one_task_doc
 
 from bilevel_kit import geometry
 from bilevel_kit.errors import UsageError
@@ -32,24 +33,9 @@ def one_kit_instance(
 ) -> Instance:
     """An instance with one task ``all`` needing ``counts`` parts, so that a one-kit plan
     holding a layout of exactly those parts can go through the checker."""
-    return from_dict(
-        {
-            "format": "bilevel-kit/1",
-            "name": "polish-test",
-            "tray": {"width": width, "height": height},
-            "part_types": [
-                {"id": t, "width": w, "height": h, "pick_time": 1.0, "rotatable": r}
-                for t, (w, h, r) in types.items()
-            ],
-            "tasks": [
-                {
-                    "id": "all",
-                    "parts": [{"type": t, "count": n} for t, n in counts.items() if n],
-                    "human_time": {"mean": 1.0},
-                }
-            ],
-        }
-    )
+    kinds = [(t, w, h, r) for t, (w, h, r) in types.items()]
+    parts = {t: n for t, n in counts.items() if n}
+    return from_dict(one_task_doc("polish-test", width, height, kinds, parts, task="all"))
 
 
 def assert_valid(inst: Instance, before: tuple[Placement, ...], after: tuple[Placement, ...]):

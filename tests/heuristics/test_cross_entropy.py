@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from strategies import one_task_doc
 
 from bilevel_kit import geometry
 from bilevel_kit.errors import UsageError
@@ -24,25 +25,8 @@ def make(
     width: float, height: float, types: list[tuple[str, float, float, bool]], **extra: Any
 ) -> Instance:
     """A one-task instance in format bilevel-kit/1 holding the given part types."""
-    return from_dict(
-        {
-            "format": "bilevel-kit/1",
-            "name": "ce-test",
-            "tray": {"width": width, "height": height},
-            "part_types": [
-                {"id": t, "width": w, "height": h, "pick_time": 1.0, "rotatable": r}
-                for t, w, h, r in types
-            ],
-            "tasks": [
-                {
-                    "id": "t",
-                    "parts": [{"type": types[0][0], "count": 1}],
-                    "human_time": {"mean": 1.0},
-                }
-            ],
-            **extra,
-        }
-    )
+    doc = one_task_doc("ce-test", width, height, types, {types[0][0]: 1})
+    return from_dict({**doc, **extra})
 
 
 TRAY = make(300, 200, [("a", 20, 20, True), ("b", 20, 20, True)])

@@ -100,27 +100,13 @@ def test_window_balance_by_hand():
     # two sequences of 3 tasks; d = 2, o_R = 1, o_H = 0.5, H_rem = 4
     robot = np.array([[3.0, 5.0, 7.0], [1.0, 1.0, 1.0]])
     human = np.array([[10.0, 20.0, 30.0], [2.0, 2.0, 2.0]])
-    d5, d6 = upper_level.window_balance(
-        robot,
-        human,
-        delivery=2.0,
-        human_remaining=4.0,
-        overhead_robot=1.0,
-        overhead_human=0.5,
-        signed=True,
-    )
+    shop = {"delivery": 2.0, "human_remaining": 4.0, "overhead_robot": 1.0, "overhead_human": 0.5}
+    d5, d6 = upper_level.window_balance(robot, human, **shop, signed=True)
     # (5): d + o_R + R(prefix) - H_rem
     assert d5.tolist() == [[2.0, 7.0, 14.0], [0.0, 1.0, 2.0]]
     # (6): d + (o_R + R(rest) if the rest is not empty) - (o_H + H(prefix))
     assert d6.tolist() == [[15.0 - 10.5, 10.0 - 30.5, 2.0 - 60.5], [5.0 - 2.5, 4.0 - 4.5, -4.5]]
-    a5, a6 = upper_level.window_balance(
-        robot,
-        human,
-        delivery=2.0,
-        human_remaining=4.0,
-        overhead_robot=1.0,
-        overhead_human=0.5,
-    )
+    a5, a6 = upper_level.window_balance(robot, human, **shop)
     assert (a5 == np.abs(d5)).all() and (a6 == np.abs(d6)).all()
 
 

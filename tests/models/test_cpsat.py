@@ -8,7 +8,9 @@ from collections import Counter
 
 import pytest
 from brute import assert_model_optimal, best_makespan, fits, model_verdict
+from flowshop import jobs_doc
 from strategies import random_doc
+from timing import allowed
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import from_dict
@@ -63,23 +65,7 @@ def test_no_delivery_no_overheads_equals_johnson(seed):
     n = 5 + seed % 3
     r = [float(rng.randint(1, 20)) for _ in range(n)]
     h = [float(rng.randint(1, 20)) for _ in range(n)]
-    doc = {
-        "format": "bilevel-kit/1",
-        "name": f"f2_{seed}",
-        "tray": {"width": 1000.0, "height": 1000.0},
-        "delivery_time": 0.0,
-        "kit_overhead": {"robot": 0.0, "human": 0.0},
-        "part_types": [{"id": "s", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-        "tasks": [
-            {
-                "id": f"j{i}",
-                "parts": [{"type": "s", "count": 1}],
-                "robot_time": r[i],
-                "human_time": {"mean": h[i]},
-            }
-            for i in range(n)
-        ],
-    }
+    doc = jobs_doc(f"f2_{seed}", r, h, part=("s", 10.0), tray=1000.0)
     inst = from_dict(doc)
     out = cs.solve(inst, **FAST)
     assert out.status == "optimal"
@@ -286,7 +272,7 @@ def test_time_limit_is_honoured(table):
     t0 = time.perf_counter()
     out = cs.solve(inst, time_limit=3.0, workers=2)
     wall = time.perf_counter() - t0
-    assert wall < 3.0 + 1.0
+    assert wall <= allowed(3.0)
     assert out.status in ("optimal", "feasible")
     assert_valid_plan(inst, out)
     assert out.extra["tray_mode"] == "benders"

@@ -15,7 +15,13 @@ import time
 import pytest
 import strategies
 from brute import assert_model_optimal, best_makespan, segmentations
-from flowshop import blocking_makespan, flow_makespan, gilmore_gomory_order, johnson_order
+from flowshop import (
+    blocking_makespan,
+    flow_makespan,
+    gilmore_gomory_order,
+    jobs_doc,
+    johnson_order,
+)
 
 from bilevel_kit import bounds
 from bilevel_kit.instance import Instance, from_dict
@@ -31,26 +37,7 @@ TRAYS = (1, 2, None)
 def flow_doc(a: list[float], b: list[float], trays: int | None) -> dict:
     """Jobs with robot time a_i and human time b_i; every task's part covers more than half
     of the tray, so no two tasks share a kit; d = 0, no overheads, no precedence."""
-    doc = {
-        "format": "bilevel-kit/1",
-        "name": "flow",
-        "tray": {"width": 100.0, "height": 100.0},
-        "delivery_time": 0.0,
-        "kit_overhead": {"robot": 0.0, "human": 0.0},
-        "part_types": [{"id": "plate", "width": 80.0, "height": 80.0, "pick_time": 1.0}],
-        "tasks": [
-            {
-                "id": f"j{i}",
-                "parts": [{"type": "plate", "count": 1}],
-                "robot_time": a[i],
-                "human_time": {"mean": b[i]},
-            }
-            for i in range(len(a))
-        ],
-    }
-    if trays is not None:
-        doc["trays"] = trays
-    return doc
+    return jobs_doc("flow", a, b, part=("plate", 80.0), trays=trays)
 
 
 def random_jobs(seed: int, n: int) -> tuple[list[float], list[float]]:

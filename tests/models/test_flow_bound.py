@@ -10,8 +10,9 @@ import time
 
 import pytest
 from brute import best_makespan
-from flowshop import flow_makespan, johnson_order
+from flowshop import flow_makespan, jobs_doc, johnson_order
 from test_exact_trays import random_doc
+from timing import load_factor
 
 from bilevel_kit import bounds, check, solve
 from bilevel_kit.instance import from_dict
@@ -23,23 +24,9 @@ def johnson_doc(seed: int, n: int) -> dict:
     """The Johnson special case: one small part type, d = 0, no overheads, no precedence,
     unlimited trays, random integer robot and human times."""
     rng = random.Random(seed)
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"johnson_n{n}_s{seed}",
-        "tray": {"width": 100.0, "height": 100.0},
-        "delivery_time": 0.0,
-        "kit_overhead": {"robot": 0.0, "human": 0.0},
-        "part_types": [{"id": "p", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-        "tasks": [
-            {
-                "id": f"t{i}",
-                "parts": [{"type": "p", "count": 1}],
-                "robot_time": float(rng.randint(1, 30)),
-                "human_time": {"mean": float(rng.randint(1, 30))},
-            }
-            for i in range(n)
-        ],
-    }
+    times = [(float(rng.randint(1, 30)), float(rng.randint(1, 30))) for _ in range(n)]
+    a, b = [r for r, _ in times], [h for _, h in times]
+    return jobs_doc(f"johnson_n{n}_s{seed}", a, b, prefix="t")
 
 
 def test_two_lines_equal_johnson_with_m_overhead_jobs():
@@ -91,7 +78,7 @@ def test_johnson_special_case_is_proven_by_both_models(n):
             if method == "cpsat"
             else solve(inst, method, time_limit=60.0)
         )
-        assert time.perf_counter() - t0 < 5.0
+        assert time.perf_counter() - t0 < 5.0 * load_factor()  # proven at once, not by search
         assert res.status == "optimal"
         assert res.objective == pytest.approx(ref) and res.bound == pytest.approx(ref)
         assert check(inst, res.plan) == []

@@ -4,6 +4,7 @@ surrogate, and the memoised oracle."""
 from __future__ import annotations
 
 import pytest
+from brute import fits_on_grid
 
 from bilevel_kit import geometry
 from bilevel_kit.instance import PartType, Tray
@@ -153,35 +154,16 @@ def test_decisions_match_brute_force(seed):
     """Random tiny kits (rotation allowed or not): pack's answer equals exhaustive search."""
     import random
 
-    import numpy as np
-
     rng = random.Random(seed)
     W, H = rng.randint(3, 6), rng.randint(3, 6)
     n = rng.randint(2, 5)
     sizes = [(rng.randint(1, W), rng.randint(1, H), rng.random() < 0.5) for _ in range(n)]
-    occ = np.zeros((H, W), dtype=bool)
-
-    def fits(k: int) -> bool:
-        if k == n:
-            return True
-        w, h, r = sizes[k]
-        for ww, hh in {(w, h), (h, w)} if r else {(w, h)}:
-            for x in range(W - ww + 1):
-                for y in range(H - hh + 1):
-                    if not occ[y : y + hh, x : x + ww].any():
-                        occ[y : y + hh, x : x + ww] = True
-                        ok = fits(k + 1)
-                        occ[y : y + hh, x : x + ww] = False
-                        if ok:
-                            return True
-        return False
-
     items = [
         (f"b{j}", PartType(id=f"b{j}", width=w, height=h, pick_time=1.0, rotatable=r))
         for j, (w, h, r) in enumerate(sizes)
     ]
     res = pk.pack(Tray(float(W), float(H)), items, time_limit=10.0)
-    assert res.status == ("feasible" if fits(0) else "infeasible")
+    assert res.status == ("feasible" if fits_on_grid(sizes, W, H) else "infeasible")
 
 
 def test_rotation_makes_a_long_part_fit():

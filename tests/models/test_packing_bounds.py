@@ -9,6 +9,7 @@ import random
 
 import numpy as np
 import pytest
+from brute import fits_on_grid
 
 from bilevel_kit.models import packing_bounds as pb
 
@@ -65,27 +66,6 @@ def test_never_rejects_a_perfect_packing(seed: int) -> None:
     assert pb.infeasibility_reason([(w, h, rot) for w, h in sizes], W, H) is None
 
 
-def _fits_brute(sizes: list[tuple[int, int, bool]], W: int, H: int) -> bool:
-    """Exhaustive search over integer corners (tiny trays only)."""
-    occ = np.zeros((H, W), dtype=bool)
-
-    def rec(k: int) -> bool:
-        if k == len(sizes):
-            return True
-        w, h, r = sizes[k]
-        for ww, hh in {(w, h), (h, w)} if r else {(w, h)}:
-            for x in range(W - ww + 1):
-                for y in range(H - hh + 1):
-                    if not occ[y : y + hh, x : x + ww].any():
-                        occ[y : y + hh, x : x + ww] = True
-                        if rec(k + 1):
-                            return True
-                        occ[y : y + hh, x : x + ww] = False
-        return False
-
-    return rec(0)
-
-
 def test_never_rejects_a_fitting_set_brute_force() -> None:
     rng = random.Random(7)
     checked = 0
@@ -94,7 +74,7 @@ def test_never_rejects_a_fitting_set_brute_force() -> None:
         n = rng.randint(2, 5)
         sizes = [(rng.randint(1, W), rng.randint(1, H), rng.random() < 0.5) for _ in range(n)]
         if pb.infeasibility_reason(sizes, W, H) is not None:
-            assert not _fits_brute(sizes, W, H), (sizes, W, H)
+            assert not fits_on_grid(sizes, W, H), (sizes, W, H)
             checked += 1
     assert checked > 20
 

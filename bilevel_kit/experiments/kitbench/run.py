@@ -15,15 +15,14 @@ library's or this run's, whichever is lower).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import statistics
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
-from ..compare import file_digest
+from ..compare import SolveCell
 from .library import OPTIMAL_RTOL, SHARES, Library, Record, now, trays_text
 
 #: The ``format`` of a bench cell record (what ``bench update`` accepts).
@@ -31,7 +30,7 @@ CELL_FORMAT = "kitbench-cell/1"
 
 
 @dataclass(frozen=True)
-class BenchCell:
+class BenchCell(SolveCell):
     """One solve of one library instance with one method."""
 
     instance: str  # path of the instance file
@@ -42,17 +41,8 @@ class BenchCell:
     instance_sha256: str = ""  # the file's digest, filled in when the cell is made
     commit: str = ""  # the code's version: recorded, not part of the key
 
-    def __post_init__(self) -> None:
-        if not self.instance_sha256:
-            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
-
-    def key(self) -> str:
-        """A stable file-name key: the digest of the instance's bytes, the method, seed, time
-        limit and options (not the path or the commit: a rerun with new code resumes)."""
-        config = {k: v for k, v in asdict(self).items() if k not in ("instance", "commit")}
-        blob = json.dumps(config, sort_keys=True, default=str)
-        digest = hashlib.sha1(blob.encode()).hexdigest()[:12]
-        return f"{Path(self.instance).stem}__{self.method}__s{self.seed}__{digest}"
+    #: a rerun with new code resumes
+    unkeyed: ClassVar[tuple[str, ...]] = ("instance", "commit")
 
 
 def bench_cell(cell: BenchCell) -> dict[str, Any]:
@@ -60,26 +50,17 @@ def bench_cell(cell: BenchCell) -> dict[str, Any]:
     cannot lay out) gives a ``refused`` record, another reported error an ``error`` one."""
     from ...errors import BilevelKitError, KitDoesNotFit, UsageError
     from ...instance import load
-    from ...methods import solve
     from ...solution import result_to_dict
 
     inst = load(cell.instance)
     record: dict[str, Any] = {
         "format": CELL_FORMAT,
-        "instance": inst.name,
-        "instance_file": cell.instance,
-        "instance_sha256": cell.instance_sha256,
-        "method": cell.method,
-        "seed": cell.seed,
-        "time_limit": cell.time_limit,
-        "params": dict(cell.params),
+        **cell.head(inst.name),
         "tasks": inst.n_tasks,
         "commit": cell.commit,
     }
     try:
-        res = solve(
-            inst, cell.method, seed=cell.seed, time_limit=cell.time_limit, check=True, **cell.params
-        )
+        res = cell.solve(inst)
     except (UsageError, KitDoesNotFit) as exc:
         return {**record, "status": "refused", "error": str(exc), "date": now()}
     except BilevelKitError as exc:

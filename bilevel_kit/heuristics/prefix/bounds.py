@@ -6,6 +6,7 @@ lower level only for prefixes that can still reach the incumbent.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -15,7 +16,11 @@ import numpy as np
 from ... import geometry
 from ...instance import Instance
 from .. import upper_level
-from .levels import Children
+from .levels import Children, unique_rows
+
+#: Types of a multiset up to which :meth:`FitnessBound.tight` enumerates their corners
+#: (4 ** (k - 1) assignments).
+CORNER_TYPES = 7
 
 #: (lo, hi, fitness bound) of prefix rows (:meth:`OptimisticScore.parts`).
 BoundParts = tuple[np.ndarray | None, np.ndarray | None, np.ndarray]
@@ -61,6 +66,23 @@ class FitnessBound:
         ly = max(tray.height - 2 * float(ey.min()), 0.0) + slack if len(pts) else 0.0
         self.cut_length = lx + ly
         self.same_gap = np.maximum(short - 2 * geometry.TOL - slack, 0.0)
+        # the corners of each type's box of centres (x then y from the box's lower left,
+        # counter-clockwise), widened by the checker's tolerance
+        lo_x, lo_y = ex - geometry.TOL, ey - geometry.TOL
+        hi_x = np.maximum(tray.width - lo_x, lo_x)
+        hi_y = np.maximum(tray.height - lo_y, lo_y)
+        cx = np.stack([lo_x, hi_x, hi_x, lo_x], axis=1)
+        cy = np.stack([lo_y, lo_y, hi_y, hi_y], axis=1)
+        #: corner_dist[t, a, u, b]: distance from corner a of type t's box to corner b of u's
+        self.corner_dist = (
+            np.hypot(
+                cx[:, :, None, None] - cx[None, None, :, :],
+                cy[:, :, None, None] - cy[None, None, :, :],
+            )
+            + slack
+        )
+        self._tight: dict[bytes, float] = {}
+        self._patterns: dict[int, tuple[np.ndarray, list[tuple[int, int]], np.ndarray]] = {}
 
     def __call__(self, counts: np.ndarray) -> np.ndarray:
         counts = np.asarray(counts)
@@ -69,7 +91,82 @@ class FitnessBound:
             # of a row does not depend on the batch: compute it once per count
             table = self._bounds(np.arange(int(counts.max()) + 1)[:, None])
             return np.asarray(table[counts[:, 0]])
+        if counts.dtype.kind in "iu" and len(counts) > 64:
+            # many rows repeat (a beam scores every child of a level): once per distinct
+            # row, each row's value computed as in the batch (tested bit for bit)
+            keys, inverse = unique_rows(counts)
+            if 2 * len(keys) < len(counts):
+                return np.asarray(self._bounds(keys)[inverse])
         return self._bounds(counts)
+
+    def tight(self, counts: np.ndarray) -> np.ndarray:
+        r"""A bound at most :meth:`__call__`'s: also :math:`\max D_{diff} - D_{same}^{lb}`
+        with :math:`\max D_{diff}` exact over the centres' boxes (:meth:`_corner_max`).
+        Only the best-first queue uses it: the beam ranks by :meth:`__call__` (its choice of
+        prefix sets is part of the decision)."""
+        counts = np.asarray(counts, dtype=np.int64)
+        keys, inverse = unique_rows(counts)
+        values = np.empty(len(keys))
+        todo = []
+        for k, row in enumerate(keys):
+            hit = self._tight.get(row.tobytes())
+            if hit is None:
+                todo.append(k)
+            else:
+                values[k] = hit
+        if todo:
+            rows = keys[todo]
+            fresh = np.minimum(self._bounds(rows), self._corner_max(rows) - self._same(rows))
+            values[todo] = fresh
+            for row, v in zip(rows, fresh.tolist(), strict=True):
+                self._tight[row.tobytes()] = v
+        return values[inverse]
+
+    def _same(self, counts: np.ndarray) -> np.ndarray:
+        c = np.asarray(counts, dtype=np.float64)
+        return np.asarray((c * (c - 1) / 2) @ self.same_gap)
+
+    def _corner_max(self, counts: np.ndarray) -> np.ndarray:
+        r"""The largest :math:`D_{diff}` of any centres in the boxes, each type's parts
+        gathered at one corner of its box (inf for more than :data:`CORNER_TYPES` types).
+
+        Exact: with the other parts fixed, a type's parts add :math:`\sum_{i \in t}
+        \phi_t(p_i)`, :math:`\phi_t(q) = \sum_{j \notin t} |q - p_j|` the same function for
+        all of them, so moving them all to a maximiser of :math:`\phi_t` (convex: a corner
+        of the box) never lowers :math:`D_{diff}`; type after type, every type ends on a
+        corner. The first type's corner is fixed (the tray's symmetries map corners of every
+        box alike)."""
+        out = np.full(len(counts), np.inf)
+        present = counts > 0
+        codes = present @ (1 << np.arange(counts.shape[1], dtype=np.int64))
+        for code in np.unique(codes).tolist():
+            rows = np.flatnonzero(codes == code)
+            idx, pairs, dist = self._pattern(int(code))
+            if len(idx) <= 1:
+                out[rows] = 0.0
+            elif len(idx) <= CORNER_TYPES:
+                c = counts[rows][:, idx].astype(np.float64)
+                weight = np.stack([c[:, x] * c[:, y] for x, y in pairs], axis=1)
+                out[rows] = (weight @ dist).max(axis=1)
+        return out
+
+    def _pattern(self, code: int) -> tuple[np.ndarray, list[tuple[int, int]], np.ndarray]:
+        """The types of a support pattern, their pairs and each pair's corner distance under
+        every assignment of types to corners (pairs x assignments), memoised."""
+        hit = self._patterns.get(code)
+        if hit is None:
+            idx = np.array([t for t in range(self.delta.shape[0]) if code >> t & 1], dtype=np.int64)
+            k = len(idx)
+            pairs = [(x, y) for x in range(k) for y in range(x + 1, k)]
+            dist = np.zeros((len(pairs), 1))
+            if 1 < k <= CORNER_TYPES:
+                assign = np.array(list(itertools.product(range(4), repeat=k - 1)), dtype=np.int64)
+                assign = np.concatenate([np.zeros((len(assign), 1), dtype=np.int64), assign], 1)
+                dist = np.stack(
+                    [self.corner_dist[idx[x], assign[:, x], idx[y], assign[:, y]] for x, y in pairs]
+                )
+            hit = self._patterns[code] = (idx, pairs, dist)
+        return hit
 
     def _bounds(self, counts: np.ndarray) -> np.ndarray:
         counts = np.asarray(counts, dtype=np.float64)
@@ -164,14 +261,16 @@ class OptimisticScore:
         tasks: np.ndarray | Children,
         counts: np.ndarray,
         ctx: DecisionContext,
+        tight: bool = False,
     ) -> BoundParts:
         """What the score needs besides H_rem, the parts at hand and known fitnesses: the
         bounds (lo, hi) of the rest's robot sum (None if ``i == length``) and the fitness
-        bound of each row."""
+        bound of each row (``tight``: :meth:`FitnessBound.tight`, for the best-first queue)."""
         lo = hi = None
         if i < length:
             lo, hi = self._rest_sum_bounds(tasks, length - i, ctx)
-        return lo, hi, self.fitness_bound(counts)
+        fb = self.fitness_bound
+        return lo, hi, fb.tight(counts) if tight else fb(counts)
 
     def _rest_sum_bounds(
         self, tasks: np.ndarray | Children, m: int, ctx: DecisionContext

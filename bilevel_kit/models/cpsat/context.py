@@ -78,6 +78,8 @@ class Context:
     #: The live progress (None: nobody listens) and the solution callback it gives the solver.
     live: Live | None = None
     callback: Any = None  # a CpSolverSolutionCallback (OR-Tools is imported lazily)
+    #: The proven makespan bound of :mod:`bilevel_kit.models.relax` (None: not computed).
+    proven: Any = None
 
     @property
     def ids(self) -> list[str]:

@@ -45,9 +45,12 @@ scaled timeline (:mod:`.scaling`) and of every hint.
 
 **Time.** ``time_limit`` (default 60 s) covers everything, the warm start and packing
 included: the warm start's heuristics share :data:`HINT_SHARE` (30 %) of it (greedy-ce gets
-what is left of that share as its own ``time_limit``), the model run gets the rest; 1 % of the
-run's limit and 0.15 s are kept back (CP-SAT stops a little after its own limit on large
-models). A model whose size exceeds the memory limit is refused (:mod:`..budget`).
+what is left of that share as its own ``time_limit``), the proven bound of
+:mod:`bilevel_kit.models.relax` at most 5 % (:func:`~bilevel_kit.models.relax.for_model`), the
+model run gets the rest; 1 % of the run's limit and 0.15 s are kept back (CP-SAT stops a
+little after its own limit on large models). A model whose size exceeds the memory limit is
+not built: the incumbent is returned as feasible with the proven bound (``cpsat_status``
+``TOO_LARGE``), or the run is refused when there is none (:mod:`..budget`).
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
@@ -69,11 +72,17 @@ order with a non-overlapping layout. ``extra`` keys:
   scaled times); ``idle_bound`` for ``objective="human_idle"``;
 * ``reason`` when the run ends without a plan, or without a model, for a known reason;
 * ``model_cells``: the model's task x kit variables (its size; a model whose estimated memory
-  exceeds :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is refused with a
-  ``UsageError``, one that cannot be built within half the time left is not built:
-  ``cpsat_status`` ``NOT_BUILT``, the incumbent is returned);
+  exceeds :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built: ``cpsat_status``
+  ``TOO_LARGE``, the incumbent is returned, a ``UsageError`` without one; one that cannot be
+  built within half the time left is not built: ``cpsat_status`` ``NOT_BUILT``, the
+  incumbent is returned);
 * ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
-  bound of :mod:`bilevel_kit.bounds` (then no model is built: it is optimal);
+  bound of :mod:`bilevel_kit.bounds`, ``PROVEN_BOUND`` when it attains the proven bound of
+  :mod:`bilevel_kit.models.relax` (then no model is built: it is optimal);
+* ``bound_source``: which bound ``bound`` is (``model``, a closed form, ``head_tail_*`` or
+  ``kit_lp`` of :mod:`bilevel_kit.models.relax`), ``bound_sources`` every bound computed before
+  the model (s), ``bound_lp_kits`` the kit-count LP bound per kit count, ``bound_time_s`` their
+  time (makespan objective without release times);
 * ``hint_method``: the heuristic whose plan was the hint, ``hint_time_s`` the warm start's
   time (registered method only; ``wall_time_s`` then includes it).
 """
@@ -92,7 +101,7 @@ from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
-from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
 from ..common import (
     Packer,
     assignment_cells,
@@ -108,6 +117,7 @@ from ..common import (
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound, tray_wait
+from .proven import bound_source, known_bound, proven_kit_cap, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .tray import embed_scope, tray_mode
 from .warm import MIN_RUN, best_heuristic_plan
@@ -340,6 +350,8 @@ def run(
     upper = None
     if incumbent is not None and options.objective == "makespan":
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
+    start = None if incumbent is None else _plan_of(ctx, incumbent, None)
+    strong_bound(ctx, None if start is None else evaluate(instance, start).makespan, report.extra)
     K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
     mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
@@ -352,9 +364,9 @@ def run(
     proven = _proven_without_model(ctx, incumbent, upper, report)
     if proven is not None:
         return proven
-    if not _buildable(instance, K, budget, report.extra):
+    if not _buildable(instance, K, budget, report.extra, incumbent is not None):
         if incumbent is None:
-            return report.finish(None, Status.UNKNOWN, best_bound(instance))
+            return report.finish(None, Status.UNKNOWN, known_bound(ctx))
         return _conclude(ctx, None, State(incumbent, upper), report)
     return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
 
@@ -424,6 +436,10 @@ def _proven_without_model(
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+    if ctx.proven is not None and start_ms is not None and start_ms <= ctx.proven.value + 1e-9:
+        # the incumbent attains the proven bound of models.relax: optimal without a model
+        extra.update(build_time_s=0.0, cpsat_status="PROVEN_BOUND", cuts=0)
+        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
     if upper is not None and sc.rel and upper <= release_bound(instance, sc):
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
         extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
@@ -432,13 +448,26 @@ def _proven_without_model(
     return None
 
 
-def _buildable(instance: Instance, K: int, budget: Budget, extra: dict[str, Any]) -> bool:
-    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
-    a ``reason``) when it would not be built and solved within the time left."""
+def _buildable(
+    instance: Instance, K: int, budget: Budget, extra: dict[str, Any], has_plan: bool
+) -> bool:
+    """Whether to build the model with K kits: False (with a ``reason``) when it would exceed
+    the memory limit (a UsageError when there is no incumbent to return instead) or would not
+    be built and solved within the time left."""
     cells = assignment_cells(instance, K)
     extra["model_cells"] = cells
     n = instance.n_tasks
-    check_model_memory("cpsat", cells, BYTES_PER_CELL, f"task x kit variables ({n} tasks, K = {K})")
+    what = f"task x kit variables ({n} tasks, K = {K})"
+    refusal = memory_refusal("cpsat", cells, BYTES_PER_CELL, what)
+    if refusal is not None and has_plan:
+        extra.update(
+            reason=f"{refusal}; the incumbent is returned with the proven bound",
+            build_time_s=0.0,
+            cpsat_status="TOO_LARGE",
+            cuts=0,
+        )
+        return False
+    check_model_memory("cpsat", cells, BYTES_PER_CELL, what)
     if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
         extra.update(
             reason=f"a model of {cells:,} task x kit variables would not be built and solved "
@@ -477,6 +506,7 @@ def _solve_model(
         objective=options.objective,
         pack_res=options.pack_resolution,
         groups=ctx.groups,
+        kit_bounds=scaled_kit_bounds(ctx),
     )
     extra["build_time_s"] = budget.elapsed()
     ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun
@@ -499,7 +529,7 @@ def _solve_model(
             return report.finish(None, Status.INFEASIBLE, None)
         if state.infeasible and state.scope == AXIS_ALIGNED:
             extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
-        return report.finish(None, Status.UNKNOWN, best_bound(instance))
+        return report.finish(None, Status.UNKNOWN, known_bound(ctx))
     return _conclude(ctx, mdl, state, report)
 
 
@@ -546,7 +576,8 @@ def _incumbent(
         qp = closed_form_plan(instance, first)
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
             return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
-    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.1), ctx.pack_res)
+    # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
+    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.next(0.1), ctx.pack_res)
     qp = quick_plan(instance, quick)
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])
@@ -563,6 +594,7 @@ def _kit_cap(ctx: Context, upper: int | None) -> int:
     K = n
     if upper is None:
         return K
+    K = proven_kit_cap(ctx, upper, K)
     edges = _edges(ctx.instance)
     has_pred = {b for _, b in edges}
     has_succ = {a for a, _ in edges}
@@ -589,8 +621,10 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
     idle_bound = None
     if ctx.objective == "makespan":
-        bound_s = closed if any_s is None else max(closed, any_s)  # every plan (module doc)
-        bound_axis = closed if lower_s is None else max(closed, lower_s)
+        strong = known_bound(ctx)  # the closed forms and models.relax: every plan
+        bound_s = strong if any_s is None else max(strong, any_s)  # every plan (module doc)
+        bound_axis = strong if lower_s is None else max(strong, lower_s)
+        extra["bound_source"] = bound_source(ctx, any_s)
         exact = sc.exact or (real.makespan <= bound_axis + 1e-6 and not sc.rel)
         optimal_axis = state.proven and state.scope is not None and exact
         optimal = (optimal_axis and state.scope == ANY_ANGLE) or (

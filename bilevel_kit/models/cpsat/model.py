@@ -53,7 +53,7 @@ optimum); with o_H > 0 it trades makespan against the number of kits.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from ...bounds import johnson_lines, min_kits
@@ -74,8 +74,12 @@ def build(
     objective: str,
     pack_res: float,
     groups: list[list[list[int]]],
+    kit_bounds: Mapping[int, int] | None = None,
 ) -> Model:
-    """The model of the module docstring with K kit positions (``upper``: C <= U)."""
+    r"""The model of the module docstring with K kit positions (``upper``: C <= U);
+    ``kit_bounds``: m -> a lower bound on the scaled makespan of every plan of exactly m kits
+    (the kit-count LP of :mod:`bilevel_kit.models.relax`), added as
+    :math:`C \ge \sum_m L_m (u_{m-1} - u_m)`."""
     from ortools.sat.python import cp_model
 
     m = cp_model.CpModel()
@@ -93,6 +97,14 @@ def build(
     _one_tray_bound(instance, sc, out)
     for c, slope in johnson_lines(sc.r, sc.h, sc.o_r + sc.d, sc.o_h):  # bound (d), m = sum u
         m.add(c + slope * sum(used) <= C)
+    if kit_bounds:  # exactly m kits used <=> u_{m-1} and not u_m
+        terms = [
+            v * (used[k - 1] - (used[k] if k < K else 0))
+            for k, v in kit_bounds.items()
+            if 1 <= k <= K and v > 0
+        ]
+        if terms:
+            m.add(sum(terms) <= C)
     if objective == "makespan":
         m.minimize(C)
     else:

@@ -21,8 +21,11 @@ packable plan) is the MIP start.
 
 **Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
 master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
-half the time left is not built (the quick plan is returned), and one over the memory limit
-is refused (:mod:`..budget`).
+half the time left is not built (the quick plan is returned), nor is one over the memory
+limit (the quick plan is returned as feasible with the proven bound, ``termination``
+``too_large``; the run is refused without one: :mod:`..budget`). The proven bound of
+:mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
+(:func:`~bilevel_kit.models.relax.for_model`), the ``hint`` method at most 30 %.
 
 **Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
 bound on the makespan in seconds (the master's best bound when every cut is proven, never below
@@ -32,7 +35,10 @@ the closed-form bounds). ``extra`` keys:
   known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
   ``build_time_s``, ``wall_time_s``;
 * ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
-  bound of :mod:`bilevel_kit.bounds` (no model is built: it is optimal);
+  bound of :mod:`bilevel_kit.bounds`, ``proven_bound`` when it attains the proven bound of
+  :mod:`bilevel_kit.models.relax` (no model is built: it is optimal);
+* ``bound_source``, ``bound_sources``, ``bound_lp_kits``, ``bound_time_s``: as for ``cpsat``;
+  ``hint_method`` the method whose plan became the incumbent (None: the quick plan);
 * ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``axis_aligned_cuts``,
   ``termination`` (the last master solve's), ``master_time_s`` (its wall time);
 * ``proof_scope``, ``status_reason``, ``optimal_axis_aligned``, ``bound_axis_aligned``,
@@ -42,7 +48,8 @@ the closed-form bounds). ``extra`` keys:
   ``objective="human_idle"``;
 * ``reason`` when the run ends without a plan, or without a model, for a known reason;
 * ``model_cells``: the model's task x kit variables (a model whose estimated memory exceeds
-  :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is refused with a ``UsageError``; one that
+  :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built, ``termination`` ``too_large``,
+  or refused with a ``UsageError`` without a plan; one that
   cannot be built within half the time left is not built: ``termination`` ``not_built``,
   the quick plan is returned).
 
@@ -60,10 +67,10 @@ from typing import Any, Literal
 from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
-from ...methods import MethodOutput, Status
+from ...methods import MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
-from ..budget import Budget, check_model_memory, too_slow_to_build
+from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
 from ..common import (
     NoGoodCuts,
     Packer,
@@ -95,6 +102,8 @@ MARGIN = 0.2
 #: Peak memory per task x kit variable of the Pyomo model (measured 5-9 kB on in-trees of
 #: 60-120 tasks; HiGHS runs in a child process); bench/results/scale.md.
 BYTES_PER_CELL = 12_000
+#: The share of the time limit the ``hint`` method may use.
+HINT_SHARE = 0.3
 #: Time per task x kit variable to build the Pyomo model (measured 0.7-0.8 ms) and write it
 #: for the HiGHS child (about 1.3 ms more: 7 s for 5,263 variables on a loaded machine).
 BUILD_S_PER_CELL = 2.5e-3
@@ -119,6 +128,22 @@ class MilpOptions:
         metadata={"help": "auto: seed cuts for task pairs that do not fit; benders: area only"},
     )
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+    hint: str = field(
+        default="none",
+        metadata={
+            "help": "none (the quick plan alone), or a registered method (e.g. lns) whose plan "
+            "is the incumbent when better, within 30 % of the time limit"
+        },
+    )
+
+    def __post_init__(self) -> None:
+        from ...methods import REGISTRY
+
+        if self.hint != "none" and self.hint not in REGISTRY:
+            raise ValueError(
+                f"option 'hint': unknown method {self.hint!r}; choose none or one of "
+                f"{', '.join(REGISTRY)}"
+            )
 
 
 def solve(
@@ -131,10 +156,11 @@ def solve(
     tray: str = "auto",
     log: bool = False,
     solver_options: Mapping[str, Any] | None = None,
+    hint: str = "none",
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
-    params = {"solver": solver, "objective": objective, "tray": tray, "log": log}
+    params = {"solver": solver, "objective": objective, "tray": tray, "log": log, "hint": hint}
     options = parse_options(MilpOptions, params, "milp")
     return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
 
@@ -184,13 +210,15 @@ def run(
             proof_scope=AXIS_ALIGNED,
         )
         return r.finish(None, Status.UNKNOWN, closed)
-    inc, inc_obj, upper, K = _incumbent(r, pack_tl)
-    if upper is not None and upper <= closed + TOL:
-        # the quick plan attains a closed-form bound (e.g. Johnson's makespan): optimal
-        # without a model (bilevel_kit/bounds.py, (d))
-        r.extra.update(build_time_s=0.0, termination="closed_form_bound")
+    inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
+    K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
+    if upper is not None and upper <= r.best + TOL:
+        # the quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
+        # bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))
+        done = "closed_form_bound" if upper <= closed + TOL else "proven_bound"
+        r.extra.update(build_time_s=0.0, termination=done)
         return _conclude(r, inc, None, None, ANY_ANGLE, proven=True)
-    if not _buildable(r, K):
+    if not _buildable(r, K, inc is not None):
         return _conclude(r, inc, None, None, ANY_ANGLE, proven=False)
     return _solve_master(r, K, upper, inc, inc_obj, opt, seed, solver_options)
 
@@ -210,6 +238,12 @@ class _Run:
     closed: float  # the closed-form makespan bound
     live: _Live
     extra: dict[str, Any] = field(default_factory=dict)
+    proven: Any = None  # the proven bound of models.relax (None: not computed)
+
+    @property
+    def best(self) -> float:
+        """The best makespan bound known before the model (s)."""
+        return self.closed if self.proven is None else max(self.closed, self.proven.value)
 
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         self.extra["wall_time_s"] = self.budget.elapsed()
@@ -220,16 +254,19 @@ class _Run:
 
 
 def _incumbent(
-    r: _Run, pack_tl: float
+    r: _Run, pack_tl: float, seed: int
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
-    """The quick plan (for makespan, first one attaining the closed-form bound), its
-    objective, the upper bound U and the kit cap K (valid only for plans at least as good)."""
+    """The quick plan (for makespan, first one attaining the closed-form bound) or the hint's
+    plan if better, its objective, the upper bound U and the kit cap K (valid only for plans
+    at least as good)."""
     instance, budget, objective = r.instance, r.budget, r.options.objective
     inc = None
     if objective == "makespan":  # optimal at once if it attains the closed-form bound
         inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
     inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, objective)
+    if r.options.hint != "none" and (inc is None or inc_obj is None or inc_obj > r.closed + TOL):
+        inc, inc_obj = _hinted(r, inc, inc_obj, seed)
     upper = None
     K = instance.n_tasks
     if inc is not None and inc_obj is not None and objective == "makespan":
@@ -246,15 +283,66 @@ def _incumbent(
     return inc, inc_obj, upper, K
 
 
-def _buildable(r: _Run, K: int) -> bool:
-    """Whether to build the model with K kits: a UsageError over the memory limit, False (with
-    a ``reason``) when it would not be built and solved within the time left."""
+def _hinted(
+    r: _Run, inc: list[list[str]] | None, inc_obj: float | None, seed: int
+) -> tuple[list[list[str]] | None, float | None]:
+    """The plan of the ``hint`` method within :data:`HINT_SHARE` of the time limit when its
+    kits pack and it beats ``inc`` (``extra['hint_method']`` names it), else ``inc``."""
+    from ..cpsat.method import best_heuristic_plan
+
+    left = min(HINT_SHARE * r.budget.time_limit, r.budget.remaining(MARGIN))
+    plan, source = best_heuristic_plan(r.instance, (r.options.hint,), seed=seed, time_limit=left)
+    r.extra["hint_method"] = None
+    if plan is None:
+        return inc, inc_obj
+    kits = [list(k.tasks) for k in plan.kits if k.tasks]
+    obj = objective_value(r.instance, kits, r.options.objective)
+    if (inc_obj is not None and obj >= inc_obj - TOL) or not all(r.packer.fits(k) for k in kits):
+        return inc, inc_obj
+    r.extra["hint_method"] = source
+    return kits, obj
+
+
+def _strong_bound(r: _Run, upper: float | None, K: int) -> int:
+    """The proven makespan bound of :mod:`bilevel_kit.models.relax` into ``r.proven``
+    (makespan objective only, within its share of the time limit); the kit cap K lowered by
+    it."""
+    if r.options.objective != "makespan":
+        return K
+    from ..relax import closed_at, for_model
+
+    t0 = r.budget.elapsed()
+    r.proven = for_model(r.instance, r.budget.time_limit, r.budget.remaining(MARGIN), upper)
+    r.extra.update(
+        bound_sources=r.proven.sources,
+        bound_lp_kits=dict(r.proven.per_kits),
+        bound_time_s=r.budget.elapsed() - t0,
+    )
+    if upper is not None:
+        cap = r.proven.kit_cap(upper + TOL * max(1.0, upper), closed_at(r.instance))
+        if cap is not None:
+            K = max(1, min(K, cap))
+            r.extra["max_kits"] = K
+    return K
+
+
+def _buildable(r: _Run, K: int, has_plan: bool) -> bool:
+    """Whether to build the model with K kits: False (with a ``reason``) when it would exceed
+    the memory limit (a UsageError when there is no plan to return instead) or would not be
+    built and solved within the time left."""
     instance = r.instance
     cells = assignment_cells(instance, K)
     r.extra["model_cells"] = cells
-    check_model_memory(
-        "milp", cells, BYTES_PER_CELL, f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
-    )
+    what = f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
+    refusal = memory_refusal("milp", cells, BYTES_PER_CELL, what)
+    if refusal is not None and has_plan:
+        r.extra.update(
+            reason=f"{refusal}; the quick plan is returned with the proven bound",
+            build_time_s=0.0,
+            termination="too_large",
+        )
+        return False
+    check_model_memory("milp", cells, BYTES_PER_CELL, what)
     if too_slow_to_build(r.budget, cells * BUILD_S_PER_CELL, MARGIN):
         r.extra.update(
             reason=f"a model of {cells:,} task x kit variables would not be built and solved "
@@ -278,7 +366,8 @@ def _solve_master(
 ) -> MethodOutput:
     """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
     options = r.options
-    master = build(r.instance, K, upper, options.objective)
+    lower = None if r.proven is None else r.proven.value
+    master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, inc_obj, r.live)
     if options.tray == "auto":
@@ -298,7 +387,7 @@ def _solve_master(
             return r.finish(None, Status.INFEASIBLE, None)
         if loop.infeasible:  # no plan with 0/90-degree layouts; one at other angles may exist
             r.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
-        return r.finish(None, Status.UNKNOWN, r.closed)
+        return r.finish(None, Status.UNKNOWN, r.best)
     return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
@@ -317,19 +406,33 @@ def _conclude(
     there are no kits or some kit has no layout in time."""
     plan = None if kits is None else _with_layouts(r.instance, kits, r.packer, r.extra)
     if plan is None:
-        return r.finish(None, Status.UNKNOWN, r.closed)
+        return r.finish(None, Status.UNKNOWN, r.best)
     objective = r.options.objective
     bound = _makespan_bound(r.instance, plan, r.closed, lower_any, objective, r.extra)
     real = evaluate(r.instance, plan).makespan
+    if objective == "makespan":  # the proven bound of models.relax holds for every plan
+        r.extra["bound_source"] = _source(r, lower_any)
+        bound = min(max(bound, r.best), real)
+        r.extra["gap"] = gap(real, bound) or 0.0
     optimal = (proven and scope == ANY_ANGLE) or (
         objective == "makespan" and real <= bound + TOL * max(1.0, real)
     )
     r.extra["optimal_axis_aligned"] = proven and scope is not None
     if objective == "makespan":
-        axis = r.closed if lower is None else max(r.closed, lower)
+        axis = r.best if lower is None else max(r.best, lower)
         r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
     r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
     return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
+
+
+def _source(r: _Run, lower_any: float | None) -> str:
+    """Which bound is the best: ``model`` (the master's, for every plan), the source of
+    :mod:`..relax`'s proven bound, or ``closed_form``."""
+    if lower_any is not None and lower_any > r.best + TOL:
+        return "model"
+    if r.proven is not None and r.proven.value >= r.closed - TOL:
+        return str(r.proven.source)
+    return "closed_form"
 
 
 def _with_layouts(

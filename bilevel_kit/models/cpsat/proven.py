@@ -1,0 +1,63 @@
+"""The proven makespan bound of :mod:`bilevel_kit.models.relax` in ``cpsat`` (docs/
+formulations.md, "Stronger lower bounds"): computed once per run within its share of the time
+limit, fed to the model per kit count, used to cap the kit count and reported with its source.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...bounds import best_bound
+from .context import Context
+
+
+def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> None:
+    """The proven bound into ``ctx.proven`` (makespan objective without release times only;
+    ``upper_s``: the incumbent's makespan in s, which ends the kit-count scan early)."""
+    if ctx.objective != "makespan" or any(ctx.sc.rel):
+        return
+    from ..relax import for_model
+
+    t0 = ctx.budget.elapsed()
+    ctx.proven = for_model(ctx.instance, ctx.budget.time_limit, ctx.budget.remaining(), upper_s)
+    extra.update(
+        bound_sources=ctx.proven.sources,
+        bound_lp_kits=dict(ctx.proven.per_kits),
+        bound_time_s=ctx.budget.elapsed() - t0,
+    )
+
+
+def known_bound(ctx: Context) -> float:
+    """The best makespan bound known before the model (s), for every plan."""
+    closed = best_bound(ctx.instance)
+    return closed if ctx.proven is None else max(closed, ctx.proven.value)
+
+
+def bound_source(ctx: Context, any_s: float | None) -> str:
+    """Which bound is the best: ``model`` (the model's bound for every plan, ``any_s``), the
+    source of the proven bound, or ``closed_form``."""
+    if any_s is not None and any_s > known_bound(ctx) + 1e-9:
+        return "model"
+    if ctx.proven is not None and ctx.proven.value >= best_bound(ctx.instance) - 1e-9:
+        return str(ctx.proven.source)
+    return "closed_form"
+
+
+def scaled_kit_bounds(ctx: Context) -> dict[int, int] | None:
+    """The kit-count LP bounds on the model's grid (None: none computed)."""
+    if ctx.proven is None:
+        return None
+    from ..relax import scaled_kit_bounds as on_grid
+
+    return on_grid(ctx.proven, ctx.sc.res, ctx.sc.exact)
+
+
+def proven_kit_cap(ctx: Context, upper: int, K: int) -> int:
+    """K lowered to the most kits a plan of scaled makespan at most ``upper`` can have by the
+    kit-count LP (on an exact grid only: then scaled and real makespans agree)."""
+    if ctx.proven is None or not ctx.sc.exact:
+        return K
+    from ..relax import closed_at
+
+    cap = ctx.proven.kit_cap(upper * ctx.sc.res + 1e-6, closed_at(ctx.instance))
+    return K if cap is None else max(1, min(K, cap))

@@ -1,0 +1,158 @@
+"""Lower bounds stronger than the closed forms, time-boxed (docs/formulations.md, "Stronger
+lower bounds").
+
+:func:`proven_bound` takes the best of the closed forms of :mod:`bilevel_kit.bounds`, the
+precedence bounds of :mod:`.precedence` (heads and tails) and the kit-count LP bound of
+:mod:`.kit_lp` (the LP relaxation with the kit count fixed, scanned over the counts), rounded
+up to the makespan's time grid when every time lies on one. The exact models add it to their
+objective (per kit count) and report it with its source; ``lns`` reports it as its bound.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from ...bounds import johnson_lines, lines_value, lower_bounds, min_kits, tray_wait
+from ...instance import Instance
+from .kit_lp import kit_count_bound
+from .precedence import head_tail_bounds
+
+#: Grid refinements tried for the makespan's time grid (as the CP-SAT model's time scaling).
+_REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
+
+
+@dataclass(frozen=True)
+class ProvenBound:
+    """A proven lower bound on the makespan: ``value`` (s), its ``source`` (a key of
+    ``sources``, every bound computed), the kit-count LP values ``per_kits`` (m -> s, on the
+    grid; m below ``stop`` scanned) and the makespan's time grid ``grid`` (None: none found)."""
+
+    value: float
+    source: str
+    sources: dict[str, float]
+    per_kits: dict[int, float] = field(default_factory=dict)
+    stop: int = 1
+    grid: float | None = None
+
+    def at(self, m: int, closed: Callable[[int], float]) -> float:
+        """A lower bound on the makespan of every plan of exactly ``m`` kits."""
+        return max(closed(m), self.per_kits.get(m, -math.inf))
+
+    def kit_cap(self, upper: float, closed: Callable[[int], float]) -> int | None:
+        """The most kits a plan of makespan at most ``upper`` can have by the kit-count LP,
+        or None when the scan does not decide it (the closed-form caps apply)."""
+        if closed(self.stop) <= upper:
+            return None
+        ok = [m for m, v in self.per_kits.items() if v <= upper + 1e-9]
+        return max(ok) if ok else min(self.per_kits, default=1)
+
+
+def closed_at(instance: Instance) -> Callable[[int], float]:
+    """The closed-form bound of :mod:`bilevel_kit.bounds` for plans of m kits: (a), (b) with
+    the one-tray wait and (d), each with m in place of m_min (each is non-decreasing in m)."""
+    lb = lower_bounds(instance)
+    m0 = int(lb["min_kits"])
+    o_h = instance.kit_overhead_human
+    a0 = instance.kit_overhead_robot + instance.delivery_time
+    w = tray_wait(instance)
+    ids = [t.id for t in instance.tasks]
+    lines = johnson_lines(
+        [instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids], a0, o_h
+    )
+
+    def at(m: int) -> float:
+        human = lb["human"] + (m - m0) * o_h
+        robot = lb["robot"] + (m - m0) * (a0 + w)
+        return max(human, robot, lines_value(lines, m))
+
+    return at
+
+
+def time_grid(instance: Instance, resolution: float = 0.1) -> float | None:
+    """The coarsest grid ``resolution / q`` (q in :data:`_REFINE`) holding every time of the
+    instance (then every makespan is on it), or None."""
+    from ..packing import is_grid_exact
+
+    ids = [t.id for t in instance.tasks]
+    values = (
+        [instance.robot_time(i) for i in ids]
+        + [instance.human_time(i) for i in ids]
+        + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
+    )
+    for q in _REFINE:
+        if is_grid_exact(values, resolution / q):
+            return resolution / q
+    return None
+
+
+def on_grid(value: float, grid: float | None) -> float:
+    """``value`` rounded up to the makespan's grid (every makespan lies on it), or as is."""
+    if grid is None or not math.isfinite(value):
+        return value
+    return round(math.ceil(value / grid - 1e-9) * grid, 9)
+
+
+def proven_bound(
+    instance: Instance,
+    *,
+    time_limit: float = 1.0,
+    upper: float | None = None,
+    lp: bool = True,
+) -> ProvenBound:
+    """The best of the closed forms, the precedence bounds and (``lp``) the kit-count LP
+    bound, this one scanned for at most ``time_limit`` s; ``upper`` (a known plan's makespan)
+    ends the scan at the counts whose closed-form bound exceeds it."""
+    lb = lower_bounds(instance)
+    sources = {
+        "closed_form_human": lb["human"],
+        "closed_form_robot": lb["robot"],
+        "closed_form_flow": lb["flow"],
+    }
+    sources.update(head_tail_bounds(instance))
+    grid = time_grid(instance)
+    per: dict[int, float] = {}
+    stop = int(lb["min_kits"])
+    if lp:
+        closed = closed_at(instance)
+        scan = kit_count_bound(
+            instance,
+            closed,
+            m_min=min_kits(instance),
+            deadline=time.perf_counter() + time_limit,
+            upper=upper,
+        )
+        per = {m: on_grid(v, grid) for m, v in scan.per_kits.items()}
+        stop = scan.stop
+        if per:  # no LP solved in time: its value is a closed form's, named as such
+            sources["kit_lp"] = scan.value
+    sources = {k: on_grid(v, grid) for k, v in sources.items()}
+    source = max(sources, key=lambda k: (sources[k], k == "kit_lp"))
+    return ProvenBound(sources[source], source, sources, per, stop, grid)
+
+
+#: The share of a run's time limit the exact models give :func:`proven_bound` (at least
+#: :data:`MIN_BOUND_S`, never more than a tenth of what is left).
+BOUND_SHARE, MIN_BOUND_S = 0.05, 0.2
+
+
+def for_model(
+    instance: Instance, time_limit: float, left: float, upper: float | None
+) -> ProvenBound:
+    """:func:`proven_bound` within an exact model's share of its run (:data:`BOUND_SHARE` of
+    ``time_limit``, at least :data:`MIN_BOUND_S`, at most a tenth of the ``left`` seconds)."""
+    share = min(max(BOUND_SHARE * time_limit, MIN_BOUND_S), 0.1 * max(0.0, left))
+    return proven_bound(instance, time_limit=share, upper=upper, lp=share > 0.02)
+
+
+def scaled_kit_bounds(bound: ProvenBound, res: float, exact: bool) -> dict[int, int]:
+    """The kit-count LP bounds on a model's integer time grid of ``res`` s: rounded up when
+    the grid holds every time (``exact``: the makespan is a multiple of ``res``), else down
+    (then the model's times are rounded down and its bound stays valid, docs/formulations.md)."""
+    out = {}
+    for m, v in bound.per_kits.items():
+        if math.isfinite(v):
+            out[m] = math.ceil(v / res - 1e-6) if exact else math.floor(v / res + 1e-9)
+    return out

@@ -1,0 +1,84 @@
+"""The large-neighbourhood search ``lns`` (docs/formulations.md, "Large-neighbourhood search"):
+valid plans, a bound that is the proven bound (never above the brute-force optimum, never the
+search's own incumbent), the same plan for a seed at a fixed number of windows."""
+
+from __future__ import annotations
+
+import pytest
+from brute import best_makespan
+from test_exact_trays import random_doc
+
+from bilevel_kit import load, solve
+from bilevel_kit.instance import from_dict
+from bilevel_kit.models.relax import proven_bound
+from bilevel_kit.validate import check
+
+
+@pytest.mark.parametrize("trays", [1, 2, None])
+@pytest.mark.parametrize("seed", range(4))
+def test_lns_bound_is_proven_and_never_above_the_optimum(seed, trays):
+    inst = from_dict(random_doc(seed, trays))
+    opt, _ = best_makespan(inst)
+    out = solve(inst, "lns", seed=seed, time_limit=20, iterations=30)
+    assert out.plan is not None and check(inst, out.plan) == []
+    assert out.bound is not None and out.bound <= opt + 1e-6
+    assert out.bound <= out.objective + 1e-9
+    assert out.bound == pytest.approx(proven_bound(inst, time_limit=30.0).value, abs=1e-6)
+    assert out.extra["bound_source"] in out.extra["bound_sources"]
+    if out.status == "optimal":  # only when the plan meets the proven bound
+        assert out.objective == pytest.approx(out.bound, abs=1e-6)
+    else:
+        assert out.status == "feasible" and out.objective > out.bound
+
+
+def test_lns_is_deterministic_at_a_fixed_number_of_windows(root):
+    inst = load(root / "instances" / "hrc_table.json")
+    opts = {"iterations": 6, "start": "quick", "window": 8}
+    a = solve(inst, "lns", seed=3, time_limit=60, **opts)
+    b = solve(inst, "lns", seed=3, time_limit=60, **opts)
+    assert a.extra["stop"] in ("iterations", "local_optimum", "optimal")
+    assert [k.tasks for k in a.plan.kits] == [k.tasks for k in b.plan.kits]
+    assert a.extra["iterations"] == b.extra["iterations"]
+    assert check(inst, a.plan) == []
+
+
+def test_lns_improves_on_its_start_or_proves_it(root):
+    inst = load(root / "instances" / "hrc_table.json")
+    out = solve(inst, "lns", seed=0, time_limit=30, iterations=40, start="quick")
+    assert out.objective <= out.extra["start_makespan"] + 1e-9
+    assert out.extra["iterations"] >= 1
+
+
+def test_lns_options_are_checked(tiny):
+    from bilevel_kit import UsageError
+
+    with pytest.raises(UsageError, match="lns"):
+        solve(tiny, "lns", window=1)
+    with pytest.raises(UsageError, match="lns"):
+        solve(tiny, "lns", start="all")
+
+
+@pytest.mark.parametrize("trays", [1, 2, 3, None])
+@pytest.mark.parametrize("seed", range(5))
+def test_suffix_response_equals_the_timeline(seed, trays):
+    """The window's objective: the suffix's max-plus response to the window's end state is
+    exactly the plan's makespan on the integer times, at every cut point."""
+    import random
+
+    from bilevel_kit.models.cpsat.scaling import scale_times, scaled_makespan, scaled_timeline
+    from bilevel_kit.models.lns.state import kit_times, tail_response
+
+    inst = from_dict(random_doc(seed, trays, n=9))
+    sc = scale_times(inst, 0.1, True)
+    rng = random.Random(seed)
+    order = list(range(inst.n_tasks))
+    cuts = sorted(rng.sample(range(1, len(order)), 4))
+    kits = [order[a:b] for a, b in zip([0, *cuts], [*cuts, len(order)], strict=True)]
+    total = scaled_makespan(sc, kits)
+    for k1 in range(1, len(kits) + 1):
+        tl = scaled_timeline(sc, kits[:k1])
+        starts = [e - kit_times(sc, k)[1] for (_, _, e), k in zip(tl, kits[:k1], strict=True)]
+        state = {"A": tl[-1][1], "E": tl[-1][2]}
+        state.update({f"HS{j}": starts[-j] for j in range(1, len(starts) + 1)})
+        form = tail_response(sc, kits[k1:], k1)
+        assert max(state[v] + c for v, c in form.items()) == total, (k1, form)
