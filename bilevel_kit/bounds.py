@@ -112,9 +112,36 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
 
 
 def best_bound(instance: Instance) -> float:
-    """The largest of the closed-form makespan bounds (seconds)."""
+    """The largest of the closed-form makespan bounds (seconds); with several stations, the
+    largest over the stations of their own (:func:`bilevel_kit.stations.station_instance`)."""
+    if instance.stations:
+        return stations_bound(instance)
     lb = lower_bounds(instance)
     return max(lb["human"], lb["robot"], lb["flow"])
+
+
+def stations_bound(instance: Instance) -> float:
+    """With several stations (docs/timeline.md#several-stations): the largest of each
+    station's own bounds (:func:`bilevel_kit.stations.station_instance`: its completion is at
+    least its tasks' makespan with the robot to itself), and the **robot across stations**: a
+    kit holds one station's tasks, so station s needs at least ``m_s`` (its area bound) kits,
+    the robot is busy ``sum_i r_i + sum_s m_s (o_R + d_s)`` before the last kit arrives, and
+    that kit's human then needs at least ``o_H,s`` plus a task without successors at s."""
+    from .stations import station_instance
+
+    subs = [
+        station_instance(instance, s)
+        for s in instance.station_ids
+        if any(t.station == s for t in instance.tasks)
+    ]
+    robot = sum(instance.robot_time(t.id) for t in instance.tasks)
+    last = math.inf
+    for sub in subs:
+        robot += min_kits(sub) * (instance.kit_overhead_robot + sub.delivery_time)
+        has_succ = {a for a, _ in sub.precedence}
+        sink = min(sub.human_time(t.id) for t in sub.tasks if t.id not in has_succ)
+        last = min(last, sub.kit_overhead_human + sink)
+    return max(robot + last, *(best_bound(sub) for sub in subs))
 
 
 def flow_bound(instance: Instance, m: int | None = None) -> float:

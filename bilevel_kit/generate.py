@@ -22,8 +22,12 @@ Families:
 ``seed`` apply to the random families only (``bilevel-kit generate`` refuses them for
 ``table``, ``mixed`` and ``stool``). ``tray`` replaces the family's tray (the paper's 300 x 200
 mm, or the one ``tightness`` gives), ``trays`` its trays in circulation (the table: 1, the
-others: unlimited) and ``name`` its name. A tray so small that some task's parts do not fit it
-on their own is an error: no method could solve that instance.
+others: unlimited) and ``name`` its name. ``stations`` S puts the family on S assembly
+stations served by one robot (docs/timeline.md#several-stations): each station builds the
+family's units of every product (so the instance has S times the units), station ``Sk``
+serving the k-th block of units, with the instance's delivery time, trays and overheads. A
+tray so small that some task's parts do not fit it on their own is an error: no method
+could solve that instance.
 
 :func:`command_line` is the command that makes a document; the description quotes it and
 ``bilevel-kit generate`` stores it as the instance's ``generated_by`` (docs/formats.md), so
@@ -75,6 +79,7 @@ def command_line(
     trays: int | str | None = None,
     tray: tuple[float, float] | None = None,
     name: str | None = None,
+    stations: int | None = None,
 ) -> str:
     """The ``bilevel-kit generate`` command that makes this document (a random family always
     names its seed, tightness and delivery time; the other options only when given)."""
@@ -95,6 +100,8 @@ def command_line(
         words += ["--tray", f"{tray[0]:g}x{tray[1]:g}"]
     if name is not None:
         words += ["--name", name]
+    if stations is not None:
+        words += ["--stations", str(stations)]
     return " ".join(words)
 
 
@@ -322,10 +329,12 @@ def generate(
     trays: int | str | None = None,
     tray: tuple[float, float] | None = None,
     name: str | None = None,
+    stations: int | None = None,
 ) -> dict[str, Any]:
     """An instance document of the given family (see the module docstring); ``seed`` and
     ``tightness`` only shape the random families, ``trays`` (an integer >= 1 or
-    ``"unlimited"``), ``tray`` (width, height in mm) and ``name`` replace the family's."""
+    ``"unlimited"``), ``tray`` (width, height in mm) and ``name`` replace the family's, and
+    ``stations`` puts it on that many assembly stations."""
     if family not in FAMILIES:
         raise UsageError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
     if size < 1:
@@ -345,8 +354,18 @@ def generate(
         d = 5.0 if delivery_time is None else delivery_time
         doc = random_graph(family, size, seed, t, d)
     _apply_options(doc, trays, tray, name)
+    if stations is not None:
+        _apply_stations(doc, stations)
     cmd = command_line(
-        family, size, seed, tightness, delivery_time, trays=trays, tray=tray, name=name
+        family,
+        size,
+        seed,
+        tightness,
+        delivery_time,
+        trays=trays,
+        tray=tray,
+        name=name,
+        stations=stations,
     )
     doc["description"] = re.sub(r"\(bilevel-kit generate [^)]*\)", f"({cmd})", doc["description"])
     if family not in PRODUCTS or tray is not None:
@@ -373,6 +392,32 @@ def _apply_options(
         if not name:
             raise UsageError("--name must not be empty")
         doc["name"] = name
+
+
+def _apply_stations(doc: dict[str, Any], n: int) -> None:
+    """``n`` stations, each building the document's units of every product: the units grow
+    ``n``-fold and station ``Sk`` serves the k-th block of them (the module docstring)."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise UsageError(f"--stations must be an integer >= 1, got {n!r}")
+    units = int(doc.get("units", 1))
+    for t in doc["tasks"]:
+        t.setdefault("product", doc["name"])  # the name changes below
+    products = list(dict.fromkeys(t["product"] for t in doc["tasks"]))
+    doc["units"] = units * n
+    doc["stations"] = [
+        {
+            "id": f"S{k}",
+            "serves": [
+                f"{p}@{u}" for u in range((k - 1) * units + 1, k * units + 1) for p in products
+            ],
+        }
+        for k in range(1, n + 1)
+    ]
+    doc["name"] = f"{doc['name']}_s{n}"
+    doc["description"] = doc["description"].replace(
+        " (bilevel-kit generate",
+        f", on {n} assembly station(s) served by one robot (bilevel-kit generate",
+    )
 
 
 def _check_solvable(

@@ -192,8 +192,10 @@ def solve(
     """
     from .bounds import best_bound
     from .reachability import ensure_kit_placeable
+    from .stations import require_stations_support
 
     spec = get_method(method)
+    require_stations_support(instance, method)
     check_seed(seed)
     check_time_limit(time_limit)
     options = spec.parse(params)
@@ -215,6 +217,9 @@ def solve(
     ):
         bound = objective  # a proof of optimality is a bound equal to the objective
     extra = dict(out.extra)
+    if instance.stations and timeline is not None:
+        per = timeline.station_metrics()  # docs/timeline.md, in the file's station order
+        extra["station_metrics"] = {s: per[s] for s in instance.station_ids if s in per}
     result_gap = gap(objective, bound)
     if check and out.plan is not None:
         from .validate import Claims

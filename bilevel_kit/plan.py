@@ -14,13 +14,16 @@ The robot pushes the tray, so it is busy while it delivers. With ``T`` trays in 
 (the paper's study: one) the tray of kit k - T comes back once the human has retrieved its
 parts, ``o_H`` after starting it; the robot cannot start kit k before. Robot idle counts
 delivery as robot work.
+With several assembly stations (docs/timeline.md#several-stations) ``d``, ``o_H``, ``T`` and
+"the previous kit" of the human and of the tray rule are those of the kit's station; the
+robot is shared, so ``arrive_{k-1}`` is the previous kit of any station.
 Every solver, the checker, the simulator and the plots go through :func:`evaluate`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 from .instance import Instance
 
@@ -83,6 +86,9 @@ class Timeline:
     robot_idle: float
     human_work: float
     robot_work: float
+    #: each kit's station, with several stations (docs/timeline.md#several-stations); empty
+    #: for one station
+    kit_stations: tuple[str, ...] = ()
 
     @classmethod
     def from_work(
@@ -111,6 +117,19 @@ class Timeline:
     def n_kits(self) -> int:
         return len(self.kits)
 
+    def station_metrics(self) -> dict[str, dict[str, float | int]]:
+        """Per station: its completion time, its human's idle time (completion less the
+        human's work there) and its kits; empty for one station (the four metrics say it)."""
+        out: dict[str, dict[str, float | int]] = {}
+        for kt, s in zip(self.kits, self.kit_stations, strict=True):
+            m = out.setdefault(s, {"completion": 0.0, "human_idle": 0.0, "n_kits": 0})
+            m["human_idle"] = float(m["human_idle"]) - (kt.human_end - kt.human_start)
+            m["completion"] = max(m["completion"], kt.human_end)
+            m["n_kits"] = int(m["n_kits"]) + 1
+        for m in out.values():
+            m["human_idle"] = float(m["completion"]) + float(m["human_idle"])
+        return out
+
     def metrics(self) -> dict[str, float | int]:
         return {
             "makespan": self.makespan,
@@ -120,18 +139,21 @@ class Timeline:
         }
 
 
-def tray_back(instance: Instance, kits: Sequence[KitTimes]) -> float:
-    """When the tray for the kit after ``kits`` is free: 0 while fewer than ``trays`` kits are
-    out, else ``human_start + o_H`` of the kit ``trays`` back (docs/timeline.md)."""
-    trays = instance.tray_limit
+def tray_back(instance: Instance, kits: Sequence[KitTimes], station: str = "") -> float:
+    """When a tray of ``station`` is free for its next kit, given that station's ``kits`` so
+    far: 0 while fewer than ``T_s`` kits are out, else ``human_start + o_H`` of the kit
+    ``T_s`` back (docs/timeline.md)."""
+    params = instance.station_params[station]
+    trays = params.tray_limit
     if trays is None or len(kits) < trays:
         return 0.0
-    return kits[-trays].human_start + instance.kit_overhead_human
+    return kits[-trays].human_start + params.kit_overhead_human
 
 
 def next_robot_start(instance: Instance, kits: Sequence[KitTimes]) -> float:
-    """The earliest start of the robot on the kit after ``kits``: the previous kit has arrived
-    and a tray is back (the one timeline rule, docs/timeline.md)."""
+    """The earliest start of the robot on the kit after ``kits`` on an instance of one
+    station: the previous kit has arrived and a tray is back (docs/timeline.md); with several
+    stations, :meth:`TimelineBuilder.next_start`."""
     return max(kits[-1].arrive if kits else 0.0, tray_back(instance, kits))
 
 
@@ -143,11 +165,20 @@ def kit_durations(
 ) -> tuple[float, float]:
     """(R_k, H_k) of a kit holding ``tasks``: overheads plus the tasks' robot/human times."""
     r = instance.kit_overhead_robot
-    h = instance.kit_overhead_human
+    h = instance.station_params[kit_station(instance, tasks)].kit_overhead_human
     for t in tasks:
         r += robot_times[t] if robot_times is not None else instance.robot_time(t)
         h += human_times[t] if human_times is not None else instance.human_time(t)
     return r, h
+
+
+def kit_station(instance: Instance, tasks: Sequence[str]) -> str:
+    """The station of a kit: its first task's ("" without stations; the checker refuses a
+    kit that mixes stations, ``wrong_station``, and an empty kit, timed at the first
+    station)."""
+    if not instance.stations:
+        return ""
+    return instance.station_of(tasks[0]) if tasks else instance.station_ids[0]
 
 
 class TimelineBuilder:
@@ -166,6 +197,9 @@ class TimelineBuilder:
         self.robot_times = robot_times
         self.human_times = human_times
         self.kits: list[KitTimes] = []
+        self.kit_stations: list[str] = []
+        #: each station's kits so far, in delivery order
+        self.by_station: dict[str, list[KitTimes]] = {s: [] for s in instance.station_ids}
         self.task_start: dict[str, float] = {}
         self.task_end: dict[str, float] = {}
         self.robot_work = 0.0
@@ -173,38 +207,71 @@ class TimelineBuilder:
 
     @property
     def human_free(self) -> float:
-        """When the human finishes the last kit so far (0 before the first)."""
+        """When the last human finishes the kits so far (0 before the first): with one
+        station, its human's end of the last kit."""
+        if self.instance.stations:
+            return max(self.station_free(s) for s in self.by_station)
         return self.kits[-1].human_end if self.kits else 0.0
+
+    def station_free(self, station: str = "") -> float:
+        """When the human of ``station`` finishes its last kit so far (0 before its first)."""
+        own = self.by_station[station]
+        return own[-1].human_end if own else 0.0
+
+    def next_start(self, station: str = "") -> float:
+        """The earliest robot start of the next kit if it is for ``station``: the robot is
+        free (the previous kit, of any station, has arrived) and a tray of ``station`` is
+        back (docs/timeline.md#several-stations)."""
+        free = self.kits[-1].arrive if self.kits else 0.0
+        return max(free, tray_back(self.instance, self.by_station[station], station))
 
     def append(self, kit: Kit) -> KitTimes:
         """Add the next kit in delivery order and return its times (the module docstring)."""
         inst, human_times = self.instance, self.human_times
+        station = kit_station(inst, kit.tasks)
+        params = inst.station_params[station]
         r, h = kit_durations(inst, kit.tasks, self.robot_times, human_times)
-        robot_start = next_robot_start(inst, self.kits)
+        robot_start = self.next_start(station)
         robot_end = robot_start + r
-        arrive = robot_end + inst.delivery_time
-        human_start = max(arrive, self.human_free)
+        arrive = robot_end + params.delivery_time
+        human_start = max(arrive, self.station_free(station))
         human_end = human_start + h
-        clock = human_start + inst.kit_overhead_human
+        clock = human_start + params.kit_overhead_human
         for t in kit.tasks:
             self.task_start[t] = clock
             clock += human_times[t] if human_times is not None else inst.human_time(t)
             self.task_end[t] = clock
         times = KitTimes(robot_start, robot_end, arrive, human_start, human_end)
         self.kits.append(times)
-        self.robot_work += r + inst.delivery_time
+        self.kit_stations.append(station)
+        self.by_station[station].append(times)
+        self.robot_work += r + params.delivery_time
         self.human_work += h
         return times
 
     def timeline(self) -> Timeline:
         """The timeline of the kits appended so far."""
-        return Timeline.from_work(
-            self.kits,
-            self.task_start,
-            self.task_end,
-            self.human_free,
-            self.human_work,
-            self.robot_work,
+        if not self.instance.stations:
+            return Timeline.from_work(
+                self.kits,
+                self.task_start,
+                self.task_end,
+                self.human_free,
+                self.human_work,
+                self.robot_work,
+            )
+        ends = [self.station_free(s) for s in self.by_station]
+        return replace(
+            Timeline.from_work(
+                self.kits,
+                self.task_start,
+                self.task_end,
+                max(ends),
+                self.human_work,
+                self.robot_work,
+            ),
+            human_idle=sum(ends) - self.human_work,
+            kit_stations=tuple(self.kit_stations),
         )
 
 

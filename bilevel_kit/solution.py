@@ -175,6 +175,11 @@ def schema() -> dict[str, Any]:
                         },
                     },
                     "trays": {"type": ["integer", "null"], "minimum": 1},
+                    "stations": {
+                        "type": "array",
+                        "items": {"type": "object"},
+                        "description": "the instance's stations, when it declares them",
+                    },
                 },
             },
             "objective": _OPT_NUM,
@@ -327,6 +332,7 @@ def _timeline(params: dict[str, Any] | None, num: _Numbers) -> dict[str, Any] | 
             for k in ("robot", "human")
         },
         "trays": trays,
+        **({"stations": params["stations"]} if "stations" in params else {}),
     }
 
 

@@ -38,6 +38,7 @@ KINDS = (
     "repeated_task",
     "missing_task",
     "precedence",
+    "wrong_station",
     "unknown_part_type",
     "duplicate_part_id",
     "parts_mismatch",
@@ -100,6 +101,7 @@ def timeline_params(instance: Instance) -> dict[str, Any]:
             "human": instance.kit_overhead_human,
         },
         "trays": instance.trays,
+        **({"stations": [st.to_dict() for st in instance.stations]} if instance.stations else {}),
     }
 
 
@@ -136,6 +138,7 @@ def check(
     if claims is not None:  # first: it explains every time that follows
         out += _check_instance(instance, claims)
     out += _check_tasks(instance, plan)
+    out += _check_stations(instance, plan)
     for k, kit in enumerate(plan.kits, start=1):
         out += _check_layout(instance, kit, k)
     if reported_kits is not None or reported_metrics is not None:
@@ -294,6 +297,20 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
                     "precedence", f"{a!r} must precede {b!r} but comes after it inside kit {ka}", ka
                 )
             )
+    return out
+
+
+def _check_stations(instance: Instance, plan: Plan) -> list[Violation]:
+    """Each kit holds tasks of one station (docs/timeline.md#several-stations); precedence
+    never joins two stations, so the precedence pass above is per station already."""
+    if not instance.stations:
+        return []
+    out = []
+    for k, kit in enumerate(plan.kits, start=1):
+        where = {instance.task_by_id[t].station for t in kit.tasks if t in instance.task_by_id}
+        if len(where) > 1:
+            shown = ", ".join(sorted(where))
+            out.append(Violation("wrong_station", f"kit {k} mixes tasks of stations {shown}", k))
     return out
 
 
@@ -489,7 +506,7 @@ def _check_times(
                             k,
                         )
                     )
-        out += _check_tray_rule(instance, reported_kits)
+        out += _check_tray_rule(instance, plan, reported_kits)
     if reported_metrics is not None:
         for name, w in tl.metrics().items():
             if name not in reported_metrics:
@@ -504,21 +521,34 @@ def _check_times(
     return out
 
 
-def _check_tray_rule(instance: Instance, kits: Sequence[KitTimes]) -> list[Violation]:
-    """``robot_start_k >= human_start_{k-T} + o_H`` on the reported times (T trays)."""
-    trays = instance.tray_limit
-    if trays is None:
-        return []
+def _check_tray_rule(instance: Instance, plan: Plan, kits: Sequence[KitTimes]) -> list[Violation]:
+    """``robot_start_k >= human_start_j + o_H`` on the reported times, ``j`` the ``T_s``-th
+    previous kit of kit k's station ``s`` (one station: the ``T``-th previous kit)."""
     out = []
-    for k in range(trays, len(kits)):
-        back = kits[k - trays].human_start + instance.kit_overhead_human
-        if kits[k].robot_start < back - TIME_TOL:
-            out.append(
-                Violation(
-                    "tray_not_returned",
-                    f"kit {k + 1}: the robot starts at {kits[k].robot_start:.6g} s, before the "
-                    f"tray of kit {k + 1 - trays} is back at {back:.6g} s ({trays} tray(s))",
-                    k + 1,
+    seen: dict[str, list[int]] = {}  # station -> its kits' indices so far
+    for k, (kt, kit) in enumerate(zip(kits, plan.kits, strict=False)):
+        station = _station(instance, kit)
+        own = seen.setdefault(station, [])
+        params = instance.station_params.get(station)
+        trays = params.tray_limit if params is not None else None
+        if trays is not None and len(own) >= trays:
+            j = own[-trays]
+            back = kits[j].human_start + params.kit_overhead_human  # type: ignore[union-attr]
+            if kt.robot_start < back - TIME_TOL:
+                at = f" of station {station}" if station else ""
+                out.append(
+                    Violation(
+                        "tray_not_returned",
+                        f"kit {k + 1}: the robot starts at {kt.robot_start:.6g} s, before the "
+                        f"tray of kit {j + 1} is back at {back:.6g} s ({trays} tray(s){at})",
+                        k + 1,
+                    )
                 )
-            )
+        own.append(k)
     return out
+
+
+def _station(instance: Instance, kit: Kit) -> str:
+    """A kit's station as the checker sees it: its first known task's ("" without)."""
+    known = [t for t in kit.tasks if t in instance.task_by_id]
+    return instance.task_by_id[known[0]].station if known else ""

@@ -6,6 +6,9 @@ CP-SAT packer (area first; memoised per part multiset) for 0/90-degree layouts o
 (the test instances' sizes are whole millimetres, so the grid is exact). Only for instances of
 <= 7 tasks. The brute force is the optimum over 0/90-degree plans, which is what an exact
 model's own verdict speaks of (``model_verdict``, docs/formulations.md#what-optimal-means).
+With several assembly stations (docs/timeline.md#several-stations) a kit holds tasks of one
+station only, so the segmentations keep the kits that do: every plan is an order cut into
+kits, so this still enumerates every valid plan.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
     """Every precedence-feasible permutation x every one of its 2^(n-1) cut patterns, each
     distinct segmentation (as a sequence of task sets) once."""
     ids = [t.id for t in inst.tasks]
+    station = {t.id: t.station for t in inst.tasks}
     n = len(ids)
     seen = set()
     for perm in itertools.permutations(ids):
@@ -55,6 +59,8 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
                     cur = []
                 cur.append(perm[k])
             kits.append(tuple(cur))
+            if any(len({station[t] for t in k}) > 1 for k in kits):
+                continue
             key = tuple(frozenset(k) for k in kits)
             if key not in seen:
                 seen.add(key)

@@ -95,6 +95,33 @@ def random_doc(
     }
 
 
+def stations_doc(seed: int, n_stations: int, n: int | None = None) -> dict[str, Any]:
+    """:func:`random_doc` on ``n_stations`` assembly stations (docs/timeline.md): each task on
+    a random station (every station gets one), the edges between stations dropped, each
+    station with its own delivery time, trays (1, 2 or the instance's unlimited) and, on
+    some, its own human overhead."""
+    doc = random_doc(seed, n)
+    rng = random.Random(seed + 7919)
+    ids = [f"S{k}" for k in range(n_stations)]
+    where = ids + [rng.choice(ids) for _ in range(len(doc["tasks"]) - n_stations)]
+    rng.shuffle(where)
+    for task, s in zip(doc["tasks"], where, strict=True):
+        task["station"] = s
+    on = {t["id"]: t["station"] for t in doc["tasks"]}
+    doc["precedence"] = [e for e in doc["precedence"] if on[e[0]] == on[e[1]]]
+    stations = []
+    for s in ids:
+        st: dict[str, Any] = {"id": s, "delivery_time": rng.randint(0, 16) / 2}
+        trays = rng.choice([1, 2, None])
+        if trays is not None:
+            st["trays"] = trays
+        if rng.random() < 0.5:
+            st["kit_overhead_human"] = rng.randint(0, 6) / 2
+        stations.append(st)
+    doc["stations"] = stations
+    return doc
+
+
 def one_task_doc(
     name: str,
     width: float,

@@ -63,6 +63,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the tray's width x height in mm, replacing the family's (not with --tightness)",
     )
     p.add_argument("--name", metavar="NAME", help="the instance's name (default: the family's)")
+    p.add_argument(
+        "--stations",
+        type=positive_int,
+        metavar="S",
+        help="S assembly stations served by one robot, each building --size units of the "
+        "family's products (docs/timeline.md#several-stations)",
+    )
     add_output(p, "--out", "-o", metavar="FILE", help="write here instead of stdout")
 
 
@@ -79,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
                     f"sparse), not to {args.family!r}"
                 )
     seed = 0 if args.seed is None else args.seed
-    options = {"trays": args.trays, "tray": args.tray, "name": args.name}
+    options = {"trays": args.trays, "tray": args.tray, "name": args.name, "stations": args.stations}
     doc = generate(args.family, args.size, seed, args.tightness, args.delivery_time, **options)
     cmd = command_line(args.family, args.size, seed, args.tightness, args.delivery_time, **options)
     doc = _with_command(doc, cmd)
@@ -92,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"wrote {args.out}: {doc['name']}, {len(doc['tasks'])} tasks x "
             f"{doc.get('units', 1)} unit(s)"
+            + (f" on {len(doc['stations'])} station(s)" if "stations" in doc else "")
         )
     else:
         sys.stdout.write(text)

@@ -158,6 +158,11 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
         f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
         f"  time {result.wall_time_s:.3f} s"
     )
+    for station, sm in result.extra.get("station_metrics", {}).items():
+        lines.append(
+            f"  station {station}: completion {_fmt(sm['completion'])} s"
+            f"  human idle {_fmt(sm['human_idle'])} s  kits {sm['n_kits']}"
+        )
     j = result.extra.get("plan_objective_J")
     if result.status_objective != "makespan" and j is not None:
         # the status is about J, not the makespan: show the numbers it refers to
@@ -171,10 +176,12 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
     if quiet or result.plan is None or result.timeline is None:
         return "\n".join(lines)
     lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
+    where = result.timeline.kit_stations
     for k, (kit, t) in enumerate(zip(result.plan.kits, result.timeline.kits, strict=True), 1):
+        at = f"  (station {where[k - 1]})" if where else ""
         lines.append(
             f"{k:>3}  {t.robot_start:7.1f}-{t.robot_end:<7.1f}  {t.arrive:8.1f}  "
-            f"{t.human_start:7.1f}-{t.human_end:<7.1f}  {','.join(kit.tasks)}"
+            f"{t.human_start:7.1f}-{t.human_end:<7.1f}  {','.join(kit.tasks)}{at}"
         )
     return "\n".join(lines)
 

@@ -5,6 +5,12 @@
   algorithm, ties broken by the order of the tasks in the file).
 * Whole Assembly: one kit per product unit holding all of that unit's tasks, in the same order.
 
+With several assembly stations (docs/timeline.md#several-stations) each station gets these
+kits of its own tasks (Whole Assembly: one kit per product unit and station), and the stations'
+kit sequences are interleaved by earliest need: the next kit is the next one of the station
+whose human runs out of work first (the earliest end of its last kit so far, ties to the
+station listed first), by the one timeline evaluator.
+
 Layouts come from the shelf packer (when the instance enforces Sawyer reachability and the
 packer's layout puts a part out of reach, from cross-entropy with seed 0 instead); a kit that
 cannot be laid out raises
@@ -19,7 +25,7 @@ from ..errors import KitDoesNotFit
 from ..instance import Instance, topological_order
 from ..methods import MethodOutput, Status
 from ..options import NO_OPTIONS, NoOptions
-from ..plan import Kit, Plan
+from ..plan import Kit, Plan, TimelineBuilder
 from ..reachability import unreachable
 from .shelf import kit_items, shelf_pack
 
@@ -63,6 +69,12 @@ def single_task(
     time_limit: float | None = None,
 ) -> MethodOutput:
     """One kit per task, in topological order."""
+    if instance.stations:
+        order = topological_order(instance)
+        queues = {
+            s: [[t] for t in order if instance.station_of(t) == s] for s in instance.station_ids
+        }
+        return _interleaved(instance, queues, "kit for task")
     kits = tuple(
         packed_kit(instance, [t], f"kit for task {t!r}") for t in topological_order(instance)
     )
@@ -79,8 +91,39 @@ def whole_assembly(
     """One kit per product unit, its tasks in topological order."""
     order = topological_order(instance)
     unit = {t.id: t.unit for t in instance.tasks}
+    if instance.stations:
+        queues = {
+            s: [
+                kit
+                for u in range(1, instance.units + 1)
+                if (kit := [t for t in order if unit[t] == u and instance.station_of(t) == s])
+            ]
+            for s in instance.station_ids
+        }
+        return _interleaved(instance, queues, "whole-assembly kit of")
     kits = tuple(
         packed_kit(instance, [t for t in order if unit[t] == u], f"whole-assembly kit of unit {u}")
         for u in range(1, instance.units + 1)
     )
     return MethodOutput(Plan(kits), Status.FEASIBLE)
+
+
+def _interleaved(
+    instance: Instance, queues: dict[str, list[list[str]]], label: str
+) -> MethodOutput:
+    """Each station's kits in its own order, interleaved by earliest need (the module
+    docstring): the station whose human is free first gets the next kit."""
+    timeline = TimelineBuilder(instance)
+    heads = dict.fromkeys(queues, 0)
+    kits: list[Kit] = []
+    while True:
+        ready = [s for s in queues if heads[s] < len(queues[s])]
+        if not ready:
+            break
+        station = min(ready, key=lambda s: timeline.station_free(s))  # stable: file order
+        tasks = queues[station][heads[station]]
+        heads[station] += 1
+        kit = packed_kit(instance, tasks, f"{label} {', '.join(tasks)}")
+        timeline.append(kit)
+        kits.append(kit)
+    return MethodOutput(Plan(tuple(kits)), Status.FEASIBLE)

@@ -57,6 +57,7 @@ def schema() -> dict[str, Any]:
                 "default": DEFAULT_HORIZON,
             },
             "trays": _trays_schema(),
+            "stations": _stations_schema(),
             "supply": _supply_schema(),
             "units": {"type": "integer", "minimum": 1, "maximum": MAX_TASKS, "default": 1},
             "station": _station_schema(),
@@ -121,6 +122,11 @@ def _task_schema() -> dict[str, Any]:
             "id": _ID,
             "name": {"type": "string"},
             "product": {"type": "string", "minLength": 1},
+            "station": {
+                **_ID,
+                "description": "the assembly station of the task (one of 'stations'); "
+                "default: the station serving its product unit",
+            },
             "parts": {"type": "array", "items": part_request},
             "human_time": {
                 "type": "object",
@@ -174,6 +180,40 @@ def _trays_schema() -> dict[str, Any]:
         "description": "kit trays in circulation: the robot starts kit k only when the "
         "tray of kit k - trays is back, i.e. once the human has retrieved its parts "
         "(the paper's study: 1); absent or null: unlimited",
+    }
+
+
+def _stations_schema() -> dict[str, Any]:
+    """Assembly stations served by the one robot (docs/timeline.md#several-stations)."""
+    return {
+        "type": "array",
+        "minItems": 1,
+        "description": "assembly stations served by the robot; absent: one station holding "
+        "every task",
+        "items": {
+            "type": "object",
+            "required": ["id"],
+            "additionalProperties": False,
+            "properties": {
+                "id": _ID,
+                "delivery_time": {**_NONNEG, "description": "d_s (s); default: delivery_time"},
+                "trays": {
+                    "type": "integer",
+                    "minimum": 1,
+                    "description": "T_s, trays of this station; default: trays",
+                },
+                "kit_overhead_human": {
+                    **_NONNEG,
+                    "description": "o_H of this station's human (s); default: kit_overhead.human",
+                },
+                "serves": {
+                    "type": "array",
+                    "items": {"type": "string", "minLength": 1},
+                    "description": "products ('table') or product units ('table@2') whose "
+                    "tasks the station builds",
+                },
+            },
+        },
     }
 
 

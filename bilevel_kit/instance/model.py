@@ -83,6 +83,9 @@ class Task:
     product: str = ""
     unit: int = 1
     base_id: str = ""
+    #: The assembly station (docs/timeline.md#several-stations): the file's ``station`` field
+    #: on a base task, the resolved station on an expanded one; "" without ``stations``.
+    station: str = ""
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,41 @@ class Supply:
     mat: float
     mttf: float | None = None
     repair_time: float = DEFAULT_REPAIR_TIME
+
+
+@dataclass(frozen=True)
+class AssemblyStation:
+    """One assembly station served by the robot (docs/timeline.md#several-stations): its own
+    delivery time, trays and per-kit human overhead (``None``: the instance's), and the
+    products (``"table"``) or product units (``"table@2"``) whose tasks it builds."""
+
+    id: str
+    delivery_time: float | None = None
+    trays: int | None = None
+    kit_overhead_human: float | None = None
+    serves: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        doc: dict[str, Any] = {"id": self.id}
+        if self.delivery_time is not None:
+            doc["delivery_time"] = self.delivery_time
+        if self.trays is not None:
+            doc["trays"] = self.trays
+        if self.kit_overhead_human is not None:
+            doc["kit_overhead_human"] = self.kit_overhead_human
+        if self.serves:
+            doc["serves"] = list(self.serves)
+        return doc
+
+
+@dataclass(frozen=True)
+class StationParams:
+    """A station's resolved timeline parameters: ``d_s``, ``o_H`` of the station and the
+    number of trays that binds (``None``: never)."""
+
+    delivery_time: float
+    kit_overhead_human: float
+    tray_limit: int | None
 
 
 @dataclass(frozen=True)
@@ -127,6 +165,8 @@ class Instance:
     #: Kit trays in circulation (the study's protocol: 1); ``None``: unlimited, the robot may
     #: run ahead of the human (docs/timeline.md).
     trays: int | None = None
+    #: Assembly stations (docs/timeline.md#several-stations); empty: one station, every task.
+    stations: tuple[AssemblyStation, ...] = ()
     source: str = "<memory>"
 
     # -- the expanded (all-units) view -------------------------------------------------------
@@ -134,12 +174,61 @@ class Instance:
     def tasks(self) -> tuple[Task, ...]:
         """All tasks of all units; ids get an ``@u`` suffix when ``units > 1``."""
         if self.units == 1:
-            return tuple(replace(t, base_id=t.base_id or t.id) for t in self.base_tasks)
+            return tuple(
+                replace(t, base_id=t.base_id or t.id, station=self._station_for(t, 1))
+                for t in self.base_tasks
+            )
         return tuple(
-            replace(t, id=f"{t.id}@{u}", name=f"{t.name} (unit {u})", unit=u, base_id=t.id)
+            replace(
+                t,
+                id=f"{t.id}@{u}",
+                name=f"{t.name} (unit {u})",
+                unit=u,
+                base_id=t.id,
+                station=self._station_for(t, u),
+            )
             for u in range(1, self.units + 1)
             for t in self.base_tasks
         )
+
+    def _station_for(self, task: Task, unit: int) -> str:
+        """A task's station: its own field, else the station serving its product unit, else
+        the one serving its product ("" when none does, which the parser refuses)."""
+        if not self.stations or task.station:
+            return task.station
+        served = self.served_by
+        return served.get(f"{task.product}@{unit}", served.get(task.product, ""))
+
+    @cached_property
+    def served_by(self) -> dict[str, str]:
+        """``serves`` entries (product or ``product@unit``) -> station id."""
+        return {key: s.id for s in self.stations for key in s.serves}
+
+    @property
+    def station_ids(self) -> tuple[str, ...]:
+        """The stations' ids in file order; ``("",)`` for the one implicit station."""
+        return tuple(s.id for s in self.stations) if self.stations else ("",)
+
+    def station_of(self, task_id: str) -> str:
+        """The station of an (expanded) task; "" without ``stations``."""
+        return self.task_by_id[task_id].station
+
+    @cached_property
+    def station_params(self) -> dict[str, StationParams]:
+        """Each station's ``d_s``, ``o_H`` and binding tray count (docs/timeline.md); without
+        ``stations`` the one station "" has the instance's own."""
+        if not self.stations:
+            return {"": StationParams(self.delivery_time, self.kit_overhead_human, self.tray_limit)}
+        count = Counter(t.station for t in self.tasks)
+        out = {}
+        for s in self.stations:
+            trays = s.trays if s.trays is not None else self.trays
+            out[s.id] = StationParams(
+                self.delivery_time if s.delivery_time is None else s.delivery_time,
+                self.kit_overhead_human if s.kit_overhead_human is None else s.kit_overhead_human,
+                None if trays is None or trays >= count[s.id] else trays,
+            )
+        return out
 
     @cached_property
     def precedence(self) -> tuple[tuple[str, str], ...]:
@@ -159,6 +248,8 @@ class Instance:
         products: dict[str, list[Task]] = {}
         for t in self.base_tasks:
             products.setdefault(t.product, []).append(t)
+        if self.stations:
+            return self._station_precedence(products, succ, pred)
         edges: list[tuple[str, str]] = []
         for u in range(1, self.units + 1):
             edges += [(f"{a}@{u}", f"{b}@{u}") for a, b in self.base_precedence]
@@ -168,6 +259,30 @@ class Instance:
                 sinks = [t.id for t in members if succ[t.id] == 0]
                 sources = [t.id for t in members if pred[t.id] == 0]
                 edges += [(f"{s}@{u}", f"{r}@{u + 1}") for s in sinks for r in sources]
+        return tuple(edges)
+
+    def _station_precedence(
+        self, products: dict[str, list[Task]], succ: dict[str, int], pred: dict[str, int]
+    ) -> tuple[tuple[str, str], ...]:
+        """The expanded edges with stations: the product's own edges in every unit, and the
+        units of a product chained station by station (the sinks of its tasks on station s in
+        one unit precede their sources on s in the next unit that has any): stations are
+        independent (docs/timeline.md#several-stations)."""
+        edges = [
+            (f"{a}@{u}", f"{b}@{u}")
+            for u in range(1, self.units + 1)
+            for a, b in self.base_precedence
+        ]
+        for members in products.values():
+            last: dict[str, list[str]] = {}  # station -> sinks of its latest unit
+            for u in range(1, self.units + 1):
+                groups: dict[str, list[Task]] = {}
+                for t in members:
+                    groups.setdefault(self._station_for(t, u), []).append(t)
+                for st, group in groups.items():
+                    sources = [f"{t.id}@{u}" for t in group if pred[t.id] == 0]
+                    edges += [(s, r) for s in last.get(st, []) for r in sources]
+                    last[st] = [f"{t.id}@{u}" for t in group if succ[t.id] == 0]
         return tuple(edges)
 
     @cached_property
@@ -267,7 +382,13 @@ class Instance:
                 raise InstanceError(self.source, "$.units", "must be >= 1")
             check_size(len(self.base_tasks), int(units), self.source)
             changes["units"] = int(units)
-        return replace(self, **changes) if changes else self
+        out = replace(self, **changes) if changes else self
+        lost = [t.id for t in out.tasks if not t.station] if out.stations else []
+        if lost:  # docs/timeline.md#several-stations: every task on a station
+            raise InstanceError(
+                self.source, "$.units", f"task {lost[0]!r} is on no station with these units"
+            )
+        return out
 
     @property
     def tray_limit(self) -> int | None:
@@ -316,6 +437,8 @@ class Instance:
             d: dict[str, Any] = {"id": t.id, "name": t.name}
             if t.product and t.product != self.name:
                 d["product"] = t.product
+            if t.station:
+                d["station"] = t.station
             d["parts"] = [{"type": p, "count": n} for p, n in t.parts]
             d["human_time"] = {"mean": t.human_mean, "sd": t.human_sd}
             if t.robot_time is not None:
@@ -327,6 +450,8 @@ class Instance:
         doc["horizon"] = self.horizon
         if self.trays is not None:
             doc["trays"] = self.trays
+        if self.stations:
+            doc["stations"] = [s.to_dict() for s in self.stations]
         if self.supply:
             doc["supply"] = {
                 k: {

@@ -23,6 +23,7 @@ from .model import (
     DEFAULT_REPAIR_TIME,
     DEFAULT_WEIGHTS,
     FORMAT,
+    AssemblyStation,
     Instance,
     PartType,
     Supply,
@@ -87,7 +88,8 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     if robot_times == "motion":
         part_types = _motion_pick_times(part_types, station, tray, source)
     overhead = doc.get("kit_overhead", {})
-    return Instance(
+    stations = _stations(doc, tasks, source)
+    inst = Instance(
         name=name,
         tray=tray,
         delivery_time=float(doc.get("delivery_time", 0.0)),
@@ -108,8 +110,12 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         reach_resolution=float(doc.get("reach_resolution", 10.0)),
         robot_times=robot_times,
         trays=parse_trays(doc.get("trays"), source) if doc.get("trays") is not None else None,
+        stations=stations,
         source=source,
     )
+    if stations:
+        _check_station_tasks(inst, source)
+    return inst
 
 
 def _check_structure(doc: Any, source: str) -> None:
@@ -185,6 +191,7 @@ def _tasks(
                 robot_time=float(t["robot_time"]) if "robot_time" in t else None,
                 product=t.get("product", product),
                 base_id=t["id"],
+                station=t.get("station", ""),
             )
         )
     return tasks
@@ -258,6 +265,84 @@ def _find_cycle(nodes: list[str], edges: Iterable[tuple[str, str]]) -> list[str]
                 stack.pop()
                 path.pop()
     return None
+
+
+def _stations(
+    doc: Mapping[str, Any], tasks: list[Task], source: str
+) -> tuple[AssemblyStation, ...]:
+    """The assembly stations (docs/timeline.md#several-stations): unique ids; each ``serves``
+    entry a known product or ``product@unit`` with ``1 <= unit <= units``, served once; a
+    task's ``station`` field names a declared station."""
+    entries = doc.get("stations", [])
+    ids: set[str] = set()
+    served: set[str] = set()
+    products = {t.product for t in tasks}
+    units = int(doc.get("units", 1))
+    out = []
+    for i, e in enumerate(entries):
+        if e["id"] in ids:
+            raise InstanceError(source, f"$.stations[{i}].id", f"duplicate station id {e['id']!r}")
+        ids.add(e["id"])
+        for j, key in enumerate(e.get("serves", [])):
+            product, _, unit = key.partition("@")
+            bad = product not in products or (
+                unit and not (unit.isdigit() and 1 <= int(unit) <= units)
+            )
+            where = f"$.stations[{i}].serves[{j}]"
+            if bad:
+                raise InstanceError(
+                    source,
+                    where,
+                    f"{key!r} is no product ({', '.join(sorted(products))}) "
+                    f"nor product@unit with unit in 1..{units}",
+                )
+            if key in served:
+                raise InstanceError(source, where, f"{key!r} is served by two stations")
+            served.add(key)
+        out.append(
+            AssemblyStation(
+                id=e["id"],
+                delivery_time=float(e["delivery_time"]) if "delivery_time" in e else None,
+                trays=int(e["trays"]) if "trays" in e else None,
+                kit_overhead_human=(
+                    float(e["kit_overhead_human"]) if "kit_overhead_human" in e else None
+                ),
+                serves=tuple(e.get("serves", [])),
+            )
+        )
+    for i, t in enumerate(tasks):
+        if t.station and t.station not in ids:
+            known = ", ".join(sorted(ids)) if ids else "none: the file declares no stations"
+            raise InstanceError(
+                source, f"$.tasks[{i}].station", f"unknown station {t.station!r} (known: {known})"
+            )
+    return tuple(out)
+
+
+def _check_station_tasks(inst: Instance, source: str) -> None:
+    """Every task on a station, and no precedence edge between two stations (they are
+    independent, docs/timeline.md#several-stations)."""
+    index = {t.id: i for i, t in enumerate(inst.base_tasks)}
+    for t in inst.tasks:
+        if not t.station:
+            unit = f" (unit {t.unit})" if inst.units > 1 else ""
+            raise InstanceError(
+                source,
+                f"$.tasks[{index[t.base_id]}].station",
+                f"task {t.base_id!r}{unit} belongs to no station: give it a 'station' or list "
+                f"its product {t.product!r} in a station's 'serves'",
+            )
+    by_id = inst.task_by_id
+    for k, (a, b) in enumerate(inst.base_precedence):
+        for u in range(1, inst.units + 1):
+            ta, tb = (by_id[x if inst.units == 1 else f"{x}@{u}"] for x in (a, b))
+            if ta.station != tb.station:
+                raise InstanceError(
+                    source,
+                    f"$.precedence[{k}]",
+                    f"{a!r} is on station {ta.station!r}, {b!r} on {tb.station!r}: stations are "
+                    "independent, so no edge may join them",
+                )
 
 
 def _supply(

@@ -176,6 +176,11 @@ def simulate(
     seed = int(seed)
     if seed < 0:
         raise UsageError(f"seed must be >= 0, got {seed}")
+    if instance.stations:
+        raise UsageError(
+            f"{instance.source}: the simulation does not model several assembly stations yet "
+            "(docs/timeline.md#several-stations)"
+        )
     inst = effective_instance(instance, params)
     pol = _policy(inst, policy, params, seed)
     times = sample_times(

@@ -27,6 +27,7 @@ CORE = (
     "plan",
     "validate",
     "bounds",
+    "stations",
     "geometry",
     "fitness",
     "reachability",

@@ -220,7 +220,11 @@ def cpsat(
     time_limit: float | None = None,
 ) -> MethodOutput:
     """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
-    (module docstring)."""
+    (module docstring). Several assembly stations: :mod:`.stations`."""
+    if instance.stations:
+        from .stations import solve_stations
+
+        return solve_stations(instance, options, seed=seed, time_limit=time_limit)
     budget = Budget(time_limit)
     plan: Plan | None = None
     source = None

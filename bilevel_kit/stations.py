@@ -1,0 +1,52 @@
+"""Several assembly stations served by one robot (docs/timeline.md#several-stations).
+
+The evaluator (:mod:`bilevel_kit.plan`) and the checker take stations themselves; this module
+holds what methods and bounds share about them: a station's tasks as an instance of their own
+(:func:`station_instance`, whose closed-form bounds hold for that station's completion) and
+the list of the methods that model stations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from .errors import UsageError
+from .instance import Instance
+
+#: The methods that plan for several stations; every other one refuses an instance that
+#: declares ``stations`` (its times would use the instance's ``d``, ``o_H`` and ``trays``).
+STATION_METHODS = frozenset({"single-task", "whole-assembly", "cpsat"})
+
+
+def station_instance(instance: Instance, station: str) -> Instance:
+    """The tasks of ``station`` as an instance of one station, with its ``d_s``, ``o_H`` and
+    trays: the robot serving this station alone. Its plans' makespans are at most the
+    station's completion in any plan of ``instance`` (dropping the other stations' kits only
+    frees the robot earlier, and times are non-decreasing in start times), so its bounds hold
+    for that completion and their max over the stations for the makespan."""
+    if not instance.stations:
+        return instance
+    tasks = tuple(replace(t, station="") for t in instance.tasks if t.station == station)
+    ids = {t.id for t in tasks}
+    spec = next(s for s in instance.stations if s.id == station)
+    params = instance.station_params[station]
+    return replace(
+        instance,
+        name=f"{instance.name}:{station}",
+        base_tasks=tasks,
+        base_precedence=tuple((a, b) for a, b in instance.precedence if a in ids),
+        units=1,
+        delivery_time=params.delivery_time,
+        kit_overhead_human=params.kit_overhead_human,
+        trays=spec.trays if spec.trays is not None else instance.trays,
+        stations=(),
+    )
+
+
+def require_stations_support(instance: Instance, method: str) -> None:
+    """Refuse (exit 2) a method that does not model stations on an instance that has them."""
+    if instance.stations and method not in STATION_METHODS:
+        raise UsageError(
+            f"{instance.source}: method {method!r} does not model several assembly stations "
+            f"yet; use one of {', '.join(sorted(STATION_METHODS))} (docs/timeline.md)"
+        )
