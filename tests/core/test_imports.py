@@ -238,3 +238,24 @@ def test_the_rules_can_fail():
         ]
     finally:
         GRAPH[f"{PKG}.heuristics.shelf"].discard(f"{PKG}.models.packing")
+
+
+def test_modules_and_functions_stay_small():
+    """Small modules with one job each (docs/extending.md#the-house): at most 700 lines per
+    module and 100 per function, so a reader can hold one in view."""
+    import ast
+    from pathlib import Path
+
+    package = Path(__file__).resolve().parents[2] / "bilevel_kit"
+    too_long = []
+    for path in sorted(package.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        name = path.relative_to(package.parent)
+        if text.count("\n") > 700:
+            too_long.append(f"{name}: {text.count(chr(10))} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                length = node.end_lineno - node.lineno + 1
+                if length > 100:
+                    too_long.append(f"{name}:{node.lineno} {node.name}: {length} lines")
+    assert not too_long, "\n".join(too_long)

@@ -7,13 +7,11 @@ best heuristic plan (:func:`best_heuristic_plan`, option ``hint``).
 **Tray mode.** ``embedded`` puts the rectangles into the model, ``benders`` checks the kits
 of master solutions with the packing oracle and cuts those that do not fit (:mod:`.tray`,
 :mod:`.benders`). ``auto`` uses ``embedded`` when the number of optional (part, kit)
-rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS` (300: one table, 28 parts x at most 9
-kits; two tables took 9 s embedded against 1.3 s with Benders), the instance does not
-enforce reachability and has no tray limit (the one-tray table: 8-10 s embedded against 4 s
-with Benders on a loaded machine) and the embedded tray proves optimality for every plan
-(:func:`embed_scope`: all the instance's parts fit one tray, or none may rotate and the grid is
-exact), else ``benders``. Embedded models run with
-:data:`~bilevel_kit.models.packing.SAFE_NO_OVERLAP_2D` (an OR-Tools 9.15 workaround).
+rectangles is at most :data:`AUTO_EMBEDDED_MAX_RECTS`, the instance does not enforce
+reachability, has no tray limit, and the embedded tray proves optimality for every plan
+(:func:`embed_scope`), else ``benders`` (measured: :data:`.tray.AUTO_EMBEDDED_MAX_RECTS`).
+Embedded models run with :data:`~bilevel_kit.models.packing.SAFE_NO_OVERLAP_2D` (an
+OR-Tools 9.15 workaround).
 "optimal" and ``bound`` speak of every plan the checker accepts (parts at any angle); the
 model's own optimum and bound hold for the plans its exclusions were proven for, which may be
 the 0/90-degree plans only (``optimal_axis_aligned``, ``bound_axis_aligned``,
@@ -24,8 +22,7 @@ which the bound never undercuts, hold for every plan. Times are scaled to intege
 **Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
 checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
 \min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
-:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U is added
-too.
+:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U too.
 
 **Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none): a
 task cannot be picked before its release (raised to its ancestors'); the model, its scaled

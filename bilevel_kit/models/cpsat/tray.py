@@ -26,7 +26,9 @@ from ..common import Packer
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import Model
 
-#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles.
+#: ``auto`` embeds the tray when the model has at most this many optional (part, kit) rectangles
+#: (300: one table, 28 parts x at most 9 kits; two tables took 9 s embedded against 1.3 s with
+#: Benders, the one-tray table 8-10 s embedded against 4 s with Benders on a loaded machine).
 AUTO_EMBEDDED_MAX_RECTS = 300
 
 #: Lower-left grid corner and rotation of every part of a plan: task index -> (type, copy j)
