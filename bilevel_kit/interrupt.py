@@ -31,7 +31,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import TypeVar
+from typing import IO, TypeVar
 
 T = TypeVar("T")
 
@@ -48,6 +48,17 @@ class Terminated(KeyboardInterrupt):
 def message(exc: BaseException | None = None) -> str:
     """The one line a command prints when it was interrupted."""
     return "bilevel-kit: interrupted" + (" (SIGTERM)" if isinstance(exc, Terminated) else "")
+
+
+#: Set once the interrupt's line is on stderr: a watchdog that must still end the process
+#: (its exit outlived the grace period) then exits without a second line.
+_REPORTED = threading.Event()
+
+
+def report(exc: BaseException | None, stream: IO[str]) -> None:
+    """Print the interrupt's one line (:func:`message`), once per process."""
+    print(message(exc), file=stream, flush=True)
+    _REPORTED.set()
 
 
 def forget_unhandled_interrupt() -> None:
@@ -213,8 +224,9 @@ class _Guard:
             return
         _run_cleanups()
         term = signum == signal.SIGTERM
-        with contextlib.suppress(OSError):
-            os.write(2, f"{message(Terminated() if term else None)} (forced)\n".encode())
+        if not _REPORTED.is_set():  # the command's own line is enough once it is out
+            with contextlib.suppress(OSError):
+                os.write(2, f"{message(Terminated() if term else None)} (forced)\n".encode())
         os._exit(EXIT_INTERRUPTED)
 
     def close(self, linger: bool) -> None:

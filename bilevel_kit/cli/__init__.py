@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from ..interrupt import forget_unhandled_interrupt, message, signal_guard
+from ..interrupt import forget_unhandled_interrupt, report, signal_guard
 from . import (
     bench,
     check,
@@ -138,7 +138,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with signal_guard(linger=argv is None):  # Ctrl-C and SIGTERM at any moment
             code = _parse_and_run(argv)
     except KeyboardInterrupt as exc:  # while starting, before the command runs
-        print(message(exc), file=sys.stderr)
+        report(exc, sys.stderr)
         code = EXIT_INTERRUPTED
     if code == EXIT_INTERRUPTED:
         forget_unhandled_interrupt()

@@ -471,7 +471,7 @@ def run_command(
     interrupt (Ctrl-C, or SIGTERM under :func:`bilevel_kit.interrupt.signal_guard`) is one
     line and exit 130 once every cleanup on the way has run."""
     from ..errors import BilevelKitError
-    from ..interrupt import message
+    from ..interrupt import report
 
     try:
         check_output_options(args)
@@ -480,5 +480,5 @@ def run_command(
         print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt as exc:
-        print(message(exc), file=sys.stderr)
+        report(exc, sys.stderr)
         return EXIT_INTERRUPTED
