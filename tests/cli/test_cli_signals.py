@@ -125,7 +125,11 @@ class Command:
     def assert_clean(self, sig: int, code: int, err: str, seconds: float) -> None:
         assert code == EXIT_INTERRUPTED, err[-2000:]
         assert "Traceback" not in err, err[-2000:]
-        assert err.strip().endswith("interrupted" + (" (SIGTERM)" if sig == signal.SIGTERM else ""))
+        # the command's own line, or the watchdog's when a busy machine kept the exit past the
+        # grace period (it runs the same cleanups, checked below); never both
+        line = "bilevel-kit: interrupted" + (" (SIGTERM)" if sig == signal.SIGTERM else "")
+        assert err.strip().splitlines()[-1] in (line, f"{line} (forced)"), err[-2000:]
+        assert err.count("bilevel-kit: interrupted") == 1, err[-2000:]
         assert seconds < STOP_S, seconds
         deadline = time.monotonic() + 3
         while any(_alive(k) for k in self.kids) and time.monotonic() < deadline:
@@ -191,7 +195,7 @@ def test_compare_after_a_cpsat_cell_keeps_only_finished_cells(tmp_path, sig):
     cmd.wait_for(cmd.child_started, "the milp cell's HiGHS child")
     code, err, seconds = cmd.stop(sig)
     cmd.assert_clean(sig, code, err, seconds)
-    assert "(interrupted)" in err
+    assert "(interrupted)" in err or err.rstrip().endswith("(forced)")  # the sweep's summary
     (kept,) = cells.iterdir()  # the finished cell only, complete
     assert "cpsat" in kept.name and json.loads(kept.read_text())["status"] == "optimal"
     assert not (tmp_path / "t.csv").exists()

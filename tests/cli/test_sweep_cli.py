@@ -75,7 +75,9 @@ def test_ctrl_c_stops_quickly_and_keeps_finished_cells(tmp_path, jobs):
             proc.wait()
     text = err.decode()
     assert proc.returncode == EXIT_INTERRUPTED, text[-2000:]
-    assert "bilevel-kit: interrupted" in text and "(interrupted)" in text
+    assert "bilevel-kit: interrupted" in text
+    assert "(interrupted)" in text or text.rstrip().endswith("(forced)")  # the summary, or the
+    # watchdog ended a slow exit on a busy machine (same cleanups)
     assert "Traceback" not in text  # the workers leave Ctrl-C to the client
     # ~0.5-1.2 s measured (docs/cli.md); the bound is what the mechanism needs (the workers
     # are stopped, not waited for), not the goal: a busy machine took 12.3 s against 5 s
