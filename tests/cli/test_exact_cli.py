@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from timing import PROOF_LIMIT
 
 from bilevel_kit import check, solve
 from bilevel_kit.cli import main
@@ -101,7 +102,7 @@ def test_pack_instance_tasks_and_bad_input(tmp_path, capsys, root, monkeypatch):
 
 def test_cpsat_method_is_exact_and_valid(stool, tiny, table):
     for inst in (stool, tiny):
-        res = solve(inst, "cpsat", time_limit=20, check=True)
+        res = solve(inst, "cpsat", time_limit=PROOF_LIMIT, check=True)
         assert res.status == "optimal" and res.extra["violations"] == []
         assert res.gap == 0.0 and res.bound == pytest.approx(res.objective)
         for heuristic in ("single-task", "greedy-ce"):
