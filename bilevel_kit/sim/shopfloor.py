@@ -12,7 +12,9 @@ Processes:
 * **Human**: takes a kit when it arrives if idle, otherwise the kit waits in a FIFO queue at the
   assembly station; spends ``o_H`` retrieving its parts, which frees the tray, and assembles the
   kit's tasks in order with the sampled durations. The run ends when the human finishes the
-  last task.
+  last task. With several stations (docs/simulation.md#several-stations) each station has a
+  human of its own, with its queue, ``o_H``, trays and delivery time ``d_s``; the run ends
+  when the last of them finishes.
 * **Trays**: the instance's ``trays`` (docs/timeline.md): the robot starts kit k only once the
   tray of kit k - trays is back, ``o_H`` after the human started that kit, the evaluator's
   ``robot_start_k >= human_start_{k-trays} + o_H``. The wait is ``robot_blocked`` in the
