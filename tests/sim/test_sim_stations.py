@@ -121,3 +121,13 @@ def test_a_policy_object_serves_several_runs() -> None:
     a = simulate(inst, pol, params=DET, seed=1)
     b = simulate(inst, pol, params=DET, seed=1)
     assert a.record() == b.record()
+
+
+def test_cli_simulates_stations_and_refuses_other_policies_before_any_run(capsys) -> None:
+    from bilevel_kit.cli import main
+
+    path = "instances/stations/table_stool_s2.json"
+    assert main(["simulate", path, "--policy", "single-task", "--reps", "2", "-q"]) == 0
+    assert "table_stool_s2: policy single-task" in capsys.readouterr().out
+    assert main(["simulate", path, "--policy", "optimized-oracle", "-q"]) == 2
+    assert "does not model several assembly stations" in capsys.readouterr().err
