@@ -131,3 +131,17 @@ def test_cli_simulates_stations_and_refuses_other_policies_before_any_run(capsys
     assert "table_stool_s2: policy single-task" in capsys.readouterr().out
     assert main(["simulate", path, "--policy", "optimized-oracle", "-q"]) == 2
     assert "does not model several assembly stations" in capsys.readouterr().err
+
+
+def test_optimized_runs_per_station_once_greedy_ce_plans_stations(monkeypatch) -> None:
+    """The study picks ``optimized`` up when greedy-ce plans stations; the wrapper already
+    runs it (a greedy-ce policy per station) and its run is timed by the evaluator."""
+    import bilevel_kit.stations as st
+    from bilevel_kit.heuristics.cross_entropy import CEParams
+
+    monkeypatch.setattr(st, "STATION_METHODS", st.STATION_METHODS | {"greedy-ce"})
+    inst = load("instances/stations/table_u1_s2.json")
+    ce = CEParams(samples=30, elite=6, max_iter=8)
+    res = simulate(inst, "optimized", params=replace(DET, ce=ce), seed=0)
+    assert check(inst, res.plan) == []
+    _assert_timeline(res, evaluate(inst, res.plan))
