@@ -139,6 +139,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--no-simulation", action="store_true", help="planning only (skip the window study)"
     )
+    _add_stations_arguments(p)
+    add_sweep_options(p)
+
+
+def _add_stations_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("stations")
     g.add_argument(
         "--lines",
@@ -164,7 +169,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="none,feeders",
         help="supply settings: none (all in stock), feeders (default both)",
     )
-    add_sweep_options(p)
 
 
 def integers(text: str) -> tuple[int, ...]:

@@ -307,9 +307,10 @@ def plot_stations_panel(
         x = [r["stations"] for r in rs]
         y = [r[metric] for r in rs]
         ax.plot(x, y, marker="o", ms=3, color=sw.color, label=LABELS.get(policy, policy))
-        # (a share or a rate is never negative: the t-interval's band is cut at 0)
+        # (a rate is never negative, a share never above 100 %: the t-interval's band is cut)
+        top = 100.0 if metric == "idle" else math.inf
         lo = [max(0.0, r[f"{metric}_low"]) for r in rs]
-        hi = [r[f"{metric}_high"] for r in rs]
+        hi = [min(top, r[f"{metric}_high"]) for r in rs]
         ax.fill_between(x, lo, hi, color=sw.color, alpha=0.15, lw=0)
     if metric == "idle":
         ax.axhline(100 * THRESHOLD, color="black", ls="--", lw=0.8, label="10 % idle")
@@ -344,6 +345,26 @@ def plot_stations(rows: Sequence[Mapping[str, Any]], line: str, *, quick: bool =
     return fig
 
 
+def _check_options(
+    lines: Sequence[str],
+    delays: Sequence[str],
+    policies: Sequence[str],
+    reps: int,
+    units: int,
+    grid: Sequence[int],
+) -> None:
+    """Refuse (exit 2) an unknown line, supply or policy without stations, or a count < 1."""
+    allowed = station_policies()
+    bad = [p for p in policies if p not in allowed] + [x for x in lines if x not in LINES]
+    bad += [d for d in delays if d not in DELAYS]
+    if bad or reps < 1 or units < 1 or min(grid) < 1:
+        raise UsageError(
+            f"bad stations study options {bad or (reps, units, grid)}: policies from "
+            f"{', '.join(allowed)}, lines from {', '.join(LINES)}, supply from "
+            f"{', '.join(DELAYS)}, reps, units and S >= 1"
+        )
+
+
 def run_stations(
     out_dir: str | Path = "out/repro/stations",
     quick: bool = False,
@@ -373,16 +394,8 @@ def run_stations(
     grid = tuple(stations) if stations else (QUICK_STATIONS if quick else STATIONS)
     lines = tuple(lines) if lines else tuple(LINES)
     delays = tuple(delays) if delays else DELAYS
-    allowed = station_policies()
-    policies = tuple(policies) if policies else allowed
-    bad = [p for p in policies if p not in allowed] + [x for x in lines if x not in LINES]
-    bad += [d for d in delays if d not in DELAYS]
-    if bad or reps < 1 or units < 1 or min(grid) < 1:
-        raise UsageError(
-            f"bad stations study options {bad or (reps, units, grid)}: policies from "
-            f"{', '.join(allowed)}, lines from {', '.join(LINES)}, supply from "
-            f"{', '.join(DELAYS)}, reps, units and S >= 1"
-        )
+    policies = tuple(policies) if policies else station_policies()
+    _check_options(lines, delays, policies, reps, units, grid)
     cells = [
         StationsCell(
             line,
