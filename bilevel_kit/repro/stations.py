@@ -365,6 +365,49 @@ def _check_options(
         )
 
 
+def _cells(
+    lines: Sequence[str],
+    grid: Sequence[int],
+    delays: Sequence[str],
+    policies: Sequence[str],
+    seeds: Sequence[int],
+    units: int,
+) -> list[StationsCell]:
+    """Every (line, supply, policy, seed, S), S varying fastest within a replication."""
+    return [
+        StationsCell(
+            line, s, delay, policy, seed, units, CPSAT_OPTIONS if policy == "cpsat-rolling" else {}
+        )
+        for line in lines
+        for delay in delays
+        for policy in policies
+        for seed in seeds
+        for s in grid
+    ]
+
+
+def _write_outputs(
+    out: Path,
+    rows: Sequence[Mapping[str, Any]],
+    best: Sequence[Mapping[str, Any]],
+    head: str,
+    quick: bool,
+) -> dict[str, Path]:
+    """The CSVs, the Markdown tables and one figure per line (module docstring)."""
+    from ..plots import save_figure
+
+    files: dict[str, Path] = {
+        "csv": write_csv(out / "stations.csv", rows, exclude=(), line_end="\n"),
+        "served_csv": write_csv(out / "stations_served.csv", best, exclude=(), line_end="\n"),
+        "markdown": out / "stations.md",
+    }
+    atomic.write_text(files["markdown"], head + format_markdown(rows, best) + "\n")
+    for line in dict.fromkeys(str(r["line"]) for r in rows):
+        fig = plot_stations(rows, line, quick=quick)
+        files[f"figure_{line}"] = save_figure(fig, out / f"stations_{line}.png")
+    return files
+
+
 def run_stations(
     out_dir: str | Path = "out/repro/stations",
     quick: bool = False,
@@ -386,8 +429,6 @@ def run_stations(
     (1..6; 1, 2, 4 with ``quick``). Cells are saved under ``out_dir/cells/`` (a rerun
     computes only the missing ones). Writes ``stations.csv``, ``stations_served.csv``,
     ``stations.md``, one figure per line and ``stations.json``; returns the summary."""
-    from ..plots import save_figure
-
     t0 = time.perf_counter()
     reps = reps if reps is not None else (QUICK_REPS if quick else REPS)
     units = units if units is not None else (QUICK_UNITS if quick else UNITS)
@@ -396,22 +437,8 @@ def run_stations(
     delays = tuple(delays) if delays else DELAYS
     policies = tuple(policies) if policies else station_policies()
     _check_options(lines, delays, policies, reps, units, grid)
-    cells = [
-        StationsCell(
-            line,
-            s,
-            delay,
-            policy,
-            seed * 1_000_000 + i,
-            units,
-            CPSAT_OPTIONS if policy == "cpsat-rolling" else {},
-        )
-        for line in lines
-        for delay in delays
-        for policy in policies
-        for i in range(reps)
-        for s in grid
-    ]
+    seeds = [seed * 1_000_000 + i for i in range(reps)]
+    cells = _cells(lines, grid, delays, policies, seeds, units)
     out = Path(out_dir)
     records, computed = run_cells_counted(
         cells,
@@ -424,21 +451,12 @@ def run_stations(
     failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
     ok = [r for r in records if not is_failed(r)]
     rows, best = summarize(ok), served(ok)
-    files: dict[str, Path] = {
-        "csv": write_csv(out / "stations.csv", rows, exclude=(), line_end="\n"),
-        "served_csv": write_csv(out / "stations_served.csv", best, exclude=(), line_end="\n"),
-        "markdown": out / "stations.md",
-    }
     head = (
         f"Stations per robot{' (QUICK: a reduced run)' if quick else ''}: {units} unit(s) per "
         f"station, {reps} replication(s), S = {', '.join(map(str, grid))}. Mean [95 % "
         "t-interval over replications].\n\n"
     )
-    atomic.write_text(files["markdown"], head + format_markdown(rows, best) + "\n")
-    for line in lines:
-        if any(r["line"] == line for r in rows):
-            fig = plot_stations(rows, line, quick=quick)
-            files[f"figure_{line}"] = save_figure(fig, out / f"stations_{line}.png")
+    files = _write_outputs(out, rows, best, head, quick)
     result = {
         "quick": quick,
         "reps": reps,
