@@ -42,8 +42,8 @@ STATION_POLICIES = ("single-task", "whole-assembly", "cpsat-rolling")
 
 def station_policies() -> tuple[str, ...]:
     """The simulation policies that take several stations now: the baselines, cpsat-rolling,
-    and ``optimized`` once greedy-ce plans stations (:data:`~bilevel_kit.stations.
-    STATION_METHODS`)."""
+    and ``optimized`` once greedy-ce plans stations (in
+    :data:`bilevel_kit.stations.STATION_METHODS`)."""
     extra = ("optimized",) if "greedy-ce" in _stations.STATION_METHODS else ()
     return STATION_POLICIES + extra
 
