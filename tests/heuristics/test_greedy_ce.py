@@ -322,10 +322,11 @@ def test_the_time_limit_stops_an_enumeration_mid_epoch(table):
 
 
 def test_unique_rows_equals_numpy_row_unique():
-    """The mixed-radix shortcut keeps np.unique's order, keys and inverse."""
+    """The mixed-radix shortcut (used by the enumeration too) keeps np.unique's order, keys
+    and inverse."""
     import numpy as np
 
-    from bilevel_kit.heuristics.greedy_ce import unique_rows
+    from bilevel_kit.heuristics.prefix.levels import unique_rows
 
     rng = np.random.default_rng(0)
     for shape, high in [((500, 3), 4), ((2000, 6), 9), ((1, 2), 1), ((50, 1), 3)]:
