@@ -354,7 +354,14 @@ class PrefixSearch:
             )
         else:
             score, rest, capped = self._rests.depth_first(
-                dc.ep.window, lv.seqs[k], length - i, f, lower, None, incumbent + TIE_TOL
+                dc.ep.window,
+                lv.seqs[k],
+                length - i,
+                f,
+                lower,
+                None,
+                incumbent + TIE_TOL,
+                self._pair_terms(dc, li, k, fit),
             )
         self.stats.rest_capped += capped
         return (score, li, k, rest, fit) if rest else None
@@ -386,6 +393,33 @@ class PrefixSearch:
             return float(self._score(i, diff5, diff6, fit, u))
 
         return f, lower
+
+    def _pair_terms(self, dc: _Decision, li: int, k: int, fit: float) -> np.ndarray:
+        """:meth:`_pair_score` as the numbers the compiled rest search reads
+        (:data:`._dfs_kernel.TERMS`), each product formed as :meth:`_score` forms it."""
+        inst, ctx, w = self.instance, dc.ctx, self.instance.weights
+        lv, i = dc.levels[li], li + 1
+        diff5 = inst.delivery_time + inst.kit_overhead_robot + float(lv.robot[k])
+        diff5 = diff5 - ctx.human_remaining
+        diff5 = diff5 if ctx.signed else abs(diff5)
+        unav = ctx.unavailable(lv.counts[k][None, :])
+        u = 0.0 if unav is None else float(unav[0])
+        human = inst.kit_overhead_human + float(lv.human[k])
+        return np.array(
+            [
+                -w["W2"] * float(i),
+                w["W3"] * diff5,
+                w["W4"],
+                w["W5"] * fit,
+                float(unav is not None),
+                w["W7"] * u,
+                inst.delivery_time,
+                inst.kit_overhead_robot,
+                human,
+                float(ctx.signed),
+            ],
+            dtype=np.float64,
+        )
 
     def _score(
         self, i: int, diff5: float, diff6: FloatOrArray, fit: float, unav: float | None
@@ -422,6 +456,7 @@ class PrefixSearch:
                         length - i,
                         *self._pair_score(dc, li, k, fit),
                         fmin + TIE_TOL,
+                        terms=self._pair_terms(dc, li, k, fit),
                     )
                     if first:
                         rest, score = first, f2

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _rest_kernel
+from .. import _dfs_kernel, _rest_kernel
 from .levels import Precedence, Window
 
 #: Deep tasks from which an epoch's rest search runs compiled (both loops give the same).
@@ -91,6 +91,14 @@ class RestSearch:
         #: the decomposition's packed sum tables by available tasks per value (capped at the
         #: largest k), shared by the epochs
         self.packed: dict[bytes, PackedTables] = {}
+        #: the compiled depth-first search (:mod:`.._dfs_kernel`) and the graph as its arrays
+        self._dfs = _dfs_kernel.kernel()
+        self._dfs_graph = (
+            np.append(graph.succ_start, len(graph.succ_flat)).astype(np.int64),
+            graph.succ_flat,
+            np.cumsum([0, *(len(p) for p in graph.pred)]).astype(np.int64),
+            graph.arc_pred,
+        )
 
     def depth_first(
         self,
@@ -101,14 +109,32 @@ class RestSearch:
         bound: Callable[[float, float], float],
         threshold: float | None,
         cutoff: float = math.inf,
+        terms: np.ndarray | None = None,
     ) -> RestResult:
         """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
         topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
         bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
         largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
         rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
-        are not looked for (the result is then ``(inf, ())``)."""
+        are not looked for (the result is then ``(inf, ())``). ``terms``: ``score`` and
+        ``bound`` as :data:`.._dfs_kernel.TERMS`, for the compiled search (the same result)."""
         ordered, rel = self._after(window, prefix)
+        if terms is not None and self._dfs is not None:
+            f, rest, capped = self._dfs(
+                np.array(ordered, dtype=np.int64),
+                np.array(rel, dtype=np.int64),
+                self._dfs_graph,
+                self.r,
+                m,
+                self.max_nodes,
+                self.prune,
+                window.r_range,
+                terms,
+                threshold is not None,
+                math.inf if threshold is None else threshold,
+                cutoff,
+            )
+            return float(f), tuple(rest.tolist()), bool(capped)
         rl = self._r_list
         rmin, rmax = window.r_range  # over the tasks not done (a superset of those left)
         best_f = math.inf
