@@ -65,6 +65,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from ..instance import Instance
+from . import _beam_kernel
 from .prefix.bounds import BoundParts, DecisionContext, OptimisticScore
 from .prefix.frontier import Frontier
 from .prefix.levels import Children, Level, Precedence, Window, build_levels, unique_rows
@@ -176,6 +177,10 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._optimistic = OptimisticScore(instance, robot, types, self._prune)
+        #: the compiled beam (:mod:`._beam_kernel`) and each task's count row's key
+        self._beam_kernel = _beam_kernel.kernel()
+        keys, inverse = unique_rows(np.asarray(part_matrix, dtype=np.int64))
+        self._task_keys = (keys, inverse.astype(np.int64))
         self._rests = RestSearch(
             self.graph, robot, instance.horizon, self._prune, limits.max_rest_nodes
         )
@@ -237,6 +242,17 @@ class PrefixSearch:
         ) -> np.ndarray:
             return self._optimistic(i, length, kids, robot, human, counts, ctx)
 
+        def fast_beam(
+            i: int,
+            p_tasks: np.ndarray,
+            p_unl: np.ndarray,
+            p_robot: np.ndarray,
+            p_human: np.ndarray,
+            p_counts: np.ndarray,
+        ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+            parents = (p_tasks, p_unl, p_robot, p_human, p_counts)
+            return self._fast_beam(i, length, ep.window, ctx, parents)
+
         levels, beam = build_levels(
             self.graph,
             ep.window,
@@ -247,6 +263,7 @@ class PrefixSearch:
             max_sets=lim.max_prefix_sets,
             beam_width=lim.beam_width,
             beam_score=beam_score,
+            fast_beam=fast_beam if self._beam_kernel is not None else None,
         )
         ep.levels, ep.beam = levels, beam
         ep.unique = [unique_rows(lv.counts) for lv in levels]
@@ -261,6 +278,54 @@ class PrefixSearch:
         if not beam:
             ep.rows = sum(len(lv.seqs) for lv in levels) + len(self.r)
             self._keep_epoch((done.tobytes(), length, ctx.signed), ep)
+
+    def _fast_beam(
+        self,
+        i: int,
+        length: int,
+        window: Window,
+        ctx: DecisionContext,
+        parents: tuple[np.ndarray, ...],
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """A beam level's children and their optimistic scores, compiled
+        (:mod:`._beam_kernel`: the rows and floats of ``beam_score``); None where the kernel
+        does not apply (bounds off, inexact sums, parts at hand, windows beyond 62 tasks)."""
+        kern = self._beam_kernel
+        if kern is None or not self._prune or not ctx.exact_sums or ctx.available is not None:
+            return None
+        if len(ctx.low_ids) > 62 or len(ctx.high_ids) > 62:
+            return None
+        p_tasks, p_unl, p_robot, p_human, p_counts = parents
+        inst, w, m = self.instance, self.instance.weights, length - i
+        d, o_r = inst.delivery_time, inst.kit_overhead_robot
+        p_keys, p_key = unique_rows(p_counts)
+        c_keys, c_key = self._task_keys
+        table = self._optimistic.fitness_bound(
+            (p_keys[:, None, :] + c_keys[None, :, :]).reshape(-1, p_counts.shape[1])
+        ).reshape(len(p_keys), len(c_keys))
+        low, high = ctx.low_ids, ctx.high_ids
+        consts = np.array(
+            [
+                -w["W2"] * float(i),
+                w["W3"],
+                w["W4"],
+                w["W5"],
+                d,
+                d + o_r,
+                o_r,
+                inst.kit_overhead_human,
+                ctx.human_remaining,
+                float(ctx.signed),
+                self.r[low[:m]].sum() if m else 0.0,
+                self.r[high[:m]].sum() if m else 0.0,
+            ],
+            dtype=np.float64,
+        )
+        avail = np.array(window.avail, dtype=np.int64)
+        keys = (p_key.astype(np.int64), c_key, np.ascontiguousarray(table, dtype=np.float64))
+        return kern(
+            avail, p_tasks, p_unl, p_robot, p_human, self.r, self.h, keys, low, high, m, consts
+        )
 
     def _frontier(
         self, dc: _Decision, cached: Callable[[np.ndarray], tuple[float, bool] | None] | None

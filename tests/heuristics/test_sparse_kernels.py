@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_greedy_search import TINY_CE, enumerable_instances
 
 from bilevel_kit.generate import generate
-from bilevel_kit.heuristics import _dfs_kernel
+from bilevel_kit.heuristics import _beam_kernel, _dfs_kernel
 from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
 from bilevel_kit.heuristics.prefix import rests
 from bilevel_kit.instance import Instance, from_dict
@@ -64,3 +65,62 @@ def test_compiled_depth_first_on_generated_graphs(family, size, max_rest):
     """Wide windows (sparse), deep ones (in-trees, series-parallel), capped searches."""
     inst = from_dict(generate(family, size, seed=2))
     assert _plan_checking_every_rest_search(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
+
+
+def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
+    """Plan with every compiled beam level checked against the numpy children and scores
+    (``build_levels`` without the compiled beam): the same rows in the same order, the same
+    floats; returns the levels compared."""
+    from bilevel_kit.heuristics import greedy_search
+    from bilevel_kit.heuristics.prefix import levels as levels_mod
+
+    if _beam_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    original = greedy_search.PrefixSearch._fast_beam
+    checked = []
+
+    def both(self, i, length, window, ctx, parents):
+        fast = original(self, i, length, window, ctx, parents)
+        if fast is None:
+            return None
+        p_tasks, p_unl, p_robot, p_human, p_counts = parents
+        avail = np.array(window.avail, dtype=np.int64)
+        par, child = levels_mod._children(avail, p_tasks, p_unl, self.graph.n)
+        rows = levels_mod.Children(p_tasks, par, child)
+        opt = self._optimistic(
+            i,
+            length,
+            rows,
+            p_robot[par] + self.r[child],
+            p_human[par] + self.h[child],
+            p_counts[par] + self.part_matrix[child],
+            ctx,
+        )
+        assert fast[0].tolist() == par.tolist() and fast[1].tolist() == child.tolist()
+        assert fast[2].tolist() == opt.tolist()
+        checked.append(len(par))
+        return fast
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(greedy_search.PrefixSearch, "_fast_beam", both)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    return len(checked)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(1, 12), st.integers(1, 6), st.booleans())
+def test_compiled_beam_is_the_numpy_beam(inst, max_sets, width, signed):
+    """Random instances with a beam from the first levels (small caps), signed or not."""
+    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets, beam_width=width, signed=signed)
+    _plan_checking_every_beam(inst, params)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_sets"),
+    [("sparse", 120, 5000), ("sparse", 60, 300), ("intree", 60, 50), ("series-parallel", 60, 40)],
+)
+def test_compiled_beam_on_generated_graphs(family, size, max_sets):
+    """Wide windows (sparse: the second level is a beam), deep ones with unlocked children."""
+    inst = from_dict(generate(family, size, seed=2))
+    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets)
+    assert _plan_checking_every_beam(inst, params)
