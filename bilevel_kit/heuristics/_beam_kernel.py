@@ -11,7 +11,8 @@ optimistic scores in one pass, operation by operation as numpy forms them (Eqs. 
 and human sums, the rest-sum bounds when every sum of robot times is exact (the first ``m``
 window tasks of least, or greatest, robot time outside the row), the fitness bound read from
 a table of the bound of every (parent's count row, task's count row), computed by the same
-numpy code. The caller keeps the same rows (``frontier.smallest``) and builds only them.
+numpy code. It keeps the rows ``frontier.smallest`` keeps (a heap of the best so far), and
+the caller builds only them.
 
 numba is imported on first use; without it (or with ``BILEVEL_KIT_NO_NUMBA=1``,
 :mod:`bilevel_kit.heuristics._kernels`) :func:`kernel` returns None and the caller scores
@@ -53,6 +54,58 @@ def _bits(ids: np.ndarray, pos: np.ndarray, tasks: np.ndarray) -> int:
     return mask
 
 
+def _above(opt: np.ndarray, rows: np.ndarray, a: int, b: int) -> bool:
+    """Slot ``a`` after slot ``b`` in the order (score, row)."""
+    return opt[a] > opt[b] or (opt[a] == opt[b] and rows[a] > rows[b])
+
+
+def _sift_down(heap: np.ndarray, kept: int, opt: np.ndarray, rows: np.ndarray) -> None:
+    """Restore the max-heap ``heap`` (slots) after its top changed."""
+    q = 0
+    while True:
+        a, b, big = 2 * q + 1, 2 * q + 2, q
+        if a < kept and _above(opt, rows, heap[a], heap[big]):
+            big = a
+        if b < kept and _above(opt, rows, heap[b], heap[big]):
+            big = b
+        if big == q:
+            return
+        heap[q], heap[big] = heap[big], heap[q]
+        q = big
+
+
+def _offer(
+    heap: np.ndarray,
+    kept: int,
+    slots: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    score: float,
+    row: int,
+    p: int,
+    c: int,
+) -> int:
+    """Keep the first entries in the order (score, row) seen so far, as many as the slots
+    (``frontier.smallest``: the first of a stable sort; rows come in increasing order, so an
+    entry tied with the largest kept one is not kept). ``slots``: (score, row, parent, child)
+    of each kept entry; ``heap``: the slots as a max-heap. Returns how many are kept."""
+    opt, rows, par, child = slots
+    if kept < len(opt):
+        opt[kept], rows[kept], par[kept], child[kept] = score, row, p, c
+        heap[kept] = kept
+        q = kept
+        while q > 0:  # sift up
+            up = (q - 1) // 2
+            if not _above(opt, rows, heap[q], heap[up]):
+                break
+            heap[q], heap[up] = heap[up], heap[q]
+            q = up
+        return kept + 1
+    top = heap[0]
+    if score < opt[top]:
+        opt[top], rows[top], par[top], child[top] = score, row, p, c
+        _sift_down(heap, kept, opt, rows)
+    return kept
+
+
 def beam_scores(
     avail: np.ndarray,
     p_tasks: np.ndarray,
@@ -66,12 +119,16 @@ def beam_scores(
     high: np.ndarray,
     m: int,
     consts: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The children (parent row, task) of every parent row (``p_tasks``; ``p_unl`` its
-    unlocked children padded with the number of tasks) and the optimistic score of each.
-    ``keys``: the key of each parent's count row, of each task's, and the fitness bound of
-    every (parent key, task key); ``low``/``high``: the window tasks of least/greatest robot
-    time (``length`` of each); ``m``: the rest's size (0: no rest); ``consts``: :data:`CONSTS`."""
+    width: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """The ``width`` children of least optimistic score, ties to the first (the beam of
+    ``build_levels``), as (parent row, task, score) in the level's order, and False if a
+    score is NaN (then nothing: the caller's numpy order applies). The children are those of
+    every parent row (``p_tasks``; ``p_unl``: its unlocked children padded with the number
+    of tasks). ``keys``: the key of each parent's count row, of each task's, and the fitness
+    bound of every (parent key, task key); ``low``/``high``: the window tasks of least/greatest
+    robot time (``length`` of each); ``m``: the rest's size (0: no rest); ``consts``:
+    :data:`CONSTS`."""
     p_key, c_key, table = keys
     n = len(robot)
     n_par = len(p_tasks)
@@ -86,9 +143,15 @@ def beam_scores(
         for t in p_unl[p]:
             if t < n:
                 count += 1
-    par = np.empty(count, dtype=np.int64)
-    child = np.empty(count, dtype=np.int64)
-    opt = np.empty(count)
+    keep = min(count, width)
+    slots = (
+        np.empty(keep),
+        np.empty(keep, dtype=np.int64),
+        np.empty(keep, dtype=np.int64),
+        np.empty(keep, dtype=np.int64),
+    )
+    heap = np.empty(keep, dtype=np.int64)
+    kept = 0
     pos_lo = np.full(n, -1, dtype=np.int64)
     pos_hi = np.full(n, -1, dtype=np.int64)
     for q in range(len(low)):
@@ -114,8 +177,6 @@ def beam_scores(
             else:
                 c = p_unl[p, b]
                 b += 1
-            par[row] = p
-            child[row] = c
             diff5 = d_or + (p_robot[p] + robot[c]) - h_rem
             h_kit = o_h + (p_human[p] + human[c])
             if m == 0:
@@ -140,19 +201,23 @@ def beam_scores(
             if not signed:
                 diff5 = abs(diff5)
             fb = table[p_key[p], c_key[c]]
-            opt[row] = c0 + w3 * diff5 + w4 * diff6 - w5 * fb
+            score = c0 + w3 * diff5 + w4 * diff6 - w5 * fb
+            if score != score:  # NaN: numpy's order, not this heap's
+                return slots[2][:0], slots[3][:0], slots[0][:0], False
+            kept = _offer(heap, kept, slots, score, row, p, c)
             row += 1
-    return par, child, opt
+    order = np.argsort(slots[1])  # by row: the order of the level
+    return slots[2][order], slots[3][order], slots[0][order], True
 
 
 #: The compiled :func:`beam_scores` once built.
-_JITTED: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+_JITTED: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] | None = None
 
 #: The helpers :func:`kernel` compiles before :func:`beam_scores` (it calls them).
-_HELPERS = ("_rest_sum", "_bits")
+_HELPERS = ("_rest_sum", "_bits", "_above", "_sift_down", "_offer")
 
 
-def kernel() -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+def kernel() -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] | None:
     """The compiled :func:`beam_scores`, or None when numba is disabled or missing."""
     global _JITTED
     if _kernels.disabled():

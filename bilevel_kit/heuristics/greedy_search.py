@@ -287,9 +287,10 @@ class PrefixSearch:
         ctx: DecisionContext,
         parents: tuple[np.ndarray, ...],
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """A beam level's children and their optimistic scores, compiled
-        (:mod:`._beam_kernel`: the rows and floats of ``beam_score``); None where the kernel
-        does not apply (bounds off, inexact sums, parts at hand, windows beyond 62 tasks)."""
+        """The rows a beam level keeps and their optimistic scores, compiled
+        (:mod:`._beam_kernel`: the rows and floats of ``beam_score`` and ``smallest``); None
+        where the kernel does not apply (bounds off, inexact sums, parts at hand, windows
+        beyond 62 tasks, a NaN score)."""
         kern = self._beam_kernel
         if kern is None or not self._prune or not ctx.exact_sums or ctx.available is not None:
             return None
@@ -323,9 +324,22 @@ class PrefixSearch:
         )
         avail = np.array(window.avail, dtype=np.int64)
         keys = (p_key.astype(np.int64), c_key, np.ascontiguousarray(table, dtype=np.float64))
-        return kern(
-            avail, p_tasks, p_unl, p_robot, p_human, self.r, self.h, keys, low, high, m, consts
+        par, child, opt, ok = kern(
+            avail,
+            p_tasks,
+            p_unl,
+            p_robot,
+            p_human,
+            self.r,
+            self.h,
+            keys,
+            low,
+            high,
+            m,
+            consts,
+            self.limits.beam_width,
         )
+        return (par, child, opt) if ok else None
 
     def _frontier(
         self, dc: _Decision, cached: Callable[[np.ndarray], tuple[float, bool] | None] | None

@@ -17,6 +17,7 @@ from bilevel_kit.generate import generate
 from bilevel_kit.heuristics import _beam_kernel, _dfs_kernel
 from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
 from bilevel_kit.heuristics.prefix import rests
+from bilevel_kit.heuristics.prefix.frontier import smallest
 from bilevel_kit.instance import Instance, from_dict
 
 
@@ -68,9 +69,9 @@ def test_compiled_depth_first_on_generated_graphs(family, size, max_rest):
 
 
 def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
-    """Plan with every compiled beam level checked against the numpy children and scores
-    (``build_levels`` without the compiled beam): the same rows in the same order, the same
-    floats; returns the levels compared."""
+    """Plan with every compiled beam level checked against the numpy children, scores and
+    choice (``build_levels`` without the compiled beam): the same rows kept in the same
+    order, the same floats; returns the levels compared."""
     from bilevel_kit.heuristics import greedy_search
     from bilevel_kit.heuristics.prefix import levels as levels_mod
 
@@ -96,8 +97,10 @@ def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
             p_counts[par] + self.part_matrix[child],
             ctx,
         )
-        assert fast[0].tolist() == par.tolist() and fast[1].tolist() == child.tolist()
-        assert fast[2].tolist() == opt.tolist()
+        keep = smallest(opt, self.limits.beam_width)
+        assert fast[0].tolist() == par[keep].tolist()
+        assert fast[1].tolist() == child[keep].tolist()
+        assert fast[2].tolist() == opt[keep].tolist()
         checked.append(len(par))
         return fast
 

@@ -75,9 +75,9 @@ class Children:
 #: Scores of candidate rows of level ``i`` for the beam: (i, rows, robot, human, counts).
 BeamScore = Callable[[int, Children, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
-#: The children of a beam level with their scores at once, or None where it does not apply:
-#: (i, parents' tasks, their unlocked children, robot sums, human sums, count rows) ->
-#: (parent row, child, score) of every child, in the order of :func:`_children`.
+#: A beam level at once, or None where it does not apply: (i, parents' tasks, their unlocked
+#: children, robot sums, human sums, count rows) -> (parent row, child, score) of the
+#: ``beam_width`` children the beam keeps, in the order of :func:`_children`.
 FastBeam = Callable[
     [int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     tuple[np.ndarray, np.ndarray, np.ndarray] | None,
@@ -254,10 +254,8 @@ def build_levels(
         ):
             fast = fast_beam(i, p_tasks, p_unl, p_robot, p_human, p_counts)
         if fast is not None:  # the beam's rows only
-            par, child, opt = fast
+            par, child, _ = fast
             beam = True
-            keep = smallest(opt, beam_width)
-            par, child = par[keep], child[keep]
         else:
             par, child = _children(avail, p_tasks, p_unl, graph.n)
         if len(child) == 0:
