@@ -428,8 +428,9 @@ class PrefixSearch:
             d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
             target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
             floor = lower(-math.inf, math.inf) if self._prune and not signed else -math.inf
+            terms = self._pair_terms(dc, li, k, fit)
             score, rest, capped = rests.best(
-                lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor
+                lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor, terms
             )
         else:
             score, rest, capped = self._rests.depth_first(

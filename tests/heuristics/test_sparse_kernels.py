@@ -127,3 +127,46 @@ def test_compiled_beam_on_generated_graphs(family, size, max_sets):
     inst = from_dict(generate(family, size, seed=2))
     params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets)
     assert _plan_checking_every_beam(inst, params)
+
+
+def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
+    """Plan with every rest by decomposition found twice, with F compiled (``terms``) and
+    with the caller's numpy ``score``: the same (F, rest, capped); returns the rests compared."""
+    from bilevel_kit.heuristics import _rest_kernel
+
+    if _rest_kernel.rest_kernel() is None:
+        pytest.skip("numba is not available")
+    original = rests.RestDecomposition.best
+    compared = []
+
+    def both(self, prefix, m, score, cutoff, target, floor=-math.inf, terms=None):
+        fast = original(self, prefix, m, score, cutoff, target, floor, terms)
+        slow = original(self, prefix, m, score, cutoff, target, floor, None)
+        assert fast[1:] == slow[1:]
+        assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
+        compared.append(terms is not None and self._rest_kernel is not None)
+        return fast
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+        mp.setattr(rests.RestDecomposition, "best", both)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    return sum(compared)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(1, 30), st.booleans())
+def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
+    """Random instances, the rest search capped or not, signed or not."""
+    params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+    _plan_checking_every_scored_rest(inst, params)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_rest"),
+    [("sparse", 100, 2000), ("sparse", 60, 30), ("intree", 60, 2000), ("series-parallel", 60, 9)],
+)
+def test_compiled_rest_scores_on_generated_graphs(family, size, max_rest):
+    """Wide and deep windows, capped and not."""
+    inst = from_dict(generate(family, size, seed=3))
+    assert _plan_checking_every_scored_rest(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))

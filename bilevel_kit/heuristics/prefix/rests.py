@@ -264,8 +264,10 @@ class RestDecomposition:
         #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays;
         #: without deep tasks the only core is the empty one: the Python loop is quicker
         self._kernel = None
+        self._rest_kernel = None
         if exact_sums and len(self.deep) >= MIN_DEEP_COMPILED:
             self._kernel = _rest_kernel.kernel()
+            self._rest_kernel = _rest_kernel.rest_kernel()
         self._window_size = len(anc)
         self._epoch: tuple[np.ndarray, ...] = ()
         self._packed: PackedTables | None = None
@@ -377,6 +379,7 @@ class RestDecomposition:
         cutoff: float,
         target: float,
         floor: float = -math.inf,
+        terms: np.ndarray | None = None,
     ) -> RestResult:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
@@ -384,6 +387,8 @@ class RestDecomposition:
         ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
         still enumerated, so the cap counts as without the floor."""
         if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
+            if terms is not None and self._rest_kernel is not None:
+                return self._best_scored(prefix, m, terms, cutoff, target)
             return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         sets = self._need_sets(prefix, pset, m)
@@ -446,6 +451,24 @@ class RestDecomposition:
         for t in tasks & self.pool:
             out[self.vlist[t]] = out.get(self.vlist[t], 0) + 1
         return out
+
+    def _best_scored(
+        self, prefix: tuple[int, ...], m: int, terms: np.ndarray, cutoff: float, target: float
+    ) -> RestResult:
+        """:meth:`_best_compiled` with F computed compiled too (:func:`_rest_kernel.best_rest`,
+        ``terms`` as :data:`.._dfs_kernel.TERMS`: the same floats and the same core)."""
+        assert self._rest_kernel is not None
+        tables = self._packed_tables()
+        prefix_arr = np.array(prefix, dtype=np.int64)
+        f, best, capped, rows, members = self._rest_kernel(
+            prefix_arr, m, self.max_cores, float(target), self._epoch, tables, terms, cutoff
+        )
+        if best < 0:
+            return math.inf, (), bool(capped)
+        tasks = [t for t in members[best].tolist() if t >= 0]
+        k = m - len(tasks)
+        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
+        return float(f), self._order(set(prefix), frozenset(tasks), free), bool(capped)
 
     def _best_compiled(
         self,
