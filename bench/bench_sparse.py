@@ -18,12 +18,13 @@ compare: a faster heuristic gets further before its remaining kits are single ta
 
 Writes bench/results/sparse.csv (``--out``). Usage:
 python bench/bench_sparse.py --old-code OLD_CHECKOUT [--old-python PY] [--sizes 250 500 1000]
-[--rounds 1] [--limit 10] [--tracemalloc] [--out bench/results/sparse.csv]
+[--rounds 1] [--limit 10] [--tracemalloc] [--out bench/results/sparse.csv] [--append]
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import os
@@ -115,9 +116,13 @@ def main() -> None:
     ap.add_argument("--limit", type=float, help="greedy-ce's time limit (s); default none")
     ap.add_argument("--tracemalloc", action="store_true", help="also the Python peak (a child)")
     ap.add_argument("--out", type=Path, default=ROOT / "bench/results/sparse.csv")
+    ap.add_argument("--append", action="store_true", help="keep the rows already in --out")
     args = ap.parse_args()
     versions = (("old", args.old_python, args.old_code), ("new", sys.executable, ROOT))
     rows: list[dict[str, Any]] = []
+    if args.append and args.out.exists():  # short runs, one CSV (the machine is shared)
+        with open(args.out, newline="") as fh:
+            rows.extend(csv.DictReader(fh))
     with tempfile.TemporaryDirectory() as tmp:
         for size in sorted(args.sizes):
             inst = Path(tmp) / f"sparse_{size}.json"
@@ -131,6 +136,7 @@ def main() -> None:
                     rows.append(row)
     for size in sorted(args.sizes):
         got = {r["code"]: r for r in rows if r["size"] == size and r["rep"] == 0}
+        got = {k: v for k, v in got.items() if v.get("limit_s") == args.limit}
         if "wall_s" in got.get("old", {}) and "wall_s" in got.get("new", {}):
             old, new = got["old"], got["new"]
             same = old["plan_sha"] == new["plan_sha"] and old["makespan"] == new["makespan"]
