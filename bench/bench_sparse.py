@@ -16,9 +16,9 @@ load average at the start of each case is recorded.
 ``--limit T`` runs greedy-ce with that time limit instead (its plan is then the gap to
 compare: a faster heuristic gets further before its remaining kits are single tasks).
 
-Writes bench/results/sparse.csv (``--out``). Usage:
+Writes bench/results/sparse.csv (``--out``) and the same rows as a table in sparse.md. Usage:
 python bench/bench_sparse.py --old-code OLD_CHECKOUT [--old-python PY] [--sizes 250 500 1000]
-[--rounds 1] [--limit 10] [--tracemalloc] [--out bench/results/sparse.csv] [--append]
+[--rounds 1] [--limit 10] [--tracemalloc] [--versions old new] [--out FILE] [--append]
 """
 
 from __future__ import annotations
@@ -107,6 +107,30 @@ def run_case(python: str, code: Path, inst: Path, limit: float | None, memory: b
     return row
 
 
+def write_markdown(rows: list[dict[str, Any]], path: Path) -> Path:
+    """The rows as a short table beside the CSV, OLD and NEW of a case on adjacent lines."""
+    lines = [
+        "# greedy-ce on sparse wide graphs, before and after",
+        "",
+        "Written by `python bench/bench_sparse.py` (module docstring: instances, columns).",
+        "",
+        "| tasks | limit (s) | code | wall (s) | CPU (s) | peak RSS (MB) | makespan | kits "
+        "| gap to bound (%) | plan digest | load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+
+    def key(r: dict[str, Any]) -> tuple[int, str, str, str]:
+        return int(r["size"]), str(r.get("limit_s") or ""), str(r["rep"]), r["code"]
+
+    for r in sorted(rows, key=key):
+        cells = [r["size"], r.get("limit_s") or "none", r["code"]]
+        cells += [r.get(k, "") for k in ("wall_s", "cpu_s", "peak_rss_mb", "makespan", "kits")]
+        cells += [r.get("gap_pct", ""), r.get("plan_sha", r.get("error", "")), r["load_avg"]]
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old-code", type=Path, required=True, help="the checkout before")
@@ -117,8 +141,15 @@ def main() -> None:
     ap.add_argument("--tracemalloc", action="store_true", help="also the Python peak (a child)")
     ap.add_argument("--out", type=Path, default=ROOT / "bench/results/sparse.csv")
     ap.add_argument("--append", action="store_true", help="keep the rows already in --out")
+    ap.add_argument(
+        "--versions", nargs="+", default=["old", "new"], choices=["old", "new"], help="run these"
+    )
     args = ap.parse_args()
-    versions = (("old", args.old_python, args.old_code), ("new", sys.executable, ROOT))
+    versions = [
+        v
+        for v in (("old", args.old_python, args.old_code), ("new", sys.executable, ROOT))
+        if v[0] in args.versions
+    ]
     rows: list[dict[str, Any]] = []
     if args.append and args.out.exists():  # short runs, one CSV (the machine is shared)
         with open(args.out, newline="") as fh:
@@ -146,6 +177,7 @@ def main() -> None:
                 f"same plan: {same}"
             )
     print(f"wrote {write_rows(args.out, rows)}")
+    print(f"wrote {write_markdown(rows, args.out.with_suffix('.md'))}")
 
 
 if __name__ == "__main__":
