@@ -79,6 +79,9 @@ TIE_TOL = 1e-9
 #: Fitness of a part multiset (count vector over the sorted part types): (fitness, fits).
 FitnessFn = Callable[[np.ndarray], tuple[float, bool]]
 
+#: Parent count rows whose fitness bounds (one per task count row) the beam keeps.
+BOUND_ROWS = 20_000
+
 #: Size of the decision's epoch cache: prefix sets plus tasks (per epoch), in all its epochs.
 EPOCH_CACHE_ROWS = 50_000
 
@@ -181,6 +184,8 @@ class PrefixSearch:
         self._beam_kernel = _beam_kernel.kernel()
         keys, inverse = unique_rows(np.asarray(part_matrix, dtype=np.int64))
         self._task_keys = (keys, inverse.astype(np.int64))
+        #: fitness bounds of a parent count row plus each task's (:meth:`_bound_table`)
+        self._bound_rows: dict[bytes, np.ndarray] = {}
         self._rests = RestSearch(
             self.graph, robot, instance.horizon, self._prune, limits.max_rest_nodes
         )
@@ -300,10 +305,8 @@ class PrefixSearch:
         inst, w, m = self.instance, self.instance.weights, length - i
         d, o_r = inst.delivery_time, inst.kit_overhead_robot
         p_keys, p_key = unique_rows(p_counts)
-        c_keys, c_key = self._task_keys
-        table = self._optimistic.fitness_bound(
-            (p_keys[:, None, :] + c_keys[None, :, :]).reshape(-1, p_counts.shape[1])
-        ).reshape(len(p_keys), len(c_keys))
+        c_key = self._task_keys[1]
+        table = self._bound_table(p_keys)
         low, high = ctx.low_ids, ctx.high_ids
         consts = np.array(
             [
@@ -340,6 +343,25 @@ class PrefixSearch:
             self.limits.beam_width,
         )
         return (par, child, opt) if ok else None
+
+    def _bound_table(self, p_keys: np.ndarray) -> np.ndarray:
+        """The fitness bound of each parent count row (``p_keys``) plus each task's count row
+        (:attr:`_task_keys`), for the compiled beam; rows memoised by parent row (the bound
+        of a row does not depend on the batch it is computed in)."""
+        c_keys = self._task_keys[0]
+        memo = self._bound_rows
+        names = [row.tobytes() for row in p_keys]
+        todo = [u for u, name in enumerate(names) if name not in memo]
+        if todo:
+            rows = p_keys[todo][:, None, :] + c_keys[None, :, :]
+            fresh = self._optimistic.fitness_bound(rows.reshape(-1, p_keys.shape[1]))
+            if len(memo) + len(todo) > BOUND_ROWS:
+                memo.clear()
+            for u, values in zip(todo, fresh.reshape(len(todo), len(c_keys)), strict=True):
+                memo[names[u]] = values
+        return np.array([memo[name] for name in names], dtype=np.float64).reshape(
+            len(p_keys), len(c_keys)
+        )
 
     def _frontier(
         self, dc: _Decision, cached: Callable[[np.ndarray], tuple[float, bool] | None] | None
@@ -419,18 +441,19 @@ class PrefixSearch:
         rest's F is within the tie tolerance of ``incumbent`` (else None)."""
         lv, i, length = dc.levels[li], li + 1, dc.length
         fit = float(dc.fits_of[li][k])
+        rests = dc.ep.rests
+        if rests is not None and i < length and rests.scores_compiled(length - i):
+            return self._best_pair_compiled(dc, li, k, fit, incumbent)
         f, lower = self._pair_score(dc, li, k, fit)
         if i == length:
             return float(f(0.0)), li, k, (), fit
-        rests = dc.ep.rests
         if rests is not None:
             inst, signed = self.instance, dc.ctx.signed
             d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
             target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
             floor = lower(-math.inf, math.inf) if self._prune and not signed else -math.inf
-            terms = self._pair_terms(dc, li, k, fit)
             score, rest, capped = rests.best(
-                lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor, terms
+                lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor
             )
         else:
             score, rest, capped = self._rests.depth_first(
@@ -443,6 +466,24 @@ class PrefixSearch:
                 incumbent + TIE_TOL,
                 self._pair_terms(dc, li, k, fit),
             )
+        self.stats.rest_capped += capped
+        return (score, li, k, rest, fit) if rest else None
+
+    def _best_pair_compiled(
+        self, dc: _Decision, li: int, k: int, fit: float, incumbent: float
+    ) -> _Found | None:
+        """:meth:`_best_pair` when the decomposition scores its rests compiled (no
+        ``score`` closure: :meth:`_pair_terms`; the same target, so the same rest)."""
+        lv, i = dc.levels[li], li + 1
+        rests = dc.ep.rests
+        assert rests is not None
+        inst, signed = self.instance, dc.ctx.signed
+        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+        terms = self._pair_terms(dc, li, k, fit)
+        score, rest, capped = rests.best(
+            lv.seqs[k], dc.length - i, _unused_score, incumbent + TIE_TOL, target, terms=terms
+        )
         self.stats.rest_capped += capped
         return (score, li, k, rest, fit) if rest else None
 
@@ -580,6 +621,11 @@ class PrefixSearch:
         while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
             _, old = self._epochs.popitem(last=False)
             self._epoch_rows -= old.rows
+
+
+def _unused_score(rest: Any) -> Any:
+    """The ``score`` of a rest search that scores compiled (never called)."""
+    raise AssertionError("the compiled rest search does not call score")
 
 
 def available_vector(

@@ -130,26 +130,33 @@ def test_compiled_beam_on_generated_graphs(family, size, max_sets):
 
 
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
-    """Plan with every rest by decomposition found twice, with F compiled (``terms``) and
-    with the caller's numpy ``score``: the same (F, rest, capped); returns the rests compared."""
-    from bilevel_kit.heuristics import _rest_kernel
+    """Plan with every pair's best rest found twice, with F compiled and with the numpy
+    ``score`` closure (the decomposition told it cannot score compiled): the same (F, rest);
+    returns the pairs compared."""
+    from bilevel_kit.heuristics import _rest_kernel, greedy_search
 
     if _rest_kernel.rest_kernel() is None:
         pytest.skip("numba is not available")
-    original = rests.RestDecomposition.best
+    original = greedy_search.PrefixSearch._best_pair
     compared = []
 
-    def both(self, prefix, m, score, cutoff, target, floor=-math.inf, terms=None):
-        fast = original(self, prefix, m, score, cutoff, target, floor, terms)
-        slow = original(self, prefix, m, score, cutoff, target, floor, None)
-        assert fast[1:] == slow[1:]
-        assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
-        compared.append(terms is not None and self._rest_kernel is not None)
+    def both(self, dc, li, k, incumbent):
+        fast = original(self, dc, li, k, incumbent)
+        rests_ = dc.ep.rests
+        compiled = rests_ is not None and rests_.scores_compiled(dc.length - li - 1)
+        with pytest.MonkeyPatch.context() as inner:
+            inner.setattr(rests.RestDecomposition, "scores_compiled", lambda self, m: False)
+            slow = original(self, dc, li, k, incumbent)
+        assert (fast is None) == (slow is None)
+        if fast is not None:
+            assert fast[1:] == slow[1:]
+            assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
+        compared.append(compiled and li + 1 < dc.length)
         return fast
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
-        mp.setattr(rests.RestDecomposition, "best", both)
+        mp.setattr(greedy_search.PrefixSearch, "_best_pair", both)
         plan(inst, policy=GreedyCEPolicy(inst, params, 0))
     return sum(compared)
 

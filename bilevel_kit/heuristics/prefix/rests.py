@@ -386,9 +386,9 @@ class RestDecomposition:
         ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
         ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
         still enumerated, so the cap counts as without the floor."""
+        if terms is not None and self.scores_compiled(m):
+            return self._best_scored(prefix, m, terms, cutoff, target)
         if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
-            if terms is not None and self._rest_kernel is not None:
-                return self._best_scored(prefix, m, terms, cutoff, target)
             return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         sets = self._need_sets(prefix, pset, m)
@@ -451,6 +451,15 @@ class RestDecomposition:
         for t in tasks & self.pool:
             out[self.vlist[t]] = out.get(self.vlist[t], 0) + 1
         return out
+
+    def scores_compiled(self, m: int) -> bool:
+        """Whether :meth:`best` with ``terms`` scores the rests of ``m`` tasks compiled (then
+        it does not call ``score``)."""
+        return (
+            self._kernel is not None
+            and self._rest_kernel is not None
+            and (self._window_size + 1) ** m < 2**62
+        )
 
     def _best_scored(
         self, prefix: tuple[int, ...], m: int, terms: np.ndarray, cutoff: float, target: float
