@@ -424,6 +424,11 @@ class PrefixSearch:
             return
         self.stats.evaluated += 1
         dc.fits_of[li][k] = fit0
+        parts = None
+        if dc.ctx.exact_sums:  # the level's rest-sum bounds are this row's (exact in any order)
+            lo, hi, fb = dc.ep.parts[li]
+            row = slice(k, k + 1)
+            parts = (None if lo is None else lo[row], None if hi is None else hi[row], fb[row])
         bound = self._optimistic(
             li + 1,
             dc.length,
@@ -433,6 +438,7 @@ class PrefixSearch:
             lv.counts[k : k + 1],
             dc.ctx,
             np.array([fit0]),
+            parts,
         )
         queue.push((float(bound[0]), 1, li, k))
 
