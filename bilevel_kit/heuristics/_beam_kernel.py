@@ -106,6 +106,25 @@ def _offer(
     return kept
 
 
+def _starts(
+    avail: np.ndarray, p_tasks: np.ndarray, p_unl: np.ndarray, n: int
+) -> tuple[np.ndarray, int]:
+    """Per parent the position in ``avail`` of its first child there (above its largest
+    task), and the children of all parents (those plus the unlocked ones)."""
+    starts = np.empty(len(p_tasks), dtype=np.int64)
+    count = 0
+    for p in range(len(p_tasks)):
+        last = -1
+        for t in p_tasks[p]:
+            last = max(last, t)
+        starts[p] = np.searchsorted(avail, last, side="right")
+        count += len(avail) - starts[p]
+        for t in p_unl[p]:
+            if t < n:
+                count += 1
+    return starts, count
+
+
 def beam_scores(
     avail: np.ndarray,
     p_tasks: np.ndarray,
@@ -132,17 +151,7 @@ def beam_scores(
     p_key, c_key, table = keys
     n = len(robot)
     n_par = len(p_tasks)
-    starts = np.empty(n_par, dtype=np.int64)
-    count = 0
-    for p in range(n_par):  # per parent the available tasks above its largest, plus unlocked
-        last = -1
-        for t in p_tasks[p]:
-            last = max(last, t)
-        starts[p] = np.searchsorted(avail, last, side="right")
-        count += len(avail) - starts[p]
-        for t in p_unl[p]:
-            if t < n:
-                count += 1
+    starts, count = _starts(avail, p_tasks, p_unl, n)
     keep = min(count, width)
     slots = (
         np.empty(keep),
@@ -214,7 +223,7 @@ def beam_scores(
 _JITTED: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] | None = None
 
 #: The helpers :func:`kernel` compiles before :func:`beam_scores` (it calls them).
-_HELPERS = ("_rest_sum", "_bits", "_above", "_sift_down", "_offer")
+_HELPERS = ("_rest_sum", "_bits", "_above", "_sift_down", "_offer", "_starts")
 
 
 def kernel() -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] | None:

@@ -562,20 +562,26 @@ def cache_missing() -> bool:
 def cache_indexes() -> list[str]:
     """The names (glob patterns) of numba's index files of the entry kernels: the CE block
     and greedy-ce's compiled decision (rest searches, beam; docs/scaling.md). numba names an
-    index by the module, the function and its first source line."""
-    from . import _beam_kernel, _dfs_kernel, _rest_kernel
-
-    entries = (
-        ("_kernels", _ce_block),
-        ("_dfs_kernel", _dfs_kernel.depth_first),
-        ("_beam_kernel", _beam_kernel.beam_scores),
-        ("_rest_kernel", _rest_kernel.best_rest),
-    )
-    out = []
-    for module, kernel in entries:
-        func = getattr(kernel, "py_func", kernel)
-        out.append(f"{module}.{func.__name__}-{func.__code__.co_firstlineno}.py*.nbi")
+    index by the module, the function and its first source line; the decision's modules are
+    read, not imported (they import this one)."""
+    func = getattr(_ce_block, "py_func", _ce_block)
+    out = [f"_kernels._ce_block-{func.__code__.co_firstlineno}.py*.nbi"]
+    for module, name in DECISION_KERNELS:
+        lines = (_SOURCES / f"{module}.py").read_text().splitlines()
+        line = next(k for k, text in enumerate(lines, 1) if text.startswith(f"def {name}("))
+        out.append(f"{module}.{name}-{line}.py*.nbi")
     return out
+
+
+#: Where the kernels' sources are (their cache is beside them unless ``NUMBA_CACHE_DIR``).
+_SOURCES = Path(__file__).resolve().parent
+
+#: greedy-ce's compiled decision: (module, entry kernel) (:func:`cache_indexes`).
+DECISION_KERNELS = (
+    ("_dfs_kernel", "depth_first"),
+    ("_beam_kernel", "beam_scores"),
+    ("_rest_kernel", "best_rest"),
+)
 
 
 def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
