@@ -113,6 +113,8 @@ def write_markdown(rows: list[dict[str, Any]], path: Path) -> Path:
         "# greedy-ce on sparse wide graphs, before and after",
         "",
         "Written by `python bench/bench_sparse.py` (module docstring: instances, columns).",
+        "A peak RSS near 300 MB is a child that compiled kernels in its warm-up (sources "
+        "changed since numba cached them); the solve itself is timed after it.",
         "",
         "| tasks | limit (s) | code | wall (s) | CPU (s) | peak RSS (MB) | makespan | kits "
         "| gap to bound (%) | plan digest | load |",
