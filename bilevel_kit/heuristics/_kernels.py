@@ -542,9 +542,10 @@ def njit() -> Callable[[Callable[..., Any]], Any] | None:
 
 
 def cache_missing() -> bool:
-    """True when numba will compile the kernels on their first call (no on-disk cache yet: the
-    first run after an install takes ~15 s longer), so that a command can say so instead of
-    staying silent. numba caches beside the sources, or under ``NUMBA_CACHE_DIR``."""
+    """True when numba will compile kernels on their first call (no on-disk cache yet of one
+    of :func:`cache_indexes`: the first run after an install takes ~15 s longer), so that a
+    command can say so instead of staying silent. numba caches beside the sources, or under
+    ``NUMBA_CACHE_DIR``."""
     if njit() is None:
         return False
     import os
@@ -553,9 +554,34 @@ def cache_missing() -> bool:
     places = [here]
     if os.environ.get("NUMBA_CACHE_DIR"):
         places.append(Path(os.environ["NUMBA_CACHE_DIR"]))
-    func = getattr(_ce_block, "py_func", _ce_block)  # numba names its index by the source line
-    index = f"_kernels._ce_block-{func.__code__.co_firstlineno}.py*.nbi"
-    return not any(any(p.rglob(index)) for p in places if p.is_dir())
+    return not all(
+        any(any(p.rglob(index)) for p in places if p.is_dir()) for index in cache_indexes()
+    )
+
+
+def cache_indexes() -> list[str]:
+    """The names (glob patterns) of numba's index files of the entry kernels: the CE block
+    and greedy-ce's compiled decision (rest searches, beam; docs/scaling.md). numba names an
+    index by the module, the function and its first source line; the decision's modules are
+    read, not imported (they import this one)."""
+    func = getattr(_ce_block, "py_func", _ce_block)
+    out = [f"_kernels._ce_block-{func.__code__.co_firstlineno}.py*.nbi"]
+    for module, name in DECISION_KERNELS:
+        lines = (_SOURCES / f"{module}.py").read_text().splitlines()
+        line = next(k for k, text in enumerate(lines, 1) if text.startswith(f"def {name}("))
+        out.append(f"{module}.{name}-{line}.py*.nbi")
+    return out
+
+
+#: Where the kernels' sources are (their cache is beside them unless ``NUMBA_CACHE_DIR``).
+_SOURCES = Path(__file__).resolve().parent
+
+#: greedy-ce's compiled decision: (module, entry kernel) (:func:`cache_indexes`).
+DECISION_KERNELS = (
+    ("_dfs_kernel", "depth_first"),
+    ("_beam_kernel", "beam_scores"),
+    ("_rest_kernel", "best_rest"),
+)
 
 
 def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:

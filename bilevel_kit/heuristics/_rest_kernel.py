@@ -27,7 +27,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from . import _kernels
+from . import _dfs_kernel, _kernels
 
 
 def _lower_bound(sums: np.ndarray, lo: int, hi: int, x: float) -> int:
@@ -267,6 +267,30 @@ def best_cores(
     return count, capped, rest_sum, rows, members
 
 
+def best_rest(
+    prefix: np.ndarray,
+    m: int,
+    max_cores: int,
+    target: float,
+    epoch: tuple[np.ndarray, ...],
+    tables: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    terms: np.ndarray,
+    cutoff: float,
+) -> tuple[float, int, bool, np.ndarray, np.ndarray]:
+    """:func:`best_cores` with each core's F (``terms``: F by rest sum,
+    :data:`._dfs_kernel.TERMS`, the floats of the caller's ``score``) and the first core of
+    least F at most ``cutoff``: (its F, its index (-1: none), capped, rows, members)."""
+    count, capped, rest_sum, rows, members = best_cores(prefix, m, max_cores, target, epoch, tables)
+    best, best_f = -1, np.inf
+    for c in range(count):
+        if rest_sum[c] != rest_sum[c]:  # NaN: no free multiset
+            continue
+        v = _dfs_kernel._leaf_score(terms, rest_sum[c])
+        if v <= cutoff and (best < 0 or v < best_f):
+            best, best_f = c, v
+    return best_f, best, capped, rows, members
+
+
 #: The compiled :func:`best_cores` once built.
 _JITTED: Callable[..., tuple[int, bool, np.ndarray, np.ndarray, np.ndarray]] | None = None
 
@@ -289,3 +313,21 @@ def kernel() -> Callable[..., tuple[int, bool, np.ndarray, np.ndarray, np.ndarra
             globals()[name] = jit(globals()[name])
         _JITTED = jit(best_cores)
     return _JITTED
+
+
+#: The compiled :func:`best_rest` once built.
+_JITTED_REST: Callable[..., tuple[float, int, bool, np.ndarray, np.ndarray]] | None = None
+
+
+def rest_kernel() -> Callable[..., tuple[float, int, bool, np.ndarray, np.ndarray]] | None:
+    """The compiled :func:`best_rest` (after :func:`kernel` and the compiled F of
+    :mod:`._dfs_kernel`), or None when numba is disabled or missing."""
+    global _JITTED_REST
+    if _JITTED_REST is None:
+        compiled = kernel()
+        jit = _kernels.njit()
+        if compiled is None or jit is None or _dfs_kernel.kernel() is None:
+            return None
+        globals()["best_cores"] = compiled  # the compiled best_rest calls compiled code
+        _JITTED_REST = jit(best_rest)
+    return _JITTED_REST

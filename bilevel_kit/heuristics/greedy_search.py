@@ -65,6 +65,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from ..instance import Instance
+from . import _beam_kernel
 from .prefix.bounds import BoundParts, DecisionContext, OptimisticScore
 from .prefix.frontier import Frontier
 from .prefix.levels import Children, Level, Precedence, Window, build_levels, unique_rows
@@ -77,6 +78,9 @@ TIE_TOL = 1e-9
 
 #: Fitness of a part multiset (count vector over the sorted part types): (fitness, fits).
 FitnessFn = Callable[[np.ndarray], tuple[float, bool]]
+
+#: Parent count rows whose fitness bounds (one per task count row) the beam keeps.
+BOUND_ROWS = 20_000
 
 #: Size of the decision's epoch cache: prefix sets plus tasks (per epoch), in all its epochs.
 EPOCH_CACHE_ROWS = 50_000
@@ -176,6 +180,12 @@ class PrefixSearch:
         w = instance.weights
         self._prune = w["W4"] >= 0 and w["W5"] >= 0 and w["W6"] >= 0
         self._optimistic = OptimisticScore(instance, robot, types, self._prune)
+        #: the compiled beam (:mod:`._beam_kernel`) and each task's count row's key
+        self._beam_kernel = _beam_kernel.kernel()
+        keys, inverse = unique_rows(np.asarray(part_matrix, dtype=np.int64))
+        self._task_keys = (keys, inverse.astype(np.int64))
+        #: fitness bounds of a parent count row plus each task's (:meth:`_bound_table`)
+        self._bound_rows: dict[bytes, np.ndarray] = {}
         self._rests = RestSearch(
             self.graph, robot, instance.horizon, self._prune, limits.max_rest_nodes
         )
@@ -237,6 +247,17 @@ class PrefixSearch:
         ) -> np.ndarray:
             return self._optimistic(i, length, kids, robot, human, counts, ctx)
 
+        def fast_beam(
+            i: int,
+            p_tasks: np.ndarray,
+            p_unl: np.ndarray,
+            p_robot: np.ndarray,
+            p_human: np.ndarray,
+            p_counts: np.ndarray,
+        ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+            parents = (p_tasks, p_unl, p_robot, p_human, p_counts)
+            return self._fast_beam(i, length, ep.window, ctx, parents)
+
         levels, beam = build_levels(
             self.graph,
             ep.window,
@@ -247,6 +268,7 @@ class PrefixSearch:
             max_sets=lim.max_prefix_sets,
             beam_width=lim.beam_width,
             beam_score=beam_score,
+            fast_beam=fast_beam if self._beam_kernel is not None else None,
         )
         ep.levels, ep.beam = levels, beam
         ep.unique = [unique_rows(lv.counts) for lv in levels]
@@ -261,6 +283,85 @@ class PrefixSearch:
         if not beam:
             ep.rows = sum(len(lv.seqs) for lv in levels) + len(self.r)
             self._keep_epoch((done.tobytes(), length, ctx.signed), ep)
+
+    def _fast_beam(
+        self,
+        i: int,
+        length: int,
+        window: Window,
+        ctx: DecisionContext,
+        parents: tuple[np.ndarray, ...],
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The rows a beam level keeps and their optimistic scores, compiled
+        (:mod:`._beam_kernel`: the rows and floats of ``beam_score`` and ``smallest``); None
+        where the kernel does not apply (bounds off, inexact sums, parts at hand, windows
+        beyond 62 tasks, a NaN score)."""
+        kern = self._beam_kernel
+        if kern is None or not self._prune or not ctx.exact_sums or ctx.available is not None:
+            return None
+        if len(ctx.low_ids) > 62 or len(ctx.high_ids) > 62:
+            return None
+        p_tasks, p_unl, p_robot, p_human, p_counts = parents
+        inst, w, m = self.instance, self.instance.weights, length - i
+        d, o_r = inst.delivery_time, inst.kit_overhead_robot
+        p_keys, p_key = unique_rows(p_counts)
+        c_key = self._task_keys[1]
+        table = self._bound_table(p_keys)
+        low, high = ctx.low_ids, ctx.high_ids
+        consts = np.array(
+            [
+                -w["W2"] * float(i),
+                w["W3"],
+                w["W4"],
+                w["W5"],
+                d,
+                d + o_r,
+                o_r,
+                inst.kit_overhead_human,
+                ctx.human_remaining,
+                float(ctx.signed),
+                self.r[low[:m]].sum() if m else 0.0,
+                self.r[high[:m]].sum() if m else 0.0,
+            ],
+            dtype=np.float64,
+        )
+        avail = np.array(window.avail, dtype=np.int64)
+        keys = (p_key.astype(np.int64), c_key, np.ascontiguousarray(table, dtype=np.float64))
+        par, child, opt, ok = kern(
+            avail,
+            p_tasks,
+            p_unl,
+            p_robot,
+            p_human,
+            self.r,
+            self.h,
+            keys,
+            low,
+            high,
+            m,
+            consts,
+            self.limits.beam_width,
+        )
+        return (par, child, opt) if ok else None
+
+    def _bound_table(self, p_keys: np.ndarray) -> np.ndarray:
+        """The fitness bound of each parent count row (``p_keys``) plus each task's count row
+        (:attr:`_task_keys`), for the compiled beam; rows memoised by parent row (the bound
+        of a row does not depend on the batch it is computed in)."""
+        c_keys = self._task_keys[0]
+        memo = self._bound_rows
+        names = [row.tobytes() for row in p_keys]
+        todo = [u for u, name in enumerate(names) if name not in memo]
+        if todo:
+            rows = p_keys[todo][:, None, :] + c_keys[None, :, :]
+            fresh = self._optimistic.fitness_bound(rows.reshape(-1, p_keys.shape[1]))
+            if len(memo) + len(todo) > BOUND_ROWS:
+                memo.clear()
+            for u, values in zip(todo, fresh.reshape(len(todo), len(c_keys)), strict=True):
+                memo[names[u]] = values
+        return np.array([memo[name] for name in names], dtype=np.float64).reshape(
+            len(p_keys), len(c_keys)
+        )
 
     def _frontier(
         self, dc: _Decision, cached: Callable[[np.ndarray], tuple[float, bool] | None] | None
@@ -323,6 +424,11 @@ class PrefixSearch:
             return
         self.stats.evaluated += 1
         dc.fits_of[li][k] = fit0
+        parts = None
+        if dc.ctx.exact_sums:  # the level's rest-sum bounds are this row's (exact in any order)
+            lo, hi, fb = dc.ep.parts[li]
+            row = slice(k, k + 1)
+            parts = (None if lo is None else lo[row], None if hi is None else hi[row], fb[row])
         bound = self._optimistic(
             li + 1,
             dc.length,
@@ -332,6 +438,7 @@ class PrefixSearch:
             lv.counts[k : k + 1],
             dc.ctx,
             np.array([fit0]),
+            parts,
         )
         queue.push((float(bound[0]), 1, li, k))
 
@@ -340,10 +447,12 @@ class PrefixSearch:
         rest's F is within the tie tolerance of ``incumbent`` (else None)."""
         lv, i, length = dc.levels[li], li + 1, dc.length
         fit = float(dc.fits_of[li][k])
+        rests = dc.ep.rests
+        if rests is not None and i < length and rests.scores_compiled(length - i):
+            return self._best_pair_compiled(dc, li, k, fit, incumbent)
         f, lower = self._pair_score(dc, li, k, fit)
         if i == length:
             return float(f(0.0)), li, k, (), fit
-        rests = dc.ep.rests
         if rests is not None:
             inst, signed = self.instance, dc.ctx.signed
             d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
@@ -354,8 +463,33 @@ class PrefixSearch:
             )
         else:
             score, rest, capped = self._rests.depth_first(
-                dc.ep.window, lv.seqs[k], length - i, f, lower, None, incumbent + TIE_TOL
+                dc.ep.window,
+                lv.seqs[k],
+                length - i,
+                f,
+                lower,
+                None,
+                incumbent + TIE_TOL,
+                self._pair_terms(dc, li, k, fit),
             )
+        self.stats.rest_capped += capped
+        return (score, li, k, rest, fit) if rest else None
+
+    def _best_pair_compiled(
+        self, dc: _Decision, li: int, k: int, fit: float, incumbent: float
+    ) -> _Found | None:
+        """:meth:`_best_pair` when the decomposition scores its rests compiled (no
+        ``score`` closure: :meth:`_pair_terms`; the same target, so the same rest)."""
+        lv, i = dc.levels[li], li + 1
+        rests = dc.ep.rests
+        assert rests is not None
+        inst, signed = self.instance, dc.ctx.signed
+        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
+        terms = self._pair_terms(dc, li, k, fit)
+        score, rest, capped = rests.best(
+            lv.seqs[k], dc.length - i, _unused_score, incumbent + TIE_TOL, target, terms=terms
+        )
         self.stats.rest_capped += capped
         return (score, li, k, rest, fit) if rest else None
 
@@ -386,6 +520,33 @@ class PrefixSearch:
             return float(self._score(i, diff5, diff6, fit, u))
 
         return f, lower
+
+    def _pair_terms(self, dc: _Decision, li: int, k: int, fit: float) -> np.ndarray:
+        """:meth:`_pair_score` as the numbers the compiled rest search reads
+        (:data:`._dfs_kernel.TERMS`), each product formed as :meth:`_score` forms it."""
+        inst, ctx, w = self.instance, dc.ctx, self.instance.weights
+        lv, i = dc.levels[li], li + 1
+        diff5 = inst.delivery_time + inst.kit_overhead_robot + float(lv.robot[k])
+        diff5 = diff5 - ctx.human_remaining
+        diff5 = diff5 if ctx.signed else abs(diff5)
+        unav = ctx.unavailable(lv.counts[k][None, :])
+        u = 0.0 if unav is None else float(unav[0])
+        human = inst.kit_overhead_human + float(lv.human[k])
+        return np.array(
+            [
+                -w["W2"] * float(i),
+                w["W3"] * diff5,
+                w["W4"],
+                w["W5"] * fit,
+                float(unav is not None),
+                w["W7"] * u,
+                inst.delivery_time,
+                inst.kit_overhead_robot,
+                human,
+                float(ctx.signed),
+            ],
+            dtype=np.float64,
+        )
 
     def _score(
         self, i: int, diff5: float, diff6: FloatOrArray, fit: float, unav: float | None
@@ -422,6 +583,7 @@ class PrefixSearch:
                         length - i,
                         *self._pair_score(dc, li, k, fit),
                         fmin + TIE_TOL,
+                        terms=self._pair_terms(dc, li, k, fit),
                     )
                     if first:
                         rest, score = first, f2
@@ -465,6 +627,11 @@ class PrefixSearch:
         while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
             _, old = self._epochs.popitem(last=False)
             self._epoch_rows -= old.rows
+
+
+def _unused_score(rest: Any) -> Any:
+    """The ``score`` of a rest search that scores compiled (never called)."""
+    raise AssertionError("the compiled rest search does not call score")
 
 
 def available_vector(

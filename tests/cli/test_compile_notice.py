@@ -31,7 +31,7 @@ def test_the_note_appears_on_a_terminal_only_when_the_cache_is_missing(monkeypat
 
 def test_cache_missing_follows_numbas_index_of_the_ce_block(tmp_path, monkeypatch):
     """numba names the index by the kernel's first source line: a stale index of an older
-    line does not count, the current one does."""
+    line does not count, the current one does; every entry kernel's index must be there."""
     if _kernels.njit() is None:
         pytest.skip("numba is disabled or missing")
     monkeypatch.setattr(_kernels, "__file__", str(tmp_path / "_kernels.py"))
@@ -43,4 +43,9 @@ def test_cache_missing_follows_numbas_index_of_the_ce_block(tmp_path, monkeypatc
     assert _kernels.cache_missing()
     func = getattr(_kernels._ce_block, "py_func", _kernels._ce_block)
     (cache / f"_kernels._ce_block-{func.__code__.co_firstlineno}.py311.nbi").write_text("")
+    others = _kernels.cache_indexes()[1:]  # greedy-ce's decision kernels: each one counts
+    for pattern in others:
+        assert _kernels.cache_missing()
+        (cache / pattern.replace("py*", "py311")).write_text("")
+    assert len(others) == 3
     assert not _kernels.cache_missing()

@@ -75,6 +75,14 @@ class Children:
 #: Scores of candidate rows of level ``i`` for the beam: (i, rows, robot, human, counts).
 BeamScore = Callable[[int, Children, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
+#: A beam level at once, or None where it does not apply: (i, parents' tasks, their unlocked
+#: children, robot sums, human sums, count rows) -> (parent row, child, score) of the
+#: ``beam_width`` children the beam keeps, in the order of :func:`_children`.
+FastBeam = Callable[
+    [int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+]
+
 
 class Precedence:
     """The precedence graph (predecessors of each task) in the forms the prefix sets and the
@@ -218,12 +226,14 @@ def build_levels(
     max_sets: int,
     beam_width: int,
     beam_score: BeamScore,
+    fast_beam: FastBeam | None = None,
 ) -> tuple[list[Level], bool]:
     """The closed prefix sets of sizes 1..``length``, and whether a level became a beam.
 
     ``robot``, ``human``, ``part_matrix``: each task's times and part counts (summed over a
     prefix). Once the sets would exceed ``max_sets``, this level and the deeper ones keep the
-    ``beam_width`` rows of least ``beam_score`` (the optimistic score)."""
+    ``beam_width`` rows of least ``beam_score`` (the optimistic score); ``fast_beam`` makes
+    and scores a beam level's children at once (the same rows and scores)."""
     avail = np.array(window.avail, dtype=np.int64)
     undone = np.array(window.undone, dtype=np.int64)
     parents: list[tuple[int, ...]] = [()]
@@ -238,13 +248,22 @@ def build_levels(
     total = 0
     beam = False
     for i in range(1, length + 1):
-        par, child = _children(avail, p_tasks, p_unl, graph.n)
+        fast = None
+        if fast_beam is not None and (
+            beam or total + _n_children(avail, p_tasks, p_unl, graph.n) > max_sets
+        ):
+            fast = fast_beam(i, p_tasks, p_unl, p_robot, p_human, p_counts)
+        if fast is not None:  # the beam's rows only
+            par, child, _ = fast
+            beam = True
+        else:
+            par, child = _children(avail, p_tasks, p_unl, graph.n)
         if len(child) == 0:
             break
         k_robot = p_robot[par] + robot[child]
         k_human = p_human[par] + human[child]
         k_counts = p_counts[par] + part_matrix[child]
-        if beam or total + len(child) > max_sets:
+        if fast is None and (beam or total + len(child) > max_sets):
             beam = True
             opt = beam_score(i, Children(p_tasks, par, child), k_robot, k_human, k_counts)
             keep = smallest(opt, beam_width)
@@ -258,6 +277,13 @@ def build_levels(
             p_unl = graph.unlocked_rows(p_unl, par, child, tasks, undone)
         parents, p_tasks, p_robot, p_human, p_counts = seqs, tasks, k_robot, k_human, k_counts
     return levels, beam
+
+
+def _n_children(avail: np.ndarray, p_tasks: np.ndarray, p_unl: np.ndarray, n: int) -> int:
+    """How many rows :func:`_children` gives, without making them."""
+    last = p_tasks.max(axis=1) if p_tasks.shape[1] else np.full(1, -1)
+    starts = np.searchsorted(avail, last, side="right")
+    return int((len(avail) - starts).sum() + (p_unl < n).sum())
 
 
 def _children(

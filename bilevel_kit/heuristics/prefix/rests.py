@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _rest_kernel
+from .. import _dfs_kernel, _rest_kernel
 from .levels import Precedence, Window
 
 #: Deep tasks from which an epoch's rest search runs compiled (both loops give the same).
@@ -91,6 +91,14 @@ class RestSearch:
         #: the decomposition's packed sum tables by available tasks per value (capped at the
         #: largest k), shared by the epochs
         self.packed: dict[bytes, PackedTables] = {}
+        #: the compiled depth-first search (:mod:`.._dfs_kernel`) and the graph as its arrays
+        self._dfs = _dfs_kernel.kernel()
+        self._dfs_graph = (
+            np.append(graph.succ_start, len(graph.succ_flat)).astype(np.int64),
+            graph.succ_flat,
+            np.cumsum([0, *(len(p) for p in graph.pred)]).astype(np.int64),
+            graph.arc_pred,
+        )
 
     def depth_first(
         self,
@@ -101,14 +109,32 @@ class RestSearch:
         bound: Callable[[float, float], float],
         threshold: float | None,
         cutoff: float = math.inf,
+        terms: np.ndarray | None = None,
     ) -> RestResult:
         """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
         topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
         bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
         largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
         rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
-        are not looked for (the result is then ``(inf, ())``)."""
+        are not looked for (the result is then ``(inf, ())``). ``terms``: ``score`` and
+        ``bound`` as :data:`.._dfs_kernel.TERMS`, for the compiled search (the same result)."""
         ordered, rel = self._after(window, prefix)
+        if terms is not None and self._dfs is not None:
+            f, rest, capped = self._dfs(
+                np.array(ordered, dtype=np.int64),
+                np.array(rel, dtype=np.int64),
+                self._dfs_graph,
+                self.r,
+                m,
+                self.max_nodes,
+                self.prune,
+                window.r_range,
+                terms,
+                threshold is not None,
+                math.inf if threshold is None else threshold,
+                cutoff,
+            )
+            return float(f), tuple(rest.tolist()), bool(capped)
         rl = self._r_list
         rmin, rmax = window.r_range  # over the tasks not done (a superset of those left)
         best_f = math.inf
@@ -238,8 +264,10 @@ class RestDecomposition:
         #: the compiled loop of :meth:`best` (sums exact in any order only) and its arrays;
         #: without deep tasks the only core is the empty one: the Python loop is quicker
         self._kernel = None
+        self._rest_kernel = None
         if exact_sums and len(self.deep) >= MIN_DEEP_COMPILED:
             self._kernel = _rest_kernel.kernel()
+            self._rest_kernel = _rest_kernel.rest_kernel()
         self._window_size = len(anc)
         self._epoch: tuple[np.ndarray, ...] = ()
         self._packed: PackedTables | None = None
@@ -351,12 +379,15 @@ class RestDecomposition:
         cutoff: float,
         target: float,
         floor: float = -math.inf,
+        terms: np.ndarray | None = None,
     ) -> RestResult:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
         ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
         ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
         still enumerated, so the cap counts as without the floor."""
+        if terms is not None and self.scores_compiled(m):
+            return self._best_scored(prefix, m, terms, cutoff, target)
         if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
             return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
@@ -420,6 +451,33 @@ class RestDecomposition:
         for t in tasks & self.pool:
             out[self.vlist[t]] = out.get(self.vlist[t], 0) + 1
         return out
+
+    def scores_compiled(self, m: int) -> bool:
+        """Whether :meth:`best` with ``terms`` scores the rests of ``m`` tasks compiled (then
+        it does not call ``score``)."""
+        return (
+            self._kernel is not None
+            and self._rest_kernel is not None
+            and (self._window_size + 1) ** m < 2**62
+        )
+
+    def _best_scored(
+        self, prefix: tuple[int, ...], m: int, terms: np.ndarray, cutoff: float, target: float
+    ) -> RestResult:
+        """:meth:`_best_compiled` with F computed compiled too (:func:`_rest_kernel.best_rest`,
+        ``terms`` as :data:`.._dfs_kernel.TERMS`: the same floats and the same core)."""
+        assert self._rest_kernel is not None
+        tables = self._packed_tables()
+        prefix_arr = np.array(prefix, dtype=np.int64)
+        f, best, capped, rows, members = self._rest_kernel(
+            prefix_arr, m, self.max_cores, float(target), self._epoch, tables, terms, cutoff
+        )
+        if best < 0:
+            return math.inf, (), bool(capped)
+        tasks = [t for t in members[best].tolist() if t >= 0]
+        k = m - len(tasks)
+        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
+        return float(f), self._order(set(prefix), frozenset(tasks), free), bool(capped)
 
     def _best_compiled(
         self,

@@ -1,0 +1,179 @@
+"""The compiled parts of greedy-ce's decision on sparse wide graphs (issue 27, item 3,
+docs/scaling.md) against the Python code they replace: every call gives the same result, on
+random small instances (with non-integer robot times: the depth-first rest search decides)
+and on generated graphs, also with the searches capped."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from test_greedy_search import TINY_CE, enumerable_instances
+
+from bilevel_kit.generate import generate
+from bilevel_kit.heuristics import _beam_kernel, _dfs_kernel
+from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
+from bilevel_kit.heuristics.prefix import rests
+from bilevel_kit.heuristics.prefix.frontier import smallest
+from bilevel_kit.instance import Instance, from_dict
+
+
+def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> int:
+    """Plan with every depth-first rest search run twice, compiled and in Python, asserting
+    the same (F, rest, capped); returns the searches compared."""
+    if _dfs_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    original = rests.RestSearch.depth_first
+    calls = []
+
+    def both(self, window, prefix, m, score, bound, threshold, cutoff=math.inf, terms=None):
+        assert terms is not None  # greedy-ce always offers the compiled search
+        fast = original(self, window, prefix, m, score, bound, threshold, cutoff, terms)
+        slow = original(self, window, prefix, m, score, bound, threshold, cutoff, None)
+        assert fast[1:] == slow[1:]
+        assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
+        calls.append(fast[2])
+        return fast
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rests.RestSearch, "depth_first", both)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    return len(calls)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(1, 30), st.booleans(), st.booleans())
+def test_compiled_depth_first_is_the_python_search(inst, max_rest, signed, jitter):
+    """Random instances (robot times made non-integer: the depth-first search finds every
+    rest), capped or not, signed or not."""
+    if jitter:  # pick times off the 1/64 grid: the decomposition is not used
+        doc = inst.to_dict()
+        for k, p in enumerate(doc["part_types"]):
+            p["pick_time"] += 0.013 * (k + 1)
+        inst = from_dict(doc)
+    params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+    _plan_checking_every_rest_search(inst, params)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_rest"),
+    [("sparse", 60, 2000), ("sparse", 80, 25), ("intree", 60, 40), ("series-parallel", 40, 9)],
+)
+def test_compiled_depth_first_on_generated_graphs(family, size, max_rest):
+    """Wide windows (sparse), deep ones (in-trees, series-parallel), capped searches."""
+    inst = from_dict(generate(family, size, seed=2))
+    assert _plan_checking_every_rest_search(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
+
+
+def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
+    """Plan with every compiled beam level checked against the numpy children, scores and
+    choice (``build_levels`` without the compiled beam): the same rows kept in the same
+    order, the same floats; returns the levels compared."""
+    from bilevel_kit.heuristics import greedy_search
+    from bilevel_kit.heuristics.prefix import levels as levels_mod
+
+    if _beam_kernel.kernel() is None:
+        pytest.skip("numba is not available")
+    original = greedy_search.PrefixSearch._fast_beam
+    checked = []
+
+    def both(self, i, length, window, ctx, parents):
+        fast = original(self, i, length, window, ctx, parents)
+        if fast is None:
+            return None
+        p_tasks, p_unl, p_robot, p_human, p_counts = parents
+        avail = np.array(window.avail, dtype=np.int64)
+        par, child = levels_mod._children(avail, p_tasks, p_unl, self.graph.n)
+        rows = levels_mod.Children(p_tasks, par, child)
+        opt = self._optimistic(
+            i,
+            length,
+            rows,
+            p_robot[par] + self.r[child],
+            p_human[par] + self.h[child],
+            p_counts[par] + self.part_matrix[child],
+            ctx,
+        )
+        keep = smallest(opt, self.limits.beam_width)
+        assert fast[0].tolist() == par[keep].tolist()
+        assert fast[1].tolist() == child[keep].tolist()
+        assert fast[2].tolist() == opt[keep].tolist()
+        checked.append(len(par))
+        return fast
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(greedy_search.PrefixSearch, "_fast_beam", both)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    return len(checked)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(1, 12), st.integers(1, 6), st.booleans())
+def test_compiled_beam_is_the_numpy_beam(inst, max_sets, width, signed):
+    """Random instances with a beam from the first levels (small caps), signed or not."""
+    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets, beam_width=width, signed=signed)
+    _plan_checking_every_beam(inst, params)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_sets"),
+    [("sparse", 120, 5000), ("sparse", 60, 300), ("intree", 60, 50), ("series-parallel", 60, 40)],
+)
+def test_compiled_beam_on_generated_graphs(family, size, max_sets):
+    """Wide windows (sparse: the second level is a beam), deep ones with unlocked children."""
+    inst = from_dict(generate(family, size, seed=2))
+    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets)
+    assert _plan_checking_every_beam(inst, params)
+
+
+def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
+    """Plan with every pair's best rest found twice, with F compiled and with the numpy
+    ``score`` closure (the decomposition told it cannot score compiled): the same (F, rest);
+    returns the pairs compared."""
+    from bilevel_kit.heuristics import _rest_kernel, greedy_search
+
+    if _rest_kernel.rest_kernel() is None:
+        pytest.skip("numba is not available")
+    original = greedy_search.PrefixSearch._best_pair
+    compared = []
+
+    def both(self, dc, li, k, incumbent):
+        fast = original(self, dc, li, k, incumbent)
+        rests_ = dc.ep.rests
+        compiled = rests_ is not None and rests_.scores_compiled(dc.length - li - 1)
+        with pytest.MonkeyPatch.context() as inner:
+            inner.setattr(rests.RestDecomposition, "scores_compiled", lambda self, m: False)
+            slow = original(self, dc, li, k, incumbent)
+        assert (fast is None) == (slow is None)
+        if fast is not None:
+            assert fast[1:] == slow[1:]
+            assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
+        compared.append(compiled and li + 1 < dc.length)
+        return fast
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+        mp.setattr(greedy_search.PrefixSearch, "_best_pair", both)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    return sum(compared)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(enumerable_instances(), st.integers(1, 30), st.booleans())
+def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
+    """Random instances, the rest search capped or not, signed or not."""
+    params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
+    _plan_checking_every_scored_rest(inst, params)
+
+
+@pytest.mark.parametrize(
+    ("family", "size", "max_rest"),
+    [("sparse", 100, 2000), ("sparse", 60, 30), ("intree", 60, 2000), ("series-parallel", 60, 9)],
+)
+def test_compiled_rest_scores_on_generated_graphs(family, size, max_rest):
+    """Wide and deep windows, capped and not."""
+    inst = from_dict(generate(family, size, seed=3))
+    assert _plan_checking_every_scored_rest(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
