@@ -614,13 +614,22 @@ def greedy_ce(
 ) -> MethodOutput:
     """Registered method ``greedy-ce``: the paper's bilevel heuristic (options and ``extra``
     in the module docstring). Past ``time_limit`` seconds the remaining kits are single tasks
-    (``extra["time_limit_hit"]``)."""
+    (``extra["time_limit_hit"]``). Several stations: :mod:`.greedy_stations`."""
     params = options.to_params()
-    policy = GreedyCEPolicy(instance, params, seed)
-    if time_limit is not None:
-        policy.deadline = time.perf_counter() + time_limit
-    result = plan(instance, params, seed, policy)
-    st = policy.stats
+    deadline = None if time_limit is None else time.perf_counter() + time_limit
+    if instance.stations:  # docs/timeline.md#several-stations
+        from .greedy_stations import merged_stats, plan_stations, station_policies
+
+        policies = station_policies(
+            instance, lambda inst: GreedyCEPolicy(inst, params, seed), deadline
+        )
+        result = plan_stations(instance, policies, PolicyState)
+        st = merged_stats(policies, result)
+    else:
+        policy = GreedyCEPolicy(instance, params, seed)
+        policy.deadline = deadline
+        result = plan(instance, params, seed, policy)
+        st = policy.stats
     extra = {
         "epochs": st.epochs,
         "decision": "enumerate"
