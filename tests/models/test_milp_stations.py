@@ -27,6 +27,7 @@ def test_milp_equals_brute_force_on_stations(seed, n_stations):
     out = milp(inst, MilpOptions(), seed=0, time_limit=60)
     assert out.plan is not None
     assert check(inst, out.plan) == []
+    assert out.extra["tray_mode"] == "benders"  # as cpsat's stations model
     assert_model_optimal(out, opt, tol=1e-5)  # the solver's tolerance, as tests/models/test_milp.py
 
 

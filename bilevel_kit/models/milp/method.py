@@ -214,7 +214,7 @@ def run(
         from .stations import incumbent
 
         inc, inc_obj, upper, K = incumbent(instance, options.objective, options.hint)
-        r.extra.update(max_kits=K, upper_start=inc_obj)
+        r.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
     else:
         inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
         K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
@@ -388,7 +388,7 @@ def _solve_master(
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, inc_obj, r.live)
     loop.start = start
-    if options.tray == "auto":
+    if options.tray == "auto" and not r.instance.stations:  # stations: Benders, as cpsat's
         loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
     scope = loop.cuts.scope
