@@ -255,9 +255,13 @@ def layout_terms(layout: Sequence[Placement]) -> tuple[float, float, float, floa
     """(D_same, D_diff, Z_box, Z_exact) of one layout, in float64.
 
     ``Z_exact`` sums the exact intersection areas of the rotated rectangles; only pairs whose
-    bounding boxes overlap are clipped (the others intersect in zero area)."""
+    bounding boxes overlap are clipped (the others intersect in zero area). Above
+    :data:`LARGE_LAYOUT` parts the distance sums run over blocks of rows and the overlaps over
+    the grid hash's near pairs, so memory stays linear in the number of parts."""
     if len(layout) < 2:
         return 0.0, 0.0, 0.0, 0.0
+    if len(layout) > LARGE_LAYOUT:
+        return _large_layout_terms(layout)
     x = np.array([[p.x for p in layout]])
     y = np.array([[p.y for p in layout]])
     th = np.array([[p.theta for p in layout]])
@@ -272,24 +276,82 @@ def layout_terms(layout: Sequence[Placement]) -> tuple[float, float, float, floa
     )
 
 
-def overlapping_box_pairs(layout: Sequence[Placement]) -> list[tuple[int, int]]:
-    """Index pairs whose bounding boxes overlap with positive area: the only candidates for an
-    exact overlap (a disjoint or touching box pair cannot intersect in its interior)."""
-    n = len(layout)
-    if n < 2:
-        return []
-    x = np.array([p.x for p in layout])
-    y = np.array([p.y for p in layout])
+#: Above this many parts a single layout is scored without the all-pairs table (the kits too
+#: large for the cross-entropy search, laid out by the shelf packer).
+LARGE_LAYOUT = 500
+#: Pair distances computed at once by :func:`pair_distance_sums` (bounds its memory).
+DISTANCE_BLOCK = 1 << 20
+
+
+def pair_distance_sums(
+    x: np.ndarray, y: np.ndarray, labels: Sequence[Hashable]
+) -> tuple[float, float]:
+    """(D_same, D_diff) of Eqs. 8-9 for one layout, in blocks of rows of the upper triangle:
+    quadratic time, memory of :data:`DISTANCE_BLOCK` distances."""
+    n = len(x)
+    codes = np.unique(np.asarray(labels, dtype=object).astype(str), return_inverse=True)[1]
+    rows = max(1, DISTANCE_BLOCK // max(n, 1))
+    d_all = d_same = 0.0
+    for a in range(0, n - 1, rows):
+        b = min(n - 1, a + rows)
+        d = np.hypot(x[a:b, None] - x[None, a + 1 :], y[a:b, None] - y[None, a + 1 :])
+        upper = np.arange(a + 1, n)[None, :] > np.arange(a, b)[:, None]
+        same = codes[a:b, None] == codes[None, a + 1 :]
+        d_all += float(d[upper].sum())
+        d_same += float(d[upper & same].sum())
+    return d_same, d_all - d_same
+
+
+def _box_arrays(layout: Sequence[Placement]) -> tuple[np.ndarray, ...]:
+    x = np.array([p.x for p in layout], dtype=np.float64)
+    y = np.array([p.y for p in layout], dtype=np.float64)
     ex, ey = half_extents(
-        np.array([p.w for p in layout]),
-        np.array([p.h for p in layout]),
+        np.array([p.w for p in layout], dtype=np.float64),
+        np.array([p.h for p in layout], dtype=np.float64),
         np.array([p.theta for p in layout], dtype=np.float64),
     )
-    i, j = np.triu_indices(n, 1)
+    return x, y, ex, ey
+
+
+def _large_layout_terms(layout: Sequence[Placement]) -> tuple[float, float, float, float]:
+    """:func:`layout_terms` for a large layout (same terms, summed in another order)."""
+    x, y, ex, ey = _box_arrays(layout)
+    d_same, d_diff = pair_distance_sums(x, y, [p.type for p in layout])
+    i, j = box_pairs(x, y, ex, ey)
+    z_box = float(
+        box_overlap_1d(x[i] - x[j], ex[i], ex[j]) @ box_overlap_1d(y[i] - y[j], ey[i], ey[j])
+    )
+    return d_same, d_diff, z_box, exact_overlap_area(layout)
+
+
+def box_pairs(
+    x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i < j) whose boxes overlap with positive area: every pair below
+    :data:`LARGE_LAYOUT` parts, the grid hash's near pairs above."""
+    n = len(x)
+    if n <= LARGE_LAYOUT:
+        i, j = np.triu_indices(n, 1)
+    else:
+        lo = np.stack([x - ex, y - ey], axis=1)
+        hi = np.stack([x + ex, y + ey], axis=1)
+        found = list(geometry.near_pairs(lo, hi, 0.0))
+        i = np.concatenate([a for a, _ in found]) if found else np.zeros(0, dtype=np.int64)
+        j = np.concatenate([b for _, b in found]) if found else np.zeros(0, dtype=np.int64)
     ox = ex[i] + ex[j] - np.abs(x[i] - x[j])
     oy = ey[i] + ey[j] - np.abs(y[i] - y[j])
     hit = (ox > 0) & (oy > 0)
-    return [(int(a), int(b)) for a, b in zip(i[hit], j[hit], strict=True)]
+    return i[hit], j[hit]
+
+
+def overlapping_box_pairs(layout: Sequence[Placement]) -> list[tuple[int, int]]:
+    """Index pairs whose bounding boxes overlap with positive area: the only candidates for an
+    exact overlap (a disjoint or touching box pair cannot intersect in its interior)."""
+    if len(layout) < 2:
+        return []
+    i, j = box_pairs(*_box_arrays(layout))
+    order = np.lexsort((j, i))
+    return [(int(a), int(b)) for a, b in zip(i[order], j[order], strict=True)]
 
 
 def exact_overlap_area(layout: Sequence[Placement]) -> float:

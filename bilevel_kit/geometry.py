@@ -155,7 +155,7 @@ def layout_violations(
     """Every footprint outside the ``width`` x ``height`` tray (in input order), then every
     overlapping pair (in lexicographic index order); ``first=True`` stops at the first fault,
     ``limit`` after that many overlapping pairs (then the pairs listed are those of the first
-    blocks of parts :func:`_near_pairs` visits, still sorted).
+    blocks of parts :func:`near_pairs` visits, still sorted).
 
     Only pairs whose axis-aligned bounding boxes come within ``tol`` of each other get the
     separating-axis test: for boxes farther apart, one of the two rectangles' edge normals
@@ -191,7 +191,7 @@ def layout_violations(
         near = ((np.minimum(hi[i], hi[j]) - np.maximum(lo[i], lo[j])) > -tol).all(axis=1)
         _exact_pairs(parts, corner_sets, i[near], j[near], tol, found, stop)
     else:
-        for i, j in _near_pairs(lo_c, hi_c, tol):
+        for i, j in near_pairs(lo_c, hi_c, tol):
             keep = _sat_depth(allc[i], allc[j]) > tol / 2  # the exact test decides (> tol)
             _exact_pairs(parts, None, i[keep], j[keep], tol, found, stop)
             if stop is not None and len(found) >= stop:
@@ -201,7 +201,7 @@ def layout_violations(
 
 
 #: Up to this many footprints :func:`layout_violations` compares every pair of bounding boxes
-#: (the layout searches' kits); above, it uses the grid hash of :func:`_near_pairs`.
+#: (the layout searches' kits); above, it uses the grid hash of :func:`near_pairs`.
 SMALL_LAYOUT = 64
 #: Candidate pairs handled at once by the grid hash (bounds the memory of a dense layout).
 PAIR_BLOCK = 100_000
@@ -261,7 +261,7 @@ def _sat_depth(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.asarray(over.min(axis=1))
 
 
-def _near_pairs(
+def near_pairs(
     lo: np.ndarray, hi: np.ndarray, tol: float
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """The pairs (i < j) of boxes that come within ``tol`` of each other, in blocks of about

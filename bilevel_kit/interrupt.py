@@ -249,8 +249,10 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
     thread, and a watchdog ends the process ``grace`` seconds after the first signal (at once
     after a second) if it is still running (module docstring). ``linger``: the guard is the
     whole process (the command line), so after a signal the deadline also covers the
-    interpreter's exit. Outside the main thread, or when SIGTERM already has a handler of
-    someone else's, nothing is installed."""
+    interpreter's exit, and the signals are ignored once the command is over: a Ctrl-C
+    that comes as the process exits leaves the command's own exit code (Python's default
+    handler would end the process by the signal, exit -2). Outside the main thread, or
+    when SIGTERM already has a handler of someone else's, nothing is installed."""
     if (
         threading.current_thread() is not threading.main_thread()
         or signal.getsignal(signal.SIGTERM) not in (signal.SIG_DFL, None)
@@ -267,7 +269,9 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         signal.signal(signal.SIGTERM, guard.handler)
         yield
     finally:
-        signal.set_wakeup_fd(old_fd)
+        if linger:  # the command is over: a late signal must not kill the exiting process
+            old_int = old_term = signal.SIG_IGN
         signal.signal(signal.SIGTERM, old_term)
         signal.signal(signal.SIGINT, old_int)
+        signal.set_wakeup_fd(old_fd)
         guard.close(linger)

@@ -20,7 +20,10 @@ from .common import (
     sweep_session,
 )
 
-HELP = "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon and adaptive studies"
+HELP = (
+    "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon, adaptive and "
+    "stations studies"
+)
 DESCRIPTION = (
     "calibrate: fit the robot's speed, the human's pickup time and the participant x condition "
     "SD to 3 of the paper's numbers on a calibration cohort, with a parametric bootstrap; its "
@@ -37,12 +40,18 @@ DESCRIPTION = (
     "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s). adaptive: "
     "optimized, optimized-adaptive (learns the human's pace) and optimized-oracle over fast, "
     "median, slow and sampled participants, without and with supply delays "
-    "(docs/simulation.md). See paper_repro/README.md."
+    "(docs/simulation.md). stations: how many assembly stations one robot keeps busy: "
+    "throughput, human idle per station and robot utilisation against S = 1..6 stations of "
+    "the table, stool, chair and mixed lines, per policy, without and with feeders "
+    "(docs/stations.md). See paper_repro/README.md."
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("experiment", choices=("calibrate", "user-study", "fig6", "horizon", "adaptive"))
+    p.add_argument(
+        "experiment",
+        choices=("calibrate", "user-study", "fig6", "horizon", "adaptive", "stations"),
+    )
     p.add_argument(
         "--quick",
         action="store_true",
@@ -59,7 +68,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="R",
         help="fig6: replications per cell (default 30; 3 with --quick); horizon: replications "
         "per simulation cell (default 3; 1 with --quick); adaptive: runs per participant group "
-        "(default 10; 2 with --quick), 3R sampled participants",
+        "(default 10; 2 with --quick), 3R sampled participants; stations: replications "
+        "(default 5; 2 with --quick)",
     )
     p.add_argument(
         "--mats",
@@ -129,7 +139,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--no-simulation", action="store_true", help="planning only (skip the window study)"
     )
+    _add_stations_arguments(p)
     add_sweep_options(p)
+
+
+def _add_stations_arguments(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("stations")
+    g.add_argument(
+        "--lines",
+        type=lambda t: listed(t, str),
+        metavar="table,mix",
+        help="lines: table, stool, chair, mix (default all)",
+    )
+    g.add_argument(
+        "--stations",
+        type=integers,
+        metavar="1,2,3",
+        help="stations per robot S (default 1..6; 1,2,4 with --quick)",
+    )
+    g.add_argument(
+        "--units",
+        type=positive_int,
+        metavar="U",
+        help="units each station builds (default 2)",
+    )
+    g.add_argument(
+        "--supply",
+        type=lambda t: listed(t, str),
+        metavar="none,feeders",
+        help="supply settings: none (all in stock), feeders (default both)",
+    )
 
 
 def integers(text: str) -> tuple[int, ...]:
@@ -162,7 +201,19 @@ def _run(args: argparse.Namespace) -> int:
         res = repro.run_calibration(out, draws=args.draws, **run)
         return _report(res)
     run["calibration"] = args.calibration
-    if args.experiment == "adaptive":
+    if args.experiment == "stations":
+        from ..repro.stations import run_stations
+
+        res = run_stations(
+            out,
+            reps=args.reps,
+            lines=args.lines,
+            stations=args.stations,
+            delays=args.supply,
+            units=args.units,
+            **run,
+        )
+    elif args.experiment == "adaptive":
         from ..repro.adaptive import run_adaptive
 
         res = run_adaptive(out, reps=args.reps, **run)

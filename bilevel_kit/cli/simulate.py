@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from ..experiments.replications import ReplicationCell, replication_cell
     from ..instance import load
     from ..sim import POLICIES, SimParams
+    from ..sim.stations import require_station_policy
 
     if args.buffer is not None:
         raise UsageError("--buffer was removed: use --trays (trays = buffer + 1)")
@@ -109,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
         policy_options=dict(args.param),
     )
     POLICIES.spec(args.policy).parse(params.policy_options)  # fail before any run
+    require_station_policy(instance, args.policy)  # several stations: exit 2 before any run
     cells = [
         ReplicationCell(instance, args.policy, params, s)
         for s in range(args.seed, args.seed + args.reps)

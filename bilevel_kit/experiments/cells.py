@@ -159,10 +159,46 @@ def _connect(client: type[Client], address: str) -> Client:
     Dask cannot read) is a :class:`UsageError` naming it, not a traceback (Dask waits 30 s)."""
     from ..errors import UsageError
 
+    _probe(address)
     try:
         return client(address, timeout=30)
     except (OSError, ValueError, TimeoutError) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise UsageError(
+            f"--scheduler {address}: no Dask scheduler to connect to ({reason})"
+        ) from None
+    except (MemoryError, EOFError, TypeError, KeyError) as exc:  # a server that is not Dask
+        reason = f"its reply is not Dask's: {type(exc).__name__}"
+        raise UsageError(
+            f"--scheduler {address}: no Dask scheduler to connect to ({reason})"
+        ) from None
+
+
+#: Seconds to wait for a TCP scheduler to accept a connection before Dask's own handshake.
+PROBE_TIMEOUT = 5.0
+
+
+def _probe(address: str) -> None:
+    """A plain TCP connect to a ``tcp://``/``tls://`` scheduler first: Dask retries a refused
+    or unanswered connection for its whole 30 s timeout, this says so at once (refused) or
+    after :data:`PROBE_TIMEOUT` seconds (no answer)."""
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    from ..errors import UsageError
+
+    try:
+        scheme, loc = parse_address(address)
+        host, port = parse_host_port(loc)
+    except ValueError:
+        return  # Dask's own message names what it cannot read
+    if scheme not in ("tcp", "tls"):
+        return
+    try:
+        socket.create_connection((host, port), timeout=PROBE_TIMEOUT).close()
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else exc.strerror or str(exc)
         raise UsageError(
             f"--scheduler {address}: no Dask scheduler to connect to ({reason})"
         ) from None

@@ -71,7 +71,7 @@ from ..instance import Instance, PartType, Tray
 from ..plan import Placement
 from .ce.accept import Candidate, candidate, choose
 from .ce.accept import exactly_valid as _exactly_valid  # noqa: F401 - tests import it from here
-from .ce.kit import Kit, build_kit, start_vector
+from .ce.kit import MAX_CE_PARTS, Kit, build_kit, start_vector
 from .ce.params import Arrangement, CEParams
 from .ce.sampling import Run, ce_run
 from .ce.snap import snap
@@ -128,12 +128,6 @@ def arrange(
     if params.snap:
         choice = snap(kit, choice, w6)
     return _arrangement(kit, choice, run, w6)
-
-
-#: The most parts CE lays out: its search space has 3 numbers per part and it keeps a
-#: covariance of that size squared (a 4,000-part kit asked for 6 GiB and ran for minutes per
-#: iteration). A larger kit gets the shelf packer's layout, or none.
-MAX_CE_PARTS = 500
 
 
 def _packer_only(kit: Kit, w6: float) -> Arrangement:

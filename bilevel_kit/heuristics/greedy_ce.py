@@ -37,7 +37,8 @@ Decisions taken where the paper is silent (docs/errata.md):
 Options (:class:`GreedyCEOptions`, validated centrally): ``horizon`` (N), ``signed``,
 ``precedence``, ``polish`` (convex polish of every CE layout, :mod:`bilevel_kit.heuristics.convex`),
 the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entropy.CEParams` field.
-``time_limit`` is accepted for the common interface; the heuristic has none.
+Past ``time_limit`` the remaining kits are single tasks. Several stations:
+:mod:`.greedy_stations`.
 
 ``extra`` of the registered method ``greedy-ce``:
 
@@ -55,6 +56,8 @@ the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entro
 
 from __future__ import annotations
 
+import functools
+import heapq
 import itertools
 import math
 import time
@@ -71,6 +74,8 @@ from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
 from . import upper_level
 from .cross_entropy import Arrangement, CEParams, arrange
 from .greedy_search import PrefixSearch, SearchLimits, SearchStats, available_vector
+from .greedy_stations import plan_stations
+from .prefix.levels import unique_rows
 
 #: Refuse to enumerate more than this many partial sequences at one epoch (each is scored,
 #: and its parts laid out: 2,000,000 took 30 s and 0.8 GB at a 2 s limit).
@@ -406,10 +411,25 @@ class GreedyCEPolicy:
             self.stats.fitness_cache_hits += 1
         return hit
 
+    def _listed(self, done: set[int], length: int) -> list[tuple[int, ...]] | None:
+        """Up to ``MAX_SEQUENCES + 1`` sequences, or None once the time limit passes."""
+        listed: list[tuple[int, ...]] = []
+        gen = self._sequences(done, length)
+        while len(listed) <= MAX_SEQUENCES:
+            chunk = list(itertools.islice(gen, 4096))
+            listed += chunk
+            if len(chunk) < 4096:
+                break
+            if self.past_deadline():
+                return None
+        return listed[: MAX_SEQUENCES + 1]
+
     def _enumerate(
         self, state: PolicyState, done: set[int], length: int
-    ) -> tuple[list[int], float]:
-        """Every (K, i) scored at once (the penalty form, and ``decision="enumerate"``)."""
+    ) -> tuple[list[int], float] | None:
+        """Every (K, i) scored at once (the penalty form, and ``decision="enumerate"``); None
+        when the time limit passes before every new part multiset has its layout (the epoch
+        then takes the single-task kit of :meth:`_cheap`, as every later one does)."""
         inst = self.instance
         remaining = len(self._ids) - len(done)
         if math.perm(remaining, length) > MAX_SEQUENCES and self.params.precedence != "hard":
@@ -417,7 +437,9 @@ class GreedyCEPolicy:
                 f"{math.perm(remaining, length)} sequences to enumerate in the "
                 "penalty form; lower the horizon"
             )
-        listed = list(itertools.islice(self._sequences(done, length), MAX_SEQUENCES + 1))
+        listed = self._listed(done, length)
+        if listed is None:
+            return None
         if len(listed) > MAX_SEQUENCES:
             raise UsageError(
                 f"more than {MAX_SEQUENCES:,} partial sequences at one epoch to enumerate; "
@@ -440,11 +462,13 @@ class GreedyCEPolicy:
             signed=self.params.signed,
         )
         counts = np.cumsum(self._part_matrix[seqs], axis=1).reshape(-1, len(self._types))
-        keys, inverse = np.unique(counts, axis=0, return_inverse=True)
+        keys, inverse = unique_rows(counts)
         inverse = inverse.reshape(len(seqs), length)
         fit = np.empty(len(keys))
         fits = np.empty(len(keys), dtype=bool)
         for k, row in enumerate(keys):
+            if self.past_deadline() and self._cached_fitness(row) is None:
+                return None
             fit[k], fits[k] = self._fitness(row)
         unavailable = None
         avail = available_vector(state.available, self._types)
@@ -514,7 +538,11 @@ class GreedyCEPolicy:
             self.stats.time_limit_hit = True
             prefix, best_score = self._cheap(done)
         elif self.params.precedence == "penalty" or self.params.decision == "enumerate":
-            prefix, best_score = self._enumerate(state, done, length)
+            found: tuple[list[int], float | None] | None = self._enumerate(state, done, length)
+            if found is None:
+                self.stats.time_limit_hit = True
+                found = self._cheap(done)
+            prefix, best_score = found
         else:
             prefix, best_score = self._exact(state, done, length)
         if not prefix:
@@ -529,23 +557,40 @@ class GreedyCEPolicy:
 
     def finish(self, done: set[str]) -> Iterator[Kit]:
         """After the time limit: every remaining task alone, the first available one (file
-        order) first, as :meth:`_cheap` picks them; in time linear in the tasks (one
-        :meth:`decide` per task rebuilds the set of done tasks: 15,000 tasks took 95 s)."""
+        order) first, as :meth:`_cheap` picks them: the smallest topological order, by a heap,
+        and one layout per distinct part multiset, so 60,000 tasks take about a second."""
         inst = self.instance
         done_idx = {inst.index[t] for t in done}
-        pending = [j for j in range(len(self._ids)) if j not in done_idx]
         self.stats.time_limit_hit = True
-        while pending:
-            k = next((k for k, j in enumerate(pending) if self._pred[j] <= done_idx), None)
-            if k is None or not self._fitness(self._part_matrix[pending[k]])[1]:
-                raise KitDoesNotFit(
-                    f"{inst.source}: no next kit fits the tray: the first available of the "
-                    f"remaining {len(pending)} tasks does not lay out alone"
-                )
-            j = pending.pop(k)
-            done_idx.add(j)
+        waiting = [len(p - done_idx) for p in self._pred]
+        succ: list[list[int]] = [[] for _ in self._ids]
+        for j, preds in enumerate(self._pred):
+            for p in preds:
+                succ[p].append(j)
+        ready = [j for j in range(len(self._ids)) if j not in done_idx and waiting[j] == 0]
+        heapq.heapify(ready)
+        left = len(self._ids) - len(done_idx)
+        made: dict[bytes, tuple[Kit, dict[str, Any]]] = {}
+        terms = self.stats.objective_terms
+        while ready:
+            j = heapq.heappop(ready)
+            key = self._part_matrix[j].tobytes()
+            if key in made:
+                terms.append(dict(made[key][1]))
+            else:
+                if not self._fitness(self._part_matrix[j])[1]:
+                    raise KitDoesNotFit(
+                        f"{inst.source}: no next kit fits the tray: the first available of "
+                        f"the remaining {left} tasks does not lay out alone"
+                    )
+                made[key] = (self._kit([j], None, None), terms[-1])
+            left -= 1
             self.stats.epochs += 1
-            yield self._kit([j], None, None)
+            for s in succ[j]:
+                waiting[s] -= 1
+                if waiting[s] == 0:
+                    heapq.heappush(ready, s)
+            yield Kit((self._ids[j],), made[key][0].layout)
 
     def _kit(self, prefix: list[int], best_score: float | None, h_rem: float | None) -> Kit:
         """The kit of the tasks ``prefix`` with its CE layout, its terms kept in the stats."""
@@ -616,15 +661,12 @@ def greedy_ce(
     in the module docstring). Past ``time_limit`` seconds the remaining kits are single tasks
     (``extra["time_limit_hit"]``). Several stations: :mod:`.greedy_stations`."""
     params = options.to_params()
+    # the clock starts before the policy's set-up, which is linear in the tasks (seconds at
+    # 60,000 tasks): the limit bounds the whole method
     deadline = None if time_limit is None else time.perf_counter() + time_limit
     if instance.stations:  # docs/timeline.md#several-stations
-        from .greedy_stations import merged_stats, plan_stations, station_policies
-
-        policies = station_policies(
-            instance, lambda inst: GreedyCEPolicy(inst, params, seed), deadline
-        )
-        result = plan_stations(instance, policies, PolicyState)
-        st = merged_stats(policies, result)
+        make = functools.partial(GreedyCEPolicy, params=params, seed=seed)
+        result, st = plan_stations(instance, make, PolicyState, deadline)
     else:
         policy = GreedyCEPolicy(instance, params, seed)
         policy.deadline = deadline

@@ -66,6 +66,19 @@ def station_policies(
 
 def plan_stations(
     instance: Instance,
+    make: Callable[[Instance], StationPolicy],
+    state: Callable[[frozenset[str], float], Any],
+    deadline: float | None,
+) -> tuple[Plan, Any]:
+    """The offline plan of the module docstring, by one policy per station built by ``make``
+    (past ``deadline``, single-task kits), and the policies' counters merged."""
+    policies = station_policies(instance, make, deadline)
+    plan = _plan(instance, policies, state)
+    return plan, merged_stats(policies, plan)
+
+
+def _plan(
+    instance: Instance,
     policies: dict[str, StationPolicy],
     state: Callable[[frozenset[str], float], Any],
 ) -> Plan:

@@ -132,6 +132,19 @@ class StationParams:
     tray_limit: int | None
 
 
+#: Cached views of :class:`Instance` that depend only on its tasks, units, stations and
+#: precedence, so a copy that changes none of these shares them.
+GRAPH_VIEWS = (
+    "tasks",
+    "served_by",
+    "precedence",
+    "task_by_id",
+    "index",
+    "predecessors",
+    "ancestors",
+)
+
+
 @dataclass(frozen=True)
 class Instance:
     """A kitting problem. Fields mirror the JSON format; see
@@ -383,6 +396,10 @@ class Instance:
             check_size(len(self.base_tasks), int(units), self.source)
             changes["units"] = int(units)
         out = replace(self, **changes) if changes else self
+        if out is not self and "units" not in changes:
+            for name in GRAPH_VIEWS:  # same tasks and graph: no re-expansion (linear in tasks)
+                if name in self.__dict__:
+                    out.__dict__[name] = self.__dict__[name]
         lost = [t.id for t in out.tasks if not t.station] if out.stations else []
         if lost:  # docs/timeline.md#several-stations: every task on a station
             raise InstanceError(

@@ -1,7 +1,8 @@
 """Reproduction of the paper's user study (Section V-A, Fig. 5 top) and Figure 6 (Section V-B).
 
-The entry points the CLI (``bilevel-kit repro calibrate|user-study|fig6|horizon|adaptive``)
-calls (``run_adaptive`` lives in :mod:`.adaptive`)::
+The entry points the CLI (``bilevel-kit repro calibrate|user-study|fig6|horizon|adaptive|
+stations``) calls (``run_adaptive`` lives in :mod:`.adaptive`, ``run_stations`` in
+:mod:`.stations`)::
 
     run_calibration(out_dir="out/repro/calibration", quick=False, seed=0, jobs=1) -> dict
     run_user_study(out_dir="out/repro/user_study", quick=False, seed=0, jobs=1) -> dict
@@ -15,11 +16,11 @@ under ``out_dir`` and return a JSON-serialisable summary with the output paths u
 ``run_calibration``, ``load_calibration``), :mod:`.calibration` (the protocol's fit),
 :mod:`.user_study`, :mod:`.predictions` (fitted, implied and predicted paper numbers),
 :mod:`.within` (the participant model explained), :mod:`.sensitivity`, :mod:`.fig6` and
-:mod:`.fig6_stats` (by direction, trends, power), :mod:`.horizon` and :mod:`.adaptive` (beyond
-the paper), :mod:`.stats` (ANOVA, Tukey HSD, t-tests), :mod:`.plots` (figures),
-:mod:`.report`, :mod:`.report_sim`, :mod:`.facts` and :mod:`.template` (the documents rendered
-from the committed CSVs), :mod:`.common` (the paper's numbers). ``paper_repro/README.md``
-documents the choices and the results (docs/reproduction.md).
+:mod:`.fig6_stats` (by direction, trends, power), :mod:`.horizon`, :mod:`.adaptive` and
+:mod:`.stations` (beyond the paper), :mod:`.stats` (ANOVA, Tukey HSD, t-tests), :mod:`.plots`
+(figures), :mod:`.report`, :mod:`.report_sim`, :mod:`.facts` and :mod:`.template` (the
+documents rendered from the committed CSVs), :mod:`.common` (the paper's numbers).
+``paper_repro/README.md`` documents the choices and the results (docs/reproduction.md).
 
 Choices that apply to the user study and Figure 6 (why, in short):
 

@@ -90,8 +90,9 @@ class WholeAssemblyPolicy(_NoOptionsPolicy):
     def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
         order = topological_order(instance)
         unit = {t.id: t.unit for t in instance.tasks}
+        # the units present (1..units; a station's own instance keeps its tasks' units)
         self._units = [
-            tuple(t for t in order if unit[t] == u) for u in range(1, instance.units + 1)
+            (u, tuple(t for t in order if unit[t] == u)) for u in sorted(set(unit.values()))
         ]
         self._layouts = LayoutCache(instance)
 
@@ -99,7 +100,7 @@ class WholeAssemblyPolicy(_NoOptionsPolicy):
         pass
 
     def decide(self, state: SimState) -> Kit | None:
-        for u, tasks in enumerate(self._units, start=1):
+        for u, tasks in self._units:
             left = tuple(t for t in tasks if t not in state.done)
             if left:
                 return self._layouts.kit(left, f"whole-assembly kit of unit {u}")

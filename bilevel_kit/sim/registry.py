@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, ClassVar, cast
 
 from ..errors import UsageError
 from ..options import Registered, import_target
@@ -120,8 +120,16 @@ def make_policy(
     name: str, instance: Instance, *, seed: int = 0, params: SimParams | None = None
 ) -> Policy:
     """Build a registered policy by name, its options validated (a clear error for an unknown
-    policy, an unknown option key or a bad value)."""
+    policy, an unknown option key or a bad value); with several stations, one per station
+    (:class:`.stations.StationsPolicy`), or a clear error if the policy does not take them."""
     spec = POLICIES.spec(name)
     options = spec.parse(params.policy_options if params is not None else {})
     factory: Callable[..., Policy] = spec.load()  # cls(instance, *, seed, params, options)
+    if instance.stations:  # one policy per station (docs/simulation.md#several-stations)
+        from .stations import StationsPolicy, require_station_policy
+
+        require_station_policy(instance, name)
+        # (its ``name`` is the wrapped policy's, an instance attribute: hence the cast)
+        wrapped = StationsPolicy(instance, factory, seed=seed, params=params, options=options)
+        return cast("Policy", wrapped)
     return factory(instance, seed=seed, params=params, options=options)

@@ -9,7 +9,7 @@ no supply process and deterministic times the two can be compared field by field
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -21,6 +21,7 @@ from .params import SimParams, effective_instance
 from .registry import make_policy
 from .shopfloor import STREAM, ShopFloor, SimulationError
 from .state import Policy
+from .stations import StationsPolicy, require_station_policy
 from .timing import SampledTimes, sample_times
 
 
@@ -109,6 +110,7 @@ class SimResult:
             "robot_times": self.times.robot_times(),
             "feeders": {k: dict(v) for k, v in self.feeders.items()},
             "params": self.params.to_dict(),
+            **({"stations": self.timeline.station_metrics()} if self.instance.stations else {}),
         }
 
 
@@ -117,6 +119,11 @@ def _policy(instance: Instance, policy: str | Policy, params: SimParams, seed: i
     if isinstance(policy, str):
         pseed = seed if params.policy_seed is None else params.policy_seed
         return make_policy(policy, instance, seed=pseed, params=params)
+    if instance.stations and not isinstance(policy, StationsPolicy):
+        raise UsageError(
+            "with several stations the policy object must be built by make_policy "
+            "(one policy per station, docs/simulation.md#several-stations)"
+        )
     if getattr(policy, "instance", None) is not None and [t.id for t in policy.instance.tasks] != [
         t.id for t in instance.tasks
     ]:
@@ -140,6 +147,13 @@ def _result(shop: ShopFloor, pol: Policy, seed: int) -> SimResult:
         shop.human_work,
         shop.robot_work,
     )
+    if inst.stations:  # each human's idle up to its own completion (docs/timeline.md)
+        ends = [h.last_end for h in shop.humans.values()]
+        timeline = replace(
+            timeline,
+            human_idle=sum(ends) - shop.human_work,
+            kit_stations=tuple(shop.kit_stations),
+        )
     return SimResult(
         instance=inst,
         policy=getattr(pol, "name", type(pol).__name__),
@@ -176,11 +190,8 @@ def simulate(
     seed = int(seed)
     if seed < 0:
         raise UsageError(f"seed must be >= 0, got {seed}")
-    if instance.stations:
-        raise UsageError(
-            f"{instance.source}: the simulation does not model several assembly stations yet "
-            "(docs/timeline.md#several-stations)"
-        )
+    if isinstance(policy, str):
+        require_station_policy(instance, policy)
     inst = effective_instance(instance, params)
     pol = _policy(inst, policy, params, seed)
     times = sample_times(

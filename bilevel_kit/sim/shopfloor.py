@@ -12,7 +12,9 @@ Processes:
 * **Human**: takes a kit when it arrives if idle, otherwise the kit waits in a FIFO queue at the
   assembly station; spends ``o_H`` retrieving its parts, which frees the tray, and assembles the
   kit's tasks in order with the sampled durations. The run ends when the human finishes the
-  last task.
+  last task. With several stations (docs/simulation.md#several-stations) each station has a
+  human of its own, with its queue, ``o_H``, trays and delivery time ``d_s``; the run ends
+  when the last of them finishes.
 * **Trays**: the instance's ``trays`` (docs/timeline.md): the robot starts kit k only once the
   tray of kit k - trays is back, ``o_H`` after the human started that kit, the evaluator's
   ``robot_start_k >= human_start_{k-trays} + o_H``. The wait is ``robot_blocked`` in the
@@ -45,7 +47,7 @@ participants and the same arrivals (common random numbers for paired comparisons
 
 from __future__ import annotations
 
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Callable, Generator, Mapping
 from typing import Any
 
@@ -53,8 +55,8 @@ import numpy as np
 import simpy
 
 from ..errors import BilevelKitError
-from ..instance import Instance
-from ..plan import Kit
+from ..instance import Instance, StationParams
+from ..plan import Kit, kit_station
 from .feeders import Feeder
 from .params import SimParams
 from .state import UNLIMITED, HumanProgress, Policy, SimState
@@ -96,18 +98,16 @@ class ShopFloor:
         else:
             self._dur = inst.human_time
         self.kits: list[Kit] = []
+        self.kit_stations: list[str] = []
         self.kit_times: list[dict[str, float]] = []
         self.kit_waits: list[float] = []
         self.done: set[str] = set()
-        self.queue: deque[int] = deque()
         self.max_queue = 0
-        self._kit_ready: simpy.Event | None = None
         self._tray_back: simpy.Event | None = None
-        self.trays_back = 0  # kits whose parts the human has retrieved (their tray is free)
         self.robot_blocked = 0.0
-        self.in_hand: int | None = None
-        self.phase = -1
-        self.phase_start = 0.0
+        #: one human per station ("" alone without ``stations``), docs/timeline.md
+        self.humans = {s: _Human(s, inst.station_params[s]) for s in inst.station_ids}
+        self.left = Counter(t.station for t in inst.tasks)  # tasks not kitted, per station
         self.task_start: dict[str, float] = {}
         self.task_end: dict[str, float] = {}
         self.observed: dict[str, float] = {}  # measured durations of finished tasks
@@ -115,28 +115,30 @@ class ShopFloor:
         self.robot_work = 0.0
         self.robot_wait = 0.0
         self.n_waits = 0
+        self.finished_tasks = 0
         self.finished = env.event()
         env.process(self._robot())
-        env.process(self._human())
+        for human in self.humans.values():
+            env.process(self._human(human))
 
     # -- the robot's view ----------------------------------------------------------------------
-    def _progress(self) -> HumanProgress:
-        """The human's position now: task ids and clock times only."""
-        k = self.in_hand
+    def _progress(self, human: _Human) -> HumanProgress:
+        """A human's position now: task ids and clock times only."""
+        k = human.in_hand
         return HumanProgress(
             now=self.env.now,
-            overhead=self.inst.kit_overhead_human,
+            overhead=human.params.kit_overhead_human,
             in_hand=self.kits[k].tasks if k is not None else (),
-            phase=self.phase,
-            phase_start=self.phase_start,
-            queued=tuple(self.kits[q].tasks for q in self.queue),
+            phase=human.phase,
+            phase_start=human.phase_start,
+            queued=tuple(self.kits[q].tasks for q in human.queue),
         )
 
     def state(self) -> SimState:
         avail = dict.fromkeys(self.inst.part_types, UNLIMITED)
         for t, f in self.feeders.items():
             avail[t] = f.stock
-        progress = self._progress()
+        progress = self._progress(self.humans[self.inst.station_ids[0]])
         true_speed: tuple[float, ...] = ()
         if getattr(self.policy, "sees_true_speed", False):  # the oracle references only
             sf = self.params.timing.session_factor
@@ -153,7 +155,24 @@ class ShopFloor:
             observed=dict(self.observed),
             progress=progress,
             true_speed=true_speed,
+            **(self._station_views() if self.inst.stations else {}),
         )
+
+    def _station_views(self) -> dict[str, Any]:
+        """The stations' fields of :class:`SimState` (docs/timeline.md#several-stations)."""
+        progress = {s: self._progress(h) for s, h in self.humans.items()}
+        remaining = {s: p.remaining(self._dur) for s, p in progress.items()}
+        free = {}
+        for s, h in self.humans.items():
+            busy = h.in_hand is not None or h.queue
+            free[s] = self.env.now + remaining[s] if busy else h.last_end
+        return {
+            "station_progress": progress,
+            "station_remaining": remaining,
+            "station_free": free,
+            "station_left": {s: self.left[s] for s in self.humans},
+            "trays_free": {s: h.trays_free() for s, h in self.humans.items()},
+        }
 
     def _check_kit(self, kit: Kit) -> None:
         name = getattr(self.policy, "name", type(self.policy).__name__)
@@ -171,24 +190,26 @@ class ShopFloor:
                     f"policy {name!r} kitted {t!r} before its predecessor(s) {sorted(missing)}"
                 )
             seen.add(t)
+        stations = {self.inst.station_of(t) for t in kit.tasks}
+        if len(stations) > 1:
+            raise SimulationError(
+                f"policy {name!r} kitted tasks of several stations {sorted(stations)} in one kit"
+            )
 
     # -- processes -----------------------------------------------------------------------------
+    def _all_blocked(self) -> bool:
+        """No station with tasks left has a tray back (with one station: kit k waits for the
+        tray of kit k - T, docs/timeline.md)."""
+        return len(self.done) < self.inst.n_tasks and all(
+            h.blocked() for s, h in self.humans.items() if self.left[s] > 0
+        )
+
     def _robot(self) -> Generator[simpy.Event, Any, None]:
         env, inst = self.env, self.inst
-        o_r, d = inst.kit_overhead_robot, inst.delivery_time
-        trays = inst.tray_limit
+        o_r = inst.kit_overhead_robot
         while True:
-            # kit k = len(self.kits) needs the tray of kit k - trays back (docs/timeline.md)
-            if (
-                trays is not None
-                and len(self.kits) - self.trays_back >= trays
-                and len(self.done) < inst.n_tasks
-            ):
-                t0 = env.now
-                while len(self.kits) - self.trays_back >= trays:
-                    self._tray_back = env.event()
-                    yield self._tray_back
-                self.robot_blocked += env.now - t0
+            # the robot decides once a tray of some station with work left is back
+            yield from self._wait_trays(self._all_blocked)
             kit = self.policy.decide(self.state())
             if kit is None:
                 if len(self.done) < inst.n_tasks:
@@ -197,9 +218,15 @@ class ShopFloor:
                     )
                 return
             self._check_kit(kit)
+            human = self.humans[kit_station(inst, kit.tasks)]
+            # several stations: the policy may choose a station whose trays are all out
+            yield from self._wait_trays(human.blocked)
             k = len(self.kits)
             self.kits.append(kit)
+            self.kit_stations.append(human.station)
+            human.kits_out += 1
             self.done.update(kit.tasks)
+            self.left[human.station] -= len(kit.tasks)
             start = env.now
             if o_r:
                 yield env.timeout(o_r)
@@ -210,18 +237,29 @@ class ShopFloor:
             else:
                 wait = yield from self._pick_available_first(picks)
             end = env.now
+            d = human.params.delivery_time
             if d:
                 yield env.timeout(d)
             self.robot_work += busy + d
             self.robot_wait += wait
             self.kit_waits.append(wait)
             self.kit_times.append({"robot_start": start, "robot_end": end, "arrive": env.now})
-            self.queue.append(k)
-            self.max_queue = max(self.max_queue, len(self.queue))
-            ev = self._kit_ready
+            human.queue.append(k)
+            self.max_queue = max(self.max_queue, len(human.queue))
+            ev = human.kit_ready
             if ev is not None:
-                self._kit_ready = None
+                human.kit_ready = None
                 ev.succeed()
+
+    def _wait_trays(self, blocked: Callable[[], bool]) -> Generator[simpy.Event, Any, None]:
+        """Wait while ``blocked()`` (each tray back wakes the robot); counted as blocked."""
+        if not blocked():
+            return
+        t0 = self.env.now
+        while blocked():
+            self._tray_back = self.env.event()
+            yield self._tray_back
+        self.robot_blocked += self.env.now - t0
 
     def _pick_in_order(
         self, picks: list[tuple[str | None, float]]
@@ -273,30 +311,29 @@ class ShopFloor:
                 yield env.timeout(dur)
         return wait
 
-    def _human(self) -> Generator[simpy.Event, Any, None]:
+    def _human(self, human: _Human) -> Generator[simpy.Event, Any, None]:
         env, inst = self.env, self.inst
-        oh = inst.kit_overhead_human
+        oh = human.params.kit_overhead_human
         h = self.times.human
-        finished_tasks = 0
         while True:
-            if not self.queue:
-                self._kit_ready = env.event()
-                yield self._kit_ready
-            k = self.queue.popleft()
+            if not human.queue:
+                human.kit_ready = env.event()
+                yield human.kit_ready
+            k = human.queue.popleft()
             tasks = self.kits[k].tasks
-            self.in_hand, self.phase, self.phase_start = k, -1, env.now
+            human.in_hand, human.phase, human.phase_start = k, -1, env.now
             self.kit_times[k]["human_start"] = env.now
             work = oh
             if oh:
                 yield env.timeout(oh)
             # the parts are off the tray: it goes back to the robot
-            self.trays_back += 1
+            human.trays_back += 1
             back = self._tray_back
             if back is not None:
                 self._tray_back = None
                 back.succeed()
             for j, t in enumerate(tasks):
-                self.phase, self.phase_start = j, env.now
+                human.phase, human.phase_start = j, env.now
                 self.task_start[t] = env.now
                 work += h[t]
                 yield env.timeout(h[t])
@@ -304,8 +341,35 @@ class ShopFloor:
                 self.observed[t] = h[t]
             self.kit_times[k]["human_end"] = env.now
             self.human_work += work
-            self.in_hand = None
-            finished_tasks += len(tasks)
-            if finished_tasks == inst.n_tasks:
+            human.in_hand = None
+            human.last_end = env.now
+            self.finished_tasks += len(tasks)
+            if self.finished_tasks == inst.n_tasks:
                 self.finished.succeed()
                 return
+
+
+class _Human:
+    """The human of one station: the kits waiting there (FIFO), the one in hand, the trays
+    (docs/timeline.md#several-stations)."""
+
+    def __init__(self, station: str, params: StationParams) -> None:
+        self.station = station
+        self.params = params
+        self.queue: deque[int] = deque()
+        self.kit_ready: simpy.Event | None = None
+        self.kits_out = 0  # kits built for this station
+        self.trays_back = 0  # of them, those whose parts the human retrieved (tray free)
+        self.in_hand: int | None = None
+        self.phase = -1
+        self.phase_start = 0.0
+        self.last_end = 0.0  # when the human finished the last kit (0 before the first)
+
+    def trays_free(self) -> int:
+        """Trays back at the robot now (:data:`UNLIMITED` without a binding limit)."""
+        limit = self.params.tray_limit
+        return UNLIMITED if limit is None else limit - (self.kits_out - self.trays_back)
+
+    def blocked(self) -> bool:
+        """Every tray of the station is out: its next kit must wait for one to come back."""
+        return self.trays_free() <= 0

@@ -15,7 +15,7 @@ options dataclass, validated by :func:`.registry.make_policy`) with two methods:
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar, Protocol, runtime_checkable
 
 from ..heuristics.greedy_ce import PolicyState
@@ -90,6 +90,19 @@ class SimState:
         true_speed: the participant's true speed factor per unit (the sampled factor times
             the timing model's ``session_factor``), given only to policies whose class sets
             ``sees_true_speed = True`` (the oracle references); empty for every other policy.
+
+    With several stations (docs/timeline.md#several-stations) ``human_remaining`` and
+    ``progress`` are the first station's; per station id:
+
+    Attributes:
+        station_progress: the human's position (:class:`HumanProgress`).
+        station_remaining: expected seconds until the human has finished its delivered kits.
+        station_free: when the human runs out of work: ``time`` plus the above while it has
+            work, else when it finished its last kit (0 before its first), the clock time
+            of the baselines' "earliest need".
+        station_left: tasks of the station not kitted yet.
+        trays_free: trays of the station back at the robot (:data:`UNLIMITED` when its
+            limit never binds); a kit for a station with none waits for one.
     """
 
     time: float
@@ -103,6 +116,26 @@ class SimState:
     observed: Mapping[str, float] = field(default_factory=dict)
     progress: HumanProgress = field(default_factory=HumanProgress)
     true_speed: tuple[float, ...] = ()
+    station_progress: Mapping[str, HumanProgress] = field(default_factory=dict)
+    station_remaining: Mapping[str, float] = field(default_factory=dict)
+    station_free: Mapping[str, float] = field(default_factory=dict)
+    station_left: Mapping[str, int] = field(default_factory=dict)
+    trays_free: Mapping[str, int] = field(default_factory=dict)
+
+    def for_station(self, station: str, tasks: frozenset[str]) -> SimState:
+        """The view of one station as if the robot served it alone: its human's progress and
+        remaining work, ``done`` restricted to its ``tasks``; stock and feeders shared."""
+        return replace(
+            self,
+            done=self.done & tasks,
+            human_remaining=self.station_remaining[station],
+            progress=self.station_progress[station],
+            station_progress={},
+            station_remaining={},
+            station_free={},
+            station_left={},
+            trays_free={},
+        )
 
     def expected_wait(self, part_type: str, count: int = 1) -> float:
         """Expected seconds until ``count`` parts of a type are in stock (0 if they are).

@@ -337,3 +337,36 @@ def test_run_stoppable_stops_the_call_and_raises_the_interrupt(python_sigint):
         run_stoppable(lambda: stopped.wait(30), stopped.set)
     assert stopped.is_set()
     assert run_stoppable(lambda: 7, stopped.set) == 7
+
+
+LATE = """
+import os, signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
+from bilevel_kit.interrupt import signal_guard
+
+with signal_guard(linger=True):
+    print("the command's work", flush=True)
+for sig in (signal.SIGINT, signal.SIGTERM):  # as the process exits
+    os.kill(os.getpid(), sig)
+    time.sleep(0.2)
+sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize("linger", [True, False])
+def test_a_signal_as_the_command_exits_keeps_its_exit_code(linger):
+    """A Ctrl-C that arrived just as a solve ended killed the process by the signal (exit -2,
+    2 runs in 15): once the whole-process guard is over, signals are ignored."""
+    script = LATE if linger else LATE.replace("linger=True", "linger=False")
+    proc = subprocess.run(
+        [sys.executable, "-c", script],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.stdout == "the command's work\n"
+    if linger:
+        assert proc.returncode == 3 and proc.stderr == ""
+    else:  # a guard inside a longer program gives the program its handlers back
+        assert proc.returncode == -signal.SIGINT

@@ -77,3 +77,22 @@ def test_builder_gives_each_prefix_the_timeline_of_evaluate(table):
         full = evaluate(table, Plan(tuple(kits[:k])))
         assert builder.timeline() == full
         assert times == full.kits[-1] and builder.human_free == full.makespan
+
+
+def test_overrides_that_keep_the_tasks_share_the_expanded_graph():
+    """A method's copy with its own horizon or weights (greedy-ce makes one) must not expand
+    the units again: at 60,000 tasks that took seconds of its time limit."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from bilevel_kit import load
+
+    inst = replace(load(Path(__file__).parents[2] / "instances" / "hrc_table.json"), units=3)
+    views = (inst.tasks, inst.index, inst.predecessors, inst.precedence)
+    copy = inst.with_overrides(horizon=2, weights={"W1": 2.0}, trays="unlimited")
+    assert (copy.tasks, copy.index, copy.predecessors, copy.precedence) == views
+    assert copy.tasks is inst.tasks and copy.predecessors is inst.predecessors
+    assert copy.trays is None and copy.station_params[""].tray_limit is None  # not shared
+    assert inst.station_params[""].tray_limit == 1
+    more = inst.with_overrides(units=4)
+    assert more.n_tasks == 48 and more.tasks is not inst.tasks

@@ -20,6 +20,7 @@ from bilevel_kit.fitness import (
     layout_fitness,
     layout_terms,
     overlapping_box_pairs,
+    pair_distance_sums,
 )
 from bilevel_kit.instance import Tray
 from bilevel_kit.plan import Placement
@@ -210,3 +211,46 @@ def test_box_z_bounds_exact_z(rects: list[tuple[float, ...]]) -> None:
         for b in range(a + 1, len(lay))
     )
     assert exact_overlap_area(lay) == pytest.approx(brute, abs=1e-6)
+
+
+def _random_layout(n: int, seed: int) -> tuple[Placement, ...]:
+    """Overlapping and separate parts of three types, some rotated."""
+    rng = np.random.default_rng(seed)
+    return tuple(
+        pl(
+            f"p{k}",
+            "abc"[k % 3],
+            float(rng.uniform(0, 400)),
+            float(rng.uniform(0, 300)),
+            float(rng.uniform(5, 30)),
+            float(rng.uniform(5, 30)),
+            float(rng.choice([0.0, 90.0, 33.0])),
+        )
+        for k in range(n)
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_large_layout_path_gives_the_same_terms(monkeypatch, seed: int) -> None:
+    """Above LARGE_LAYOUT parts a layout is scored in blocks of rows and over the grid hash's
+    near pairs: the same four terms as the all-pairs path, to summation rounding."""
+    import bilevel_kit.fitness as fit
+
+    layout = _random_layout(120, seed)
+    small = fit.layout_terms(layout)
+    pairs = fit.overlapping_box_pairs(layout)
+    monkeypatch.setattr(fit, "LARGE_LAYOUT", 10)
+    monkeypatch.setattr(fit, "DISTANCE_BLOCK", 500)  # several row blocks
+    large = fit.layout_terms(layout)
+    assert fit.overlapping_box_pairs(layout) == pairs
+    assert len(pairs) > 5  # the layout does overlap, so Z is tested
+    for a, b in zip(large, small, strict=True):
+        assert math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-6)
+
+
+def test_pair_distance_sums_by_hand() -> None:
+    x, y = np.array([0.0, 3.0, 0.0]), np.array([0.0, 4.0, 1.0])
+    # pairs: (0,1) 5 different, (0,2) 1 same, (1,2) sqrt(9 + 9) different
+    d_same, d_diff = pair_distance_sums(x, y, ["a", "b", "a"])
+    assert d_same == pytest.approx(1.0)
+    assert d_diff == pytest.approx(5.0 + math.sqrt(18.0))

@@ -12,8 +12,10 @@ import contextlib
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -189,3 +191,62 @@ def test_a_killed_client_resumes_with_the_finished_cells(cluster, serial, tmp_pa
     assert again.returncode == 0, err[-3000:]
     assert f"fig6 cells: {N_CELLS - kept} done, {kept} skipped, 0 failed" in err
     _assert_clean(out, serial)
+
+
+def _closed_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])  # closed again when the block ends
+
+
+def _junk_server() -> tuple[socket.socket, threading.Thread]:
+    """A TCP server that answers every connection with bytes that are not Dask's."""
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen()
+
+    def serve() -> None:
+        with contextlib.suppress(OSError):
+            while True:
+                conn, _ = srv.accept()
+                conn.sendall(b"\xff" * 64)
+                conn.close()
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    return srv, thread
+
+
+@pytest.mark.parametrize("kind", ["refused", "not dask"])
+def test_a_scheduler_that_is_not_there_is_reported_before_dask_s_timeout(tmp_path, kind):
+    """Dask retries a refused connection for its 30 s timeout, and a server that is not Dask
+    crashed it (a 3 EiB allocation): both are exit 2 naming the option, before any cell."""
+    srv = None
+    if kind == "refused":
+        port = _closed_port()
+    else:
+        srv, _ = _junk_server()
+        port = srv.getsockname()[1]
+    out = tmp_path / "cells"
+    try:
+        t0 = time.monotonic()
+        proc = subprocess.run(
+            [
+                *(sys.executable, "-c", CLI, "compare", str(ROOT / "instances" / "tiny.json")),
+                *("--methods", "single-task", "--scheduler", f"tcp://127.0.0.1:{port}"),
+                *("--cells", str(out)),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        seconds = time.monotonic() - t0
+    finally:
+        if srv is not None:
+            srv.close()
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and f"--scheduler tcp://127.0.0.1:{port}" in err[0]
+    assert "no Dask scheduler to connect to" in err[0]
+    assert kind != "refused" or "Connection refused" in err[0]
+    assert not out.exists() and seconds < 25  # Dask alone took its 30 s timeout

@@ -295,3 +295,43 @@ def test_past_the_time_limit_the_rest_are_single_tasks_in_one_pass(root):
     res = solve(inst, "greedy-ce", time_limit=1e-6)
     assert res.extra["time_limit_hit"] and len(res.plan.kits) == inst.n_tasks
     assert check(inst, res.plan) == []
+
+
+def test_the_time_limit_stops_an_enumeration_mid_epoch(table):
+    """A long horizon's epoch (horizon 8 enumerated: ~10^5 sequences, dozens of layouts) took
+    17 s at a 2 s limit: when the limit passes while the epoch's layouts are computed, the
+    epoch takes the single-task kit, without laying out the rest."""
+    ce = CEParams(samples=20, elite=5, max_iter=3)
+    params = GreedyParams(horizon=8, decision="enumerate", ce=ce)
+    policy = GreedyCEPolicy(table, params, seed=0)
+    policy.deadline = float("inf")  # not past at the epoch's start
+    calls = []
+
+    def past() -> bool:
+        calls.append(1)
+        return policy.stats.ce_calls >= 3  # the limit passes after three new layouts
+
+    policy.past_deadline = past  # type: ignore[method-assign]
+    kit = policy.decide(PolicyState(frozenset(), 0.0))
+    assert kit is not None and kit.tasks == ("foot1",)
+    # foot1 alone was among the three layouts: the single-task kit reuses it
+    assert policy.stats.time_limit_hit and policy.stats.ce_calls == 3
+    assert policy.stats.sequences == 36_120 and len(calls) > 3
+
+
+def test_unique_rows_equals_numpy_row_unique():
+    """The mixed-radix shortcut keeps np.unique's order, keys and inverse."""
+    import numpy as np
+
+    from bilevel_kit.heuristics.greedy_ce import unique_rows
+
+    rng = np.random.default_rng(0)
+    for shape, high in [((500, 3), 4), ((2000, 6), 9), ((1, 2), 1), ((50, 1), 3)]:
+        rows = rng.integers(0, high, size=shape)
+        keys, inverse = unique_rows(rows)
+        want_keys, want_inv = np.unique(rows, axis=0, return_inverse=True)
+        assert np.array_equal(keys, want_keys)
+        assert np.array_equal(inverse, want_inv.reshape(-1))
+    wide = np.array([[2**40, 1], [0, 2**40], [2**40, 1]])  # radix product above 2^62
+    keys, inverse = unique_rows(wide)
+    assert keys.tolist() == [[0, 2**40], [2**40, 1]] and inverse.tolist() == [1, 0, 1]

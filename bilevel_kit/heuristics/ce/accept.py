@@ -10,12 +10,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ... import geometry
-from ...fitness import box_overlap_1d
+from ...fitness import box_overlap_1d, box_pairs, pair_distance_sums
 from ...instance import Tray
 from ...plan import Placement
 from ...reachability import ReachGrid
 from .. import _kernels
-from .kit import Kit, clip_centre, extents64
+from .kit import MAX_CE_PARTS, Kit, clip_centre, extents64
 
 
 def exactly_valid(layout: Sequence[Placement], tray: Tray, reach: ReachGrid | None = None) -> bool:
@@ -58,6 +58,33 @@ def assess(
         and (y - ey >= -tol).all()
         and (y + ey <= H + tol).all()
     )
+    dsd, i, j, z_box = _pair_terms(kit, x, y, ex, ey)
+    if kit.reach is not None and not kit.reach.lookup(x, y).all():
+        inside = False  # an unreachable centroid is as invalid as a part off the tray
+    if not inside:
+        return Candidate(x, y, theta, -(dsd + w6 * z_box), False, source)
+    z = 0.0
+    for a, b in zip(i.tolist(), j.tolist(), strict=True):
+        ca = geometry.corners(x[a], y[a], kit.w[a], kit.h[a], theta[a])
+        cb = geometry.corners(x[b], y[b], kit.w[b], kit.h[b], theta[b])
+        if geometry.rects_overlap(ca, cb):
+            return Candidate(x, y, theta, -(dsd + w6 * z_box), False, source)
+        z += geometry.intersection_area(ca, cb)
+    return Candidate(x, y, theta, -(dsd + w6 * z), True, source)
+
+
+def _pair_terms(
+    kit: Kit, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """(D_same - D_diff, the pairs (i, j) whose boxes overlap, their box Z) of one layout:
+    over the kit's pair table, or for a kit too large for CE without it
+    (:func:`bilevel_kit.fitness.pair_distance_sums` and the grid hash)."""
+    if kit.n > MAX_CE_PARTS:
+        d_same, d_diff = pair_distance_sums(x, y, [t.id for t in kit.types])
+        i, j = box_pairs(x, y, ex, ey)
+        dx, dy = x[i] - x[j], y[i] - y[j]
+        z_box = float(box_overlap_1d(dx, ex[i], ex[j]) @ box_overlap_1d(dy, ey[i], ey[j]))
+        return d_same - d_diff, i, j, z_box
     i, j = kit.pairs.i, kit.pairs.j
     dx = x[i] - x[j]
     dy = y[i] - y[j]
@@ -69,19 +96,7 @@ def assess(
         box_overlap_1d(dx[hit], ex[i[hit]], ex[j[hit]])
         @ box_overlap_1d(dy[hit], ey[i[hit]], ey[j[hit]])
     )
-    if kit.reach is not None and not kit.reach.lookup(x, y).all():
-        inside = False  # an unreachable centroid is as invalid as a part off the tray
-    if not inside:
-        return Candidate(x, y, theta, -(dsd + w6 * z_box), False, source)
-    z = 0.0
-    for p in hit:
-        a, b = int(i[p]), int(j[p])
-        ca = geometry.corners(x[a], y[a], kit.w[a], kit.h[a], theta[a])
-        cb = geometry.corners(x[b], y[b], kit.w[b], kit.h[b], theta[b])
-        if geometry.rects_overlap(ca, cb):
-            return Candidate(x, y, theta, -(dsd + w6 * z_box), False, source)
-        z += geometry.intersection_area(ca, cb)
-    return Candidate(x, y, theta, -(dsd + w6 * z), True, source)
+    return dsd, i[hit], j[hit], z_box
 
 
 def push_apart(

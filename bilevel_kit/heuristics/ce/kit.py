@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -28,7 +29,8 @@ class Kit:
     h: np.ndarray
     rot_idx: np.ndarray
     fixed_idx: np.ndarray
-    pairs: PairTable
+    #: Float dtype of the pair table (the CE's scoring precision).
+    dtype: type
     #: Reach grid when the instance enforces Sawyer reachability (else None).
     reach: ReachGrid | None = None
     n: int = field(init=False)
@@ -37,6 +39,12 @@ class Kit:
     def __post_init__(self) -> None:
         self.n = len(self.ids)
         self.dim = 2 * self.n + self.rot_idx.size
+
+    @cached_property
+    def pairs(self) -> PairTable:
+        """Every unordered pair of parts, built on first use: it is quadratic in ``n``, and a
+        kit too large for CE (:data:`MAX_CE_PARTS`) is scored without it."""
+        return PairTable.build([t.id for t in self.types], self.dtype)
 
     def decode(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x, y, theta) in float64 of a decision vector, projected into the tray and with
@@ -60,6 +68,13 @@ class Kit:
             )
             for k, t in enumerate(self.types)
         )
+
+
+#: The most parts CE lays out: its search space has 3 numbers per part and it keeps a
+#: covariance of that size squared (a 4,000-part kit asked for 6 GiB and ran for minutes per
+#: iteration). A larger kit gets the shelf packer's layout, or none, scored without the pair
+#: table (:func:`bilevel_kit.fitness.large_layout_terms`).
+MAX_CE_PARTS = 500
 
 
 def extents64(kit: Kit, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -100,7 +115,7 @@ def build_kit(instance: Instance, parts: Mapping[str, int], dtype: type) -> Kit:
         h=np.array([t.height for t in types], dtype=np.float64),
         rot_idx=np.flatnonzero(rot),
         fixed_idx=np.flatnonzero(~rot),
-        pairs=PairTable.build([t.id for t in types], dtype),
+        dtype=dtype,
         reach=reach_grid(instance),
     )
 

@@ -1,0 +1,478 @@
+"""Beyond the paper: how many assembly stations one kitting robot keeps busy
+(``bilevel-kit repro stations``; docs/stations.md).
+
+Lines: every station builds the table (``table``), the stool (``stool``) or the chair
+(``chair``) of the mixed-model family (:func:`bilevel_kit.generate.mixed`), or station k builds
+the table, the stool and the chair in turn (``mix``). ``S`` = 1..6 stations per robot, each
+building ``units`` units with one tray (the paper's protocol) and its own human
+(docs/timeline.md#several-stations). Supply: none (every part in stock), or the large parts
+(legs, feet, connectors, stool tops and legs; not screws) each fed by a feeder with MAT
+:data:`DELAY_MAT`, MTTF :data:`DELAY_MTTF` and a 30 s repair, starting empty: the feeders are
+shared, so their rate caps what more stations can build.
+
+Times are sampled (:class:`bilevel_kit.sim.TimingModel`: a speed factor per unit with the
+paper's CV, and per-task noise :data:`TASK_CV`); the robot and ``o_H`` are the instance's
+(uncalibrated). Each replication's seed is common to every policy and S (common random
+numbers). Per run: throughput (units per hour: units built / makespan), human idle per station
+(the share of its human's time from its first kit's arrival to its completion spent waiting:
+the wait for the first kit is start-up; the mean over the stations), robot utilisation (robot busy
+picking and delivering / makespan). Per policy and replication, ``S_max`` is the largest S whose
+human idle and every smaller S's are at most 10 % (0: already above at S = 1); its mean has a
+95 % t-interval over the replications.
+
+Policies: the baselines and cpsat-rolling (one policy per station, the station of earliest
+need first: :mod:`bilevel_kit.sim.stations`), and ``optimized`` once greedy-ce plans stations
+(:func:`bilevel_kit.sim.stations.station_policies`).
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import atomic, style
+from ..errors import UsageError
+from ..experiments.cells import is_failed, run_cells_counted, write_json
+from ..experiments.tables import markdown_lines, write_csv
+from ..generate import mixed
+from ..instance import Instance, from_dict
+from ..plan import Timeline
+from ..sim import SimParams, TimingModel, simulate
+from ..sim.stations import station_policies
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+#: The product each station builds, station k taking entry (k - 1) mod len.
+LINES: dict[str, tuple[str, ...]] = {
+    "table": ("table",),
+    "stool": ("stool",),
+    "chair": ("chair",),
+    "mix": ("table", "stool", "chair"),
+}
+#: Task id prefix of each product in :func:`bilevel_kit.generate.mixed`.
+_PREFIX = {"table": "T", "stool": "S", "chair": "C"}
+#: The parts fed by feeders in the supply-delay setting (screws come in bulk).
+FED = ("leg", "foot", "connector", "seat", "stool_leg")
+DELAY_MAT, DELAY_MTTF, DELAY_REPAIR = 60.0, 60.0, 30.0
+DELAYS = ("none", "feeders")
+TASK_CV = 0.1
+THRESHOLD = 0.10
+STATIONS = (1, 2, 3, 4, 5, 6)
+UNITS, REPS = 2, 5
+QUICK_UNITS, QUICK_REPS, QUICK_STATIONS = 2, 2, (1, 2, 4)
+#: cpsat-rolling's options in the study: a window of 8 tasks and 0.05 deterministic seconds
+#: per decision (a run of 6 stations makes about 100 decisions).
+CPSAT_OPTIONS: dict[str, Any] = {"window": 8, "deterministic_time": 0.05}
+LABELS = {
+    "single-task": "Single Task",
+    "whole-assembly": "Whole Assembly",
+    "cpsat-rolling": "cpsat-rolling",
+    "optimized": "Optimized (greedy-ce)",
+}
+
+
+def line_document(line: str, stations: int, units: int) -> dict[str, Any]:
+    """An instance document: ``stations`` stations of ``line`` (the module docstring), each
+    building ``units`` units of its product with one tray; station ``Sk``'s tasks are the
+    product's with ids prefixed ``sk_`` and product ``<product>k``."""
+    if line not in LINES:
+        raise UsageError(f"unknown line {line!r}; lines are {', '.join(LINES)}")
+    base = mixed(1)
+    tasks: list[dict[str, Any]] = []
+    edges: list[list[str]] = []
+    doc_stations = []
+    for k in range(1, stations + 1):
+        product = LINES[line][(k - 1) % len(LINES[line])]
+        own = [t for t in base["tasks"] if t["product"] == product]
+        ids = {t["id"] for t in own}
+        tasks += [
+            dict(copy.deepcopy(t), id=f"s{k}_{t['id']}", product=f"{product}{k}") for t in own
+        ]
+        edges += [[f"s{k}_{a}", f"s{k}_{b}"] for a, b in base["precedence"] if a in ids]
+        doc_stations.append({"id": f"S{k}", "serves": [f"{product}{k}"]})
+    used = {p["type"] for t in tasks for p in t["parts"]}
+    return {
+        **{k: v for k, v in base.items() if k not in ("tasks", "precedence", "assumptions")},
+        "name": f"{line}_s{stations}_u{units}",
+        "description": f"{stations} assembly station(s) of the '{line}' line, {units} unit(s) "
+        "each, one robot (bilevel-kit repro stations; docs/stations.md).",
+        "part_types": [p for p in base["part_types"] if p["id"] in used],
+        "tasks": tasks,
+        "precedence": edges,
+        "units": units,
+        "trays": 1,
+        "stations": doc_stations,
+    }
+
+
+def line_instance(line: str, stations: int, units: int) -> Instance:
+    return from_dict(line_document(line, stations, units), f"<stations study {line}>")
+
+
+@dataclass(frozen=True)
+class StationsCell:
+    """One run: a line with ``stations`` stations under one supply setting, one policy, one
+    seed (a pure function of these)."""
+
+    line: str
+    stations: int
+    delay: str
+    policy: str
+    seed: int
+    units: int = UNITS
+    policy_options: dict[str, Any] = field(default_factory=dict)
+
+    def key(self) -> str:
+        blob = json.dumps(asdict(self), sort_keys=True).encode()
+        digest = hashlib.sha1(blob).hexdigest()[:10]
+        return f"{self.line}_s{self.stations}_{self.delay}_{self.policy}_{self.seed}__{digest}"
+
+    def params(self, inst: Instance) -> SimParams:
+        fed = [t for t in FED if t in inst.part_types] if self.delay == "feeders" else []
+        return SimParams(
+            mat=dict.fromkeys(fed, DELAY_MAT),
+            mttf=DELAY_MTTF if fed else None,
+            repair_time=DELAY_REPAIR,
+            timing=TimingModel(task_cv=TASK_CV),
+            policy_options=self.policy_options,
+        )
+
+
+def stations_cell(cell: StationsCell) -> dict[str, Any]:
+    """Simulate one run: throughput, human idle per station, robot utilisation."""
+    inst = line_instance(cell.line, cell.stations, cell.units)
+    t0 = time.perf_counter()
+    res = simulate(inst, cell.policy, params=cell.params(inst), seed=cell.seed)
+    idle = station_idle(res.timeline)
+    units = cell.stations * cell.units
+    return {
+        "key": cell.key(),
+        "cell": asdict(cell),
+        "makespan": res.makespan,
+        "throughput": 3600.0 * units / res.makespan,
+        "idle": float(np.mean(idle)),
+        "idle_max": max(idle),
+        "robot_utilisation": res.robot_work / res.makespan,
+        "robot_wait": res.robot_wait,
+        "n_kits": res.n_kits,
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def station_idle(timeline: Timeline) -> list[float]:
+    """Per station, the share of its human's time from its first kit to its completion
+    spent idle (the wait for the first kit is start-up, not the line's steady state)."""
+    first: dict[str, float] = {}
+    end: dict[str, float] = {}
+    work: dict[str, float] = {}
+    for kt, s in zip(timeline.kits, timeline.kit_stations, strict=True):
+        first.setdefault(s, kt.human_start)
+        end[s] = max(end.get(s, 0.0), kt.human_end)
+        work[s] = work.get(s, 0.0) + kt.human_end - kt.human_start
+    return [max(0.0, 1.0 - work[s] / (end[s] - first[s])) for s in first]
+
+
+def _t_interval(x: Sequence[float]) -> tuple[float, float, float]:
+    """Mean and its 95 % t-interval (the mean twice with one value)."""
+    from scipy.stats import t
+
+    a = np.asarray(x, float)
+    m = float(a.mean())
+    if len(a) < 2:
+        return m, m, m
+    half = float(t.ppf(0.975, len(a) - 1) * a.std(ddof=1) / math.sqrt(len(a)))
+    return m, m - half, m + half
+
+
+def summarize(records: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Rows of ``stations.csv``: per line, supply, policy and S, each metric's mean and 95 %
+    t-interval over the replications."""
+    groups: dict[tuple[str, str, str, int], list[Mapping[str, Any]]] = {}
+    for r in records:
+        c = r["cell"]
+        groups.setdefault((c["line"], c["delay"], c["policy"], c["stations"]), []).append(r)
+    rows = []
+    for (line, delay, policy, s), rs in groups.items():
+        row: dict[str, Any] = {"line": line, "delay": delay, "policy": policy, "stations": s}
+        row["reps"] = len(rs)
+        for metric, scale in (("throughput", 1.0), ("idle", 100.0), ("robot_utilisation", 100.0)):
+            m, lo, hi = _t_interval([scale * float(r[metric]) for r in rs])
+            row.update({metric: round(m, 2), f"{metric}_low": round(lo, 2)})
+            row[f"{metric}_high"] = round(hi, 2)
+        row["wall_s"] = round(sum(float(r["wall_s"]) for r in rs), 2)
+        rows.append(row)
+    return rows
+
+
+def served(records: Sequence[Mapping[str, Any]], threshold: float = THRESHOLD) -> list[dict]:
+    """Rows of ``stations_served.csv``: per line, supply and policy, ``S_max`` (the module
+    docstring) per replication, its mean and 95 % t-interval."""
+    runs: dict[tuple[str, str, str], dict[int, dict[int, float]]] = {}
+    for r in records:
+        c = r["cell"]
+        by_seed = runs.setdefault((c["line"], c["delay"], c["policy"]), {})
+        by_seed.setdefault(c["seed"], {})[c["stations"]] = float(r["idle"])
+    rows = []
+    for (line, delay, policy), by_seed in runs.items():
+        best = []
+        for idle in by_seed.values():
+            ok = 0
+            for s in sorted(idle):
+                if s != ok + 1 or idle[s] > threshold:
+                    break
+                ok = s
+            best.append(ok)
+        m, lo, hi = _t_interval(best)
+        rows.append(
+            {
+                "line": line,
+                "delay": delay,
+                "policy": policy,
+                "reps": len(best),
+                "s_max": round(m, 2),
+                "s_max_low": round(lo, 2),
+                "s_max_high": round(hi, 2),
+                "per_rep": best,
+            }
+        )
+    return rows
+
+
+def _ci(r: Mapping[str, Any], metric: str, fmt: str = ".1f") -> str:
+    return f"{r[metric]:{fmt}} [{r[f'{metric}_low']:{fmt}}, {r[f'{metric}_high']:{fmt}}]"
+
+
+def format_markdown(rows: Sequence[Mapping[str, Any]], best: Sequence[Mapping[str, Any]]) -> str:
+    """The study's tables: ``S_max`` per line, supply and policy, then every metric."""
+    head = ["line", "supply", "policy", f"S_max (idle <= {100 * THRESHOLD:.0f} %) [95 % CI]"]
+    body = [
+        [b["line"], b["delay"], LABELS.get(b["policy"], b["policy"]), _ci(b, "s_max", ".2f")]
+        for b in best
+    ]
+    out = [*markdown_lines(head, body), ""]
+    head = [
+        "line",
+        "supply",
+        "policy",
+        "S",
+        "units/h [95 % CI]",
+        "idle per station % [95 % CI]",
+        "robot busy % [95 % CI]",
+    ]
+    body = [
+        [
+            r["line"],
+            r["delay"],
+            LABELS.get(r["policy"], r["policy"]),
+            str(r["stations"]),
+            _ci(r, "throughput"),
+            _ci(r, "idle"),
+            _ci(r, "robot_utilisation"),
+        ]
+        for r in rows
+    ]
+    return "\n".join(out + markdown_lines(head, body))
+
+
+@style.styled
+def plot_stations_panel(
+    rows: Sequence[Mapping[str, Any]],
+    *,
+    line: str,
+    delay: str,
+    metric: str = "throughput",
+    ax: Axes | None = None,
+) -> Axes:
+    """One panel: ``metric`` (``throughput`` or ``idle``) against S, one line per policy with
+    its 95 % band; the idle panel marks the 10 % threshold."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(4.8, 3.2), layout="constrained")
+    mine = [r for r in rows if r["line"] == line and r["delay"] == delay]
+    policies = list(dict.fromkeys(r["policy"] for r in mine))
+    for policy, sw in zip(policies, style.categorical(len(policies)), strict=True):
+        rs = sorted((r for r in mine if r["policy"] == policy), key=lambda r: r["stations"])
+        x = [r["stations"] for r in rs]
+        y = [r[metric] for r in rs]
+        ax.plot(x, y, marker="o", ms=3, color=sw.color, label=LABELS.get(policy, policy))
+        # (a rate is never negative, a share never above 100 %: the t-interval's band is cut)
+        top = 100.0 if metric == "idle" else math.inf
+        lo = [max(0.0, r[f"{metric}_low"]) for r in rs]
+        hi = [min(top, r[f"{metric}_high"]) for r in rs]
+        ax.fill_between(x, lo, hi, color=sw.color, alpha=0.15, lw=0)
+    if metric == "idle":
+        ax.axhline(100 * THRESHOLD, color="black", ls="--", lw=0.8, label="10 % idle")
+        ax.set_ylabel("human idle per station (%)")
+    else:
+        ax.set_ylabel("throughput (units per hour)")
+    ax.set_xlabel("stations per robot S")
+    ax.set_xticks(sorted({int(r["stations"]) for r in mine}))
+    ax.set_title(f"{line} line, supply: {'feeders' if delay == 'feeders' else 'in stock'}")
+    ax.grid(alpha=0.3)
+    return ax
+
+
+@style.styled
+def plot_stations(rows: Sequence[Mapping[str, Any]], line: str, *, quick: bool = False) -> Figure:
+    """Throughput (top) and human idle (bottom) against S for one line, without and with
+    supply delays (columns), one line per policy."""
+    import matplotlib.pyplot as plt
+
+    delays = [d for d in DELAYS if any(r["line"] == line and r["delay"] == d for r in rows)]
+    fig, axes = plt.subplots(
+        2, len(delays), figsize=(4.6 * len(delays), 6.4), squeeze=False, layout="constrained"
+    )
+    for j, delay in enumerate(delays):
+        plot_stations_panel(rows, line=line, delay=delay, metric="throughput", ax=axes[0][j])
+        plot_stations_panel(rows, line=line, delay=delay, metric="idle", ax=axes[1][j])
+        axes[1][j].set_title("")
+    handles, labels = axes[1][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels))
+    if quick:
+        fig.suptitle("QUICK run: fewer stations, units and replications")
+    return fig
+
+
+def _check_options(
+    lines: Sequence[str],
+    delays: Sequence[str],
+    policies: Sequence[str],
+    reps: int,
+    units: int,
+    grid: Sequence[int],
+) -> None:
+    """Refuse (exit 2) an unknown line, supply or policy without stations, or a count < 1."""
+    allowed = station_policies()
+    bad = [p for p in policies if p not in allowed] + [x for x in lines if x not in LINES]
+    bad += [d for d in delays if d not in DELAYS]
+    if bad or reps < 1 or units < 1 or min(grid) < 1:
+        raise UsageError(
+            f"bad stations study options {bad or (reps, units, grid)}: policies from "
+            f"{', '.join(allowed)}, lines from {', '.join(LINES)}, supply from "
+            f"{', '.join(DELAYS)}, reps, units and S >= 1"
+        )
+
+
+def _cells(
+    lines: Sequence[str],
+    grid: Sequence[int],
+    delays: Sequence[str],
+    policies: Sequence[str],
+    seeds: Sequence[int],
+    units: int,
+) -> list[StationsCell]:
+    """Every (line, supply, policy, seed, S), S varying fastest within a replication."""
+    return [
+        StationsCell(
+            line, s, delay, policy, seed, units, CPSAT_OPTIONS if policy == "cpsat-rolling" else {}
+        )
+        for line in lines
+        for delay in delays
+        for policy in policies
+        for seed in seeds
+        for s in grid
+    ]
+
+
+def _write_outputs(
+    out: Path,
+    rows: Sequence[Mapping[str, Any]],
+    best: Sequence[Mapping[str, Any]],
+    head: str,
+    quick: bool,
+) -> dict[str, Path]:
+    """The CSVs, the Markdown tables and one figure per line (module docstring)."""
+    from ..plots import save_figure
+
+    files: dict[str, Path] = {
+        "csv": write_csv(out / "stations.csv", rows, exclude=(), line_end="\n"),
+        "served_csv": write_csv(out / "stations_served.csv", best, exclude=(), line_end="\n"),
+        "markdown": out / "stations.md",
+    }
+    atomic.write_text(files["markdown"], head + format_markdown(rows, best) + "\n")
+    for line in dict.fromkeys(str(r["line"]) for r in rows):
+        fig = plot_stations(rows, line, quick=quick)
+        files[f"figure_{line}"] = save_figure(fig, out / f"stations_{line}.png")
+    return files
+
+
+def run_stations(
+    out_dir: str | Path = "out/repro/stations",
+    quick: bool = False,
+    reps: int | None = None,
+    jobs: int = 1,
+    seed: int = 0,
+    *,
+    lines: Sequence[str] | None = None,
+    stations: Sequence[int] | None = None,
+    delays: Sequence[str] | None = None,
+    units: int | None = None,
+    policies: Sequence[str] | None = None,
+    progress: bool | None = None,
+    **_: Any,
+) -> dict[str, Any]:
+    """The stations study (module docstring): ``reps`` replications (5; 2 with ``quick``) of
+    ``units`` units per station (2; at least 2 for the idle to mean anything: with one unit
+    Whole Assembly delivers one kit per station, never idle after it) for S in ``stations``
+    (1..6; 1, 2, 4 with ``quick``). Cells are saved under ``out_dir/cells/`` (a rerun
+    computes only the missing ones). Writes ``stations.csv``, ``stations_served.csv``,
+    ``stations.md``, one figure per line and ``stations.json``; returns the summary."""
+    t0 = time.perf_counter()
+    reps = reps if reps is not None else (QUICK_REPS if quick else REPS)
+    units = units if units is not None else (QUICK_UNITS if quick else UNITS)
+    grid = tuple(stations) if stations else (QUICK_STATIONS if quick else STATIONS)
+    lines = tuple(lines) if lines else tuple(LINES)
+    delays = tuple(delays) if delays else DELAYS
+    policies = tuple(policies) if policies else station_policies()
+    _check_options(lines, delays, policies, reps, units, grid)
+    seeds = [seed * 1_000_000 + i for i in range(reps)]
+    cells = _cells(lines, grid, delays, policies, seeds, units)
+    out = Path(out_dir)
+    records, computed = run_cells_counted(
+        cells,
+        stations_cell,
+        cell_dir=out / "cells",
+        jobs=jobs,
+        progress=progress,
+        desc="stations cells",
+    )
+    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
+    ok = [r for r in records if not is_failed(r)]
+    rows, best = summarize(ok), served(ok)
+    head = (
+        f"Stations per robot{' (QUICK: a reduced run)' if quick else ''}: {units} unit(s) per "
+        f"station, {reps} replication(s), S = {', '.join(map(str, grid))}. Mean [95 % "
+        "t-interval over replications].\n\n"
+    )
+    files = _write_outputs(out, rows, best, head, quick)
+    result = {
+        "quick": quick,
+        "reps": reps,
+        "units": units,
+        "stations": list(grid),
+        "lines": list(lines),
+        "delays": list(delays),
+        "policies": list(policies),
+        "seed": seed,
+        "cells": len(cells),
+        "computed": computed,
+        "failed": failed,
+        "rows": rows,
+        "served": best,
+        "wall_s": time.perf_counter() - t0,
+    }
+    result["files"] = {k: str(v) for k, v in {**files, "json": out / "stations.json"}.items()}
+    write_json(out / "stations.json", result)
+    return result
