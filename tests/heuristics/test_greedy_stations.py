@@ -92,3 +92,18 @@ def test_past_the_time_limit_single_task_kits_stay_valid():
     assert out.extra["time_limit_hit"]
     assert check(inst, out.plan) == []
     assert all(len(k.tasks) == 1 for k in out.plan.kits)
+
+
+def test_simulation_without_delays_kits_the_offline_plan(root):
+    """The simulation's ``optimized`` (a greedy-ce policy per station, earliest need first:
+    docs/simulation.md#several-stations) with deterministic times and every part in stock
+    kits what offline greedy-ce plans."""
+    from bilevel_kit.sim import simulate
+    from bilevel_kit.sim.params import SimParams, TimingModel
+
+    inst = load(root / "instances" / "stations" / "table_u1_s2.json")
+    offline = solve(inst, "greedy-ce", seed=0)
+    params = SimParams(timing=TimingModel.deterministic())
+    online = simulate(inst, "optimized", params=params, seed=0)
+    assert [k.tasks for k in online.plan.kits] == [k.tasks for k in offline.plan.kits]
+    assert online.timeline.makespan == pytest.approx(offline.objective)
