@@ -286,20 +286,30 @@ DISTANCE_BLOCK = 1 << 20
 def pair_distance_sums(
     x: np.ndarray, y: np.ndarray, labels: Sequence[Hashable]
 ) -> tuple[float, float]:
-    """(D_same, D_diff) of Eqs. 8-9 for one layout, in blocks of rows of the upper triangle:
-    quadratic time, memory of :data:`DISTANCE_BLOCK` distances."""
-    n = len(x)
+    """(D_same, D_diff) of Eqs. 8-9 for one layout: ``D_same`` as the sum over each type's
+    own pairs, ``D_diff`` as all pairs' sum minus it. Quadratic time in scipy's C loops,
+    memory of :data:`DISTANCE_BLOCK` distances."""
+    points = np.column_stack([x, y]).astype(np.float64)
     codes = np.unique(np.asarray(labels, dtype=object).astype(str), return_inverse=True)[1]
+    d_all = _pairwise_sum(points)
+    kinds = np.unique(codes).tolist()
+    if len(kinds) == 1:
+        return d_all, 0.0
+    d_same = sum(_pairwise_sum(points[codes == c]) for c in kinds)
+    return float(d_same), float(d_all - d_same)
+
+
+def _pairwise_sum(points: np.ndarray) -> float:
+    """The sum of the distances of every unordered pair of ``points``, in blocks of rows."""
+    from scipy.spatial.distance import cdist, pdist
+
+    n = len(points)
     rows = max(1, DISTANCE_BLOCK // max(n, 1))
-    d_all = d_same = 0.0
-    for a in range(0, n - 1, rows):
-        b = min(n - 1, a + rows)
-        d = np.hypot(x[a:b, None] - x[None, a + 1 :], y[a:b, None] - y[None, a + 1 :])
-        upper = np.arange(a + 1, n)[None, :] > np.arange(a, b)[:, None]
-        same = codes[a:b, None] == codes[None, a + 1 :]
-        d_all += float(d[upper].sum())
-        d_same += float(d[upper & same].sum())
-    return d_same, d_all - d_same
+    total = 0.0
+    for a in range(0, n, rows):
+        b = min(n, a + rows)
+        total += float(pdist(points[a:b]).sum()) + float(cdist(points[a:b], points[b:]).sum())
+    return total
 
 
 def _box_arrays(layout: Sequence[Placement]) -> tuple[np.ndarray, ...]:

@@ -64,14 +64,20 @@ def station_policies(
     return out
 
 
-def plan_stations(
+def plan_greedy(
     instance: Instance,
     make: Callable[[Instance], StationPolicy],
     state: Callable[[frozenset[str], float], Any],
+    plan_one: Callable[..., Plan],
     deadline: float | None,
 ) -> tuple[Plan, Any]:
-    """The offline plan of the module docstring, by one policy per station built by ``make``
-    (past ``deadline``, single-task kits), and the policies' counters merged."""
+    """greedy-ce's offline plan and its counters, past ``deadline`` with single-task kits:
+    without stations ``plan_one`` (:func:`.greedy_ce.plan`) with one policy built by ``make``,
+    unchanged; with several, the plan of the module docstring, one policy per station."""
+    if not instance.stations:
+        policy = make(instance)
+        policy.deadline = deadline
+        return plan_one(instance, policy=policy), policy.stats
     policies = station_policies(instance, make, deadline)
     plan = _plan(instance, policies, state)
     return plan, merged_stats(policies, plan)

@@ -715,6 +715,12 @@ ISSUE_23B_ROWS: dict[str, Row] = {
         2,
         "more than 200,000 partial sequences",
     ),
+    "greedy-ce set-up longer than the limit": row(
+        "solve {i} -m greedy-ce --units 20000 --time-limit 2",
+        2,
+        "--time-limit 2 s is shorter than greedy-ce's set-up for 60,000 tasks",
+        "give at least 12 s",
+    ),
     "pack 10,000 parts": bad_pack(_set("items.0.count", 10_000), "$.items[0].count"),
     "compare --methods empty": argv_row(
         ["compare", "{i}", "--methods", ""], 2, "--methods", "at least one"

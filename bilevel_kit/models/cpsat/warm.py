@@ -19,6 +19,10 @@ MIN_HINT = 0.3
 #: its incremental timeline, +0.5-1.4 s at 1,000 tasks since (bench/results/scale.md): now a
 #: conservative margin, kept because the scale benchmark's cpsat rows were measured with it.
 HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
+#: Seconds greedy-ce spends loading its compiled kernels (numba's import and cache) before it
+#: can look at its clock, when numba is not loaded yet: about 1 s idle, 2-3 s on a busy
+#: machine (a 4,000-part task at 2 s took 5.1 s with it, docs/scaling.md).
+KERNEL_LOAD_S = 1.0
 
 
 def best_heuristic_plan(
@@ -31,6 +35,7 @@ def best_heuristic_plan(
     methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
     all: each gets what is left of it, and once it is spent the remaining methods are
     skipped (unless no plan is known yet)."""
+    import sys
     import time
 
     from ...errors import BilevelKitError
@@ -44,6 +49,8 @@ def best_heuristic_plan(
             break
         if left is not None:  # keep back the method's overrun past its own limit
             left -= HINT_OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
+            if name == "greedy-ce" and "numba" not in sys.modules:
+                left -= KERNEL_LOAD_S
             if left <= MIN_HINT and best is not None:
                 continue
             if name == "greedy-ce" and best is not None and _kernels_would_compile():
