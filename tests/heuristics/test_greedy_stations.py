@@ -87,11 +87,16 @@ def test_next_kit_goes_to_the_station_of_earliest_need():
 
 
 def test_past_the_time_limit_single_task_kits_stay_valid():
+    """A deadline already past (greedy-ce refuses a time limit shorter than its set-up, so
+    the planner is called directly): every station's tasks alone, interleaved, valid."""
+    from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, PolicyState, plan
+    from bilevel_kit.heuristics.greedy_stations import plan_greedy
+
     inst = from_dict(strategies.stations_doc(3, 3, n=6))
-    out = greedy_ce(inst, seed=0, time_limit=0.0)
-    assert out.extra["time_limit_hit"]
-    assert check(inst, out.plan) == []
-    assert all(len(k.tasks) == 1 for k in out.plan.kits)
+    result, stats = plan_greedy(inst, GreedyCEPolicy, PolicyState, plan, deadline=0.0)
+    assert stats.time_limit_hit and stats.epochs == inst.n_tasks
+    assert check(inst, result) == []
+    assert all(len(k.tasks) == 1 for k in result.kits)
 
 
 def test_simulation_without_delays_kits_the_offline_plan(root):
