@@ -180,28 +180,11 @@ def _record(cache: _FitCache, counts: dict[str, int], res: PackResult) -> Fit | 
 
 
 def fit_counts(
-    tray: _Rect,
-    part_types: Mapping[str, PartType],
-    counts: Mapping[str, int],
-    *,
-    time_limit: float = 2.0,
-    resolution: float = 1.0,
-    workers: int = 2,
-    seed: int = 0,
-    reach: ReachGrid | None = None,
+    tray: _Rect, part_types: Mapping[str, PartType], counts: Mapping[str, int], **options: Any
 ) -> tuple[bool | None, TypedLayout | None]:
-    """:func:`fit_verdict` as (fits, layout by type): False only with a proof (of either
-    scope), None when unknown."""
-    fit = fit_verdict(
-        tray,
-        part_types,
-        counts,
-        time_limit=time_limit,
-        resolution=resolution,
-        workers=workers,
-        seed=seed,
-        reach=reach,
-    )
+    """:func:`fit_verdict` (with its keyword ``options``) as (fits, layout by type): False
+    only with a proof (of either scope), None when unknown."""
+    fit = fit_verdict(tray, part_types, counts, **options)
     return fit.fits, fit.layout
 
 

@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 import pytest
+from simcheck import assert_matches_evaluator
 
 from bilevel_kit import Plan, check, evaluate
 from bilevel_kit.errors import UsageError
@@ -32,22 +33,6 @@ from bilevel_kit.sim import (
 CE = CEParams(samples=60, elite=10, max_iter=30)
 DET = SimParams(timing=TimingModel.deterministic(), ce=CE)
 DELAYS = SimParams(ce=CE, mat={"leg": 60.0, "foot": 60.0}, mttf=90.0)
-TIME_FIELDS = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
-
-
-def _assert_matches_evaluator(res, tl) -> None:
-    assert len(res.kit_times) == len(tl.kits)
-    for got, want in zip(res.kit_times, tl.kits, strict=True):
-        for name in TIME_FIELDS:
-            assert getattr(got, name) == pytest.approx(getattr(want, name), abs=1e-9, rel=0)
-    assert res.makespan == pytest.approx(tl.makespan, abs=1e-9, rel=0)
-    assert res.human_idle == pytest.approx(tl.human_idle, abs=1e-9, rel=0)
-    assert res.robot_idle == pytest.approx(tl.robot_idle, abs=1e-9, rel=0)
-    assert res.human_work == pytest.approx(tl.human_work, abs=1e-9, rel=0)
-    assert res.robot_work == pytest.approx(tl.robot_work, abs=1e-9, rel=0)
-    for t, start in tl.task_start.items():
-        assert res.task_start[t] == pytest.approx(start, abs=1e-9, rel=0)
-        assert res.task_end[t] == pytest.approx(tl.task_end[t], abs=1e-9, rel=0)
 
 
 @pytest.mark.parametrize("policy", sorted(POLICIES))
@@ -60,7 +45,7 @@ def test_deterministic_run_equals_the_evaluator(request, policy, name, units) ->
     assert res.robot_wait == 0 and res.n_waits == 0 and not res.feeders
     expanded = inst.with_overrides(units=units)
     assert res.n_kits >= 1 and sorted(res.plan.task_order) == sorted(t.id for t in expanded.tasks)
-    _assert_matches_evaluator(res, evaluate(expanded, res.plan))
+    assert_matches_evaluator(res, evaluate(expanded, res.plan))
 
 
 @pytest.mark.parametrize("policy", sorted(POLICIES))
@@ -74,7 +59,7 @@ def test_sampled_times_without_supply_equal_the_evaluator(table, policy) -> None
         robot_times=res.times.robot_times(),
         human_times=res.times.human,
     )
-    _assert_matches_evaluator(res, tl)
+    assert_matches_evaluator(res, tl)
     assert res.human_work != pytest.approx(
         evaluate(res.instance, res.plan).human_work
     )  # times really were sampled
@@ -91,7 +76,7 @@ def test_calibration_knobs_reach_evaluator_and_policy(table) -> None:
     assert eff.delivery_time == 10.0
     assert eff.robot_time("foot1@1") == pytest.approx(1.5 * table.robot_time("foot1"))
     assert eff.human_time("foot1@2") == pytest.approx(0.8 * table.human_time("foot1"))
-    _assert_matches_evaluator(res, evaluate(eff, res.plan))
+    assert_matches_evaluator(res, evaluate(eff, res.plan))
 
 
 @pytest.mark.parametrize(
@@ -249,7 +234,7 @@ def test_tray_rule_equals_the_evaluator(table, stool, policy, trays, units) -> N
         res = simulate(inst, policy, params=params, seed=1)
         expanded = inst.with_overrides(units=units, trays=trays)
         assert res.instance.trays == expanded.trays
-        _assert_matches_evaluator(res, evaluate(expanded, res.plan))
+        assert_matches_evaluator(res, evaluate(expanded, res.plan))
         if trays == "unlimited":
             assert res.robot_blocked == 0
 
