@@ -15,7 +15,7 @@ from .instance import Instance
 
 #: The methods that plan for several stations; every other one refuses an instance that
 #: declares ``stations`` (its times would use the instance's ``d``, ``o_H`` and ``trays``).
-STATION_METHODS = frozenset({"single-task", "whole-assembly", "cpsat"})
+STATION_METHODS = frozenset({"single-task", "whole-assembly", "greedy-ce", "cpsat", "milp"})
 
 
 def station_instance(instance: Instance, station: str) -> Instance:

@@ -37,7 +37,7 @@ Decisions taken where the paper is silent (docs/errata.md):
 Options (:class:`GreedyCEOptions`, validated centrally): ``horizon`` (N), ``signed``,
 ``precedence``, ``polish`` (convex polish of every CE layout, :mod:`bilevel_kit.heuristics.convex`),
 the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entropy.CEParams` field.
-``time_limit`` is accepted for the common interface; the heuristic has none.
+Past ``time_limit``: single-task kits. Several stations: :mod:`.greedy_stations`.
 
 ``extra`` of the registered method ``greedy-ce``:
 
@@ -55,6 +55,7 @@ the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entro
 
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
 import math
@@ -72,6 +73,7 @@ from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
 from . import upper_level
 from .cross_entropy import Arrangement, CEParams, arrange
 from .greedy_search import PrefixSearch, SearchLimits, SearchStats, available_vector
+from .greedy_stations import plan_greedy
 from .prefix.levels import unique_rows
 
 #: Refuse to enumerate more than this many partial sequences at one epoch (each is scored,
@@ -660,7 +662,7 @@ def greedy_ce(
 ) -> MethodOutput:
     """Registered method ``greedy-ce``: the paper's bilevel heuristic (options and ``extra``
     in the module docstring). Past ``time_limit`` seconds the remaining kits are single tasks
-    (``extra["time_limit_hit"]``)."""
+    (``extra["time_limit_hit"]``). Several stations: :mod:`.greedy_stations`."""
     params = options.to_params()
     # the clock starts before the policy's set-up, which is linear in the tasks (seconds at
     # 60,000 tasks): the limit bounds the whole method, and one too short for it is refused
@@ -672,10 +674,8 @@ def greedy_ce(
             f"set-up for {instance.n_tasks:,} tasks (about {need:.0f} s, "
             f"{SETUP_PER_TASK * 1e6:.0f} us per task); give at least {math.ceil(need - 1)} s"
         )
-    policy = GreedyCEPolicy(instance, params, seed)
-    policy.deadline = deadline
-    result = plan(instance, params, seed, policy)
-    st = policy.stats
+    make = functools.partial(GreedyCEPolicy, params=params, seed=seed)
+    result, st = plan_greedy(instance, make, PolicyState, plan, deadline)  # one or more stations
     extra = {
         "epochs": st.epochs,
         "decision": "enumerate"

@@ -21,7 +21,7 @@ human idle and every smaller S's are at most 10 % (0: already above at S = 1); i
 95 % t-interval over the replications.
 
 Policies: the baselines and cpsat-rolling (one policy per station, the station of earliest
-need first: :mod:`bilevel_kit.sim.stations`), and ``optimized`` once greedy-ce plans stations
+need first: :mod:`bilevel_kit.sim.stations`), and ``optimized``, greedy-ce planning stations
 (:func:`bilevel_kit.sim.stations.station_policies`).
 """
 

@@ -168,7 +168,7 @@ def test_methods_without_stations_refuse(tiny):
 
     inst = from_dict(_doc())
     with pytest.raises(UsageError, match="does not model several assembly stations"):
-        solve(inst, "greedy-ce")
+        solve(inst, "bilevel-milp")
     from bilevel_kit.sim import simulate
 
     with pytest.raises(UsageError, match="does not model several assembly stations"):

@@ -20,8 +20,6 @@ def test_plans_pass_the_checker_on_every_instance(root):
         if "kitbench" in path.parts:  # the benchmark library: tests/experiments/ covers it
             continue
         inst = load(path)
-        if inst.stations:  # greedy-ce does not model several stations yet (docs/timeline.md)
-            continue
         res = solve(inst, "greedy-ce", check=True)
         assert res.extra["violations"] == [], path.name
         assert res.status == "feasible" and res.objective >= res.bound - 1e-9

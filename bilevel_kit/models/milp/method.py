@@ -210,8 +210,14 @@ def run(
             proof_scope=AXIS_ALIGNED,
         )
         return r.finish(None, Status.UNKNOWN, closed)
-    inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
-    K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
+    if instance.stations:  # docs/timeline.md#several-stations: a master of its own
+        from .stations import incumbent
+
+        inc, inc_obj, upper, K = incumbent(instance, options.objective, options.hint)
+        r.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
+    else:
+        inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
+        K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
     if upper is not None and upper <= r.best + TOL:
         # the quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
         # bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))
@@ -332,6 +338,10 @@ def _buildable(r: _Run, K: int, has_plan: bool) -> bool:
     built and solved within the time left."""
     instance = r.instance
     cells = assignment_cells(instance, K)
+    if instance.stations:  # with the station and tray-pair binaries
+        from .stations import model_cells
+
+        cells = model_cells(instance, K)
     r.extra["model_cells"] = cells
     what = f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
     refusal = memory_refusal("milp", cells, BYTES_PER_CELL, what)
@@ -367,10 +377,18 @@ def _solve_master(
     """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
     options = r.options
     lower = None if r.proven is None else r.proven.value
-    master = build(r.instance, K, upper, options.objective, lower)
+    start = set_start
+    if r.instance.stations:
+        from . import stations
+
+        assert upper is not None  # the baselines' makespan
+        master, start = stations.build(r.instance, K, upper, r.closed), stations.set_start
+    else:
+        master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, inc_obj, r.live)
-    if options.tray == "auto":
+    loop.start = start
+    if options.tray == "auto" and not r.instance.stations:  # stations: Benders, as cpsat's
         loop.cuts.seed_pairs()
     info = loop.run(opt, seed, solver_options)
     scope = loop.cuts.scope
@@ -547,6 +565,8 @@ class _Benders:
         self.proven = False
         self.infeasible = False
         self.iterations = 0
+        #: loads the incumbent as a MIP start (:func:`.model.set_start`, or the stations')
+        self.start: Any = set_start
 
     def left(self) -> float:
         return self.budget.remaining(MARGIN)
@@ -560,7 +580,7 @@ class _Benders:
         while self.left() > 0.05:
             self.iterations += 1
             if self.inc is not None:
-                set_start(self.master, self.instance, self.inc)
+                self.start(self.master, self.instance, self.inc)
             # the master's bound holds for every plan only while every cut does (its scope);
             # its solutions are no plans
             proof = self.cuts.scope == ANY_ANGLE
