@@ -2,7 +2,7 @@
 
 :meth:`bilevel_kit.heuristics.prefix.rests.RestSearch.depth_first` looks for the rest of ``m``
 tasks after a prefix in lexicographic order of canonical sequences (the tie rule of
-docs/greedy.md, and the best rest when the robot times take many values). On sparse wide
+docs/scaling.md#greedy-ce-without-a-time-limit, and the best rest when the robot times take many values). On sparse wide
 graphs (hundreds of available tasks) it visits its whole node cap at almost every decision,
 and each node's Python work grows with the window: 40 % of greedy-ce's time on 1,000 sparse
 tasks (issue 27). :func:`depth_first` is that search, operation by operation: the same nodes
