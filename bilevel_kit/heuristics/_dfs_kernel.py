@@ -3,9 +3,10 @@
 :meth:`bilevel_kit.heuristics.prefix.rests.RestSearch.depth_first` looks for the rest of ``m``
 tasks after a prefix in lexicographic order of canonical sequences (the tie rule of
 docs/scaling.md#greedy-ce-without-a-time-limit, and the best rest when the robot times take
-many values). On sparse wide graphs (hundreds of available tasks) it visits its whole node cap at almost every decision,
-and each node's Python work grows with the window: 40 % of greedy-ce's time on 1,000 sparse
-tasks (issue 27). :func:`depth_first` is that search, operation by operation: the same nodes
+many values). On sparse wide graphs (hundreds of available tasks) it visits its whole node
+cap at almost every decision, and each node's Python work grows with the window: 40 % of
+greedy-ce's time on 1,000 sparse tasks (docs/scaling.md#sparse-wide-graphs).
+:func:`depth_first` is that search, operation by operation: the same nodes
 in the same order (so the same cap), the same children (:func:`_unlocked`, the rule of
 :meth:`..prefix.levels.Precedence.unlocked_after`), the same pruning bound and the same
 floating-point operations of F (Eqs. 4-7 with term (6) a function of the rest's robot sum,
