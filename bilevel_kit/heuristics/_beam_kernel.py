@@ -5,7 +5,7 @@ Once a level of closed prefix sets would pass ``max_prefix_sets``,
 least optimistic score (:class:`..prefix.bounds.OptimisticScore`). On sparse wide graphs
 (hundreds of available tasks) the second level alone has ~300,000 children at every decision,
 and building them, their sums and part counts and their scores with numpy took 35 % of
-greedy-ce's time on 1,000 sparse tasks (issue 27). :func:`beam_scores` makes the same
+greedy-ce's time on 1,000 sparse tasks (docs/scaling.md). :func:`beam_scores` makes the same
 children in the same order (``levels._children``: parent-major, increasing) and their
 optimistic scores in one pass, operation by operation as numpy forms them (Eqs. 4-7): robot
 and human sums, the rest-sum bounds when every sum of robot times is exact (the first ``m``
