@@ -232,10 +232,5 @@ def kernel() -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] |
     if _kernels.disabled():
         return None
     if _JITTED is None:
-        jit = _kernels.njit()
-        if jit is None:
-            return None
-        for name in _HELPERS:
-            globals()[name] = jit(globals()[name])
-        _JITTED = jit(beam_scores)
+        _JITTED = _kernels.compile_in(globals(), _HELPERS, "beam_scores")
     return _JITTED

@@ -238,10 +238,5 @@ def kernel() -> Callable[..., tuple[float, np.ndarray, bool]] | None:
     if _kernels.disabled():
         return None
     if _JITTED is None:
-        jit = _kernels.njit()
-        if jit is None:
-            return None
-        for name in _HELPERS:
-            globals()[name] = jit(globals()[name])
-        _JITTED = jit(depth_first)
+        _JITTED = _kernels.compile_in(globals(), _HELPERS, "depth_first")
     return _JITTED

@@ -25,7 +25,7 @@ is not installed); :func:`available` says which path runs.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -539,6 +539,17 @@ def njit() -> Callable[[Callable[..., Any]], Any] | None:
     except ImportError:
         return None
     return numba.njit(cache=True, nogil=True)
+
+
+def compile_in(namespace: dict[str, Any], helpers: Sequence[str], entry: str) -> Any | None:
+    """Compile a kernel module's ``helpers`` in place, then its ``entry`` (so that the
+    compiled entry calls compiled code); None when numba is disabled or missing."""
+    jit = njit()
+    if jit is None:
+        return None
+    for name in helpers:
+        namespace[name] = jit(namespace[name])
+    return jit(namespace[entry])
 
 
 def cache_missing() -> bool:

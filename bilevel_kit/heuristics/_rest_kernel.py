@@ -306,12 +306,7 @@ def kernel() -> Callable[..., tuple[int, bool, np.ndarray, np.ndarray, np.ndarra
     if _kernels.disabled():
         return None
     if _JITTED is None:
-        jit = _kernels.njit()
-        if jit is None:
-            return None
-        for name in _HELPERS:
-            globals()[name] = jit(globals()[name])
-        _JITTED = jit(best_cores)
+        _JITTED = _kernels.compile_in(globals(), _HELPERS, "best_cores")
     return _JITTED
 
 
