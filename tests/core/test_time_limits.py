@@ -23,9 +23,11 @@ T = 4.0
 @pytest.fixture(scope="module", autouse=True)
 def compiled_kernels(table):
     """numba compiles the CE kernels on their first call after an install (about 15 s, which
-    the CLI announces and docs/scaling.md states); compile them once here, so that the
-    limits below measure the solves, not the compiler."""
+    the CLI announces and docs/scaling.md states), and the prefix search's kernels on the
+    first instance wide enough to use them (the in-tree below, not the table); compile them
+    once here, so that the limits below measure the solves, not the compiler."""
     solve(table, "greedy-ce")
+    solve(from_dict(generate("intree", 60, seed=1)), "greedy-ce")
 
 
 #: The instance per method: an in-tree of 60 tasks, except the MILP (20: it builds its model
