@@ -29,7 +29,7 @@ that only ranks samples (the CE method) may score in float32.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -331,7 +331,9 @@ def _large_layout_terms(layout: Sequence[Placement]) -> tuple[float, float, floa
     z_box = float(
         box_overlap_1d(x[i] - x[j], ex[i], ex[j]) @ box_overlap_1d(y[i] - y[j], ey[i], ey[j])
     )
-    return d_same, d_diff, z_box, exact_overlap_area(layout)
+    order = np.lexsort((j, i))
+    pairs = zip(i[order].tolist(), j[order].tolist(), strict=True)
+    return d_same, d_diff, z_box, exact_overlap_area(layout, pairs)
 
 
 def box_pairs(
@@ -364,11 +366,14 @@ def overlapping_box_pairs(layout: Sequence[Placement]) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(i[order], j[order], strict=True)]
 
 
-def exact_overlap_area(layout: Sequence[Placement]) -> float:
-    """Exact Eq.-10 Z on the rotated rectangles themselves (not their bounding boxes), mm^2."""
+def exact_overlap_area(
+    layout: Sequence[Placement], pairs: Iterable[tuple[int, int]] | None = None
+) -> float:
+    """Exact Eq.-10 Z on the rotated rectangles themselves (not their bounding boxes), mm^2;
+    ``pairs``: the :func:`overlapping_box_pairs` of the layout when the caller has them."""
     corners = {}
     total = 0.0
-    for a, b in overlapping_box_pairs(layout):
+    for a, b in overlapping_box_pairs(layout) if pairs is None else pairs:
         for k in (a, b):
             if k not in corners:
                 p = layout[k]
