@@ -56,12 +56,15 @@ def buildable(
 def handoff(ctx: Context, state: State, plan: Plan, seed: int, extra: dict[str, Any]) -> State:
     """``state`` (the incumbent, whose plan is ``plan``), or the better plan the LNS finds
     from it in the time left (:func:`..lns.fallback.improve`; makespan objective without
-    release times, which the LNS does not model). ``extra`` gets ``improved_by`` (``lns`` or
+    release times, which the LNS does not model; not in a reproducible run, ``deterministic``,
+    whose result must not depend on the clock). ``extra`` gets ``improved_by`` (``lns`` or
     None) and ``fallback`` (what happened)."""
     from ..lns.fallback import improve
 
     extra["improved_by"] = None
     if ctx.objective != "makespan" or any(ctx.sc.rel) or ctx.instance.stations:
+        return state
+    if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
         return state
     better, info = improve(
         ctx.instance, plan, bound=known_bound(ctx), seed=seed, time_limit=ctx.left()
