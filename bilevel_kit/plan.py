@@ -121,6 +121,8 @@ class Timeline:
         """Per station: its completion time, its human's idle time (completion less the
         human's work there) and its kits; empty for one station (the four metrics say it)."""
         out: dict[str, dict[str, float | int]] = {}
+        if not self.kit_stations:
+            return out
         for kt, s in zip(self.kits, self.kit_stations, strict=True):
             m = out.setdefault(s, {"completion": 0.0, "human_idle": 0.0, "n_kits": 0})
             m["human_idle"] = float(m["human_idle"]) - (kt.human_end - kt.human_start)

@@ -44,6 +44,11 @@ def test_worked_example_by_hand():
     }
     assert tl.task_start["a2"] == 15 and tl.task_start["b1"] == 17.5
     assert check(inst, _plan(["a1"], ["a2"], ["b1"])) == []
+    # one station: no per-station block (the four metrics say it), as documented
+    parts = [{"id": "p", "width": 10, "height": 10, "pick_time": 1}]
+    tasks = [{"id": "a", "parts": [], "human_time": {"mean": 3}, "robot_time": 2}]
+    one = from_dict(document("one", parts, tasks, delivery_time=1, overhead=(1, 0.5)))
+    assert evaluate(one, _plan(["a"])).station_metrics() == {}
 
 
 def test_interleaving_and_station_humans_work_in_parallel():
