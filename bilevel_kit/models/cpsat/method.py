@@ -123,9 +123,9 @@ if TYPE_CHECKING:
     from .live import Live as LiveProgress
 
 TrayMode = Literal["auto", "embedded", "benders"]
-Objective = Literal["makespan", "human_idle"]
+Objective = Literal["makespan", "sum_completion", "human_idle"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
-OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
 #: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
@@ -156,7 +156,7 @@ class ScheduleOptions:
         metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
     )
     objective: Objective = field(
-        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+        default="makespan", metadata={"help": "makespan, (stations) sum_completion or human_idle"}
     )
     time_resolution: float = field(
         default=0.1,
@@ -218,7 +218,7 @@ def cpsat(
 ) -> MethodOutput:
     """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
     (module docstring). Several assembly stations: :mod:`.stations`."""
-    if instance.stations:
+    if instance.stations or options.objective == "sum_completion":
         from .stations import solve_stations
 
         return solve_stations(instance, options, seed=seed, time_limit=time_limit)

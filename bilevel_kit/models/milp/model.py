@@ -80,8 +80,14 @@ human_order = kit_order  # the human's order inside a kit (one definition: commo
 
 
 def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective: str) -> float:
-    """The model's objective of a plan: makespan, or makespan - o_H * kits."""
-    c = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    """The model's objective of a plan: makespan, or makespan - o_H * kits; with several
+    stations the stations master's (:func:`.stations.model_objective`)."""
+    tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
+    if instance.stations:
+        from .stations import model_objective
+
+        return model_objective(instance, tl, objective)
+    c = tl.makespan
     return c if objective == "makespan" else c - instance.kit_overhead_human * len(kits)
 
 
