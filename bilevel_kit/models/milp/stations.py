@@ -35,9 +35,9 @@ The objective is the makespan ``C``, the sum of the completions ``sum_s F[s,K-1]
 total human idle less the constant ``sum_i h_i``, ``sum_s F[s,K-1] - sum_s o_H,s sum_k
 z[s,k]`` (exactly: the human's work depends on the kit counts), with ``U`` from
 :func:`bilevel_kit.stations.makespan_horizon` (docs/formulations.md); ``hint`` is refused,
-and ``tray`` is always the Benders loop from the area relaxation, as in cpsat's stations model (seeding the
-cuts of every pair of tasks that does not fit, ``tray=auto`` for one station, adds cuts proven
-for 0/90-degree layouts only, so 14 of the 24 random instances of
+and ``tray`` is always the Benders loop from the area relaxation, as in cpsat's stations
+model (seeding the cuts of every pair of tasks that does not fit, ``tray=auto`` for one
+station, adds cuts proven for 0/90-degree layouts only, so 14 of the 24 random instances of
 tests/models/test_milp_stations.py were then proven optimal only among such plans, against 4
 without them).
 """
