@@ -35,8 +35,8 @@ def objective_of(timeline: Timeline, objective: str) -> float:
     sum over the stations of ``station_metrics()``'s idle."""
     if objective == "human_idle":
         return timeline.human_idle
-    per = timeline.station_metrics()
-    if objective == "sum_completion" and per:
+    if objective == "sum_completion" and timeline.kit_stations:  # else one station
+        per = timeline.station_metrics()
         return sum(float(m["completion"]) for m in per.values())
     return timeline.makespan
 

@@ -150,7 +150,7 @@ def plot_gantt(
     waits = tray_waits(instance, tl)
     _draw_waits_and_idle(ax, tl, waits, where, ys)
     ax.axvline(makespan, color=style.MAKESPAN_COLOR, linestyle="--", linewidth=1.2, gid="makespan")
-    _dress_gantt(ax, instance, tl, method, (lanes.room(human[-1]), lanes.room(robot)), ys)
+    _dress_gantt(ax, instance, tl, method, (lanes.room(human[-1]), lanes.room(robot)), (where, ys))
     _gantt_legend(ax, colors, colorbar, edge, bool(waits))
     if colorbar:
         _kit_colorbar(ax, len(colors))
@@ -319,12 +319,13 @@ def _dress_gantt(
     tl: Timeline,
     method: str | None,
     room: tuple[float, float],
-    ys: dict[str, float],
+    lanes_of: tuple[Sequence[str], dict[str, float]],
 ) -> None:
     """Lanes, axis labels, grid and the title: the instance (and method) and the metrics (with
     several stations each one's completion), on one line when it fits the axes, else on two
     (three). ``room``: the leader rows' room below the lowest human lane and above the robot
-    lane (:func:`.lanes.room`); ``ys``: each station's human lane."""
+    lane (:func:`.lanes.room`); ``where``: each kit's station; ``ys``: each station's lane."""
+    where, ys = lanes_of
     several = len(ys) > 1
     names = [f"human {s}" if several else "human" for s in ys]
     ax.set_yticks([*ys.values(), ROBOT_Y], [*names, "robot"])
@@ -342,8 +343,8 @@ def _dress_gantt(
     )
     lines = [head, metrics]
     if several:
-        per = tl.station_metrics()
-        done = (f"{s} {float(per[s]['completion']):.1f} s" for s in ys if s in per)
+        ends = {w: kt.human_end for kt, w in zip(tl.kits, where, strict=False)}  # in order
+        done = (f"{s} {ends[s]:.1f} s" for s in ys if s in ends)
         lines.append(f"completion {', '.join(done)}")
     one_line = f"{head}: {'; '.join(lines[1:])}"
     wide = style.text_width_in(one_line, style.TITLE_SIZE) <= axes_width_in(ax)
