@@ -5,7 +5,7 @@ python paper_repro/rerun.py [--only calibration,user_study,...] [--jobs 2] [--fr
 
 Steps, in order: calibration (the one calibration every other step reads: run it first, its
 CSVs are copied before the next step starts), user_study, fig6, fig6_cached (the same command
-again, every cell saved: what a rerun costs), fig6_r100, fig6_cpsat, horizon, adaptive.
+again, every cell saved: what a rerun costs), fig6_r100, fig6_cpsat, horizon, adaptive, stations.
 ``--fresh`` deletes a step's output folder first, so its time is a full rerun. Each step runs
 ``python -m bilevel_kit.cli repro ...`` in a subprocess; its wall time, the load average
 before and after and the date are written to results/timing.csv (one row per step, replaced
@@ -33,6 +33,8 @@ FIGURES = ROOT / "docs" / "figures"
 sys.path.insert(0, str(ROOT))  # a plain checkout works too
 
 #: step -> (arguments after `repro`, output folder, {file in it: name in results/ or figures/})
+#: the stations study's lines, one figure each (docs/stations.md)
+LINE_FIGURES = ("table", "stool", "chair", "mix")
 STEPS: dict[str, tuple[list[str], str, dict[str, str]]] = {
     "calibration": (
         ["calibrate"],
@@ -89,6 +91,15 @@ STEPS: dict[str, tuple[list[str], str, dict[str, str]]] = {
         },
     ),
     "adaptive": (["adaptive"], "out/repro/adaptive", {"adaptive.csv": "adaptive.csv"}),
+    "stations": (
+        ["stations"],
+        "out/repro/stations",
+        {
+            "stations.csv": "stations.csv",
+            "stations_served.csv": "stations_served.csv",
+            **{f"stations_{x}.png": f"figures/stations-{x}.png" for x in LINE_FIGURES},
+        },
+    ),
 }
 COLUMNS = (
     "run",

@@ -13,6 +13,7 @@ from .adaptive import share_text
 from .fig6_stats import BETTER, WORSE
 from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
+from .stations_tables import STATION_TABLES
 
 Row = Mapping[str, Any]
 #: Table name -> (its CSV file, its renderer).
@@ -219,6 +220,7 @@ SIM_TABLES: Tables = {
     "horizon_window": ("horizon_window.csv", horizon_window_markdown),
     "adaptive": ("adaptive.csv", adaptive_markdown),
     "adaptive_shares": ("adaptive.csv", adaptive_shares_markdown),
+    **STATION_TABLES,
     "timing": ("timing.csv", timing_markdown),
 }
 

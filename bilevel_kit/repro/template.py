@@ -45,6 +45,7 @@ TARGETS = (
     Target("paper_repro/templates/README.md", "paper_repro/README.md"),
     Target("paper_repro/templates/reproduction.md", "docs/reproduction.md"),
     Target("paper_repro/templates/simulation_adaptive.md", "docs/simulation.md", section=True),
+    Target("paper_repro/templates/stations_results.md", "docs/stations.md", section=True),
 )
 
 

@@ -50,6 +50,9 @@ def test_served_counts_stations_up_to_the_first_above_the_threshold() -> None:
     records = [rec(0, 1, 0.05), rec(0, 2, 0.08), rec(0, 3, 0.2), rec(1, 1, 0.12), rec(1, 2, 0.0)]
     (row,) = served(records)
     assert row["per_rep"] == [2, 0] and row["s_max"] == 1.0
+    # the t-interval of [2, 0] is 1 +- 12.7; no replication can serve fewer than 0 stations
+    # or more than the 3 studied, so it is cut to [0, 3]
+    assert (row["s_max_low"], row["s_max_high"]) == (0.0, 3.0)
 
 
 def test_tiny_study_writes_table_figure_and_resumes(tmp_path) -> None:
