@@ -3,20 +3,21 @@
 The evaluator (:mod:`bilevel_kit.plan`) and the checker take stations themselves; this module
 holds what methods and bounds share about them: a station's tasks as an instance of their own
 (:func:`station_instance`, whose closed-form bounds hold for that station's completion), the
-objectives the exact models may minimise over them (:func:`objective_of`) and the list of the
-methods that model stations.
+objectives the exact models may minimise over them (:func:`objective_of`; their closed-form
+bounds: :func:`bilevel_kit.bounds.objective_bound`) and the list of the methods that model
+stations.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from .errors import UsageError
 from .instance import Instance
 
 if TYPE_CHECKING:
-    from .plan import Plan, Timeline
+    from .plan import Timeline
 
 #: The methods that plan for several stations; every other one refuses an instance that
 #: declares ``stations`` (its times would use the instance's ``d``, ``o_H`` and ``trays``).
@@ -41,31 +42,6 @@ def objective_of(timeline: Timeline, objective: str) -> float:
     return timeline.makespan
 
 
-def objective_bound(instance: Instance, objective: str) -> float:
-    """A closed-form lower bound on ``objective`` over every plan (s): the makespan's
-    (:func:`bilevel_kit.bounds.best_bound`); for ``sum_completion`` the sum over the stations
-    of each one's own bound (:func:`station_instance`); for ``human_idle`` the sum over the
-    stations of ``max(o_R + d_s, LB_s - W_s)``: a station's human idles at least until its
-    first kit arrives, and its idle is ``C_s`` less its work, at most ``W_s = sum h_i + o_H,s
-    n_s`` (one task per kit)."""
-    from .bounds import best_bound
-
-    if objective == "makespan":
-        return best_bound(instance)
-    total = 0.0
-    for s in instance.station_ids:
-        one = station_instance(instance, s)
-        if not one.tasks:
-            continue
-        lb = best_bound(one)
-        if objective == "human_idle":
-            work = sum(one.human_time(t.id) for t in one.tasks)
-            work += one.kit_overhead_human * one.n_tasks
-            lb = max(instance.kit_overhead_robot + one.delivery_time, lb - work)
-        total += lb
-    return total
-
-
 def makespan_horizon(instance: Instance, timeline: Timeline, objective: str) -> float:
     """A bound on the makespan of every plan at least as good as ``timeline``'s for
     ``objective``, the exact models' ``C <= U``: its makespan; its sum of completions (each
@@ -76,38 +52,6 @@ def makespan_horizon(instance: Instance, timeline: Timeline, objective: str) -> 
     o_h = max(p.kit_overhead_human for p in instance.station_params.values())
     work = sum(instance.human_time(t.id) for t in instance.tasks)
     return timeline.human_idle + work + o_h * instance.n_tasks
-
-
-def objective_extra(
-    instance: Instance,
-    plan: Plan,
-    objective: str,
-    lower: tuple[float | None, float | None],
-    optimal: tuple[bool, bool],
-) -> dict[str, Any]:
-    """An exact model's ``extra`` for ``objective`` besides the makespan: ``objective_value``,
-    ``objective_bound``, ``objective_gap`` (s; ``idle_bound`` too for the human idle) and
-    ``objective_bound_axis_aligned``. Each bound is :func:`objective_bound` or the model's
-    ``lower`` (s), valid for every plan and for 0/90-degree plans (None: none); the value when
-    ``optimal`` in the same two scopes (docs/formulations.md#what-optimal-means)."""
-    from .methods import gap
-    from .plan import evaluate
-
-    value = objective_of(evaluate(instance, plan), objective)
-    closed = objective_bound(instance, objective)
-    bounds = []
-    for low, opt in zip(lower, optimal, strict=True):
-        bound = closed if low is None else max(closed, low)
-        bounds.append(value if opt else min(bound, value))
-    out: dict[str, Any] = {
-        "objective_value": value,
-        "objective_bound": bounds[0],
-        "objective_gap": gap(value, bounds[0]),
-        "objective_bound_axis_aligned": bounds[1],
-    }
-    if objective == "human_idle":
-        out["idle_bound"] = bounds[0]
-    return out
 
 
 def station_instance(instance: Instance, station: str) -> Instance:

@@ -9,9 +9,10 @@ import pytest
 import strategies
 from brute import assert_model_optimal, assert_objective_optimal, best_makespan
 
+from bilevel_kit.bounds import objective_bound
 from bilevel_kit.instance import from_dict
 from bilevel_kit.plan import evaluate
-from bilevel_kit.stations import objective_bound, objective_of
+from bilevel_kit.stations import objective_of
 from bilevel_kit.validate import check
 
 pytest.importorskip("ortools")

@@ -221,7 +221,7 @@ def cpsat(
     if instance.stations or options.objective == "sum_completion":
         from .stations import solve_stations
 
-        return solve_stations(instance, options, seed=seed, time_limit=time_limit)
+        return solve_stations(instance, options, seed=seed, time_limit=time_limit, one=cpsat)
     budget = Budget(time_limit)
     plan: Plan | None = None
     source = None

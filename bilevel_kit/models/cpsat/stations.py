@@ -34,14 +34,15 @@ of s), or that sum less ``sum_s o_H,s m_s`` (the total human idle less the const
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from ...bounds import best_bound
+from ...bounds import best_bound, objective_extra
 from ...instance import Instance
 from ...methods import MethodOutput, Status
 from ...plan import Kit, Plan, evaluate
-from ...stations import makespan_horizon, objective_extra, objective_of
+from ...stations import makespan_horizon, objective_of
 from .. import packing_oracle
 from ..budget import Budget, check_model_memory
 from ..common import Packer, kit_order, scope_claims
@@ -63,16 +64,20 @@ def time_scale(values: list[float]) -> tuple[int, bool]:
 
 
 def solve_stations(
-    instance: Instance, options: Any, *, seed: int = 0, time_limit: float | None = None
+    instance: Instance,
+    options: Any,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+    one: Callable[..., MethodOutput] | None = None,
 ) -> MethodOutput:
     """The stations model of the module docstring, solved within ``time_limit``; without
-    stations the sum of the completions is the makespan (one-station ``cpsat``)."""
-    if not instance.stations:
-        from .method import cpsat
-
-        return cpsat(
-            instance, replace(options, objective="makespan"), seed=seed, time_limit=time_limit
-        )
+    stations the sum of the completions is the makespan: ``one`` (the one-station ``cpsat``,
+    passed in so that this module does not import :mod:`.method`) solves it."""
+    if not instance.stations:  # ``one``: the one-station model
+        assert one is not None
+        options = replace(options, objective="makespan")
+        return one(instance, options, seed=seed, time_limit=time_limit)
     from ...heuristics.baselines import single_task, whole_assembly
 
     budget = Budget(time_limit)
@@ -351,7 +356,7 @@ def _objective_extra(
     optimal: tuple[bool, bool],
     extra: dict[str, Any],
 ) -> dict[str, Any]:
-    """:func:`bilevel_kit.stations.objective_extra` from the model's bound ``model_s`` (s, the
+    """:func:`bilevel_kit.bounds.objective_extra` from the model's bound ``model_s`` (s, the
     constant ``sum_i h_i`` dropped for the human idle), a proof only on exact times and for
     the plans of the cuts' ``scope``."""
     objective = extra["objective"]

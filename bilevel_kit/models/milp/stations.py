@@ -48,19 +48,19 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...bounds import min_kits
+from ...bounds import objective_extra as stations_extra
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance, StationParams
-from ...plan import Plan, Timeline, evaluate
+from ...plan import Plan, evaluate
 from ...stations import makespan_horizon, objective_of
-from ...stations import objective_extra as stations_extra
-from .model import Master, _Data, _tray
+from .model import Master, _Data, _tray, model_objective
 
 
 def incumbent(
     instance: Instance, objective: str, hint: str
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
     """The better of the baselines' plans for ``objective`` as kits, its master objective
-    (:func:`model_objective`), the horizon ``U``
+    (:func:`.model.model_objective`), the horizon ``U``
     (:func:`bilevel_kit.stations.makespan_horizon`) and the kit cap K = n; a
     UsageError for a hint."""
     from ...heuristics.baselines import single_task, whole_assembly
@@ -86,15 +86,6 @@ def incumbent(
     return kits, model_objective(instance, tl, objective), upper, instance.n_tasks
 
 
-def model_objective(instance: Instance, tl: Timeline, objective: str) -> float:
-    """The master's objective of a plan's timeline (module docstring): the objective itself,
-    or for ``human_idle`` the total idle plus the constant ``sum_i h_i`` the master drops."""
-    value = objective_of(tl, objective)
-    if objective == "human_idle":
-        value += sum(instance.human_time(t.id) for t in instance.tasks)
-    return value
-
-
 def objective_extra(
     instance: Instance,
     plan: Plan,
@@ -102,7 +93,7 @@ def objective_extra(
     lower: tuple[float | None, float | None],
     optimal: tuple[bool, bool],
 ) -> dict[str, Any]:
-    """:func:`bilevel_kit.stations.objective_extra` with the master's bounds ``lower`` (for
+    """:func:`bilevel_kit.bounds.objective_extra` with the master's bounds ``lower`` (for
     every plan, for 0/90-degree plans) in its own units (the constant ``sum_i h_i`` dropped
     for the human idle)."""
     offset = model_objective(instance, evaluate(instance, plan), objective)
