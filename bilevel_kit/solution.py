@@ -4,9 +4,10 @@ Keys other tools can rely on: ``method``, ``status``, ``objective`` (makespan, s
 ``gap``, ``seed``, ``params``, ``wall_time_s``, ``metrics`` {``makespan``, ``human_idle``,
 ``robot_idle``, ``n_kits``} and ``kits`` [{``tasks``, ``robot_start``, ``robot_end``,
 ``arrive``, ``human_start``, ``human_end``, ``layout`` [{``part``, ``type``, ``x``, ``y``,
-``theta``, ``w``, ``h``}]}]. Lengths in mm, angles in degrees, times in s. ``overrides``:
-the instance overrides the plan was solved with (``--units``, ``--trays``, ...), which
-``bilevel-kit check`` applies again (docs/formats.md).
+``theta``, ``w``, ``h``}]}]; with several stations also each kit's ``station`` and
+``station_metrics`` {station: {``completion``, ``human_idle``, ``n_kits``}}. Lengths in mm,
+angles in degrees, times in s. ``overrides``: the instance overrides the plan was solved with
+(``--units``, ``--trays``, ...), which ``bilevel-kit check`` applies again (docs/formats.md).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from .validate import Claims, Violation, check
 FORMAT = "bilevel-kit-solution/1"
 _TIME_KEYS = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
 _METRIC_KEYS = ("makespan", "human_idle", "robot_idle", "n_kits")
+#: per station, with several stations (:meth:`bilevel_kit.plan.Timeline.station_metrics`)
+_STATION_KEYS = ("completion", "human_idle", "n_kits")
 
 
 def _jsonable(value: Any) -> Any:
@@ -51,11 +54,14 @@ def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -
     instance overrides it was solved with) is recorded so that the checker can rebuild the
     same instance."""
     kits = []
-    if result.plan is not None and result.timeline is not None:
-        for kit, times in zip(result.plan.kits, result.timeline.kits, strict=True):
+    tl = result.timeline
+    if result.plan is not None and tl is not None:
+        stations = tl.kit_stations or ("",) * len(tl.kits)
+        for kit, times, s in zip(result.plan.kits, tl.kits, stations, strict=True):
             kits.append(
                 {
                     "tasks": list(kit.tasks),
+                    **({"station": s} if s else {}),
                     **{k: getattr(times, k) for k in _TIME_KEYS},
                     "layout": [p.to_dict() for p in kit.layout],
                 }
@@ -75,8 +81,11 @@ def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -
         "wall_time_s": result.wall_time_s,
         "metrics": result.metrics,
         "kits": kits,
-        "extra": _jsonable(result.extra),
+        # per station: a checked claim of its own below, not an unchecked extra
+        "extra": _jsonable({k: v for k, v in result.extra.items() if k != "station_metrics"}),
     }
+    if result.extra.get("station_metrics"):
+        doc["station_metrics"] = _jsonable(result.extra["station_metrics"])
     if overrides:
         doc["overrides"] = _jsonable(dict(overrides))
     return doc
@@ -130,6 +139,7 @@ def schema() -> dict[str, Any]:
         "additionalProperties": False,
         "properties": {
             "tasks": {"type": "array", "items": {"type": "string"}},
+            "station": {"type": "string", "description": "the kit's station, with stations"},
             "layout": {"type": "array", "items": placement},
             **{k: _NUM for k in _TIME_KEYS},
         },
@@ -189,6 +199,20 @@ def schema() -> dict[str, Any]:
             "params": {"type": "object"},
             "wall_time_s": {"type": "number", "minimum": 0},
             "metrics": metrics,
+            "station_metrics": {
+                "type": "object",
+                "description": "per station, with several stations",
+                "additionalProperties": {
+                    "type": "object",
+                    "required": list(_STATION_KEYS),
+                    "additionalProperties": False,
+                    "properties": {
+                        "completion": _NUM,
+                        "human_idle": _NUM,
+                        "n_kits": {"type": "integer", "minimum": 0},
+                    },
+                },
+            },
             "kits": {"type": "array", "items": kit},
             "extra": {"type": "object"},
             "overrides": _OVERRIDES,
@@ -208,6 +232,9 @@ class LoadedSolution:
     reported_metrics: dict[str, float] | None
     claims: Claims = field(default_factory=Claims)
     number_faults: tuple[Violation, ...] = ()
+    #: per station, and each kit's stated station (None where not stated), with stations
+    reported_stations: dict[str, dict[str, float]] | None = None
+    reported_kit_stations: tuple[str | None, ...] | None = None
 
     @property
     def overrides(self) -> dict[str, Any]:
@@ -222,6 +249,8 @@ class LoadedSolution:
             reported_kits=self.reported_kits,
             reported_metrics=self.reported_metrics,
             claims=self.claims,
+            reported_stations=self.reported_stations,
+            reported_kit_stations=self.reported_kit_stations,
         )
         return [*self.number_faults, *found]
 
@@ -307,6 +336,13 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         timeline=_timeline(doc.get("timeline_params"), num),
         refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
     )
+    per_station = doc.get("station_metrics")
+    if per_station is not None:
+        per_station = {
+            s: {k: num(v, f"$.station_metrics.{s}.{k}") for k, v in m.items()}
+            for s, m in per_station.items()
+        }
+    kit_stations = [kd.get("station") for kd in doc["kits"]]
     return LoadedSolution(
         doc,
         Plan(tuple(kits)),
@@ -314,6 +350,8 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         metrics,
         claims,
         tuple(num.faults),
+        per_station,
+        tuple(kit_stations) if any(s is not None for s in kit_stations) else None,
     )
 
 

@@ -128,12 +128,17 @@ def check(
     reported_kits: Sequence[KitTimes] | None = None,
     reported_metrics: Mapping[str, float] | None = None,
     claims: Claims | None = None,
+    reported_stations: Mapping[str, Mapping[str, float]] | None = None,
+    reported_kit_stations: Sequence[str | None] | None = None,
 ) -> list[Violation]:
     """All violations of ``plan`` on ``instance`` (empty list: the plan is valid).
 
     ``reported_kits``/``reported_metrics`` are the times a solution file claims; they are
     compared with :func:`bilevel_kit.plan.evaluate` within :data:`TIME_TOL`. ``claims`` are
-    its headline numbers, recomputed likewise (see :func:`_check_claims`).
+    its headline numbers, recomputed likewise (see :func:`_check_claims`). With several
+    stations, ``reported_stations`` (per station: ``completion``, ``human_idle``, ``n_kits``)
+    and ``reported_kit_stations`` (each kit's stated station, None where not stated) are
+    recomputed too (docs/timeline.md#several-stations).
     """
     out: list[Violation] = []
     if claims is not None:  # first: it explains every time that follows
@@ -144,6 +149,10 @@ def check(
         out += _check_layout(instance, kit, k)
     if reported_kits is not None or reported_metrics is not None:
         out += _check_times(instance, plan, reported_kits, reported_metrics)
+    if reported_kit_stations is not None:
+        out += _check_kit_stations(instance, plan, reported_kit_stations)
+    if reported_stations is not None:
+        out += _check_station_metrics(instance, plan, reported_stations)
     if claims is not None:
         out += _check_claims(instance, plan, claims, plan_valid=not out)
     return out
@@ -546,6 +555,45 @@ def _check_tray_rule(instance: Instance, plan: Plan, kits: Sequence[KitTimes]) -
                     )
                 )
         own.append(k)
+    return out
+
+
+def _check_kit_stations(
+    instance: Instance, plan: Plan, stated: Sequence[str | None]
+) -> list[Violation]:
+    """Each kit's stated station is its tasks' station."""
+    out = []
+    for k, (kit, s) in enumerate(zip(plan.kits, stated, strict=False), start=1):
+        if s is not None and kit.tasks and s != _station(instance, kit):
+            msg = (
+                f"kit {k} is stated for station {s!r}, its tasks are of {_station(instance, kit)!r}"
+            )
+            out.append(Violation("wrong_station", msg, k))
+    return out
+
+
+def _check_station_metrics(
+    instance: Instance, plan: Plan, stated: Mapping[str, Mapping[str, float]]
+) -> list[Violation]:
+    """The stated per-station completion, human idle and kit count are the evaluator's."""
+    if any(t not in instance.task_by_id for kit in plan.kits for t in kit.tasks):
+        return []  # already reported; times of unknown tasks are undefined
+    want = evaluate(instance, plan).station_metrics()
+    out = []
+    for station, got in stated.items():
+        if station not in want:
+            msg = f"metrics are stated for station {station!r}, which has no kit in the plan"
+            out.append(Violation("times_inconsistent", msg))
+            continue
+        for name, g in got.items():
+            w = want[station][name]
+            if not math.isnan(g) and not math.isclose(g, w, abs_tol=TIME_TOL, rel_tol=1e-9):
+                out.append(
+                    Violation(
+                        "times_inconsistent",
+                        f"station {station}: reported {name} {g:.6g}, evaluator gives {w:.6g}",
+                    )
+                )
     return out
 
 

@@ -411,17 +411,14 @@ class GreedyCEPolicy:
         return hit
 
     def _listed(self, done: set[int], length: int) -> list[tuple[int, ...]] | None:
-        """Up to ``MAX_SEQUENCES + 1`` sequences, or None once the time limit passes."""
-        listed: list[tuple[int, ...]] = []
-        gen = self._sequences(done, length)
-        while len(listed) <= MAX_SEQUENCES:
-            chunk = list(itertools.islice(gen, 4096))
-            listed += chunk
-            if len(chunk) < 4096:
-                break
-            if self.past_deadline():
-                return None
-        return listed[: MAX_SEQUENCES + 1]
+        """Up to ``MAX_SEQUENCES + 1`` sequences, or None when the time limit has passed by
+        the end of the listing. The listing itself is not cut by the clock (it is bounded by
+        the cap): whether an epoch has more than ``MAX_SEQUENCES`` sequences, and so whether
+        the run is refused, must not depend on the machine's load."""
+        listed = list(itertools.islice(self._sequences(done, length), MAX_SEQUENCES + 1))
+        if len(listed) <= MAX_SEQUENCES and self.past_deadline():
+            return None
+        return listed
 
     def _enumerate(
         self, state: PolicyState, done: set[int], length: int

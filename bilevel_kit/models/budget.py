@@ -19,7 +19,12 @@ DEFAULT_TIME_LIMIT = 60.0
 
 class Budget:
     """``time_limit`` seconds from ``start``; the ``deadline`` keeps ``keep_back`` x the limit
-    in reserve (CP-SAT stops a little after its own limit on large models)."""
+    in reserve (CP-SAT stops a little after its own limit on large models).
+
+    ``stretch`` (> 1 for a reproducible run, docs/simulation.md#determinism): the sub-steps'
+    shares (:meth:`share`, :meth:`next`, :meth:`head`) are that many times larger, up to the
+    whole budget, so that on a loaded machine they still finish as on an idle one; they are
+    then wall-clock safety nets only, and the budget's own deadline the last one."""
 
     def __init__(
         self,
@@ -28,12 +33,17 @@ class Budget:
         keep_back: float = 0.0,
         start: float | None = None,
         deadline: float | None = None,
+        stretch: float = 1.0,
     ) -> None:
         self.start = time.perf_counter() if start is None else start
         self.time_limit = DEFAULT_TIME_LIMIT if time_limit is None else float(time_limit)
         if deadline is None:
             deadline = self.start + self.time_limit - keep_back * self.time_limit
         self.deadline = deadline
+        self.stretch = stretch
+
+    def _part(self, fraction: float) -> float:
+        return min(1.0, fraction * self.stretch)
 
     def __repr__(self) -> str:
         return f"Budget(time_limit={self.time_limit!r}, remaining={self.remaining():.3f})"
@@ -53,21 +63,23 @@ class Budget:
     def share(self, fraction: float, margin: float = 0.0) -> float:
         """The deadline of a sub-step that may use ``fraction`` of what is left (less
         ``margin``); never in the past."""
-        return time.perf_counter() + max(0.0, fraction * self.remaining(margin))
+        return time.perf_counter() + max(0.0, self._part(fraction) * self.remaining(margin))
 
     def cut(self, margin: float) -> Budget:
         """The same budget ending ``margin`` seconds earlier (time kept back for the end)."""
-        return Budget(self.time_limit, start=self.start, deadline=self.deadline - margin)
+        return self._sub(self.deadline - margin)
 
     def next(self, fraction: float) -> Budget:
         """The next ``fraction`` of what is left (a quick step after slow set-up work, which
         :meth:`head` would have eaten into)."""
-        return Budget(self.time_limit, start=self.start, deadline=self.share(fraction))
+        return self._sub(self.share(fraction))
 
     def head(self, fraction: float) -> Budget:
         """The first ``fraction`` of the time limit (a quick first step), within the deadline."""
-        end = min(self.deadline, self.start + fraction * self.time_limit)
-        return Budget(self.time_limit, start=self.start, deadline=end)
+        return self._sub(min(self.deadline, self.start + self._part(fraction) * self.time_limit))
+
+    def _sub(self, deadline: float) -> Budget:
+        return Budget(self.time_limit, start=self.start, deadline=deadline, stretch=self.stretch)
 
 
 # ---------------------------------------------------------------------------------------------

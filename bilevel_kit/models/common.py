@@ -158,10 +158,19 @@ def pack_time_limit(budget: Budget) -> float:
 
 class Packer:
     """The packing oracle under the run's budget: every call gets at most ``pack_tl``
-    seconds and never more than what is left."""
+    seconds and never more than what is left. ``deterministic``: every call is limited by
+    CP-SAT's deterministic time instead, :func:`.packing_oracle.deterministic_limits` of its
+    seconds, with the wall-clock safety net (still within what is left of the budget), so
+    its verdicts do not depend on the machine load (docs/simulation.md#determinism)."""
 
     def __init__(
-        self, instance: Instance, pack_tl: float, budget: Budget, resolution: float = 1.0
+        self,
+        instance: Instance,
+        pack_tl: float,
+        budget: Budget,
+        resolution: float = 1.0,
+        *,
+        deterministic: bool = False,
     ) -> None:
         from ..reachability import reach_grid
 
@@ -169,12 +178,29 @@ class Packer:
         self.res = resolution
         self.pack_tl = pack_tl
         self.budget = budget
+        self.deterministic = deterministic
         self.reach = reach_grid(instance)
         self.known: list[tuple[dict[str, int], packing_oracle.TypedLayout]] = []
+
+    def sub(self, pack_tl: float, budget: Budget) -> Packer:
+        """A packer for a sub-step: ``pack_tl`` s per call within ``budget``, the same grid and
+        kind of limit."""
+        return Packer(self.instance, pack_tl, budget, self.res, deterministic=self.deterministic)
 
     def _tl(self, limit: float | None = None) -> float:
         limit = self.pack_tl if limit is None else limit
         return max(0.02, min(limit, self.budget.remaining()))
+
+    def limits(
+        self, limit: float | None = None, deterministic: bool | None = None
+    ) -> dict[str, Any]:
+        """The oracle's keywords for a call of ``limit`` s (None: ``pack_tl``), deterministic
+        when asked (None: as the packer is)."""
+        limit = self.pack_tl if limit is None else limit
+        if not (self.deterministic if deterministic is None else deterministic):
+            return {"time_limit": self._tl(limit)}
+        dtime, net = packing_oracle.deterministic_limits(limit)
+        return {"deterministic_time": dtime, "time_limit": self._tl(net)}
 
     def learn(self, counts: Mapping[str, int], layout: Sequence[Placement]) -> None:
         """A valid layout of ``counts`` known from elsewhere (a warm start's kit, which may
@@ -184,30 +210,43 @@ class Packer:
             typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
         self.known.append(({k: n for k, n in counts.items() if n > 0}, typed))
 
-    def verdict(self, counts: Mapping[str, int], limit: float | None = None) -> Fit:
+    def verdict(
+        self,
+        counts: Mapping[str, int],
+        limit: float | None = None,
+        deterministic: bool | None = None,
+    ) -> Fit:
         """The oracle's answer (:func:`.packing_oracle.fit_verdict`): "no" only with a proof;
         "fits" at once for a multiset within one of :meth:`learn`'s."""
         for known, typed in self.known:
             if all(known.get(k, 0) >= n for k, n in counts.items() if n > 0):
                 return Fit(True, {k: typed[k][:n] for k, n in counts.items() if n > 0})
-        return self.grid_verdict(counts, limit)
+        return self.grid_verdict(counts, limit, deterministic)
 
-    def grid_verdict(self, counts: Mapping[str, int], limit: float | None = None) -> Fit:
+    def grid_verdict(
+        self,
+        counts: Mapping[str, int],
+        limit: float | None = None,
+        deterministic: bool | None = None,
+    ) -> Fit:
         """The oracle's answer alone: its layouts lie on a packing grid at 0 or 90 degrees
         (what the embedded model's hints need), never one of :meth:`learn`'s."""
         return packing_oracle.fit_verdict(
             self.instance.tray,
             self.instance.part_types,
             dict(counts),
-            time_limit=self._tl(limit),
             resolution=self.res,
             reach=self.reach,
+            **self.limits(limit, deterministic),
         )
 
     def counts(
-        self, counts: Mapping[str, int], limit: float | None = None
+        self,
+        counts: Mapping[str, int],
+        limit: float | None = None,
+        deterministic: bool | None = None,
     ) -> tuple[bool | None, Any]:
-        fit = self.verdict(counts, limit)
+        fit = self.verdict(counts, limit, deterministic)
         return fit.fits, fit.layout
 
     def fits(self, tasks: Sequence[str]) -> bool | None:
@@ -244,11 +283,16 @@ class Packer:
         return out
 
     def minimal_nofit(
-        self, counts: Mapping[str, int], until: float, scope: str = AXIS_ALIGNED
+        self,
+        counts: Mapping[str, int],
+        until: float,
+        scope: str = AXIS_ALIGNED,
+        deterministic: bool | None = None,
     ) -> dict[str, int]:
         """Deletion filter: drop parts (smallest types first) while the rest provably does not
         fit, with a proof of ``scope`` (one for every layout stays one); stops early at
-        ``until`` (a larger non-fitting multiset is still a valid cut)."""
+        ``until`` (a larger non-fitting multiset is still a valid cut); ``deterministic`` as
+        in :meth:`verdict`."""
         cur = {k: n for k, n in counts.items() if n > 0}
         for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
             while cur.get(t, 0) > 0 and time.perf_counter() < until:
@@ -256,7 +300,7 @@ class Packer:
                 trial[t] -= 1
                 if trial[t] == 0:
                     del trial[t]
-                fit = self.verdict(trial) if trial else Fit(True)
+                fit = self.verdict(trial, deterministic=deterministic) if trial else Fit(True)
                 if fit.fits is not False or (scope == ANY_ANGLE and fit.scope != ANY_ANGLE):
                     break
                 cur = trial

@@ -53,6 +53,15 @@ when a cell is a whole number of half-grid units, else an element constraint) an
 reachable cells, or one column span per row when the rows are contiguous, allows them
 (:mod:`.packing_reach`).
 
+**Limits.** By default the CP-SAT solve is limited by wall-clock ``time_limit`` (less the time
+already spent): a heavily loaded machine may then leave a kit undecided that an idle one
+decides. With ``deterministic_time`` it is limited by CP-SAT's deterministic time
+(``max_deterministic_time``) with one worker, so the answer is a function of the inputs
+whatever the load, and ``time_limit`` only caps that solve as a wall-clock safety net that
+fires on a pathologically loaded machine (``extra["safety_net"]``: the solve was stopped by
+it, not by its deterministic limit). ``extra["deterministic_time"]`` is the solve's
+deterministic time (0 without a solve); docs/simulation.md#determinism.
+
 **Oracle.** :mod:`.packing_oracle` answers "does this part multiset fit" with memoisation and
 says what a "no" proves.
 """
@@ -223,6 +232,7 @@ def pack(
     w6: float | None = None,
     log: bool = False,
     reach: ReachGrid | None = None,
+    deterministic_time: float | None = None,
 ) -> PackResult:
     """Place ``items`` ((part id, part type) pairs) on ``tray`` without overlap.
 
@@ -230,6 +240,9 @@ def pack(
     can); ``"fitness"`` maximises the L1 surrogate of the kit fitness (module docstring).
     ``reach`` (a :class:`~bilevel_kit.reachability.ReachGrid`, see
     :func:`bilevel_kit.reachability.reach_grid`) keeps every centre in a reachable cell.
+    ``deterministic_time`` (module docstring, "Limits"): limit CP-SAT by deterministic time
+    with one worker, a reproducible answer; ``time_limit`` is then a wall-clock safety net on
+    the CP-SAT solve.
     """
     if objective not in ("feasible", "fitness"):
         raise ValueError(f"objective must be 'feasible' or 'fitness', not {objective!r}")
@@ -247,8 +260,20 @@ def pack(
     if early is not None:
         return early
     model, parts = _build(items, grid, objective)
-    params = {"num_workers": max(1, workers), "random_seed": seed, "log_search_progress": log}
-    solver, st = _solve(model, objective, time_limit - (time.perf_counter() - t0), params)
+    params: dict[str, Any] = {
+        "num_workers": max(1, workers),
+        "random_seed": seed,
+        "log_search_progress": log,
+    }
+    left = time_limit - (time.perf_counter() - t0)
+    if deterministic_time is not None:  # reproducible: one worker, the net on the solve alone
+        params.update(num_workers=1, max_deterministic_time=max(0.0, deterministic_time))
+        left = time_limit
+    solver, st = _solve(model, objective, left, params)
+    extra["deterministic_time"] = solver.deterministic_time
+    if deterministic_time is not None:  # stopped by the safety net, not its own limit?
+        cut_short = solver.status_name(st) not in ("OPTIMAL", "INFEASIBLE")
+        extra["safety_net"] = cut_short and solver.deterministic_time < 0.999 * deterministic_time
     return _answer(tray, items, grid, objective, solver, st, parts, done)
 
 

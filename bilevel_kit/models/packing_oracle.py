@@ -17,6 +17,16 @@ says which layouts it rules out (:data:`~.packing.ANY_ANGLE` or
   degrees); every other proof rules out the 0/90-degree layouts only, since parts at other
   angles can fit where no axis-aligned layout does.
 
+**Limits.** A call is limited by wall-clock ``time_limit`` (the default; a kit undecided
+within it is "unknown", which callers treat as "does not fit", so a heavily loaded machine can
+change a verdict) or, with ``deterministic_time``, by CP-SAT's deterministic time with one
+worker (:func:`.packing.pack`, "Limits"): then the verdict is the same whatever the load, and
+``time_limit`` is only a wall-clock safety net per solve. An unknown answer is memoised per
+kind of limit: one of a wall-clock limit is never taken for one of a deterministic limit (nor
+one the safety net cut short), so it never turns a reproducible call's answer into "unknown".
+:data:`DET_PER_S` converts a wall limit into deterministic units
+(docs/simulation.md#determinism).
+
 The exact models cut a kit only on a "no" (``Fit.fits is False``) and claim optimality for
 every layout only when each "no" they used has the scope :data:`~.packing.ANY_ANGLE`.
 """
@@ -44,6 +54,22 @@ TypedLayout = dict[str, list[tuple[float, float, float]]]
 #: confirm a "no" of the packing grid on (more time does not help).
 WHY_TIME = "time limit"
 WHY_GRID = "no layout on the packing grid, not confirmed on an exact grid"
+#: The kinds of limit of a packing call (module docstring, "Limits"): wall-clock seconds, or
+#: CP-SAT's deterministic time with one worker (reproducible whatever the machine load).
+WALL, DET = "wall", "deterministic"
+#: Deterministic units a reproducible call gets per second of the wall limit it replaces.
+#: Measured with one worker on bench/data/packing (load 2.5 on 2 cores): decided solves ran
+#: 0.05-0.2 units per wall second, those cut at 0.5 s reached 0.06-0.11 units; so a call
+#: decides at least what the wall limit decided on such a machine (docs/simulation.md).
+DET_PER_S = 0.25
+#: The wall-clock safety net of a reproducible call: this many times the limit it replaces.
+SAFETY_NET = 10.0
+
+
+def deterministic_limits(seconds: float) -> tuple[float, float]:
+    """A wall limit of ``seconds`` as (deterministic time, wall-clock safety net) of a
+    reproducible call (:data:`DET_PER_S`, :data:`SAFETY_NET`)."""
+    return DET_PER_S * seconds, SAFETY_NET * seconds
 
 
 @dataclass(frozen=True)
@@ -65,7 +91,11 @@ class _FitCache:
 
     fits: list[tuple[dict[str, int], TypedLayout]] = field(default_factory=list)
     nofit: list[tuple[dict[str, int], str]] = field(default_factory=list)
-    unknown: dict[frozenset[tuple[str, int]], tuple[float, str]] = field(default_factory=dict)
+    #: (multiset, limit kind) -> (the limit tried, in that kind's unit: s or deterministic
+    #: units; why unknown): a wall-clock unknown never stands for a deterministic one
+    unknown: dict[tuple[frozenset[tuple[str, int]], str], tuple[float, str]] = field(
+        default_factory=dict
+    )
     solves: int = 0
 
 
@@ -122,37 +152,48 @@ def fit_verdict(
     workers: int = 2,
     seed: int = 0,
     reach: ReachGrid | None = None,
+    deterministic_time: float | None = None,
 ) -> Fit:
     """Whether a part multiset fits (module docstring), memoised; an unknown answer is retried
-    only with a longer ``time_limit`` (and never when no exact grid can confirm it)."""
+    only with a longer limit of the same kind (and never when no exact grid can confirm it).
+    ``deterministic_time`` (module docstring, "Limits"): CP-SAT limited by deterministic time
+    with one worker, ``time_limit`` the wall-clock safety net of each solve."""
     counts = {k: int(n) for k, n in counts.items() if n > 0}
     cache = _cache_for(tray, part_types, resolution, reach)
     known = _known(cache, counts, part_types, tray)
     if known is not None:
         return known
+    det = deterministic_time is not None
+    kind, budget = (WALL, time_limit) if deterministic_time is None else (DET, deterministic_time)
     key = frozenset(counts.items())
-    tried = cache.unknown.get(key)
-    if tried is not None and tried[0] >= time_limit:
+    tried = cache.unknown.get((key, kind))
+    if tried is not None and tried[0] >= budget:
         return Fit(None, why=tried[1])
     from ..heuristics.shelf import kit_items
 
     items = kit_items(part_types, counts)
     cache.solves += 1
     t0 = time.perf_counter()
-    kw: dict[str, Any] = {"workers": workers, "seed": seed, "reach": reach}
+    kw: dict[str, Any] = {"workers": 1 if det else workers, "seed": seed, "reach": reach}
+    kw["deterministic_time"] = deterministic_time
     res = pack(tray, items, resolution=resolution, time_limit=time_limit, **kw)
     why = WHY_TIME
     if res.status == "infeasible" and not res.extra.get("proof"):
         # a "no" of this grid alone: confirm it on the exact grid, with the time left
         exact = None if reach is not None else _exact_grid(tray, items)
         left = time_limit - (time.perf_counter() - t0)
+        if det:  # the deterministic time left; the safety net: the whole wall limit again
+            left = budget - res.extra.get("deterministic_time", 0.0)
+            kw["deterministic_time"] = left
         if exact is None:
             why = WHY_GRID
-        elif left > 0.01:
-            res = pack(tray, items, resolution=exact, time_limit=left, **kw)
+        elif left > (1e-4 if det else 0.01):
+            res = pack(tray, items, resolution=exact, time_limit=time_limit if det else left, **kw)
     fit = _record(cache, counts, res)
     if fit is None:
-        cache.unknown[key] = (time_limit if why == WHY_TIME else math.inf, why)
+        if res.extra.get("safety_net"):  # the wall clock stopped it: no deterministic answer
+            kind, budget = WALL, time_limit
+        cache.unknown[(key, kind)] = (budget if why == WHY_TIME else math.inf, why)
         return Fit(None, why=why)
     return fit
 

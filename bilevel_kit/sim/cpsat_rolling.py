@@ -31,12 +31,17 @@ within the limit). Online information enters the sub-problem as:
   while their tasks need nothing the stock lacks, the kit fits and the released makespan does
   not grow (fewer kits: less overhead, fewer decisions).
 
-**Determinism.** Every CP-SAT solve is limited in deterministic units
-(``max_deterministic_time`` = ``deterministic_time``) with ``workers`` fixed (1: CP-SAT is then
-deterministic), so a simulation run is a pure function of (instance, policy, parameters, seed)
-whatever the machine load. ``time_limit`` is a wall-clock safety net only: a decision that hits
-it is no longer reproducible. Committed layouts come from the policy's own shelf-packer cache,
-not from the packing oracle's process-wide cache.
+**Determinism** (docs/simulation.md#determinism). Every CP-SAT schedule solve is limited in
+deterministic units (``max_deterministic_time`` = ``deterministic_time``) with ``workers``
+fixed (1: CP-SAT is then deterministic), and the solve runs in its reproducible mode
+(:func:`bilevel_kit.models.cpsat.solve`, ``deterministic=True``): its packing calls are
+limited by deterministic time too, with one worker, and its clock-bounded steps (quick plans,
+Benders seed cuts, cut shrinking, the kit-count LP bound) get ten times their share of
+``time_limit``. So a simulation run is a function of (instance, policy, parameters, seed) on
+an idle or a loaded machine alike; ``time_limit`` and the packing calls' wall-clock limits are
+safety nets only: a decision that hits one (a pathologically loaded machine, about ten times
+slower than an idle one) is no longer reproducible. Committed layouts come from the policy's
+own shelf-packer cache, not from the packing oracle's process-wide cache.
 
 **Warm start.** Each decision is hinted with the previous decision's plan minus the kit it
 committed (restricted to the window, the window's new tasks appended as single kits), or a
@@ -287,6 +292,7 @@ class CPSATRollingPolicy:
             hint=hint,
             cpsat_params={"max_deterministic_time": opts.deterministic_time},
             releases=rel,
+            deterministic=True,
         )
         self.solves += 1
         plan = out.plan or hint

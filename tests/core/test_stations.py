@@ -329,3 +329,29 @@ def test_one_declared_station_changes_no_committed_number(root):
                 continue
             a, b = evaluate(plain, plan), evaluate(one, plan)
             assert a.kits == b.kits and a.metrics() == b.metrics(), (path.name, method)
+
+
+def test_solution_file_states_each_station_and_the_checker_recomputes_it(tmp_path):
+    import json
+
+    from bilevel_kit import solution
+    from bilevel_kit.methods import solve
+
+    inst = from_dict(_doc())
+    res = solve(inst, "single-task")
+    path = tmp_path / "s.json"
+    solution.write(path, res)
+    doc = json.loads(path.read_text())
+    per = res.timeline.station_metrics()
+    assert doc["station_metrics"] == {s: per[s] for s in ("A", "B")}
+    assert "station_metrics" not in doc["extra"]  # one copy, the checked one
+    assert [k["station"] for k in doc["kits"]] == list(res.timeline.kit_stations)
+    assert solution.read(path).check(inst) == []
+    # a wrong completion and a kit stated for the other station are both caught
+    doc["station_metrics"]["B"]["completion"] += 5.0
+    first_b = next(i for i, k in enumerate(doc["kits"]) if k["station"] == "B")
+    doc["kits"][first_b]["station"] = "A"
+    found = solution.from_dict(doc).check(inst)
+    assert sorted(v.kind for v in found) == ["times_inconsistent", "wrong_station"]
+    assert any("station B: reported completion" in v.message for v in found)
+    assert next(v for v in found if v.kind == "wrong_station").kit == first_b + 1

@@ -200,3 +200,40 @@ def test_without_supply_the_window_model_is_solved_without_releases(table):
     assert none == zeros
     kit = policy.decide(state)
     assert (kit.tasks, policy._rest) == (none[0].tasks, none[1])
+
+
+def _first_decision(instance) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    """A fresh policy's first kit and the rest of its plan, from a cold packing cache."""
+    from bilevel_kit.models import packing_oracle
+
+    packing_oracle.clear_cache()
+    policy = make_policy("cpsat-rolling", instance, params=SimParams())
+    kit = policy.decide(SimState(time=0.0, done=frozenset(), human_remaining=0.0, available={}))
+    assert kit is not None
+    return kit.tasks, policy._rest
+
+
+def test_decisions_do_not_depend_on_the_packing_clock(monkeypatch):
+    """The window's packing calls are limited by deterministic time (docs/simulation.md,
+    "Determinism"): with a clock under which every wall-clock packing limit has passed before
+    CP-SAT starts, the decision is the same; the wall-limited solve (the ``cpsat`` method's)
+    would take the kit b + c, which only CP-SAT packs, for one that does not fit."""
+    from slowclock import hard_instance, slow_packing_clock
+
+    import bilevel_kit.models.cpsat as exact
+    from bilevel_kit.models import packing_oracle
+
+    inst = hard_instance()
+    quiet = _first_decision(inst)
+    assert quiet == (("a",), (("b", "c"),))
+    slow_packing_clock(monkeypatch)
+    assert _first_decision(inst) == quiet
+    wall_solve = exact.solve
+
+    def wall(*args, **kw):
+        kw["deterministic"] = False
+        return wall_solve(*args, **kw)
+
+    monkeypatch.setattr(exact, "solve", wall)
+    assert _first_decision(inst) == (("a", "b"), (("c",),))
+    packing_oracle.clear_cache()

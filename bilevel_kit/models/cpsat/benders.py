@@ -67,9 +67,10 @@ class _Benders:
             counts = self.counts(kit)
             fit = packer.verdict(counts)
             if fit.fits is None:  # a hard packing: one more try with a longer limit
-                fit = packer.verdict(
-                    counts, max(packer.pack_tl, min(10 * packer.pack_tl, self.ctx.left() / 3))
-                )
+                longer = 10 * packer.pack_tl  # (reproducible: not from the clock)
+                if not packer.deterministic:
+                    longer = max(packer.pack_tl, min(longer, self.ctx.left() / 3))
+                fit = packer.verdict(counts, longer)
             out.append(fit)
         return out
 

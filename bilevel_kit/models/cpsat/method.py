@@ -45,9 +45,17 @@ included: the warm start's heuristics share :data:`HINT_SHARE` (30 %) of it (gre
 what is left of that share as its own ``time_limit``), the proven bound of
 :mod:`bilevel_kit.models.relax` at most 5 % (:func:`~bilevel_kit.models.relax.for_model`), the
 model run gets the rest; 1 % of the run's limit and 0.15 s are kept back (CP-SAT stops a
-little after its own limit on large models). A model whose size exceeds the memory limit is
-not built: the incumbent is returned as feasible with the proven bound (``cpsat_status``
-``TOO_LARGE``), or the run is refused when there is none (:mod:`..budget`).
+little after its own limit on large models). ``deterministic`` (:func:`solve`, for callers
+that limit CP-SAT by ``max_deterministic_time``, docs/simulation.md#determinism): packing
+calls are limited by deterministic time too (:class:`..common.Packer`) and the sub-steps'
+shares of the limit are :data:`~..packing_oracle.SAFETY_NET` times larger
+(:class:`..budget.Budget`), so the time limit is a safety net only. A model whose size
+exceeds the memory limit is not built: the incumbent is returned as feasible with the proven
+bound (``cpsat_status`` ``TOO_LARGE``), or the run is refused when there is none
+(:mod:`..budget`). Without a model (``TOO_LARGE``, ``NOT_BUILT``) option ``fallback="lns"``
+(default) hands the time left to the LNS from the incumbent (:mod:`.nomodel`,
+:mod:`..lns.fallback`; makespan objective without release times): a better plan replaces the
+incumbent, the bound stays the proven bound.
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
@@ -73,6 +81,8 @@ order with a non-overlapping layout. ``extra`` keys:
   ``TOO_LARGE``, the incumbent is returned, a ``UsageError`` without one; one that cannot be
   built within half the time left is not built: ``cpsat_status`` ``NOT_BUILT``, the
   incumbent is returned);
+* ``improved_by`` (``lns`` or None) and ``fallback`` (the time given, the makespan before and
+  after, the windows solved: :func:`..lns.fallback.improve`) when no model was built;
 * ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
   bound of :mod:`bilevel_kit.bounds`, ``PROVEN_BOUND`` when it attains the proven bound of
   :mod:`bilevel_kit.models.relax` (then no model is built: it is optimal);
@@ -98,10 +108,9 @@ from ...methods import REGISTRY, MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
-from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
+from ..budget import Budget
 from ..common import (
     Packer,
-    assignment_cells,
     chain_groups_idx,
     closed_form_plan,
     kit_order,
@@ -113,8 +122,9 @@ from ..common import (
 )
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
-from .model import build, canonical, release_bound, tray_wait
-from .proven import bound_source, known_bound, proven_kit_cap, scaled_kit_bounds, strong_bound
+from .model import build, canonical, release_bound
+from .nomodel import buildable, handoff
+from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .tray import embed_scope, tray_mode
 from .warm import MIN_RUN, best_heuristic_plan
@@ -124,17 +134,13 @@ if TYPE_CHECKING:
 
 TrayMode = Literal["auto", "embedded", "benders"]
 Objective = Literal["makespan", "sum_completion", "human_idle"]
+Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
 #: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
 HINT_SHARE = 0.3
-#: Peak memory per task x kit variable, model and a 2-worker solve (measured: 4.5-4.7 kB per
-#: variable above a 216 MB run of 14,000 variables, 1.27 GB at 247,000 on a 500-task in-tree).
-BYTES_PER_CELL = 6_000
-#: Build time per task x kit variable (measured: 90-120 us on in-trees of 60-500 tasks).
-BUILD_S_PER_CELL = 150e-6
 #: CP-SAT overruns its own limit on large models (presolve): 5.5 s at 247,000 variables.
 OVERRUN_S_PER_CELL = 25e-6
 
@@ -178,6 +184,10 @@ class ScheduleOptions:
         },
     )
     log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
+    fallback: Fallback = field(
+        default="lns",
+        metadata={"help": "no model built (too large, too slow): lns from the plan, or none"},
+    )
 
     def __post_init__(self) -> None:
         _positive(self, "time_resolution", "pack_resolution")
@@ -273,10 +283,12 @@ def solve(
     log: bool = False,
     cpsat_params: dict[str, Any] | None = None,
     releases: Mapping[str, float] | None = None,
+    fallback: str = "lns",
+    deterministic: bool = False,
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
-    method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters and
-    ``releases`` the release times (module docstring)."""
+    method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters,
+    ``releases`` the release times and ``deterministic`` (module docstring, "Time")."""
     params = {
         "workers": workers,
         "tray": tray,
@@ -285,6 +297,7 @@ def solve(
         "refine_times": refine_times,
         "pack_resolution": pack_resolution,
         "log": log,
+        "fallback": fallback,
     }
     options = parse_options(ScheduleOptions, params, "cpsat")
     return run(
@@ -295,6 +308,7 @@ def solve(
         hint=hint,
         cpsat_params=cpsat_params,
         releases=releases,
+        deterministic=deterministic,
     )
 
 
@@ -327,16 +341,20 @@ def run(
     hint: Plan | None = None,
     cpsat_params: dict[str, Any] | None = None,
     releases: Mapping[str, float] | None = None,
+    deterministic: bool = False,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
     docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
-    budget = Budget(time_limit, keep_back=KEEP_BACK)
+    stretch = packing_oracle.SAFETY_NET if deterministic else 1.0
+    budget = Budget(time_limit, keep_back=KEEP_BACK, stretch=stretch)
     try:
         sc = scale_times(instance, options.time_resolution, options.refine_times, releases)
     except ValueError as exc:
         raise UsageError(f"cpsat: {exc}") from None
     pack_tl = pack_time_limit(budget)
-    packer = Packer(instance, pack_tl, budget.cut(MARGIN), options.pack_resolution)
+    packer = Packer(
+        instance, pack_tl, budget.cut(MARGIN), options.pack_resolution, deterministic=deterministic
+    )
     report = _Report(
         budget,
         {
@@ -359,7 +377,7 @@ def run(
         upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
     start = None if incumbent is None else _plan_of(ctx, incumbent, None)
     strong_bound(ctx, None if start is None else evaluate(instance, start).makespan, report.extra)
-    K = max(_kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
+    K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
     mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
     report.extra.update(
         tray_mode=mode,
@@ -371,10 +389,14 @@ def run(
     proven = _proven_without_model(ctx, incumbent, upper, report)
     if proven is not None:
         return proven
-    if not _buildable(instance, K, budget, report.extra, incumbent is not None):
+    if not buildable(instance, K, budget, report.extra, incumbent is not None):
         if incumbent is None:
             return report.finish(None, Status.UNKNOWN, known_bound(ctx))
-        return _conclude(ctx, None, State(incumbent, upper), report)
+        state = State(incumbent, upper)
+        if options.fallback == "lns":  # the time left to the LNS from the incumbent
+            start_plan = _plan_of(ctx, incumbent, None, ctx.packer)
+            state = handoff(ctx, state, start_plan, seed, report.extra)
+        return _conclude(ctx, None, state, report)
     return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
 
 
@@ -453,38 +475,6 @@ def _proven_without_model(
         state = State(incumbent, upper, upper, proven=True, lower_any=upper)
         return _conclude(ctx, None, state, report)
     return None
-
-
-def _buildable(
-    instance: Instance, K: int, budget: Budget, extra: dict[str, Any], has_plan: bool
-) -> bool:
-    """Whether to build the model with K kits: False (with a ``reason``) when it would exceed
-    the memory limit (a UsageError when there is no incumbent to return instead) or would not
-    be built and solved within the time left."""
-    cells = assignment_cells(instance, K)
-    extra["model_cells"] = cells
-    n = instance.n_tasks
-    what = f"task x kit variables ({n} tasks, K = {K})"
-    refusal = memory_refusal("cpsat", cells, BYTES_PER_CELL, what)
-    if refusal is not None and has_plan:
-        extra.update(
-            reason=f"{refusal}; the incumbent is returned with the proven bound",
-            build_time_s=0.0,
-            cpsat_status="TOO_LARGE",
-            cuts=0,
-        )
-        return False
-    check_model_memory("cpsat", cells, BYTES_PER_CELL, what)
-    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
-        extra.update(
-            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
-            "within the time limit; the incumbent is returned",
-            build_time_s=0.0,
-            cpsat_status="NOT_BUILT",
-            cuts=0,
-        )
-        return False
-    return True
 
 
 def _solve_model(
@@ -579,42 +569,17 @@ def _incumbent(
             candidates.append(hk)
             extra["hint_used"] = True
     if ctx.objective == "makespan" and not any(ctx.sc.rel):  # (releases: not a bound of them)
-        first = Packer(instance, min(0.2, pack_tl), ctx.budget.head(0.05), ctx.pack_res)
-        qp = closed_form_plan(instance, first)
+        qp = closed_form_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
             return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
     # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
-    quick = Packer(instance, min(0.2, pack_tl), ctx.budget.next(0.1), ctx.pack_res)
-    qp = quick_plan(instance, quick)
+    qp = quick_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.next(0.1)))
     if qp is not None:
         candidates.append([[idx[t] for t in k] for k in qp])
     if not candidates:
         return None
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
     return canonical(best, ctx.groups)
-
-
-def _kit_cap(ctx: Context, upper: int | None) -> int:
-    """The largest kit count of a plan with scaled makespan <= ``upper`` (module docstring)."""
-    sc = ctx.sc
-    n = len(sc.r)
-    K = n
-    if upper is None:
-        return K
-    K = proven_kit_cap(ctx, upper, K)
-    edges = _edges(ctx.instance)
-    has_pred = {b for _, b in edges}
-    has_succ = {a for a, _ in edges}
-    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
-    if sc.o_r + sc.d + w > 0:
-        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
-        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
-    if sc.o_h > 0:
-        slack = (
-            upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
-        )
-        K = min(K, max(1, slack // sc.o_h))
-    return K
 
 
 def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:

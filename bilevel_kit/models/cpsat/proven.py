@@ -1,6 +1,7 @@
 """The proven makespan bound of :mod:`bilevel_kit.models.relax` in ``cpsat`` (docs/
 formulations.md, "Stronger lower bounds"): computed once per run within its share of the time
-limit, fed to the model per kit count, used to cap the kit count and reported with its source.
+limit, fed to the model per kit count, used to cap the kit count (with the model's own caps:
+:func:`kit_cap`) and reported with its source.
 """
 
 from __future__ import annotations
@@ -8,7 +9,9 @@ from __future__ import annotations
 from typing import Any
 
 from ...bounds import best_bound
+from ..common import reduced_edges
 from .context import Context
+from .model import tray_wait
 
 
 def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> None:
@@ -19,7 +22,10 @@ def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> 
     from ..relax import for_model
 
     t0 = ctx.budget.elapsed()
-    ctx.proven = for_model(ctx.instance, ctx.budget.time_limit, ctx.budget.remaining(), upper_s)
+    s = ctx.budget.stretch  # a reproducible run: its share is a safety net (budget.py)
+    ctx.proven = for_model(
+        ctx.instance, s * ctx.budget.time_limit, s * ctx.budget.remaining(), upper_s
+    )
     extra.update(
         bound_sources=ctx.proven.sources,
         bound_lp_kits=dict(ctx.proven.per_kits),
@@ -61,3 +67,28 @@ def proven_kit_cap(ctx: Context, upper: int, K: int) -> int:
 
     cap = ctx.proven.kit_cap(upper * ctx.sc.res + 1e-6, closed_at(ctx.instance))
     return K if cap is None else max(1, min(K, cap))
+
+
+def kit_cap(ctx: Context, upper: int | None) -> int:
+    """The largest kit count of a plan with scaled makespan <= ``upper`` (:mod:`.method`,
+    "Kit count")."""
+    sc = ctx.sc
+    n = len(sc.r)
+    K = n
+    if upper is None:
+        return K
+    K = proven_kit_cap(ctx, upper, K)
+    idx = ctx.instance.index
+    edges = [(idx[a], idx[b]) for a, b in reduced_edges(ctx.instance)]
+    has_pred = {b for _, b in edges}
+    has_succ = {a for a, _ in edges}
+    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
+    if sc.o_r + sc.d + w > 0:
+        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
+        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
+    if sc.o_h > 0:
+        slack = (
+            upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
+        )
+        K = min(K, max(1, slack // sc.o_h))
+    return K

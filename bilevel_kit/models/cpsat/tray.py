@@ -103,12 +103,17 @@ def embed_scope(instance: Instance, packer: Packer) -> str | None:
     from ...heuristics.shelf import kit_items
 
     every = instance.kit_parts([t.id for t in instance.tasks])
+    limit = min(packer.pack_tl, 0.5)
     whole = packing.pack(
         instance.tray,
         kit_items(instance.part_types, every),
         resolution=packer.res,
-        time_limit=min(packer.pack_tl, 0.5, max(0.01, packer.budget.remaining())),
         reach=packer.reach,
+        **(
+            packer.limits(limit)
+            if packer.deterministic
+            else {"time_limit": min(limit, max(0.01, packer.budget.remaining()))}
+        ),
     )
     if whole.layout is not None:
         return ANY_ANGLE

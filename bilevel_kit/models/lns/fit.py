@@ -3,9 +3,10 @@
 The shelf packer (:func:`bilevel_kit.heuristics.shelf.shelf_pack`) is tried first: a layout it
 finds is valid (the checker accepts it), so the kit fits. Only when it finds none is the exact
 packing oracle asked (:class:`..common.Packer`: its pre-search tests, then CP-SAT); an answer
-it does not reach within its time limit counts as "does not fit". With a reach map the shelf
-packer does not apply (it ignores reachability) and the oracle decides. Answers and layouts
-are memoised by part multiset.
+it does not reach within its limit counts as "does not fit" (the windows ask with a
+deterministic limit, :mod:`.window`, so their verdicts do not depend on the machine load).
+With a reach map the shelf packer does not apply (it ignores reachability) and the oracle
+decides. Answers and layouts are memoised by part multiset.
 """
 
 from __future__ import annotations
@@ -28,10 +29,15 @@ class FastFit:
         self._area = {p.id: p.area for p in instance.part_types.values()}
 
     def counts(
-        self, counts: Mapping[str, int], limit: float | None = None, oracle: bool = True
+        self,
+        counts: Mapping[str, int],
+        limit: float | None = None,
+        oracle: bool = True,
+        deterministic: bool | None = None,
     ) -> bool | None:
         """Whether the part multiset fits (None: not decided: the oracle did not decide in
-        ``limit`` s, or was not asked, ``oracle`` False, after the shelf packer failed)."""
+        ``limit`` s, or was not asked, ``oracle`` False, after the shelf packer failed);
+        ``deterministic``: the oracle's limit is deterministic (:class:`..common.Packer`)."""
         counts = {t: c for t, c in counts.items() if c}
         key = frozenset(counts.items())
         if key in self._fits:
@@ -45,7 +51,7 @@ class FastFit:
         elif not oracle:
             return None
         else:
-            verdict = self.packer.counts(counts, limit)[0]
+            verdict = self.packer.counts(counts, limit, deterministic)[0]
         if verdict is not None:
             self._fits[key] = verdict
         return verdict

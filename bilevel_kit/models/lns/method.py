@@ -17,6 +17,11 @@ A matheuristic (docs/formulations.md, "Large-neighbourhood search"):
    the windows half as large again, up to
    ``max_window``; a sweep without improvement at that size is a local optimum and ends the run.
 
+**From a given plan** (``lns(..., start_plan=, known_bound=)``, what ``cpsat`` and ``milp``
+hand over when their model is not built, :mod:`.fallback`): the given plan is the first start
+(``start_method`` ``incumbent``; a quick start replaces it only when strictly better, so the
+result is never worse), its layouts are kept, and a given proven bound replaces step 2.
+
 **Determinism.** Every random choice draws from ``numpy.random.default_rng(seed)``, and every
 window solve is limited by CP-SAT's deterministic time (``window_time``), with one worker or
 with interleaved workers (deterministic too), so a run to a fixed number of windows
@@ -99,14 +104,17 @@ def lns(
     *,
     seed: int = 0,
     time_limit: float | None = None,
+    start_plan: Plan | None = None,
+    known_bound: float | None = None,
 ) -> MethodOutput:
-    """Registered method ``lns`` (module docstring)."""
+    """Registered method ``lns`` (module docstring); ``start_plan`` a valid plan to start from,
+    ``known_bound`` a proven makespan bound (then none is computed)."""
     budget = Budget(time_limit)
     stop_at = budget.cut(MARGIN_S + MARGIN_SHARE * budget.time_limit)
     sc = scale_times(instance, 0.1, True)
     packer = Packer(instance, pack_time_limit(budget), stop_at)
     extra: dict[str, Any] = {}
-    unfit = packer.task_not_fitting()
+    unfit = None if start_plan is not None else packer.task_not_fitting()  # a plan: all fit
     if unfit is not None:
         task, scope = unfit
         if scope == ANY_ANGLE:
@@ -115,11 +123,14 @@ def lns(
         extra["reason"] = f"the parts of task {task!r} alone have no 0/90-degree layout"
         return MethodOutput(None, Status.UNKNOWN, None, extra)
     run = _Run(instance, options, budget, stop_at, sc, packer, seed, extra)
-    run.start()
+    run.start(start_plan)
     if run.kits is None:
         extra["reason"] = "no start plan within the time limit"
         return MethodOutput(None, Status.UNKNOWN, run.bound_value(), extra)
-    run.prove()
+    if known_bound is None:
+        run.prove()
+    else:
+        run.bound = known_bound
     if not run.optimal():
         run.search()
     return run.finish()
@@ -146,12 +157,17 @@ class _Run:
     fit: Any = None  # the run's FastFit (start)
 
     # -- 1. start --------------------------------------------------------------------------
-    def start(self) -> None:
-        """The best of the start plans (module docstring)."""
+    def start(self, given: Plan | None = None) -> None:
+        """The best of ``given`` and the start plans (module docstring)."""
         from .start import start_plans
 
         t0 = self.budget.elapsed()
         self.fit = FastFit(self.instance, self.packer)
+        if given is not None:  # its layouts are valid: its kits and their parts fit
+            for kit in given.kits:
+                if kit.layout:
+                    self.packer.learn(self.instance.kit_parts(kit.tasks), kit.layout)
+            self._consider(given, "incumbent")
         plans = start_plans(
             self.instance,
             self.fit,

@@ -48,7 +48,7 @@ def start_plans(
     seed: int,
 ) -> list[tuple[str, Plan]]:
     """Every start plan found within the budget, named by where it comes from."""
-    from ..cpsat.method import best_heuristic_plan
+    from ..cpsat.warm import best_heuristic_plan
 
     out: list[tuple[str, Plan]] = []
     for name in BASELINES:

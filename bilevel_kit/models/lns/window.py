@@ -18,7 +18,10 @@ the rest of the plan fixed (docs/formulations.md, "Large-neighbourhood search"):
 
 The current assignment is the hint and :math:`C \le` the current makespan, so a solve returns
 the plan or a better one. CP-SAT runs with a deterministic time limit (``dtime``) and the
-given workers (``interleave_search`` when more than one, which keeps it deterministic).
+given workers (``interleave_search`` when more than one, which keeps it deterministic),
+and the packing oracle decides the kits of its solutions with a deterministic limit too
+(:class:`..common.Packer`, one worker; its wall-clock limit is a safety net), so a window's
+result does not depend on the machine load (docs/formulations.md, "Determinism").
 """
 
 from __future__ import annotations
@@ -38,8 +41,12 @@ from .state import Edge, tail_response, window_edge
 
 #: Times a window is solved again after cutting kits that did not fit.
 PACK_ROUNDS = 4
-#: A multiset proven not to fit is shrunk to a minimal one up to this many parts.
+#: A multiset proven not to fit is shrunk to a minimal one up to this many parts ...
 SHRINK_PARTS = 16
+#: ... within this share of the time left: a safety net (it finishes far sooner), so that a
+#: loaded machine shrinks a cut as an idle one does (was 0.05 before the windows' packing
+#: became reproducible).
+SHRINK_SHARE = 0.5
 
 
 @dataclass
@@ -93,14 +100,17 @@ class Context:
 
     def fits(self, kit: Sequence[int]) -> bool:
         """Does the kit pack (an unknown verdict counts as no); cuts it if not (a proven misfit
-        of at most :data:`SHRINK_PARTS` parts shrunk to a minimal one first)."""
+        of at most :data:`SHRINK_PARTS` parts shrunk to a minimal one first). The oracle's
+        calls are limited by deterministic time (module docstring), the shrinking by
+        :data:`SHRINK_SHARE` of the time left, a safety net."""
         ids = [self.instance.tasks[i].id for i in kit]
         counts = dict(self.instance.kit_parts(ids))
-        ok = self.fit.counts(counts)
+        ok = self.fit.counts(counts, deterministic=True)
         if ok is not True:
             packer = self.fit.packer
             if ok is False and sum(counts.values()) <= SHRINK_PARTS:
-                counts = packer.minimal_nofit(counts, packer.budget.share(0.05))
+                until = packer.budget.share(SHRINK_SHARE)
+                counts = packer.minimal_nofit(counts, until, deterministic=True)
             self.add_cut(counts)
         return ok is True
 

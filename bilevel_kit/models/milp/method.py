@@ -23,7 +23,10 @@ packable plan) is the MIP start.
 master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
 half the time left is not built (the quick plan is returned), nor is one over the memory
 limit (the quick plan is returned as feasible with the proven bound, ``termination``
-``too_large``; the run is refused without one: :mod:`..budget`). The proven bound of
+``too_large``; the run is refused without one: :mod:`..budget`). Without a model, option
+``fallback="lns"`` (default) hands the time left to the LNS from the quick plan
+(:mod:`.nomodel`, :mod:`..lns.fallback`; makespan objective, one station): a better plan
+replaces it, the bound stays the proven bound. The proven bound of
 :mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
 (:func:`~bilevel_kit.models.relax.for_model`), the ``hint`` method at most 30 %.
 
@@ -52,7 +55,8 @@ the closed-form bounds). ``extra`` keys:
   :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built, ``termination`` ``too_large``,
   or refused with a ``UsageError`` without a plan; one that
   cannot be built within half the time left is not built: ``termination`` ``not_built``,
-  the quick plan is returned).
+  the quick plan is returned); then ``improved_by`` (``lns`` or None) and ``fallback`` (the
+  time given, the makespan before and after, the windows: :func:`..lns.fallback.improve`).
 
 On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
 needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
@@ -72,11 +76,10 @@ from ...methods import MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
 from ...stations import objective_of
-from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
+from ..budget import Budget
 from ..common import (
     NoGoodCuts,
     Packer,
-    assignment_cells,
     closed_form_plan,
     pack_time_limit,
     plan_extra,
@@ -96,20 +99,15 @@ from .model import (
     objective_value,
     set_start,
 )
+from .nomodel import buildable, handoff
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
 OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
-#: Peak memory per task x kit variable of the Pyomo model (measured 5-9 kB on in-trees of
-#: 60-120 tasks; HiGHS runs in a child process); bench/results/scale.md.
-BYTES_PER_CELL = 12_000
 #: The share of the time limit the ``hint`` method may use.
 HINT_SHARE = 0.3
-#: Time per task x kit variable to build the Pyomo model (measured 0.7-0.8 ms) and write it
-#: for the HiGHS child (about 1.3 ms more: 7 s for 5,263 variables on a loaded machine).
-BUILD_S_PER_CELL = 2.5e-3
 
 
 @dataclass(frozen=True)
@@ -140,6 +138,11 @@ class MilpOptions:
         },
     )
 
+    fallback: Literal["lns", "none"] = field(
+        default="lns",
+        metadata={"help": "no model built (too large, too slow): lns from the plan, or none"},
+    )
+
     def __post_init__(self) -> None:
         from ...methods import REGISTRY
 
@@ -161,10 +164,12 @@ def solve(
     log: bool = False,
     solver_options: Mapping[str, Any] | None = None,
     hint: str = "none",
+    fallback: str = "lns",
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
     params = {"solver": solver, "objective": objective, "tray": tray, "log": log, "hint": hint}
+    params["fallback"] = fallback
     options = parse_options(MilpOptions, params, "milp")
     return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
 
@@ -228,7 +233,9 @@ def run(
         done = "closed_form_bound" if upper <= closed + TOL else "proven_bound"
         r.extra.update(build_time_s=0.0, termination=done)
         return _conclude(r, inc, None, None, ANY_ANGLE, proven=True)
-    if not _buildable(r, K, inc is not None):
+    if not buildable(instance, K, budget, MARGIN, r.extra, inc is not None):
+        if inc is not None and options.fallback == "lns" and not instance.stations:
+            inc = _handoff(r, inc, seed)  # the time left to the LNS from the quick plan
         return _conclude(r, inc, None, None, ANY_ANGLE, proven=False)
     return _solve_master(r, K, upper, inc, inc_obj, opt, seed, solver_options)
 
@@ -336,34 +343,17 @@ def _strong_bound(r: _Run, upper: float | None, K: int) -> int:
     return K
 
 
-def _buildable(r: _Run, K: int, has_plan: bool) -> bool:
-    """Whether to build the model with K kits: False (with a ``reason``) when it would exceed
-    the memory limit (a UsageError when there is no plan to return instead) or would not be
-    built and solved within the time left."""
-    instance = r.instance
-    cells = assignment_cells(instance, K)
-    if instance.stations:  # with the station and tray-pair binaries
-        cells = stations.model_cells(instance, K)
-    r.extra["model_cells"] = cells
-    what = f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
-    refusal = memory_refusal("milp", cells, BYTES_PER_CELL, what)
-    if refusal is not None and has_plan:
-        r.extra.update(
-            reason=f"{refusal}; the quick plan is returned with the proven bound",
-            build_time_s=0.0,
-            termination="too_large",
-        )
-        return False
-    check_model_memory("milp", cells, BYTES_PER_CELL, what)
-    if too_slow_to_build(r.budget, cells * BUILD_S_PER_CELL, MARGIN):
-        r.extra.update(
-            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
-            "within the time limit; the quick plan is returned",
-            build_time_s=0.0,
-            termination="not_built",
-        )
-        return False
-    return True
+def _handoff(r: _Run, inc: list[list[str]], seed: int) -> list[list[str]]:
+    """The incumbent, or the LNS's better plan from it (:func:`.nomodel.handoff`; makespan
+    objective only, as the LNS's)."""
+    r.extra["improved_by"] = None
+    plan = _with_layouts(r.instance, inc, r.packer, {})
+    if plan is None or r.options.objective != "makespan":
+        return inc
+    left = r.budget.remaining(MARGIN)
+    return handoff(
+        r.instance, inc, plan, r.packer, bound=r.best, seed=seed, time_limit=left, extra=r.extra
+    )
 
 
 def _solve_master(
