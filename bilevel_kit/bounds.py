@@ -69,8 +69,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 from .instance import Instance
+
+if TYPE_CHECKING:
+    from .plan import Plan
 
 #: Relative slack when rounding an area ratio up, so that float noise (e.g. 4 * 2500 / 10000
 #: = 1.0000000000000002) does not add a kit.
@@ -219,3 +223,61 @@ def flow_shop_makespan(order: Sequence[int], a: Sequence[float], b: Sequence[flo
 def johnson_makespan(a: Sequence[float], b: Sequence[float]) -> float:
     """Optimal F2||Cmax makespan (Johnson's rule)."""
     return flow_shop_makespan(johnson_order(a, b), a, b)
+
+
+def objective_bound(instance: Instance, objective: str) -> float:
+    """A closed-form lower bound on ``objective`` over every plan (s): the makespan's
+    (:func:`bilevel_kit.bounds.best_bound`); for ``sum_completion`` the sum over the stations
+    of each one's own bound (:func:`station_instance`); for ``human_idle`` the sum over the
+    stations of ``max(o_R + d_s, LB_s - W_s)``: a station's human idles at least until its
+    first kit arrives, and its idle is ``C_s`` less its work, at most ``W_s = sum h_i + o_H,s
+    n_s`` (one task per kit)."""
+    from .stations import station_instance
+
+    if objective == "makespan":
+        return best_bound(instance)
+    total = 0.0
+    for s in instance.station_ids:
+        one = station_instance(instance, s)
+        if not one.tasks:
+            continue
+        lb = best_bound(one)
+        if objective == "human_idle":
+            work = sum(one.human_time(t.id) for t in one.tasks)
+            work += one.kit_overhead_human * one.n_tasks
+            lb = max(instance.kit_overhead_robot + one.delivery_time, lb - work)
+        total += lb
+    return total
+
+
+def objective_extra(
+    instance: Instance,
+    plan: Plan,
+    objective: str,
+    lower: tuple[float | None, float | None],
+    optimal: tuple[bool, bool],
+) -> dict[str, Any]:
+    """An exact model's ``extra`` for ``objective`` besides the makespan: ``objective_value``,
+    ``objective_bound``, ``objective_gap`` (s; the gap as :func:`bilevel_kit.methods.gap`;
+    ``idle_bound`` too for the human idle) and ``objective_bound_axis_aligned``. Each bound is
+    :func:`objective_bound` or the model's ``lower`` (s), valid for every plan and for
+    0/90-degree plans (None: none); the value when ``optimal`` in the same two scopes
+    (docs/formulations.md#what-optimal-means)."""
+    from .plan import evaluate
+    from .stations import objective_of
+
+    value = objective_of(evaluate(instance, plan), objective)
+    closed = objective_bound(instance, objective)
+    bounds = []
+    for low, opt in zip(lower, optimal, strict=True):
+        bound = closed if low is None else max(closed, low)
+        bounds.append(value if opt else min(bound, value))
+    out: dict[str, Any] = {
+        "objective_value": value,
+        "objective_bound": bounds[0],
+        "objective_gap": max(0.0, (value - bounds[0]) / value) if value > 0 else None,
+        "objective_bound_axis_aligned": bounds[1],
+    }
+    if objective == "human_idle":
+        out["idle_bound"] = bounds[0]
+    return out

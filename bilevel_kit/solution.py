@@ -166,7 +166,8 @@ def schema() -> dict[str, Any]:
             "status": {"enum": ["optimal", "feasible", "infeasible", "unknown"]},
             "status_objective": {
                 "type": "string",
-                "description": "the objective the status refers to (makespan, human_idle, J)",
+                "description": "the objective the status refers to "
+                "(makespan, human_idle, sum_completion, J)",
             },
             "timeline_params": {
                 "type": "object",

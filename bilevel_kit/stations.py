@@ -2,20 +2,56 @@
 
 The evaluator (:mod:`bilevel_kit.plan`) and the checker take stations themselves; this module
 holds what methods and bounds share about them: a station's tasks as an instance of their own
-(:func:`station_instance`, whose closed-form bounds hold for that station's completion) and
-the list of the methods that model stations.
+(:func:`station_instance`, whose closed-form bounds hold for that station's completion), the
+objectives the exact models may minimise over them (:func:`objective_of`; their closed-form
+bounds: :func:`bilevel_kit.bounds.objective_bound`) and the list of the methods that model
+stations.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from .errors import UsageError
 from .instance import Instance
 
+if TYPE_CHECKING:
+    from .plan import Timeline
+
 #: The methods that plan for several stations; every other one refuses an instance that
 #: declares ``stations`` (its times would use the instance's ``d``, ``o_H`` and ``trays``).
 STATION_METHODS = frozenset({"single-task", "whole-assembly", "greedy-ce", "cpsat", "milp"})
+
+
+#: What ``-p objective=...`` of ``cpsat``/``milp`` may name (docs/timeline.md#several-stations):
+#: the makespan (max of the completions), the sum of the stations' completions, and the total
+#: human idle (the one-station objective ``human_idle``, summed over the stations).
+OBJECTIVES = ("makespan", "sum_completion", "human_idle")
+
+
+def objective_of(timeline: Timeline, objective: str) -> float:
+    """The value of ``objective`` (:data:`OBJECTIVES`) on ``timeline`` in seconds: with one
+    station ``sum_completion`` is the makespan; ``human_idle`` is the timeline's, already the
+    sum over the stations of ``station_metrics()``'s idle."""
+    if objective == "human_idle":
+        return timeline.human_idle
+    if objective == "sum_completion" and timeline.kit_stations:  # else one station
+        per = timeline.station_metrics()
+        return sum(float(m["completion"]) for m in per.values())
+    return timeline.makespan
+
+
+def makespan_horizon(instance: Instance, timeline: Timeline, objective: str) -> float:
+    """A bound on the makespan of every plan at least as good as ``timeline``'s for
+    ``objective``, the exact models' ``C <= U``: its makespan; its sum of completions (each
+    completion is at most the sum); ``idle + sum_i h_i + n max_s o_H,s`` for the human idle
+    (a station's completion is its idle plus its work)."""
+    if objective != "human_idle":
+        return objective_of(timeline, objective)
+    o_h = max(p.kit_overhead_human for p in instance.station_params.values())
+    work = sum(instance.human_time(t.id) for t in instance.tasks)
+    return timeline.human_idle + work + o_h * instance.n_tasks
 
 
 def station_instance(instance: Instance, station: str) -> Instance:

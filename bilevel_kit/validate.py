@@ -61,8 +61,9 @@ KINDS = (
 CLAIM_KINDS = ("objective_mismatch", "bound_above_makespan", "gap_mismatch", "status_mismatch")
 
 #: The objectives a status may refer to (``status_objective``): the makespan, the human idle
-#: time the exact models may minimise instead, and the paper's objective J (bilevel-milp).
-KNOWN_OBJECTIVES = ("makespan", "human_idle", "J")
+#: time and (several stations) the sum of the stations' completions the exact models may
+#: minimise instead, and the paper's objective J (bilevel-milp).
+KNOWN_OBJECTIVES = ("makespan", "human_idle", "sum_completion", "J")
 
 #: Overlapping pairs listed per kit; more are summarised in one violation (a tampered file with
 #: thousands of stacked parts would otherwise list every pair).

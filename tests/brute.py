@@ -67,13 +67,17 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
                 yield tuple(kits)
 
 
-def best_makespan(inst) -> tuple[float, Plan | None]:
-    """The least makespan (one evaluator) over the segmentations whose kits all fit."""
+def best_makespan(inst, objective: str = "makespan") -> tuple[float, Plan | None]:
+    """The least makespan (one evaluator) over the segmentations whose kits all fit; or the
+    least of another ``objective`` of the timeline (``sum_completion``, ``human_idle``:
+    :func:`bilevel_kit.stations.objective_of`)."""
+    from bilevel_kit.stations import objective_of
+
     best: tuple[float, Plan | None] = (float("inf"), None)
     for kits in segmentations(inst):
         if all(fits(inst, k) for k in kits):
             plan = Plan(tuple(Kit(k) for k in kits))
-            ms = evaluate(inst, plan).makespan
+            ms = objective_of(evaluate(inst, plan), objective)
             if ms < best[0]:
                 best = (ms, plan)
     return best
@@ -104,6 +108,24 @@ def assert_model_optimal(out, opt: float, tol: float = 1e-9) -> None:
     assert out.extra["makespan"] == pytest.approx(opt, abs=tol)
     assert bound == pytest.approx(opt, abs=tol)
     assert out.bound <= opt + tol
+
+
+def assert_objective_optimal(out, opt: float, tol: float = 1e-5) -> None:
+    """As :func:`assert_model_optimal` for another objective of a stations model (its
+    ``objective_value`` and ``objective_bound``; ``objective_bound_axis_aligned`` for a proof
+    among 0/90-degree plans)."""
+    import pytest
+
+    extra = out.extra
+    if out.status == "optimal":
+        assert extra["proof_scope"] == "any angle", extra
+        bound = extra["objective_bound"]
+    else:
+        assert extra["optimal_axis_aligned"], (out.status, extra)
+        bound = extra["objective_bound_axis_aligned"]
+    assert extra["objective_value"] == pytest.approx(opt, abs=tol)
+    assert bound == pytest.approx(opt, abs=tol)
+    assert extra["objective_bound"] <= opt + tol
 
 
 def fits_on_grid(sizes: list[tuple[int, int, bool]], W: int, H: int) -> bool:

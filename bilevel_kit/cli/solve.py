@@ -163,6 +163,14 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
             f"  station {station}: completion {_fmt(sm['completion'])} s"
             f"  human idle {_fmt(sm['human_idle'])} s  kits {sm['n_kits']}"
         )
+    value = result.extra.get("objective_value")  # another objective of several stations
+    if result.status_objective not in ("makespan", "J") and value is not None:
+        o_gap = result.extra.get("objective_gap")
+        lines.append(
+            f"  {result.status} refers to {result.status_objective}: {_fmt(value)} s"
+            f"  bound {_fmt(result.extra.get('objective_bound'))} s"
+            f"  gap {'-' if o_gap is None else f'{100 * o_gap:.2f}%'}"
+        )
     j = result.extra.get("plan_objective_J")
     if result.status_objective != "makespan" and j is not None:
         # the status is about J, not the makespan: show the numbers it refers to

@@ -1,4 +1,6 @@
-"""The Gantt chart of the robot and the human (docs/timeline.md, docs/figures.md).
+"""The Gantt chart of the robot and the human (docs/timeline.md, docs/figures.md); with several
+assembly stations one human lane per station under the shared robot's
+(docs/timeline.md#several-stations).
 
 :func:`plot_gantt` draws in steps: the kits' bars (kitting, delivery, pickup, tasks), their
 labels (inside their bars or on leaders, :mod:`.lanes`), the tray waits and idle time, then the
@@ -18,7 +20,7 @@ import numpy as np
 
 from .. import style
 from ..instance import Instance
-from ..plan import Kit, KitTimes, Plan, Timeline, evaluate
+from ..plan import KitTimes, Plan, Timeline, evaluate, kit_station
 from ..style import plural, styled
 from . import lanes
 from .common import axes_width_in, figure_size, pyplot
@@ -56,7 +58,7 @@ def tray_waits(
     """``(k, start, end)`` (k 1-based) of each wait of the robot for a returned tray: the gap
     between kit k-1's arrival and kit k's robot start, which the timeline rule
     (docs/timeline.md, "Trays in circulation") opens only for k > ``trays``."""
-    limit = instance.tray_limit
+    limit = 1 if instance.stations else instance.tray_limit  # stations: only trays delay
     if limit is None:
         return []
     kits = timeline.kits
@@ -126,9 +128,11 @@ def plot_gantt(
     tl = timeline if timeline is not None else evaluate(instance, plan)
     n_kits = len(tl.kits)
     colors, colorbar = style.kit_colors(max(n_kits, len(plan.kits)))
+    where = list(tl.kit_stations) or [kit_station(instance, kit.tasks) for kit in plan.kits]
+    ids = instance.station_ids  # ("",): one human lane, as without stations
     created = ax is None
     if ax is None:
-        ax = _new_gantt_axes(plan)
+        ax = _new_gantt_axes(plan, len(ids))
     makespan = tl.makespan
     right = makespan * 1.02 if makespan > 0 else 1.0
     ax.set_xlim(0.0, right)
@@ -136,14 +140,17 @@ def plot_gantt(
     # thin edges when bars are narrow, so that 100 kits do not turn into black stripes
     mean_kit_in = inches_per_s * tl.robot_work / max(n_kits, 1)
     edge: dict[str, Any] = {"edgecolor": "black", "linewidth": 0.5 if mean_kit_in >= 0.15 else 0.15}
-    kit_bars, task_bars = _draw_kits(ax, instance, plan, tl, colors, edge)
+    kit_bars, task_bars = _lane_bars(plan, tl, colors, where, ids)
     robot, human, listed = _place_labels(kit_bars, task_bars, inches_per_s, right, colorbar)
+    ys = _lane_ys(ids, human)
+    _draw_kits(ax, instance, plan, tl, (colors, where, ys), edge)
     lanes.draw(ax, robot, ROBOT_Y, +1, BAR_HEIGHT / 2, stagger=False)
-    lanes.draw(ax, human, HUMAN_Y, -1, BAR_HEIGHT / 2, stagger=True)
+    for s, placement in zip(ids, human, strict=True):
+        lanes.draw(ax, placement, ys[s], -1, BAR_HEIGHT / 2, stagger=True)
     waits = tray_waits(instance, tl)
-    _draw_waits_and_idle(ax, tl, waits)
+    _draw_waits_and_idle(ax, tl, waits, where, ys)
     ax.axvline(makespan, color=style.MAKESPAN_COLOR, linestyle="--", linewidth=1.2, gid="makespan")
-    _dress_gantt(ax, instance, tl, method, (lanes.room(human), lanes.room(robot)))
+    _dress_gantt(ax, instance, tl, method, (lanes.room(human[-1]), lanes.room(robot)), (where, ys))
     _gantt_legend(ax, colors, colorbar, edge, bool(waits))
     if colorbar:
         _kit_colorbar(ax, len(colors))
@@ -152,12 +159,45 @@ def plot_gantt(
     return ax
 
 
-def _new_gantt_axes(plan: Plan) -> Axes:
-    """A new chart 3.4 inches high, wider with more tasks (within :data:`GANTT_WIDTH`)."""
+def _new_gantt_axes(plan: Plan, n_humans: int = 1) -> Axes:
+    """A new chart 3.4 inches high (0.9 more per human lane beyond one), wider with more tasks
+    (within :data:`GANTT_WIDTH`)."""
     n_tasks = sum(len(k.tasks) for k in plan.kits)
     width = float(np.clip(5.0 + 0.25 * n_tasks, *GANTT_WIDTH))
-    _, ax = pyplot().subplots(figsize=(width, 3.4), layout="constrained")
+    height = 3.4 + 0.9 * (n_humans - 1)
+    _, ax = pyplot().subplots(figsize=(width, height), layout="constrained")
     return cast("Axes", ax)
+
+
+def _lane_bars(
+    plan: Plan, tl: Timeline, colors: Sequence[Any], where: Sequence[str], ids: Sequence[str]
+) -> tuple[list[lanes.Bar], list[list[lanes.Bar]]]:
+    """The bars to label: the robot lane's (kits, texts "k") and each human lane's (tasks, in
+    the order of ``ids``); bars of zero length are not drawn, so not labelled."""
+    kit_bars: list[lanes.Bar] = []
+    task_bars: dict[str, list[lanes.Bar]] = {s: [] for s in ids}
+    for k, (kit, kt) in enumerate(zip(plan.kits, tl.kits, strict=False)):
+        if kt.robot_end > kt.robot_start:
+            kit_bars.append(
+                lanes.Bar(kt.robot_start, kt.robot_end, f"{k + 1}", colors[k], f"label:kit:{k + 1}")
+            )
+        light = style.lighten(colors[k])
+        for t in kit.tasks:
+            if t in tl.task_start and tl.task_end[t] > tl.task_start[t]:
+                bar = lanes.Bar(tl.task_start[t], tl.task_end[t], t, light, f"label:task:{t}")
+                task_bars[where[k]].append(bar)
+    return kit_bars, [task_bars[s] for s in ids]
+
+
+def _lane_ys(ids: Sequence[str], human: Sequence[lanes.Placement]) -> dict[str, float]:
+    """Each station's human lane: the first at :data:`HUMAN_Y`, the next ones below, each
+    beyond the leader rows of the lane above it (:func:`.lanes.room`)."""
+    ys: dict[str, float] = {}
+    y = HUMAN_Y
+    for s, placement in zip(ids, human, strict=True):
+        ys[s] = y
+        y -= 1.0 + lanes.room(placement)
+    return ys
 
 
 def _draw_kits(
@@ -165,44 +205,45 @@ def _draw_kits(
     instance: Instance,
     plan: Plan,
     tl: Timeline,
-    colors: Sequence[Any],
+    lanes_of: tuple[Sequence[Any], Sequence[str], dict[str, float]],
     edge: dict[str, Any],
-) -> tuple[list[lanes.Bar], list[lanes.Bar]]:
-    """Every kit's bars in both lanes; returns the bars to label in the robot's lane (kits,
-    texts "k") and the human's (tasks)."""
-    kit_bars: list[lanes.Bar] = []
-    task_bars: list[lanes.Bar] = []
+) -> None:
+    """Every kit's bars in the robot's lane and its station's human lane (``lanes_of``: the
+    kit colours, each kit's station and each station's lane y)."""
+    colors, where, ys = lanes_of
     for k, (kit, kt) in enumerate(zip(plan.kits, tl.kits, strict=False)):
         color = colors[k]
         gid = f"robot:kit:{k + 1}"
-        if _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, **edge) is not None:
-            kit_bars.append(
-                lanes.Bar(kt.robot_start, kt.robot_end, f"{k + 1}", color, f"label:kit:{k + 1}")
-            )
-        _draw_delivery_and_pickup(ax, k, kt, instance.kit_overhead_human, edge)
-        task_bars += _draw_tasks(ax, kit, tl, style.lighten(color), edge)
-    return kit_bars, task_bars
+        _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, **edge)
+        y, o_h = ys[where[k]], instance.station_params[where[k]].kit_overhead_human
+        _draw_delivery_and_pickup(ax, k, kt, (y, o_h), edge)
+        light = style.lighten(color)
+        for t in kit.tasks:
+            if t in tl.task_start:
+                s, e = tl.task_start[t], tl.task_end[t]
+                _bar(ax, y, s, e, f"human:task:{t}", color=light, **edge)
 
 
 def _place_labels(
     kit_bars: list[lanes.Bar],
-    task_bars: list[lanes.Bar],
+    task_bars: list[list[lanes.Bar]],
     inches_per_s: float,
     width_s: float,
     colorbar: bool,
-) -> tuple[lanes.Placement, lanes.Placement, bool]:
+) -> tuple[lanes.Placement, list[lanes.Placement], bool]:
     """Where the kit and task labels go, and whether the tasks must also be listed by kit.
 
     Kit labels read "kit k" when every one fits its bar that way, else "k" (one format per
     chart). A lane whose leaders do not fit keeps its inside labels only if at least half of
     its labels fit (a few scattered labels would suggest the others are missing); the list of
-    tasks by kit then names every task, and every kit when no colour bar does."""
+    tasks by kit then names every task, and every kit when no colour bar does. ``task_bars``:
+    one list per human lane."""
     long = [replace(b, text=f"kit {b.text}") for b in kit_bars]
     if all(lanes.fits_inside(b, inches_per_s) for b in long):
         kit_bars = long
     robot = lanes.place(kit_bars, inches_per_s, width_s)
-    human = lanes.place(task_bars, inches_per_s, width_s)
-    listed = human is None or (robot is None and not colorbar)
+    human = [lanes.place(bars, inches_per_s, width_s) for bars in task_bars]
+    listed = None in human or (robot is None and not colorbar)
 
     def inside_only(bars: list[lanes.Bar]) -> lanes.Placement:
         fit = [b for b in bars if lanes.fits_inside(b, inches_per_s)]
@@ -210,15 +251,17 @@ def _place_labels(
 
     return (
         robot if robot is not None else inside_only(kit_bars),
-        human if human is not None else inside_only(task_bars),
+        [h if h is not None else inside_only(b) for h, b in zip(human, task_bars, strict=True)],
         listed,
     )
 
 
 def _draw_delivery_and_pickup(
-    ax: Axes, k: int, kt: KitTimes, overhead: float, edge: dict[str, Any]
+    ax: Axes, k: int, kt: KitTimes, lane: tuple[float, float], edge: dict[str, Any]
 ) -> None:
-    """Kit ``k``'s (0-based) hatched delivery bar and the human's pickup of it."""
+    """Kit ``k``'s (0-based) hatched delivery bar and the human's pickup of it (``lane``: the
+    human lane's y and the station's pickup overhead)."""
+    y, overhead = lane
     _bar(
         ax,
         ROBOT_Y,
@@ -231,7 +274,7 @@ def _draw_delivery_and_pickup(
     )
     _bar(
         ax,
-        HUMAN_Y,
+        y,
         kt.human_start,
         min(kt.human_start + overhead, kt.human_end),
         f"human:pickup:{k + 1}",
@@ -241,24 +284,16 @@ def _draw_delivery_and_pickup(
     )
 
 
-def _draw_tasks(
-    ax: Axes, kit: Kit, tl: Timeline, light: Any, edge: dict[str, Any]
-) -> list[lanes.Bar]:
-    """The human's bar of each task of the kit (tasks the timeline does not hold are skipped);
-    returns the bars to label."""
-    out: list[lanes.Bar] = []
-    for t in kit.tasks:
-        if t not in tl.task_start:
-            continue
-        s, e = tl.task_start[t], tl.task_end[t]
-        if _bar(ax, HUMAN_Y, s, e, f"human:task:{t}", color=light, **edge) is not None:
-            out.append(lanes.Bar(s, e, t, light, f"label:task:{t}"))
-    return out
-
-
-def _draw_waits_and_idle(ax: Axes, tl: Timeline, waits: Sequence[tuple[int, float, float]]) -> None:
-    """The robot's waits for a returned tray, then the idle time of each lane up to the
-    makespan (a wait is not idle time)."""
+def _draw_waits_and_idle(
+    ax: Axes,
+    tl: Timeline,
+    waits: Sequence[tuple[int, float, float]],
+    where: Sequence[str],
+    ys: dict[str, float],
+) -> None:
+    """The robot's waits for a returned tray, then the idle time of each lane: the robot's up
+    to the makespan (a wait is not idle time), each human's up to its station's completion
+    (the makespan with one station; ``Timeline.station_metrics``)."""
     wait_style = _wait_style()
     for k, s, e in waits:
         _bar(ax, ROBOT_Y, s, e, f"robot:tray_wait:{k}", **wait_style)
@@ -268,21 +303,35 @@ def _draw_waits_and_idle(ax: Axes, tl: Timeline, waits: Sequence[tuple[int, floa
     )
     for s, e in _idle_intervals(robot_busy, tl.makespan):
         _bar(ax, ROBOT_Y, s, e, "robot:idle", **idle_style)
-    human_busy = [(kt.human_start, kt.human_end) for kt in tl.kits]
-    for s, e in _idle_intervals(human_busy, tl.makespan):
-        _bar(ax, HUMAN_Y, s, e, "human:idle", **idle_style)
+    for station, y in ys.items():
+        mine = (k < len(where) and where[k] == station for k in range(len(tl.kits)))
+        busy = [(kt.human_start, kt.human_end) for kt, m in zip(tl.kits, mine, strict=True) if m]
+        if len(ys) == 1:  # every kit, as without stations
+            busy = [(kt.human_start, kt.human_end) for kt in tl.kits]
+        end = tl.makespan if len(ys) == 1 else max((e for _, e in busy), default=0.0)
+        for s, e in _idle_intervals(busy, end):
+            _bar(ax, y, s, e, "human:idle", **idle_style)
 
 
 def _dress_gantt(
-    ax: Axes, instance: Instance, tl: Timeline, method: str | None, room: tuple[float, float]
+    ax: Axes,
+    instance: Instance,
+    tl: Timeline,
+    method: str | None,
+    room: tuple[float, float],
+    lanes_of: tuple[Sequence[str], dict[str, float]],
 ) -> None:
-    """Lanes, axis labels, grid and the title: the instance (and method) and the metrics, on
-    one line when it fits the axes, else on two. ``room``: the leader rows' room below the
-    human lane and above the robot lane (:func:`.lanes.room`)."""
-    ax.set_yticks([HUMAN_Y, ROBOT_Y], ["human", "robot"])
+    """Lanes, axis labels, grid and the title: the instance (and method) and the metrics (with
+    several stations each one's completion), on one line when it fits the axes, else on two
+    (three). ``room``: the leader rows' room below the lowest human lane and above the robot
+    lane (:func:`.lanes.room`); ``where``: each kit's station; ``ys``: each station's lane."""
+    where, ys = lanes_of
+    several = len(ys) > 1
+    names = [f"human {s}" if several else "human" for s in ys]
+    ax.set_yticks([*ys.values(), ROBOT_Y], [*names, "robot"])
     margin = 0.6 - BAR_HEIGHT / 2  # between a lane and the edge of the chart
     below, above = (max(r - margin, 0.0) for r in room)
-    ax.set_ylim(HUMAN_Y - 0.6 - below, ROBOT_Y + 0.6 + above)
+    ax.set_ylim(min(ys.values()) - 0.6 - below, ROBOT_Y + 0.6 + above)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("resource")
     ax.grid(axis="x", alpha=0.3)
@@ -292,9 +341,14 @@ def _dress_gantt(
         f"makespan {tl.makespan:.1f} s, human idle {tl.human_idle:.1f} s, "
         f"robot idle {tl.robot_idle:.1f} s, {plural(len(tl.kits), 'kit')}"
     )
-    one_line = f"{head}: {metrics}"
+    lines = [head, metrics]
+    if several:
+        ends = {w: kt.human_end for kt, w in zip(tl.kits, where, strict=False)}  # in order
+        done = (f"{s} {ends[s]:.1f} s" for s in ys if s in ends)
+        lines.append(f"completion {', '.join(done)}")
+    one_line = f"{head}: {'; '.join(lines[1:])}"
     wide = style.text_width_in(one_line, style.TITLE_SIZE) <= axes_width_in(ax)
-    ax.set_title(one_line if wide else f"{head}\n{metrics}")
+    ax.set_title(one_line if wide else "\n".join(lines))
 
 
 class KitSwatch:

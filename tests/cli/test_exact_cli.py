@@ -122,3 +122,26 @@ def test_cpsat_options_are_checked(stool):
         solve(stool, "cpsat", tray="magic")
     res = solve(stool, "cpsat", hint="none", tray="benders", time_limit=10)
     assert res.status == "optimal" and res.extra["hint_method"] is None
+
+
+def test_stations_objectives_gantt_and_refusals_through_the_cli(tmp_path, capsys):
+    """Several stations (docs/timeline.md#several-stations): ``-p objective=sum_completion``
+    of cpsat prints that objective's value, bound and gap; a heuristic refuses the option
+    (exit 2, one line); ``--gantt`` draws a lane per station."""
+    import strategies
+
+    path = tmp_path / "s3.json"
+    path.write_text(json.dumps(strategies.stations_doc(4, 3, n=5)))
+    args = ["solve", str(path), "-m", "cpsat", "-p", "objective=sum_completion", "-q", "--check"]
+    assert main([*args, "--time-limit", "60"]) == 0
+    out = capsys.readouterr().out
+    assert "cpsat optimal (for sum_completion)" in out
+    assert "optimal refers to sum_completion:" in out and "gap 0.00%" in out
+    gantt = tmp_path / "g.png"
+    assert main(["solve", str(path), "-m", "single-task", "-q", "--gantt", str(gantt)]) == 0
+    assert gantt.stat().st_size > 0
+    capsys.readouterr()
+    for method in ("single-task", "greedy-ce"):
+        assert main(["solve", str(path), "-m", method, "-p", "objective=human_idle"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "unknown option 'objective'" in err and len(err.splitlines()) == 1

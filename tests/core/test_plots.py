@@ -503,3 +503,72 @@ def test_plots_do_not_leak_style_into_rcparams(inst):
     before = dict(plt.rcParams)
     plots.plot_gantt(inst, PLAN)
     assert dict(plt.rcParams) == before
+
+
+# -- Gantt chart with several assembly stations (docs/timeline.md#several-stations) -------------
+
+
+def _stations_example():
+    """The worked example of docs/timeline.md#several-stations: A (one tray) with a1, a2 and B
+    (d = 2, no pickup) with b1, planned [a1] [a2] [b1]: B's human works while A's does."""
+    from bilevel_kit.instance import document
+
+    parts = [{"id": "p", "width": 10, "height": 10, "pick_time": 1}]
+    tasks = [
+        {"id": "a1", "parts": [], "human_time": {"mean": 10}, "robot_time": 2, "station": "A"},
+        {"id": "b1", "parts": [], "human_time": {"mean": 6}, "robot_time": 3, "station": "B"},
+        {"id": "a2", "parts": [], "human_time": {"mean": 4}, "robot_time": 5, "station": "A"},
+    ]
+    stations = [{"id": "A", "trays": 1}, {"id": "B", "delivery_time": 2, "kit_overhead_human": 0}]
+    doc = document("two", parts, tasks, delivery_time=1, overhead=(1, 0.5), stations=stations)
+    return from_dict(doc), Plan((Kit(("a1",)), Kit(("a2",)), Kit(("b1",))))
+
+
+def _lane(ax: Axes, label: str) -> float:
+    ticks = dict(zip([t.get_text() for t in ax.get_yticklabels()], ax.get_yticks(), strict=True))
+    return float(ticks[label])
+
+
+def _mid_y(r: Rectangle) -> float:
+    return r.get_y() + r.get_height() / 2
+
+
+def test_gantt_one_human_lane_per_station_and_the_shared_robot():
+    inst, plan = _stations_example()
+    tl = evaluate(inst, plan)
+    ax = plots.plot_gantt(inst, plan)
+    assert isinstance(ax, Axes)
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["human A", "human B", "robot"]
+    y_a, y_b, y_r = _lane(ax, "human A"), _lane(ax, "human B"), _lane(ax, "robot")
+    assert y_a == plots.HUMAN_Y and y_r == plots.ROBOT_Y and y_b <= y_a - 1.0
+    # the evaluator's times (the page's table): robot 0-3, 4.5-10.5, 11.5-15.5
+    for k, want in enumerate([(0, 3), (4.5, 10.5), (11.5, 15.5)], 1):
+        (kb,) = bars(ax, f"robot:kit:{k}")
+        assert span(kb) == pytest.approx(want) and _mid_y(kb) == pytest.approx(y_r)
+    (db,) = bars(ax, "robot:delivery:3")
+    assert span(db) == pytest.approx((15.5, 17.5))
+    (wait,) = bars(ax, "robot:tray_wait:")  # kit 2 waits for A's one tray (back at 4.5)
+    assert span(wait) == pytest.approx((4.0, 4.5))
+    # each task in its station's lane, A's and B's humans overlapping in time (17.5-19)
+    where = {"a1": (y_a, (4.5, 14.5)), "a2": (y_a, (15.0, 19.0)), "b1": (y_b, (17.5, 23.5))}
+    for t, (y, want) in where.items():
+        (b,) = bars(ax, f"human:task:{t}")
+        assert span(b) == pytest.approx(want) and _mid_y(b) == pytest.approx(y)
+        assert (tl.task_start[t], tl.task_end[t]) == pytest.approx(want)
+    (pickup,) = bars(ax, "human:pickup:1")
+    assert span(pickup) == pytest.approx((4.0, 4.5)) and _mid_y(pickup) == pytest.approx(y_a)
+    assert bars(ax, "human:pickup:3") == []  # o_H = 0 at B: nothing to draw
+    # each human's idle up to its own completion: A waits 0-4, B 0-17.5 (station_metrics)
+    idle = {
+        name: [span(b) for b in bars(ax, "human:idle") if _mid_y(b) == pytest.approx(y)]
+        for name, y in (("A", y_a), ("B", y_b))
+    }
+    assert idle == {"A": [pytest.approx((0.0, 4.0))], "B": [pytest.approx((0.0, 17.5))]}
+    assert "completion A 19.0 s, B 23.5 s" in ax.get_title().replace("\n", "; ")
+
+
+def test_gantt_stations_on_given_axes():
+    inst, plan = _stations_example()
+    _, ax0 = plt.subplots()
+    assert plots.plot_gantt(inst, plan, ax=ax0) is ax0
+    assert len(bars(ax0, "human:task:")) == 3

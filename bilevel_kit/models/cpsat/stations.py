@@ -24,20 +24,25 @@ proven for parts at any angle (else the verdict is ``optimal_axis_aligned``, as 
 station). The hint and the upper bound ``C <= U`` come from the better of the baselines
 (which interleave stations by earliest need); that plan is returned when no better one is
 found.
-Only the makespan is modelled (``objective=makespan``); ``tray`` mode is always the Benders
-loop here.
+The objective is the makespan C, the sum of the stations' completions ``C_s >= E_k`` (kits k
+of s), or that sum less ``sum_s o_H,s m_s`` (the total human idle less the constant
+``sum_i h_i``), with ``U`` from :func:`bilevel_kit.stations.makespan_horizon`
+(docs/formulations.md); without stations ``sum_completion`` is the one-station makespan.
+``tray`` mode is always the Benders loop here.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
-from ...bounds import best_bound
-from ...errors import UsageError
+from ...bounds import best_bound, objective_extra
 from ...instance import Instance
 from ...methods import MethodOutput, Status
 from ...plan import Kit, Plan, evaluate
+from ...stations import makespan_horizon, objective_of
 from .. import packing_oracle
 from ..budget import Budget, check_model_memory
 from ..common import Packer, kit_order, scope_claims
@@ -59,28 +64,36 @@ def time_scale(values: list[float]) -> tuple[int, bool]:
 
 
 def solve_stations(
-    instance: Instance, options: Any, *, seed: int = 0, time_limit: float | None = None
+    instance: Instance,
+    options: Any,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+    one: Callable[..., MethodOutput] | None = None,
 ) -> MethodOutput:
-    """The stations model of the module docstring, solved within ``time_limit``."""
+    """The stations model of the module docstring, solved within ``time_limit``; without
+    stations the sum of the completions is the makespan: ``one`` (the one-station ``cpsat``,
+    passed in so that this module does not import :mod:`.method`) solves it."""
+    if not instance.stations:  # ``one``: the one-station model
+        assert one is not None
+        options = replace(options, objective="makespan")
+        return one(instance, options, seed=seed, time_limit=time_limit)
     from ...heuristics.baselines import single_task, whole_assembly
 
-    if options.objective != "makespan":
-        raise UsageError(
-            "cpsat: with several stations only objective=makespan is modelled (docs/timeline.md)"
-        )
     budget = Budget(time_limit)
+    objective = options.objective
     n, S = instance.n_tasks, len(instance.station_ids)
     check_model_memory("cpsat", n * n * (S + 1), BYTES_PER_CELL, "task x kit x station cells")
     packer = Packer(instance, max(0.2, 0.05 * budget.time_limit), budget)
-    hint = _warm_start(instance, single_task(instance).plan, whole_assembly)
-    upper = evaluate(instance, hint).makespan
+    hint = _warm_start(instance, single_task(instance).plan, whole_assembly, objective)
+    upper = makespan_horizon(instance, evaluate(instance, hint), objective)
     closed = best_bound(instance)
-    extra: dict[str, Any] = {"tray_mode": "benders", "objective": "makespan", "max_kits": n}
+    extra: dict[str, Any] = {"tray_mode": "benders", "objective": objective, "max_kits": n}
     cuts: list[tuple[frozenset[int], str | None]] = []
     best: Plan = hint
     proven, bound_model = False, None
     while not budget.expired():
-        model, scale, exact = _build(instance, upper, closed, cuts, best)
+        model, scale, exact = _build(instance, upper, closed, cuts, best, objective)
         extra.update(time_scale=scale, times_exact=exact)
         status, kits, lower = _run(model, options, seed, budget)
         extra["cpsat_status"] = status
@@ -93,7 +106,7 @@ def solve_stations(
             cuts += bad
             continue
         assert plan is not None
-        if evaluate(instance, plan).makespan < evaluate(instance, best).makespan:
+        if _value(instance, plan, objective) < _value(instance, best, objective):
             best = plan
         proven = status == "OPTIMAL"
         bound_model = lower
@@ -101,8 +114,13 @@ def solve_stations(
     return _conclude(instance, best, proven, bound_model, closed, cuts, extra)
 
 
-def _warm_start(instance: Instance, single: Plan | None, whole: Any) -> Plan:
-    """The better of the baselines' plans (Whole Assembly only when its kits fit)."""
+def _value(instance: Instance, plan: Plan, objective: str) -> float:
+    return objective_of(evaluate(instance, plan), objective)
+
+
+def _warm_start(instance: Instance, single: Plan | None, whole: Any, objective: str) -> Plan:
+    """The better of the baselines' plans for ``objective`` (Whole Assembly only when its kits
+    fit)."""
     from ...errors import KitDoesNotFit
 
     assert single is not None
@@ -110,7 +128,7 @@ def _warm_start(instance: Instance, single: Plan | None, whole: Any) -> Plan:
         other = whole(instance).plan
     except KitDoesNotFit:
         return single
-    better = evaluate(instance, other).makespan < evaluate(instance, single).makespan
+    better = _value(instance, other, objective) < _value(instance, single, objective)
     return other if better else single
 
 
@@ -120,9 +138,10 @@ def _build(
     closed: float,
     cuts: list[tuple[frozenset[int], str | None]],
     hint: Plan,
+    objective: str,
 ) -> tuple[Any, int, bool]:
     """The CP-SAT model (module docstring) with ``C <= upper`` and ``C >= closed``, hinted
-    with the kits of ``hint``."""
+    with the kits of ``hint``, minimising ``objective``."""
     from ortools.sat.python import cp_model
 
     tasks = instance.tasks
@@ -183,8 +202,26 @@ def _build(
         m.add(E[k] >= A[k] + H[k])
         m.add(E[k] <= C)
     _station_rules(m, instance, z, S, E, H, q)
-    m.minimize(C)
+    m.minimize(_objective(m, instance, (z, E, C, hz), q, objective))
     return (m, x, C), scale, exact
+
+
+def _objective(m: Any, instance: Instance, zec: Any, q: Any, objective: str) -> Any:
+    """C (``zec``: the variables z, E, C and the horizon); the sum of the completions
+    ``C_s >= E_k`` (kits k of s); or that less ``sum_s o_H,s m_s`` (the total human idle less
+    the constant ``sum_i h_i``)."""
+    z, E, C, hz = zec
+    if objective == "makespan":
+        return C
+    done = {s: m.new_int_var(0, hz, f"C_{s}") for s in z}
+    for s, zs in z.items():
+        for k, e in enumerate(E):
+            m.add(done[s] >= e).only_enforce_if(zs[k])
+    total = sum(done.values())
+    if objective == "sum_completion":
+        return total
+    prm = instance.station_params
+    return total - sum(q(prm[s].kit_overhead_human) * v for s, zs in z.items() for v in zs)
 
 
 def _hint(m: Any, instance: Instance, plan: Plan, x: Any, u: Any, z: Any) -> None:
@@ -293,6 +330,12 @@ def _conclude(
     optimal = optimal_axis and scope == ANY_ANGLE
     bound_axis = max(closed, model_s) if model_s is not None and exact and scope else closed
     bound = makespan if optimal else (bound_axis if scope == ANY_ANGLE else closed)
+    objective = extra["objective"]
+    if objective != "makespan":  # the model's bound is on that objective, not the makespan
+        bound = bound_axis = closed
+        extra.update(
+            _objective_extra(instance, plan, model_s, scope, (optimal, optimal_axis), extra)
+        )
     extra.update(
         cuts=len(cuts),
         makespan=makespan,
@@ -301,6 +344,26 @@ def _conclude(
         bound_closed_form=closed,
         **scope_claims(scope),
     )
-    return MethodOutput(
-        plan, Status.OPTIMAL if optimal else Status.FEASIBLE, min(bound, makespan), extra
-    )
+    status = Status.OPTIMAL if optimal else Status.FEASIBLE
+    return MethodOutput(plan, status, min(bound, makespan), extra, status_objective=objective)
+
+
+def _objective_extra(
+    instance: Instance,
+    plan: Plan,
+    model_s: float | None,
+    scope: str | None,
+    optimal: tuple[bool, bool],
+    extra: dict[str, Any],
+) -> dict[str, Any]:
+    """:func:`bilevel_kit.bounds.objective_extra` from the model's bound ``model_s`` (s, the
+    constant ``sum_i h_i`` dropped for the human idle), a proof only on exact times and for
+    the plans of the cuts' ``scope``."""
+    objective = extra["objective"]
+    low = None
+    if model_s is not None and extra.get("times_exact") and scope is not None:
+        low = model_s
+        if objective == "human_idle":
+            low -= sum(instance.human_time(t.id) for t in instance.tasks)
+    lows = (low if scope == ANY_ANGLE else None, low)
+    return objective_extra(instance, plan, objective, lows, optimal)

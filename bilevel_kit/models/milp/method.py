@@ -48,7 +48,8 @@ the closed-form bounds). ``extra`` keys:
   ``infeasible_axis_aligned``: as for ``cpsat`` (what the cuts' proofs cover);
 * with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
   ``bound_model`` (the master's bound, or None); ``idle_bound`` for
-  ``objective="human_idle"``;
+  ``objective="human_idle"``; with stations, ``objective_value``, ``objective_bound``,
+  ``objective_gap`` of another objective (:func:`.stations.objective_extra`);
 * ``reason`` when the run ends without a plan, or without a model, for a known reason;
 * ``model_cells``: the model's task x kit variables (a model whose estimated memory exceeds
   :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built, ``termination`` ``too_large``,
@@ -65,7 +66,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 from ... import progress
@@ -74,6 +75,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
+from ...stations import objective_of
 from ..budget import Budget
 from ..common import (
     NoGoodCuts,
@@ -86,6 +88,7 @@ from ..common import (
 )
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from ..packing_oracle import WHY_TIME, Fit
+from . import stations
 from .model import (
     Master,
     add_cut,
@@ -100,7 +103,7 @@ from .nomodel import buildable, handoff
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
-OBJECTIVES: tuple[str, ...] = ("makespan", "human_idle")
+OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
 #: The share of the time limit the ``hint`` method may use.
@@ -118,8 +121,9 @@ class MilpOptions:
             "(cbc, glpk, gurobi, scip ...)"
         },
     )
-    objective: Literal["makespan", "human_idle"] = field(
-        default="makespan", metadata={"help": "minimise makespan or human idle time"}
+    objective: Literal["makespan", "sum_completion", "human_idle"] = field(
+        default="makespan",
+        metadata={"help": "minimise makespan, (stations) sum of completions, or human idle"},
     )
     tray: Literal["auto", "benders"] = field(
         default="auto",
@@ -185,6 +189,8 @@ def run(
     makespan in seconds, every kit has a topological human order and a non-overlapping layout
     from the packing oracle.
     """
+    if not instance.stations and options.objective == "sum_completion":  # = the makespan
+        options = replace(options, objective="makespan")
     budget = Budget(time_limit)
     ensure_ortools()
     opt = make_solver(options.solver)
@@ -216,14 +222,12 @@ def run(
         )
         return r.finish(None, Status.UNKNOWN, closed)
     if instance.stations:  # docs/timeline.md#several-stations: a master of its own
-        from .stations import incumbent
-
-        inc, inc_obj, upper, K = incumbent(instance, options.objective, options.hint)
+        inc, inc_obj, upper, K = stations.incumbent(instance, options.objective, options.hint)
         r.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
     else:
         inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
         K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
-    if upper is not None and upper <= r.best + TOL:
+    if upper is not None and upper <= r.best + TOL and options.objective == "makespan":
         # the quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
         # bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))
         done = "closed_form_bound" if upper <= closed + TOL else "proven_bound"
@@ -261,7 +265,7 @@ class _Run:
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         self.extra["wall_time_s"] = self.budget.elapsed()
         if plan is not None:
-            self.live.final(plan, bound, self.extra.get("idle_bound"))
+            self.live.final(plan, bound, self.extra)
         objective = self.options.objective
         return MethodOutput(plan, status, bound, self.extra, status_objective=objective)
 
@@ -367,10 +371,9 @@ def _solve_master(
     lower = None if r.proven is None else r.proven.value
     start = set_start
     if r.instance.stations:
-        from . import stations
-
-        assert upper is not None  # the baselines' makespan
-        master, start = stations.build(r.instance, K, upper, r.closed), stations.set_start
+        assert upper is not None  # the horizon of the baselines' plan
+        master = stations.build(r.instance, K, upper, r.closed, options.objective)
+        start = stations.set_start
     else:
         master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
@@ -428,6 +431,10 @@ def _conclude(
         axis = r.best if lower is None else max(r.best, lower)
         r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
     r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
+    if r.instance.stations and objective != "makespan":  # docs/timeline.md#several-stations
+        proofs = (optimal, bool(r.extra["optimal_axis_aligned"]))
+        lows = (lower_any, lower)
+        r.extra.update(stations.objective_extra(r.instance, plan, objective, lows, proofs))
     return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
 
 
@@ -470,6 +477,8 @@ def _makespan_bound(
     real = evaluate(instance, plan)
     if objective == "makespan":
         bound = closed if lower is None else max(closed, lower)
+    elif instance.stations:  # the master's bound is on another objective: objective_extra
+        bound = closed
     else:
         w_min = sum(instance.human_time(t.id) for t in instance.tasks)
         idle_lb = None if lower is None else lower - w_min
@@ -513,15 +522,16 @@ class _Live:
         """A master's bounds while it runs: only the dual one counts (see the caller)."""
         self.tracker.report(bound=self.bound(dual))
 
-    def final(self, plan: Plan, bound: float | None, idle_bound: float | None) -> None:
+    def final(self, plan: Plan, bound: float | None, extra: dict[str, Any]) -> None:
         """The result's own numbers (the last report)."""
         if not self.tracker.active:
             return
         tl = evaluate(self.instance, plan)
         if self.objective == "makespan":
             self.tracker.report(tl.makespan, bound)
-        else:
-            self.tracker.report(tl.human_idle, idle_bound)
+        else:  # with stations, sum_completion too (objective_of)
+            lower = extra.get("objective_bound", extra.get("idle_bound"))
+            self.tracker.report(objective_of(tl, self.objective), lower)
 
 
 class _Benders:

@@ -71,7 +71,8 @@ from typing import Any
 
 from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
-from ...plan import Kit, Plan, evaluate
+from ...plan import Kit, Plan, Timeline, evaluate
+from ...stations import objective_of
 from .. import packing
 from ..common import chain_groups, kit_order, kit_positions, reduced_edges, relabel_chains
 from .solver import TOL
@@ -80,9 +81,22 @@ human_order = kit_order  # the human's order inside a kit (one definition: commo
 
 
 def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective: str) -> float:
-    """The model's objective of a plan: makespan, or makespan - o_H * kits."""
-    c = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
+    """The model's objective of a plan: makespan, or makespan - o_H * kits; with several
+    stations the stations master's (:func:`model_objective`)."""
+    tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
+    if instance.stations:
+        return model_objective(instance, tl, objective)
+    c = tl.makespan
     return c if objective == "makespan" else c - instance.kit_overhead_human * len(kits)
+
+
+def model_objective(instance: Instance, tl: Timeline, objective: str) -> float:
+    """The stations master's objective of a plan's timeline (:mod:`.stations`): the objective
+    itself, or for ``human_idle`` the total idle plus the constant ``sum_i h_i`` it drops."""
+    value = objective_of(tl, objective)
+    if objective == "human_idle":
+        value += sum(instance.human_time(t.id) for t in instance.tasks)
+    return value
 
 
 @dataclass

@@ -31,10 +31,13 @@ Precedence is disaggregated as in :mod:`.model` (no chain symmetry: equal chains
 stations are not interchangeable); ``sum_k u_k`` is at least the area bound and the number of
 stations. The tray's area relaxation and the no-good cuts are :mod:`.model`'s. The incumbent
 and ``U`` are the better of the baselines' plans (which interleave stations by earliest need).
-Only the makespan is modelled (``objective=makespan``), ``hint`` is refused, and ``tray`` is
-always the Benders loop from the area relaxation, as in cpsat's stations model (seeding the
-cuts of every pair of tasks that does not fit, ``tray=auto`` for one station, adds cuts proven
-for 0/90-degree layouts only, so 14 of the 24 random instances of
+The objective is the makespan ``C``, the sum of the completions ``sum_s F[s,K-1]``, or the
+total human idle less the constant ``sum_i h_i``, ``sum_s F[s,K-1] - sum_s o_H,s sum_k
+z[s,k]`` (exactly: the human's work depends on the kit counts), with ``U`` from
+:func:`bilevel_kit.stations.makespan_horizon` (docs/formulations.md); ``hint`` is refused,
+and ``tray`` is always the Benders loop from the area relaxation, as in cpsat's stations
+model (seeding the cuts of every pair of tasks that does not fit, ``tray=auto`` for one
+station, adds cuts proven for 0/90-degree layouts only, so 14 of the 24 random instances of
 tests/models/test_milp_stations.py were then proven optimal only among such plans, against 4
 without them).
 """
@@ -45,23 +48,26 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...bounds import min_kits
+from ...bounds import objective_extra as stations_extra
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance, StationParams
 from ...plan import Plan, evaluate
-from .model import Master, _Data, _tray
+from ...stations import makespan_horizon, objective_of
+from .model import Master, _Data, _tray, model_objective
 
 
 def incumbent(
     instance: Instance, objective: str, hint: str
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
-    """The better of the baselines' plans as kits, its makespan (twice: objective and ``U``)
-    and the kit cap K = n; a UsageError for any objective but the makespan, or a hint."""
+    """The better of the baselines' plans for ``objective`` as kits, its master objective
+    (:func:`.model.model_objective`), the horizon ``U``
+    (:func:`bilevel_kit.stations.makespan_horizon`) and the kit cap K = n; a
+    UsageError for a hint."""
     from ...heuristics.baselines import single_task, whole_assembly
 
-    if objective != "makespan" or hint != "none":
+    if hint != "none":
         raise UsageError(
-            "milp: with several stations only objective=makespan and hint=none are modelled "
-            "(docs/timeline.md)"
+            "milp: with several stations only hint=none is modelled (docs/timeline.md)"
         )
     plans: list[Plan] = []
     for method in (single_task, whole_assembly):
@@ -73,9 +79,27 @@ def incumbent(
         plans.append(out.plan)
     if not plans:  # every task fits alone (checked before), so single-task always plans
         raise KitDoesNotFit(f"{instance.source}: no baseline plan for the milp incumbent")
-    best = min(plans, key=lambda p: evaluate(instance, p).makespan)
-    upper = evaluate(instance, best).makespan
-    return [list(k.tasks) for k in best.kits], upper, upper, instance.n_tasks
+    best = min(plans, key=lambda p: objective_of(evaluate(instance, p), objective))
+    tl = evaluate(instance, best)
+    kits = [list(k.tasks) for k in best.kits]
+    upper = makespan_horizon(instance, tl, objective)
+    return kits, model_objective(instance, tl, objective), upper, instance.n_tasks
+
+
+def objective_extra(
+    instance: Instance,
+    plan: Plan,
+    objective: str,
+    lower: tuple[float | None, float | None],
+    optimal: tuple[bool, bool],
+) -> dict[str, Any]:
+    """:func:`bilevel_kit.bounds.objective_extra` with the master's bounds ``lower`` (for
+    every plan, for 0/90-degree plans) in its own units (the constant ``sum_i h_i`` dropped
+    for the human idle)."""
+    offset = model_objective(instance, evaluate(instance, plan), objective)
+    offset -= objective_of(evaluate(instance, plan), objective)
+    seconds = tuple(None if v is None else v - offset for v in lower)
+    return stations_extra(instance, plan, objective, (seconds[0], seconds[1]), optimal)
 
 
 def model_cells(instance: Instance, K: int) -> int:
@@ -84,8 +108,11 @@ def model_cells(instance: Instance, K: int) -> int:
     return instance.n_tasks * K + len(instance.station_ids) * K * (2 + K * pairs)
 
 
-def build(instance: Instance, K: int, upper: float, lower: float) -> Master:
-    """The master of the module docstring with K kit positions, ``lower <= C <= upper``."""
+def build(
+    instance: Instance, K: int, upper: float, lower: float, objective: str = "makespan"
+) -> Master:
+    """The master of the module docstring with K kit positions, ``lower <= C <= upper``,
+    minimising ``objective``."""
     import pyomo.environ as pyo
 
     data = _Data.of(instance, K)
@@ -105,10 +132,23 @@ def build(instance: Instance, K: int, upper: float, lower: float) -> Master:
     _assignment(m, instance, data, K)
     _precedence(m, instance, data)
     _timeline(m, instance, data, K, hz)
-    m.obj = pyo.Objective(expr=m.C, sense=pyo.minimize)
+    m.obj = pyo.Objective(expr=_objective(m, instance, K, objective), sense=pyo.minimize)
     master = Master(m, K, data.ids, {key: m.x[key] for key in data.keys})
     _tray(master, instance, data)
     return master
+
+
+def _objective(m: Any, instance: Instance, K: int, objective: str) -> Any:
+    """C; the sum of the completions ``F[s,K-1]``; or that less ``sum_s o_H,s m_s`` (the total
+    human idle less the constant ``sum_i h_i``)."""
+    ids = range(len(instance.station_ids))
+    if objective == "makespan":
+        return m.C
+    total = sum(m.F[s, K - 1] for s in ids)
+    if objective == "sum_completion":
+        return total
+    prm = [instance.station_params[s] for s in instance.station_ids]
+    return total - sum(prm[s].kit_overhead_human * m.z[s, k] for s in ids for k in range(K))
 
 
 def _assignment(m: Any, instance: Instance, data: _Data, K: int) -> None:
