@@ -91,14 +91,26 @@ def is_failed(record: Record) -> bool:
     return record.get("status") == "error"
 
 
+def fresh_process_state() -> None:
+    """Forget what earlier cells left in this process and could change a result: the packing
+    oracle's memo (a kit implied to fit by an earlier, larger kit takes that kit's layout, and
+    a layout sets the robot's pick times). A cell is then a pure function of (config, seed),
+    whichever worker runs it and whatever ran there before (docs/cluster.md)."""
+    from ..models import packing_oracle
+
+    packing_oracle.clear_cache()
+
+
 @dataclass(frozen=True)
 class Guarded:
-    """``fn`` with its exceptions turned into error records (runs on the worker, pickles)."""
+    """``fn`` with its exceptions turned into error records, run from a fresh process state
+    (:func:`fresh_process_state`; runs on the worker, pickles)."""
 
     fn: Callable[[Any], Record]
 
     def __call__(self, cell: Any) -> Record:
         try:
+            fresh_process_state()
             return self.fn(cell)
         except Exception as exc:
             return error_record(cell, exc)
