@@ -37,8 +37,9 @@ fixed (1: CP-SAT is then deterministic), and the solve runs in its reproducible 
 (:func:`bilevel_kit.models.cpsat.solve`, ``deterministic=True``): its packing calls are
 limited by deterministic time too, with one worker, and its clock-bounded steps (quick plans,
 Benders seed cuts, cut shrinking, the kit-count LP bound) get ten times their share of
-``time_limit``. So a simulation run is a function of (instance, policy, parameters, seed) on
-an idle or a loaded machine alike; ``time_limit`` and the packing calls' wall-clock limits are
+``time_limit``. So a simulation run is meant to be a function of (instance, policy,
+parameters, seed) on an idle or a loaded machine alike (docs/simulation.md#determinism names
+one case, still open, where it is not); ``time_limit`` and the packing calls' wall-clock limits are
 safety nets only: a decision that hits one (a pathologically loaded machine, about ten times
 slower than an idle one) is no longer reproducible. Committed layouts come from the policy's
 own shelf-packer cache, not from the packing oracle's process-wide cache.
