@@ -118,6 +118,31 @@ def memory_refusal(owner: str, cells: int, bytes_per_cell: float, what: str) -> 
     )
 
 
+def no_model_reason(
+    owner: str,
+    cells: int,
+    costs: tuple[float, float],
+    what: str,
+    budget: Budget,
+    margin: float,
+    has_plan: bool,
+) -> tuple[str, str] | None:
+    """Why an exact method builds no model of ``cells`` task x kit variables, given its
+    measured ``costs`` (bytes and build seconds per variable): ``("too_large", reason)`` over
+    the memory limit while it holds a plan (a ``UsageError`` without one), ``("not_built",
+    reason)`` when it would not be built within the time left; None: build it. The caller
+    names the outcome in its own ``extra`` keys (docs/formulations.md, "Model too large")."""
+    bytes_per_cell, build_s_per_cell = costs
+    refusal = memory_refusal(owner, cells, bytes_per_cell, what)
+    if refusal is not None and has_plan:
+        return "too_large", refusal
+    check_model_memory(owner, cells, bytes_per_cell, what)
+    if too_slow_to_build(budget, cells * build_s_per_cell, margin):
+        why = f"a model of {cells:,} task x kit variables would not be built and solved"
+        return "not_built", f"{why} within the time limit"
+    return None
+
+
 def too_slow_to_build(budget: Budget, estimate_s: float, margin: float = 0.0) -> bool:
     """Would building a model (``estimate_s`` seconds) take more than :data:`BUILD_SHARE` of
     the time left? Then the run keeps its incumbent instead of overrunning its limit."""

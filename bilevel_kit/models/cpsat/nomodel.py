@@ -8,7 +8,7 @@ from typing import Any
 
 from ...instance import Instance
 from ...plan import Plan
-from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
+from ..budget import Budget, no_model_reason
 from ..common import assignment_cells
 from .context import MARGIN, Context, State
 from .proven import known_bound
@@ -31,26 +31,19 @@ def buildable(
     extra["model_cells"] = cells
     n = instance.n_tasks
     what = f"task x kit variables ({n} tasks, K = {K})"
-    refusal = memory_refusal("cpsat", cells, BYTES_PER_CELL, what)
-    if refusal is not None and has_plan:
-        extra.update(
-            reason=f"{refusal}; the incumbent is returned with the proven bound",
-            build_time_s=0.0,
-            cpsat_status="TOO_LARGE",
-            cuts=0,
-        )
-        return False
-    check_model_memory("cpsat", cells, BYTES_PER_CELL, what)
-    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, MARGIN):
-        extra.update(
-            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
-            "within the time limit; the incumbent is returned",
-            build_time_s=0.0,
-            cpsat_status="NOT_BUILT",
-            cuts=0,
-        )
-        return False
-    return True
+    costs = (BYTES_PER_CELL, BUILD_S_PER_CELL)
+    why = no_model_reason("cpsat", cells, costs, what, budget, MARGIN, has_plan)
+    if why is None:
+        return True
+    kind, reason = why
+    keep = "the incumbent is returned" + (" with the proven bound" if kind == "too_large" else "")
+    extra.update(
+        reason=f"{reason}; {keep}",
+        build_time_s=0.0,
+        cpsat_status="TOO_LARGE" if kind == "too_large" else "NOT_BUILT",
+        cuts=0,
+    )
+    return False
 
 
 def handoff(ctx: Context, state: State, plan: Plan, seed: int, extra: dict[str, Any]) -> State:

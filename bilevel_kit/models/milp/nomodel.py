@@ -8,7 +8,7 @@ from typing import Any
 
 from ...instance import Instance
 from ...plan import Plan
-from ..budget import Budget, check_model_memory, memory_refusal, too_slow_to_build
+from ..budget import Budget, no_model_reason
 from ..common import Packer, assignment_cells
 
 #: Peak memory per task x kit variable of the Pyomo model (measured 5-9 kB on in-trees of
@@ -32,24 +32,14 @@ def buildable(
         cells = model_cells(instance, K)
     extra["model_cells"] = cells
     what = f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
-    refusal = memory_refusal("milp", cells, BYTES_PER_CELL, what)
-    if refusal is not None and has_plan:
-        extra.update(
-            reason=f"{refusal}; the quick plan is returned with the proven bound",
-            build_time_s=0.0,
-            termination="too_large",
-        )
-        return False
-    check_model_memory("milp", cells, BYTES_PER_CELL, what)
-    if too_slow_to_build(budget, cells * BUILD_S_PER_CELL, margin):
-        extra.update(
-            reason=f"a model of {cells:,} task x kit variables would not be built and solved "
-            "within the time limit; the quick plan is returned",
-            build_time_s=0.0,
-            termination="not_built",
-        )
-        return False
-    return True
+    costs = (BYTES_PER_CELL, BUILD_S_PER_CELL)
+    why = no_model_reason("milp", cells, costs, what, budget, margin, has_plan)
+    if why is None:
+        return True
+    kind, reason = why
+    keep = "the quick plan is returned" + (" with the proven bound" if kind == "too_large" else "")
+    extra.update(reason=f"{reason}; {keep}", build_time_s=0.0, termination=kind)
+    return False
 
 
 def handoff(
