@@ -511,16 +511,9 @@ def test_plots_do_not_leak_style_into_rcparams(inst):
 def _stations_example():
     """The worked example of docs/timeline.md#several-stations: A (one tray) with a1, a2 and B
     (d = 2, no pickup) with b1, planned [a1] [a2] [b1]: B's human works while A's does."""
-    from bilevel_kit.instance import document
+    from stations_example import worked_example_doc
 
-    parts = [{"id": "p", "width": 10, "height": 10, "pick_time": 1}]
-    tasks = [
-        {"id": "a1", "parts": [], "human_time": {"mean": 10}, "robot_time": 2, "station": "A"},
-        {"id": "b1", "parts": [], "human_time": {"mean": 6}, "robot_time": 3, "station": "B"},
-        {"id": "a2", "parts": [], "human_time": {"mean": 4}, "robot_time": 5, "station": "A"},
-    ]
-    stations = [{"id": "A", "trays": 1}, {"id": "B", "delivery_time": 2, "kit_overhead_human": 0}]
-    doc = document("two", parts, tasks, delivery_time=1, overhead=(1, 0.5), stations=stations)
+    doc = worked_example_doc()
     return from_dict(doc), Plan((Kit(("a1",)), Kit(("a2",)), Kit(("b1",))))
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from stations_example import worked_example_doc
 
 from bilevel_kit import Kit, Plan, check, evaluate
 from bilevel_kit.errors import InstanceError
@@ -15,15 +16,7 @@ from bilevel_kit.plan import KitTimes
 
 def _doc(**fields):
     """The worked example of docs/timeline.md#several-stations."""
-    parts = [{"id": "p", "width": 10, "height": 10, "pick_time": 1}]
-    tasks = [
-        {"id": "a1", "parts": [], "human_time": {"mean": 10}, "robot_time": 2, "station": "A"},
-        {"id": "b1", "parts": [], "human_time": {"mean": 6}, "robot_time": 3, "station": "B"},
-        {"id": "a2", "parts": [], "human_time": {"mean": 4}, "robot_time": 5, "station": "A"},
-    ]
-    stations = [{"id": "A", "trays": 1}, {"id": "B", "delivery_time": 2, "kit_overhead_human": 0}]
-    base = {"stations": stations, **fields}
-    return document("two", parts, tasks, delivery_time=1, overhead=(1, 0.5), **base)
+    return worked_example_doc(**fields)
 
 
 def _plan(*kits):
