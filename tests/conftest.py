@@ -64,7 +64,11 @@ def doc() -> dict:
 
 
 def pytest_sessionstart(session):
-    """Load OR-Tools before any test imports cvxpy (see bilevel_kit/_native.py)."""
+    """Load OR-Tools before any test imports cvxpy (see bilevel_kit/_native.py), and compile
+    greedy-ce's kernels once up front (docs/scaling.md#first-run): on a fresh clone the first
+    test that runs them would otherwise print the compile notice among its own output."""
     from bilevel_kit._native import ortools_first
+    from bilevel_kit.heuristics.warmup import compile_kernels
 
     ortools_first()
+    compile_kernels()

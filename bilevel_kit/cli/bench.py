@@ -55,7 +55,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     run = sub.add_parser("run", help="run methods against the library")
     _library_option(run)
     run.add_argument(
-        "--methods", default="all", metavar="M1,M2", help="method names, or 'all' (default)"
+        "--methods",
+        default="all",
+        metavar="M1,M2",
+        help="method names, 'all' (the default: every method) or 'default' (as in compare)",
     )
     add_time_limit(run, "time limit per solve (s); default: each method's own")
     add_seed(run, "random seed of every cell (default 0)")
@@ -87,18 +90,11 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from ..experiments.kitbench import Library, parse_filter, run_bench, select
-    from ..methods import get_method, method_names
-    from .compare import method_params
+    from .compare import method_params, parse_methods
 
     library = Library.at(args.library)
     terms = parse_filter(args.filter)  # a bad filter costs nothing
-    methods = (
-        method_names()
-        if args.methods == "all"
-        else [m.strip() for m in args.methods.split(",") if m.strip()]
-    )
-    for m in methods:
-        get_method(m)
+    methods = parse_methods(args.methods)  # 'all' as in compare
     params = method_params(args.param, methods)
     records = select(library.read(), terms)
     if not records:

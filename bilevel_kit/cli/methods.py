@@ -30,7 +30,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.name is None:
         for s in REGISTRY.values():
-            print(f"{s.name:<16} {s.summary}")
+            note = "" if s.in_default else " [not in compare's default set: name it]"
+            print(f"{s.name:<16} {s.summary}{note}")
     else:
         print(describe_method(find(args.name)))
     return EXIT_OK

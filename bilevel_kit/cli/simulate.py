@@ -115,9 +115,9 @@ def run(args: argparse.Namespace) -> int:
         ReplicationCell(instance, args.policy, params, s)
         for s in range(args.seed, args.seed + args.reps)
     ]
-    from .solve import compile_notice
+    from .solve import prepare
 
-    compile_notice([args.policy])
+    prepare([args.policy])
     with sweep_session(args) as session:
         records = run_cells(cells, replication_cell, desc=f"simulate {args.policy}")
     failed = [r for r in records if is_failed(r)]

@@ -117,6 +117,8 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         "bound": res.bound,
         "gap_own": res.gap,
         "wall_time_s": res.wall_time_s,
+        # the run stopped at its time limit, not on its own (docs/cli.md#time-limits)
+        "time_limit_hit": bool(res.extra.get("time_limit_hit")),
         # None: the method returned no plan (unknown/infeasible), which is not an invalid plan
         "valid": None if res.plan is None else not violations,
         "violations": len(violations),

@@ -76,6 +76,7 @@ COMPARE_COLUMNS = [
     ("best_bound", "best bound (s)", "{:.2f}"),
     ("gap", "gap to best (%)", "{:.2%}"),
     ("valid", "valid", "{}"),
+    ("time_limit_hit", "limit hit", "yes/no"),
     ("wall_time_s", "time (s)", "{:.3f}"),
     ("instance_file", "file", "path"),  # several files may share an instance name
 ]
@@ -95,6 +96,8 @@ def _cell_text(value: Any, fmt: str) -> str:
         return "-"
     if fmt == "path":
         return _display_path(str(value))
+    if fmt == "yes/no":
+        return "yes" if value else "no"
     if fmt == "{:.2%}":
         return f"{100 * value:.2f}"
     return fmt.format(value)

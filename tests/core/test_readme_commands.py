@@ -28,7 +28,7 @@ Otherwise a command must exit 0. What the test changes, and why:
 * **Parsed, not run**: the ``repro`` studies. Their arguments go through the CLI's own
   parser (a misspelt option fails), but a study takes 15-120 s even with ``--quick``
   (measured under load), and tests/repro/ and tests/cli/ run each quick study end to end.
-* **Fast options**, so the whole file runs in minutes: ``--methods all`` becomes
+* **Fast options**, so the whole file runs in minutes: ``--methods all`` (or ``default``) becomes
   ``single-task,greedy-ce,cpsat`` (``bilevel-milp`` alone spends its 60 s default limit and
   ``milp`` starts a HiGHS child, both tested elsewhere); ``--time-limit`` is capped at 10 s;
   replications at 2 (``--reps``, and ``simulate`` without ``--reps`` gets ``--reps 2``).
@@ -195,7 +195,9 @@ def fast(segment: str) -> str:
     segment = re.sub(r"(?<![\w/.])\.venv/bin/", f"{BIN}/", segment)
     segment = re.sub(r"\[\s*--quick\s*\]", "--quick", segment)
     segment = re.sub(r"\s*\[[^\]]*\]", "", segment)
-    segment = re.sub(r"--methods(\s+|=)all\b", rf"--methods\g<1>{FAST_METHODS}", segment)
+    segment = re.sub(
+        r"--methods(\s+|=)(?:all|default)\b", rf"--methods\g<1>{FAST_METHODS}", segment
+    )
 
     def cap(match: re.Match[str], most: float) -> str:
         value = min(float(match[2]), most)

@@ -54,7 +54,7 @@ def best_heuristic_plan(
             if left <= MIN_HINT and best is not None:
                 continue
             if name == "greedy-ce" and best is not None and _kernels_would_compile():
-                continue  # the first call after an install compiles for ~15-60 s: not in budget
+                continue  # a compile of ~15-60 s (or a load of 1-3 s) is not in the budget
         try:
             spec = get_method(name)
             fn = spec.load()
@@ -74,8 +74,10 @@ def best_heuristic_plan(
 
 
 def _kernels_would_compile() -> bool:
-    """Would greedy-ce compile its CE kernels on this call (no numba cache yet)? A time-limited
-    warm start then skips it rather than overrun (docs/scaling.md#the-contract)."""
-    from ...heuristics._kernels import cache_missing
+    """Would greedy-ce compile (or load) its kernels on this call? :func:`bilevel_kit.solve`
+    compiles them before the clock (the method's ``prepare`` step), so this holds only for a
+    direct call of the method's function; a time-limited warm start then skips greedy-ce
+    rather than overrun (docs/scaling.md#first-run)."""
+    from ...heuristics.warmup import ready
 
-    return cache_missing()
+    return not ready()
