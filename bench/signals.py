@@ -197,16 +197,19 @@ def main() -> None:
     args = ap.parse_args()
     rng = random.Random(args.seed)
     rows: list[dict[str, Any]] = []
-    for method in args.methods.split(","):
-        length = measure(method, args.time_limit)
-        print(f"{method}: an undisturbed run takes {length:.2f} s after its guard", flush=True)
-        for _ in range(args.runs):
-            rows.append(one_run(method, args.time_limit, length * 1.1, rng))
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    with args.out.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    with args.out.open("w", newline="") as fh:  # row by row: a long run can be read as it goes
+        writer: csv.DictWriter[str] | None = None
+        for method in args.methods.split(","):
+            length = measure(method, args.time_limit)
+            print(f"{method}: an undisturbed run takes {length:.2f} s after its guard", flush=True)
+            for _ in range(args.runs):
+                rows.append(one_run(method, args.time_limit, length * 1.1, rng))
+                if writer is None:
+                    writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+                    writer.writeheader()
+                writer.writerow(rows[-1])
+                fh.flush()
     report(rows)
 
 
