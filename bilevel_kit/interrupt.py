@@ -280,6 +280,22 @@ class _Guard:
             self.reader.close()
 
 
+def _quiet_unraisable(
+    previous: Callable[[sys.UnraisableHookArgs], object],
+) -> Callable[[sys.UnraisableHookArgs], None]:
+    """An unraisable-exception hook that drops our own interrupt: raised inside a weakref
+    callback (importlib's module locks) or a ``__del__``, Python prints it as "Exception
+    ignored ... Traceback" and goes on; the command still stops by the recorded signal
+    (:func:`signalled`), so that text is noise on the interrupt's one line."""
+
+    def hook(args: sys.UnraisableHookArgs) -> None:
+        if isinstance(args.exc_value, KeyboardInterrupt) and signalled() is not None:
+            return
+        previous(args)
+
+    return hook
+
+
 @contextlib.contextmanager
 def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
     """Inside: SIGINT raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated` in the main
@@ -306,10 +322,13 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         signal.signal(signal.SIGINT, guard.handler)
         signal.signal(signal.SIGTERM, guard.handler)
         _ACTIVE.append(True)
+        old_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
         yield
     finally:
         if _ACTIVE:
             _ACTIVE.pop()
+            if not linger:
+                sys.unraisablehook = old_hook
         if linger:  # the command is over: a late signal must not kill the exiting process
             old_int = old_term = signal.SIG_IGN
         signal.signal(signal.SIGTERM, old_term)
