@@ -16,15 +16,16 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from .interrupt import on_forced_exit, remove_path
+from .interrupt import checkpoint, on_forced_exit, remove_path
 
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); rename it over ``path`` on success.
 
-    On an exception (``KeyboardInterrupt`` included) the temporary file is removed and
-    ``path`` is left untouched.
+    On an exception (``KeyboardInterrupt`` included), or after a signal whose exception
+    was lost on its way (:func:`bilevel_kit.interrupt.checkpoint`), the temporary file is
+    removed and ``path`` is left untouched.
     """
     try:
         in_place = not stat.S_ISREG(os.stat(path).st_mode)  # a device or a pipe
@@ -45,6 +46,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         with on_forced_exit(remove_path(tmp)):
             os.chmod(tmp, _mode_for(target))
             yield Path(tmp)
+            checkpoint()  # a signal came while the result was computed: no complete file
             os.replace(tmp, target)
             tmp = None
     finally:

@@ -6,6 +6,14 @@ Every error a user can cause (a bad file, a bad option, a kit that cannot fit) i
 
 from __future__ import annotations
 
+import re
+
+
+def one_line(text: object) -> str:
+    """``text`` on one line: a message from a plugin or a library may hold newlines, and the
+    CLI promises one line per error (line breaks become `` | ``)."""
+    return re.sub(r"\s*[\r\n]+\s*", " | ", str(text).strip())
+
 
 class BilevelKitError(Exception):
     """Base class of every error the CLI reports as bad input (exit code 2)."""
@@ -35,3 +43,8 @@ class KitDoesNotFit(BilevelKitError):
 
 class UsageError(BilevelKitError):
     """A command-line option or API argument is invalid."""
+
+
+class PluginError(BilevelKitError):
+    """A plugin's method failed (raised, returned no ``MethodOutput``, or names a module that
+    does not import); the message names the plugin. Exit 1, not 2: the input was fine."""

@@ -55,6 +55,41 @@ def message(exc: BaseException | None = None) -> str:
 _REPORTED = threading.Event()
 
 
+#: The first signal the guard's handler took (None: none yet), for :func:`signalled`.
+_SIGNAL: list[int] = []
+#: One entry per active guard (:func:`guarded`).
+_ACTIVE: list[bool] = []
+
+
+def guarded() -> bool:
+    """Is a :func:`signal_guard` active in this process (its handlers installed)?"""
+    return bool(_ACTIVE)
+
+
+def signalled() -> int | None:
+    """The signal a guard took in this process, if any. The handler raises once, and the
+    exception does not always reach the command: raised inside a C extension's import it
+    becomes ``ImportError: initialization failed`` (OR-Tools), inside a compiled kernel a
+    ``SystemError`` (numba), and code that falls back on an ``ImportError`` swallows it. So
+    the command decides by this, not by the exception (docs/cli.md#interrupting-a-command)."""
+    return _SIGNAL[0] if _SIGNAL else None
+
+
+def interrupt_for(signum: int) -> KeyboardInterrupt:
+    """The exception a signal raises: :class:`Terminated` for SIGTERM, else
+    ``KeyboardInterrupt``."""
+    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def checkpoint() -> None:
+    """Raise the interrupt again if a signal came (:func:`signalled`): called before a
+    result is committed, so no file is presented as complete after a signal whose
+    exception was swallowed on its way up."""
+    signum = signalled()
+    if signum is not None:
+        raise interrupt_for(signum)
+
+
 def report(exc: BaseException | None, stream: IO[str]) -> None:
     """Print the interrupt's one line (:func:`message`), once per process."""
     print(message(exc), file=stream, flush=True)
@@ -190,7 +225,9 @@ class _Guard:
         if self.first is not None:
             return
         self.first = signum
-        raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+        if not _SIGNAL:
+            _SIGNAL.append(signum)
+        raise interrupt_for(signum)
 
     def _watch(self) -> None:
         """Read the signal numbers Python's C handler writes to the wake-up socket."""
@@ -243,6 +280,22 @@ class _Guard:
             self.reader.close()
 
 
+def _quiet_unraisable(
+    previous: Callable[[sys.UnraisableHookArgs], object],
+) -> Callable[[sys.UnraisableHookArgs], None]:
+    """An unraisable-exception hook that drops our own interrupt: raised inside a weakref
+    callback (importlib's module locks) or a ``__del__``, Python prints it as "Exception
+    ignored ... Traceback" and goes on; the command still stops by the recorded signal
+    (:func:`signalled`), so that text is noise on the interrupt's one line."""
+
+    def hook(args: sys.UnraisableHookArgs) -> None:
+        if isinstance(args.exc_value, KeyboardInterrupt) and signalled() is not None:
+            return
+        previous(args)
+
+    return hook
+
+
 @contextlib.contextmanager
 def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
     """Inside: SIGINT raises ``KeyboardInterrupt`` and SIGTERM :class:`Terminated` in the main
@@ -261,17 +314,26 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         yield
         return
     guard = _Guard(grace)
+    _SIGNAL.clear()  # a guard's signal is its command's (tests run several in one process)
     guard.thread.start()
     old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
     old_int, old_term = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     try:  # from here on, a signal raises inside the try
         signal.signal(signal.SIGINT, guard.handler)
         signal.signal(signal.SIGTERM, guard.handler)
+        _ACTIVE.append(True)
+        old_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
         yield
     finally:
+        if _ACTIVE:
+            _ACTIVE.pop()
+            if not linger:
+                sys.unraisablehook = old_hook
         if linger:  # the command is over: a late signal must not kill the exiting process
             old_int = old_term = signal.SIG_IGN
         signal.signal(signal.SIGTERM, old_term)
         signal.signal(signal.SIGINT, old_int)
         signal.set_wakeup_fd(old_fd)
         guard.close(linger)
+        if not linger:
+            _SIGNAL.clear()

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import UsageError
+from .errors import PluginError, UsageError, one_line
 from .instance import Instance
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
@@ -121,15 +121,71 @@ class MethodSpec(Registered):
     in_default: bool = True
 
     def load(self) -> Callable[..., MethodOutput]:
-        fn: Callable[..., MethodOutput] = import_target(self.target)
-        return fn
+        """The method's function; a plugin's is guarded (:func:`_plugin_call`)."""
+        plugin = REGISTRY.plugin_of(self.name)
+        if plugin is None:
+            fn: Callable[..., MethodOutput] = import_target(self.target)
+            return fn
+        return _plugin_call(plugin, self.name, _plugin_import(plugin, self.name, self.target))
+
+    def options_class(self) -> type:
+        plugin = REGISTRY.plugin_of(self.name)
+        if plugin is None or not self.options:
+            return super().options_class()
+        cls: type = _plugin_import(plugin, self.name, self.options)
+        return cls
 
     def run_prepare(self, notify: Callable[[str], None] | None = None) -> float | None:
         """The method's ``prepare`` step (seconds spent, None when it has none)."""
         if self.prepare is None:
             return None
-        seconds: float | None = import_target(self.prepare)(notify)
-        return seconds
+        plugin = REGISTRY.plugin_of(self.name)
+        if plugin is None:
+            seconds: float | None = import_target(self.prepare)(notify)
+            return seconds
+        step = _plugin_import(plugin, self.name, self.prepare)
+        try:
+            return step(notify)
+        except (KeyboardInterrupt, UsageError):
+            raise
+        except BaseException as exc:  # a plugin's failure is one line naming it
+            text = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+            raise _plugin_failure(plugin, self.name, f"prepare step failed: {text}") from None
+
+
+def _plugin_failure(plugin: str, method: str, what: str) -> PluginError:
+    return PluginError(one_line(f"plugin {plugin!r}: method {method!r} {what}"))
+
+
+def _plugin_import(plugin: str, method: str, target: str) -> Any:
+    """A plugin's ``module:name``, any failure to import it a :class:`PluginError`."""
+    try:
+        return import_target(target)
+    except Exception as exc:
+        raise _plugin_failure(plugin, method, f"cannot import {target}: {exc}") from None
+
+
+def _plugin_call(plugin: str, method: str, fn: Any) -> Callable[..., MethodOutput]:
+    """``fn`` whose failure is one line naming the plugin (exit 1, docs/extending.md#plugins):
+    an exception (not an interrupt, nor this package's own errors, which say what is wrong
+    with the input), a ``SystemExit``, or a result that is no :class:`MethodOutput`."""
+
+    def call(*args: Any, **kwargs: Any) -> MethodOutput:
+        from .errors import BilevelKitError
+
+        try:
+            out = fn(*args, **kwargs)
+        except (KeyboardInterrupt, BilevelKitError):
+            raise
+        except BaseException as exc:
+            text = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+            raise _plugin_failure(plugin, method, f"failed: {text}") from None
+        if not isinstance(out, MethodOutput):
+            got = type(out).__name__
+            raise _plugin_failure(plugin, method, f"returned {got}, not a MethodOutput")
+        return out
+
+    return call
 
 
 #: Every method, built-in and from plugins (:mod:`bilevel_kit.registry`), by name.

@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from ..interrupt import forget_unhandled_interrupt, report, signal_guard
+from ..interrupt import checkpoint, forget_unhandled_interrupt, report, signal_guard
 from . import (
     bench,
     check,
@@ -136,8 +136,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     signal the guard's deadline also covers the interpreter's exit)."""
     try:
         with signal_guard(linger=argv is None):  # Ctrl-C and SIGTERM at any moment
-            code = _parse_and_run(argv)
-    except KeyboardInterrupt as exc:  # while starting, before the command runs
+            try:
+                code = _parse_and_run(argv)
+            except Exception:
+                checkpoint()  # a signal's exception turned into another one: interrupted
+                raise
+            if code != EXIT_INTERRUPTED:
+                checkpoint()  # a signal's exception lost on its way up: still interrupted
+    except KeyboardInterrupt as exc:  # while starting, before the command runs, or lost
         report(exc, sys.stderr)
         code = EXIT_INTERRUPTED
     if code == EXIT_INTERRUPTED:

@@ -36,7 +36,8 @@ EXIT_INTERRUPTED = 130
 #: the README's list is tested against this one (tests/cli/test_cli.py).
 EXIT_CODES: dict[int, str] = {
     EXIT_OK: "ok",
-    EXIT_INVALID: "invalid solution (check, solve --check, compare) or a placement out of reach",
+    EXIT_INVALID: "invalid solution (check, solve --check, compare), a placement out of reach, "
+    "or a plugin's method failed",
     EXIT_USAGE: "bad input or usage (one line on stderr, nothing written)",
     EXIT_UNKNOWN: "no definite answer within the time limit (compare: a method gave no plan)",
     EXIT_NO_GRID_LAYOUT: "pack: no layout on this grid, which is not a proof that none exists",
@@ -470,15 +471,16 @@ def run_command(
     """Run one command: a library error is one line on stderr and exit 2, no traceback; an
     interrupt (Ctrl-C, or SIGTERM under :func:`bilevel_kit.interrupt.signal_guard`) is one
     line and exit 130 once every cleanup on the way has run."""
-    from ..errors import BilevelKitError
+    from ..errors import BilevelKitError, PluginError, one_line
     from ..interrupt import report
 
     try:
         check_output_options(args)
         return run(args)
     except BilevelKitError as exc:
-        print(f"bilevel-kit {name}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        print(f"bilevel-kit {name}: error: {one_line(exc)}", file=sys.stderr)
+        # a plugin's method failed on good input: not a usage error (docs/extending.md#plugins)
+        return EXIT_INVALID if isinstance(exc, PluginError) else EXIT_USAGE
     except KeyboardInterrupt as exc:
         report(exc, sys.stderr)
         return EXIT_INTERRUPTED

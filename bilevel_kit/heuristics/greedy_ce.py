@@ -62,7 +62,7 @@ import math
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -71,195 +71,25 @@ from ..instance import Instance
 from ..methods import MethodOutput, Status
 from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
 from . import upper_level
-from .cross_entropy import Arrangement, CEParams, arrange
-from .greedy_search import PrefixSearch, SearchLimits, SearchStats, available_vector
+from .ce.sampling import deadline as ce_deadline
+from .cross_entropy import Arrangement, arrange
+from .greedy_options import DEFAULT_OPTIONS as DEFAULT_OPTIONS
+from .greedy_options import GreedyCEOptions as GreedyCEOptions
+from .greedy_options import GreedyParams as GreedyParams
+from .greedy_search import (
+    OutOfTime,
+    PrefixSearch,
+    SearchLimits,
+    SearchStats,
+    available_vector,
+    timed,
+)
 from .greedy_stations import plan_greedy
 from .prefix.levels import unique_rows
 
 #: Refuse to enumerate more than this many partial sequences at one epoch (each is scored,
 #: and its parts laid out: 2,000,000 took 30 s and 0.8 GB at a 2 s limit).
 MAX_SEQUENCES = 200_000
-
-
-@dataclass(frozen=True)
-class GreedyParams:
-    """Options of ``greedy-ce``; ``None`` means "the instance's value"."""
-
-    horizon: int | None = None
-    weights: Mapping[str, float] | None = None
-    signed: bool = False
-    precedence: str = "hard"  # "hard" | "penalty"
-    #: "exact": the search over prefix sets (:mod:`.greedy_search`); "enumerate": every
-    #: sequence (the penalty form always enumerates).
-    decision: str = "exact"
-    max_prefix_sets: int = SearchLimits.max_prefix_sets
-    beam_width: int = SearchLimits.beam_width
-    max_rest_nodes: int = SearchLimits.max_rest_nodes
-    ce: CEParams = field(default_factory=CEParams)
-    #: Polish every CE layout with the convex-concave SOCP of models/convex_layout.py.
-    polish: bool = False
-
-
-_WEIGHT_NAMES = ("W1", "W2", "W3", "W4", "W5", "W6", "W7")
-
-
-@dataclass(frozen=True)
-class GreedyCEOptions:
-    """The options of ``greedy-ce`` as the command line gives them (flat); ``None`` means the
-    instance's value. The CE fields mirror :class:`CEParams` (same names and defaults)."""
-
-    horizon: int | None = field(
-        default=None, metadata={"help": "rolling horizon N, tasks per window", "min": 1}
-    )
-    signed: bool = field(
-        default=False, metadata={"help": "terms (5)-(6) signed as printed, not absolute"}
-    )
-    precedence: Literal["hard", "penalty"] = field(
-        default="hard",
-        metadata={"help": "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"},
-    )
-    decision: Literal["exact", "enumerate"] = field(
-        default="exact",
-        metadata={
-            "help": "hard precedence: exact search over prefix sets, or enumerate every sequence"
-        },
-    )
-    max_prefix_sets: int = field(
-        default=SearchLimits.max_prefix_sets,
-        metadata={"help": "prefix sets per epoch beyond which the search is a beam", "min": 1},
-    )
-    beam_width: int = field(
-        default=SearchLimits.beam_width,
-        metadata={"help": "prefix sets kept per size once the search is a beam", "min": 1},
-    )
-    max_rest_nodes: int = field(
-        default=SearchLimits.max_rest_nodes,
-        metadata={"help": "search nodes per window-rest search (then the best so far)", "min": 1},
-    )
-    polish: bool = field(
-        default=False, metadata={"help": "polish every CE layout with the convex SOCP"}
-    )
-    W1: float | None = field(
-        default=None,
-        metadata={"help": "weight of term (3), per task whose predecessors are not kitted"},
-    )
-    W2: float | None = field(
-        default=None, metadata={"help": "weight of term (4), reward per task in the kit"}
-    )
-    W3: float | None = field(
-        default=None, metadata={"help": "weight of term (5), |d + R(kit) - H_rem|, per s"}
-    )
-    W4: float | None = field(
-        default=None, metadata={"help": "weight of term (6), |d + R(rest) - H(kit)|, per s"}
-    )
-    W5: float | None = field(
-        default=None, metadata={"help": "weight of term (7), reward per mm of kit fitness"}
-    )
-    W6: float | None = field(
-        default=None,
-        metadata={"help": "weight of the overlap area Z (mm^2) in the kit fitness (Eq. 11)"},
-    )
-    W7: float | None = field(
-        default=None,
-        metadata={"help": "weight of the W7 term (Sec. V-B), per part not yet available"},
-    )
-    samples: int = field(  # one CE iteration scores every sample: 10^6 took 30 s and 0.5 GB
-        default=200,
-        metadata={"help": "CE samples per iteration (2 to 20,000)", "min": 2, "max": 20_000},
-    )
-    elite: int = field(
-        default=30,
-        metadata={
-            "help": "CE elite samples the mean and covariance are refitted to (<= samples)",
-            "min": 2,
-        },
-    )
-    max_iter: int = field(default=100, metadata={"help": "CE iteration cap", "min": 1})
-    tol: float = field(
-        default=1e-4,
-        metadata={
-            "help": "CE convergence: relative change of the elite threshold (unitless, >= 0)",
-            "min": 0.0,
-        },
-    )
-    patience: int = field(
-        default=10, metadata={"help": "CE convergence: iterations within tol", "min": 1}
-    )
-    init_sd_frac: float = field(
-        default=0.25,
-        metadata={"help": "CE initial sd of x, y as a fraction of the tray side (> 0)"},
-    )
-    init_sd_theta: float = field(
-        default=30.0, metadata={"help": "CE initial sd of the angles, degrees", "min": 0.0}
-    )
-    min_sd: float = field(
-        default=0.5,
-        metadata={"help": "CE floor of the sd (> 0): mm for positions, degrees for angles"},
-    )
-    out_weight: float | None = field(
-        default=None,
-        metadata={"help": "CE penalty per mm of tray overhang (>= 0; none: automatic)", "min": 0.0},
-    )
-    precision: Literal["float32", "float64"] = field(
-        default="float32", metadata={"help": "CE precision of sample scoring (results are float64)"}
-    )
-    repair: bool = field(
-        default=True,
-        metadata={"help": "push overlapping CE candidates apart before rejecting them"},
-    )
-    restart_sd_scale: float = field(
-        default=0.1,
-        metadata={
-            "help": "CE sd of a run from a given layout, relative to a random start (>= 0)",
-            "min": 0.0,
-        },
-    )
-    mirrored: bool = field(
-        default=True, metadata={"help": "CE mirrored (antithetic) sampling: mu + L z and mu - L z"}
-    )
-    smoothing: float = field(
-        default=1.0, metadata={"help": "CE mean update smoothing, in (0, 1]", "max": 1.0}
-    )
-    cov_smoothing: float = field(
-        default=0.3, metadata={"help": "CE covariance update smoothing, in (0, 1]", "max": 1.0}
-    )
-    snap: bool = field(
-        default=False,
-        metadata={
-            "help": "turn each CE angle to the nearest quarter turn where the layout stays "
-            "valid and its fitness does not drop"
-        },
-    )
-
-    def __post_init__(self) -> None:
-        try:
-            self.ce_params()
-        except UsageError as exc:  # parse_options names the method and turns this into one
-            raise ValueError(str(exc)) from None
-
-    def ce_params(self) -> CEParams:
-        """The cross-entropy fields as :class:`CEParams`."""
-        return CEParams(**{f.name: getattr(self, f.name) for f in fields(CEParams)})
-
-    def to_params(self) -> GreedyParams:
-        """The same options as the policy's :class:`GreedyParams`."""
-        weights = {w: getattr(self, w) for w in _WEIGHT_NAMES if getattr(self, w) is not None}
-        return GreedyParams(
-            horizon=self.horizon,
-            weights=weights or None,
-            signed=self.signed,
-            precedence=self.precedence,
-            decision=self.decision,
-            max_prefix_sets=self.max_prefix_sets,
-            beam_width=self.beam_width,
-            max_rest_nodes=self.max_rest_nodes,
-            ce=self.ce_params(),
-            polish=self.polish,
-        )
-
-
-#: Every option at its default.
-DEFAULT_OPTIONS = GreedyCEOptions()
 
 
 @dataclass(frozen=True)
@@ -356,11 +186,17 @@ class GreedyCEPolicy:
             self.stats.fitness_cache_hits += 1
             return hit
         code = [self._types.index(t) * 1000 + n for t, n in key]
-        rng = np.random.default_rng(np.random.SeedSequence([self.seed, *code]))
         self.stats.ce_calls += 1
-        arr = arrange(
-            self.instance, dict(key), rng=rng, params=self.params.ce, w6=self.instance.weights["W6"]
-        )
+
+        def run() -> Arrangement:
+            rng = np.random.default_rng(np.random.SeedSequence([self.seed, *code]))
+            w6 = self.instance.weights["W6"]
+            return arrange(self.instance, dict(key), rng=rng, params=self.params.ce, w6=w6)
+
+        with ce_deadline(self.deadline):  # past the time limit, CE runs stop early
+            arr = run()
+        if not arr.fits and self.past_deadline():
+            arr = run()  # a run cut short proves nothing: "does not fit" takes a whole one
         if not arr.fits:
             self.stats.kits_not_fitting += 1
         elif self.params.polish:
@@ -488,27 +324,36 @@ class GreedyCEPolicy:
         s, col = divmod(flat, length)
         return seqs[s, : col + 1].tolist(), float(score[flat])
 
-    def _exact(self, state: PolicyState, done: set[int], length: int) -> tuple[list[int], float]:
-        """The search over closed prefix sets (:mod:`.greedy_search`): same minimum, same kit."""
+    def _exact(
+        self, state: PolicyState, done: set[int], length: int
+    ) -> tuple[list[int], float | None] | None:
+        """The search over closed prefix sets (:mod:`.greedy_search`): same minimum, same kit;
+        None when the time limit passes before every new part multiset has its layout (as
+        :meth:`_enumerate`)."""
         mask = np.zeros(len(self._ids), dtype=bool)
         mask[list(done)] = True
         search = self._search
         before = (search.stats.evaluated, search.stats.prefix_sets)
-        choice = search.decide(
-            mask,
-            length,
-            state.human_remaining,
-            available_vector(state.available, self._types),
-            self._fitness,
-            self.params.signed,
-            self._cached_fitness,
-        )
+        fitness = timed(self._fitness, self._cached_fitness, self.past_deadline)
+        timed_out = False
+        try:
+            choice = search.decide(
+                mask,
+                length,
+                state.human_remaining,
+                available_vector(state.available, self._types),
+                fitness,
+                self.params.signed,
+                self._cached_fitness,
+            )
+        except OutOfTime:
+            choice, timed_out = None, True
         st = search.stats
         self.stats.candidates += st.evaluated - before[0]
         for f in fields(SearchStats):
             setattr(self.stats, f.name, getattr(st, f.name))
         if choice is None:
-            return [], math.inf
+            return None if timed_out else ([], math.inf)
         return list(choice.prefix), choice.score
 
     def _cheap(self, done: set[int]) -> tuple[list[int], float | None]:
@@ -533,14 +378,14 @@ class GreedyCEPolicy:
         if self.deadline is not None and time.perf_counter() > self.deadline:
             self.stats.time_limit_hit = True
             prefix, best_score = self._cheap(done)
-        elif self.params.precedence == "penalty" or self.params.decision == "enumerate":
-            found: tuple[list[int], float | None] | None = self._enumerate(state, done, length)
+        else:
+            enumerate_ = self.params.precedence == "penalty" or self.params.decision == "enumerate"
+            decision = self._enumerate if enumerate_ else self._exact
+            found: tuple[list[int], float | None] | None = decision(state, done, length)
             if found is None:
                 self.stats.time_limit_hit = True
                 found = self._cheap(done)
             prefix, best_score = found
-        else:
-            prefix, best_score = self._exact(state, done, length)
         if not prefix:
             raise KitDoesNotFit(
                 f"{inst.source}: no next kit fits the tray: every candidate "

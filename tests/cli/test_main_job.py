@@ -28,8 +28,10 @@ def test_two_runs_of_the_main_job_print_the_same_table(tmp_path):
     for run in ("a", "b"):
         md = tmp_path / run / "compare.md"
         done = subprocess.run(
-            [str(BIN / "bilevel-kit"), "compare", str(ROOT / "instances" / "hrc_table.json")]
-            + ["--methods", "default", "--md", str(md), "-q"],
+            [
+                *(str(BIN / "bilevel-kit"), "compare", str(ROOT / "instances" / "hrc_table.json")),
+                *("--methods", "default", "--md", str(md), "-q"),
+            ],
             capture_output=True,
             text=True,
             timeout=600,

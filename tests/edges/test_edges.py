@@ -721,6 +721,13 @@ ISSUE_23B_ROWS: dict[str, Row] = {
         "--time-limit 2 s is shorter than greedy-ce's set-up for 60,000 tasks",
         "give at least 11 s",
     ),
+    # issue 35, item 8: a CE cap whose trace alone outgrows memory, refused with its range
+    "greedy-ce max_iter 1e7": row(
+        "solve {i} -m greedy-ce -p max_iter=10000000 --time-limit 2", 2, "'max_iter'", "1000000"
+    ),
+    "greedy-ce patience 1e7": row(
+        "solve {i} -m greedy-ce -p patience=10000000", 2, "'patience'", "1000000"
+    ),
     "pack 10,000 parts": bad_pack(_set("items.0.count", 10_000), "$.items[0].count"),
     "compare --methods empty": argv_row(
         ["compare", "{i}", "--methods", ""], 2, "--methods", "at least one"

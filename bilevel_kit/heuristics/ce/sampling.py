@@ -6,8 +6,11 @@ loop here; both take their normals from the same random stream."""
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -68,6 +71,32 @@ class Run:
     trace: list[float]
     iterations: int
     converged: bool
+
+
+#: ``time.perf_counter()`` past which a run stops early (None: no deadline); set by
+#: :func:`deadline` around a method's lower-level calls.
+_DEADLINE: ContextVar[float | None] = ContextVar("ce_deadline", default=None)
+#: Iterations a run always does before a deadline may stop it: a start for the best sample
+#: (a run of a 30-part kit takes seconds, and ``max_iter=100000 tol=0`` minutes, which
+#: carried greedy-ce's 5 s limit to 14-43 s: docs/cli.md#time-limits).
+MIN_ITER_BEFORE_DEADLINE = 10
+
+
+@contextlib.contextmanager
+def deadline(at: float | None) -> Iterator[None]:
+    """Inside, every CE run stops (not converged, its best so far) once ``at``
+    (``time.perf_counter()``) has passed and it did :data:`MIN_ITER_BEFORE_DEADLINE`
+    iterations."""
+    token = _DEADLINE.set(at)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def _out_of_time(it: int) -> bool:
+    at = _DEADLINE.get()
+    return at is not None and it >= MIN_ITER_BEFORE_DEADLINE and time.perf_counter() > at
 
 
 #: OpenBLAS runs a GEMM single-threaded when m*n*k is at most 65536 * 4. Threaded GEMMs of
@@ -152,6 +181,8 @@ def _ce_run_numpy(
         _refit(st, X, cost, p)
         if _converged(st.gammas, it, p):
             converged = True
+            break
+        if _out_of_time(it):
             break
     return Run(st.best, st.best_feasible, st.mu, st.trace, it, converged)
 
@@ -289,7 +320,7 @@ def _ce_run_compiled(
     )
     arrays = (mu, cov, L, X, scorer.exT, scorer.eyT, scorer.cost, scorer.z)
     it = 0
-    while it < p.max_iter and state[2] == 0.0:
+    while it < p.max_iter and state[2] == 0.0 and not _out_of_time(it):
         pool = _standard_normal_pool(gen, dim, m, dt)
         n_it = min(_POOL, p.max_iter - it)
         args = (*arrays, *statics, p.elite, fparams, p.patience)

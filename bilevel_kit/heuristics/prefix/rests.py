@@ -55,9 +55,10 @@ class SumTable:
     def build(cls, robot: np.ndarray, kmax: int) -> SumTable | None:
         vals, vidx = np.unique(robot, return_inverse=True)
         n_vals = len(vals)
-        if kmax < 1 or sum(math.comb(n_vals + k - 1, k) for k in range(1, kmax + 1)) > (
-            MAX_SUM_COMBOS
-        ):
+        # a rest holds at most every task but one: a horizon beyond the tasks changes nothing,
+        # and the count stops at the cap (a horizon of 1e9 summed 1e9 binomials first)
+        kmax = min(kmax, len(robot) - 1)
+        if kmax < 1 or not _combos_within(n_vals, kmax, MAX_SUM_COMBOS):
             return None
         tables = {}
         for k in range(1, kmax + 1):
@@ -71,6 +72,17 @@ class SumTable:
             order = np.argsort(sums, kind="stable")
             tables[k] = (combos[order], rank[order], sums[order])
         return cls(vals, vidx.reshape(-1), tables)
+
+
+def _combos_within(n_vals: int, kmax: int, cap: int) -> bool:
+    """Do the multisets of 1..``kmax`` of ``n_vals`` values number at most ``cap``? Stops
+    as soon as the count passes the cap, so a huge ``kmax`` costs a few steps."""
+    total = 0
+    for k in range(1, kmax + 1):
+        total += math.comb(n_vals + k - 1, k)
+        if total > cap:
+            return False
+    return True
 
 
 class RestSearch:
