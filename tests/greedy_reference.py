@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from bilevel_kit import load, solve
+from bilevel_kit import check, load, solve
 from bilevel_kit.generate import generate
 from bilevel_kit.instance import Instance, from_dict
 
@@ -57,9 +57,11 @@ def instance_of(source: str) -> Instance:
 
 def snapshot(source: str, options: dict[str, Any], time_limit: float | None) -> dict[str, Any]:
     """What the decisions fix: kits (tasks, layout), the makespan and the chosen scores."""
-    res = solve(instance_of(source), "greedy-ce", seed=0, time_limit=time_limit, **options)
+    inst = instance_of(source)
+    res = solve(inst, "greedy-ce", seed=0, time_limit=time_limit, **options)
     assert res.plan is not None
     return {
+        "violations": [v.kind for v in check(inst, res.plan)],
         "makespan": res.objective,
         "kits": [
             {
