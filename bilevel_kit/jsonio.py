@@ -105,6 +105,12 @@ def read_json(path: str | Path, error: ErrorType, *, long_ints: bool = False) ->
         raise error(src, "$", "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise error(src, "$", f"cannot read file ({exc.__class__.__name__}: {exc})") from None
+    return parse_json(text, src, error, long_ints=long_ints)
+
+
+def parse_json(text: str, src: str, error: ErrorType, *, long_ints: bool = False) -> Any:
+    """Parse the JSON text of the file ``src`` as strictly as :func:`read_json` (a cell on a
+    worker parses the document it carries, not a file: docs/cluster.md)."""
     suspect = [False]  # a duplicate key or a NaN/Infinity literal was seen
 
     def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:

@@ -114,7 +114,7 @@ def _run(args: argparse.Namespace) -> int:
             manifest=manifest,
         )
         for row in result.rows:
-            if row["status"] == "error":
+            if row["status"] == "error" and not result.all_failed:  # else one line says so
                 print(f"{row['instance']} / {row['method']}: {row['error']}", file=sys.stderr)
         print(f"{Path(args.out) / 'results.md'}:")
         print("\n".join(_summary_lines(result.summary)))
@@ -122,7 +122,7 @@ def _run(args: argparse.Namespace) -> int:
         if any(r["valid"] is False for r in result.rows):
             print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
             code = EXIT_INVALID
-        return sweep_exit(session, code, result.failed)
+        return sweep_exit(session, code, result.failed, result.all_failed)
 
 
 def _summary_lines(summary: list[dict[str, Any]]) -> list[str]:

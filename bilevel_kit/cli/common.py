@@ -401,10 +401,17 @@ def sweep_session(args: argparse.Namespace) -> AbstractContextManager[SweepSessi
     return session(args.jobs, scheduler, progress=False if args.quiet else None, connect=True)
 
 
-def sweep_exit(session: SweepSession, code: int, failed: int | None = None) -> int:
+def sweep_exit(
+    session: SweepSession, code: int, failed: int | None = None, all_failed: str | None = None
+) -> int:
     """:data:`EXIT_FAILED`, with a line on stderr, when cells failed (``failed``, default:
-    those computed in the session); it wins over ``code``: the results are incomplete."""
+    those computed in the session); it wins over ``code``: the results are incomplete.
+    ``all_failed``: the line for a sweep whose every cell failed
+    (:func:`~bilevel_kit.experiments.cells.all_failed_line`), said instead of the count."""
     n = session.failed if failed is None else failed
+    if all_failed:
+        print(all_failed, file=sys.stderr)
+        return EXIT_FAILED
     if n:
         print(f"{n} cell(s) failed (see their error records)", file=sys.stderr)
         return EXIT_FAILED

@@ -116,6 +116,8 @@ def parse_methods(text: str) -> list[str]:
 
 def run(args: argparse.Namespace) -> int:
     from ..experiments import CompareCell, add_best_bound_gap, compare_cell, run_cells
+    from ..experiments.cells import all_failed_line
+    from ..experiments.compare import instance_fields
     from ..instance import load
     from ..methods import get_method
 
@@ -126,9 +128,9 @@ def run(args: argparse.Namespace) -> int:
     overrides = instance_overrides(args)
     for path in args.instances:  # validate every input before any solve or write
         load(path).with_overrides(**overrides)
-    cells = [
-        CompareCell(str(path), m, args.seed, args.time_limit, params[m], overrides)
-        for path in args.instances
+    cells = [  # each carries its file's text, read once per file (docs/cluster.md)
+        CompareCell(str(path), m, args.seed, args.time_limit, params[m], overrides, *fields)
+        for path, fields in ((p, instance_fields(p)) for p in args.instances)
         for m in methods
     ]
     from .solve import prepare
@@ -137,8 +139,10 @@ def run(args: argparse.Namespace) -> int:
     with sweep_session(args) as session:
         raw = run_cells(cells, compare_cell, cell_dir=args.cells, desc="compare")
         records = add_best_bound_gap(_named(c, r) for c, r in zip(cells, raw, strict=True))
-        code = _report(args, records)
-        return sweep_exit(session, code, sum(r["status"] == "error" for r in records))
+        everything = all_failed_line("compare", records)  # one line, not one per cell
+        code = _report(args, records, quiet_errors=everything is not None)
+        failed = sum(r["status"] == "error" for r in records)
+        return sweep_exit(session, code, failed, everything)
 
 
 def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
@@ -157,15 +161,18 @@ def _named(cell: CompareCell, record: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _report(args: argparse.Namespace, records: list[dict[str, Any]]) -> int:
-    """The table on stdout, errors on stderr, the requested files; exit 1 on an invalid plan
-    or a false claim, else 3 when a method gave no plan."""
+def _report(
+    args: argparse.Namespace, records: list[dict[str, Any]], quiet_errors: bool = False
+) -> int:
+    """The table on stdout, errors on stderr (not with ``quiet_errors``: every cell failed,
+    one line says so), the requested files; exit 1 on an invalid plan or a false claim, else
+    3 when a method gave no plan."""
     from ..experiments import format_markdown, format_table, write_csv
     from ..experiments.compare import inconsistencies
 
     print(format_table(records))
     for r in records:
-        if r["status"] == "error":
+        if r["status"] == "error" and not quiet_errors:
             print(f"{r['instance']} / {r['method']}: {r['error']}", file=sys.stderr)
     if args.figures:
         _figures(records, args.figures, instance_overrides(args))

@@ -9,8 +9,10 @@ into a JSON-serialisable record.
 Only this process (the client) writes results: each record is saved as
 ``<cell_dir>/<key>.json`` through :mod:`bilevel_kit.atomic` as soon as it arrives, so a rerun
 skips every finished cell and an interrupted sweep (Ctrl-C, a killed client) loses only the
-cells in flight. A cell that raises becomes an *error record* (``status: "error"``, the error,
-its traceback and the cell's configuration); the sweep goes on and a rerun retries it.
+cells in flight. A record names the code that computed it (:mod:`.provenance`); a rerun
+recomputes the cells other code made (docs/cluster.md#cells-and-the-code-that-made-them). A
+cell that raises becomes an *error record* (``status: "error"``, the error, its traceback and
+the cell's configuration); the sweep goes on and a rerun retries it.
 
 Where cells run is an :class:`Executor`: :class:`SerialExecutor` (in order, in this process,
 without importing Dask) or :class:`DaskExecutor` (a ``distributed.Client`` on a
@@ -39,6 +41,7 @@ import numpy as np
 
 from .. import atomic
 from ..interrupt import on_forced_exit, remove_path
+from .provenance import CODE, code_identity, describe, reusable, without_code
 
 if TYPE_CHECKING:
     from distributed import Client, LocalCluster
@@ -69,9 +72,12 @@ class Executor(Protocol):
 
 
 def cell_config(cell: Any) -> Any:
-    """The cell's configuration as plain data (a dataclass as a dict, else its ``repr``)."""
+    """The cell's configuration as plain data (a dataclass as a dict without the fields it
+    names ``unrecorded``, e.g. an instance's text; else its ``repr``)."""
     if dataclasses.is_dataclass(cell) and not isinstance(cell, type):
-        return json.loads(json.dumps(dataclasses.asdict(cell), default=str))
+        skip = getattr(cell, "unrecorded", ())
+        config = {k: v for k, v in dataclasses.asdict(cell).items() if k not in skip}
+        return json.loads(json.dumps(config, default=str))
     return repr(cell)
 
 
@@ -89,6 +95,16 @@ def error_record(cell: Any, exc: BaseException, tb: str | None = None) -> Record
 def is_failed(record: Record) -> bool:
     """A record whose cell raised (or, for ``compare``, whose solve reported an error)."""
     return record.get("status") == "error"
+
+
+def all_failed_line(desc: str, records: Sequence[Record]) -> str | None:
+    """One line for a sweep whose every cell failed (``None`` otherwise, or without cells):
+    there is nothing to tabulate or draw, and one error repeated N times is no news."""
+    if not records or not all(is_failed(r) for r in records):
+        return None
+    errors = [" ".join(str(r.get("error") or "no error message").split()) for r in records]
+    how = "each with" if len(set(errors)) == 1 else "the first with"
+    return f"{desc}: all {len(records)} cells failed ({how} {errors[0]})"
 
 
 def fresh_process_state() -> None:
@@ -111,9 +127,10 @@ class Guarded:
     def __call__(self, cell: Any) -> Record:
         try:
             fresh_process_state()
-            return self.fn(cell)
+            record = self.fn(cell)
         except Exception as exc:
-            return error_record(cell, exc)
+            record = error_record(cell, exc)
+        return {**record, CODE: code_identity()}  # the code that computed it: the worker's
 
 
 # ---------------------------------------------------------------------------------------------
@@ -377,6 +394,15 @@ class SweepReport:
     failed: int = 0
     wall_s: float = 0.0
     interrupted: bool = False
+    stale: int = 0  # saved cells of other code, recomputed (counted in done/failed)
+    foreign: int = 0  # cells computed now by workers running other code than this process
+
+    def foreign_line(self) -> str:
+        """The line saying that workers ran other code (a rerun recomputes their cells)."""
+        return (
+            f"{self.desc}: {self.foreign} cells were computed by workers running other code "
+            f"than this client ({describe(code_identity())}); a rerun recomputes them"
+        )
 
     def line(self) -> str:
         """The one-line summary printed at the end of a sweep."""
@@ -520,7 +546,8 @@ def run_sweep(
     """Run ``fn`` on every cell without a saved record; return all records in cell order and
     the sweep's report.
 
-    Records of cells already saved under ``cell_dir`` are read back; new ones are saved as
+    Records of cells already saved under ``cell_dir`` by this code are read back (the others
+    are recomputed, and one line on stderr says how many); new ones are saved as
     they arrive (one client per ``cell_dir``: it also removes the temporary files a killed
     client left behind). Without ``cell_dir`` nothing is saved. Where cells run: ``executor``
     if given, else the active :func:`sweep_session`'s (it overrides ``jobs``), else
@@ -539,9 +566,10 @@ def run_sweep(
         for tmp in folder.glob(".*.json.*.json"):  # a killed client's half-written file
             tmp.unlink(missing_ok=True)
     paths = [cell_file(folder, c.key()) if folder is not None else None for c in cells]
-    records: list[Record | None] = [_saved(p) for p in paths]
+    loud = session is None or session.summary
+    records, stale = reusable([_saved(p) for p in paths], code_identity(), desc, loud)
     todo = [i for i, r in enumerate(records) if r is None]
-    report = SweepReport(desc, len(cells), skipped=len(cells) - len(todo))
+    report = SweepReport(desc, len(cells), skipped=len(cells) - len(todo), stale=stale)
     owned = None  # an executor started here, closed here
     if executor is None:
         if session is not None:
@@ -564,7 +592,8 @@ def run_sweep(
             path = paths[i]
             if path is not None:
                 write_json(path, rec)
-            records[i] = rec
+            records[i] = without_code(rec)
+            report.foreign += rec.get(CODE, code_identity()) != code_identity()
             if is_failed(rec):
                 report.failed += 1
                 bar.set_postfix(failed=report.failed)
@@ -580,6 +609,8 @@ def run_sweep(
         if owned is not None:
             owned.close()
         report.wall_s = time.perf_counter() - t0
+        if report.foreign and loud:
+            print(report.foreign_line(), file=sys.stderr, flush=True)
         if session is not None:
             session.reports.append(report)
             if session.summary:

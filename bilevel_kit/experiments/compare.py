@@ -17,21 +17,41 @@ if TYPE_CHECKING:
 
 class SolveCell:
     """The base of the comparison and benchmark cells (frozen dataclasses, one solve of one
-    instance file each): the instance's digest, the key, the record's first fields, the solve."""
+    instance file each): the instance's digest and text, the key, the record's first fields,
+    the solve.
+
+    The cell carries the instance file's text (:attr:`document`), read when the cell is made,
+    so a worker needs no file system shared with the client, nor the client's working folder
+    (docs/cluster.md#a-cluster-by-hand); the path only names the file in records and messages.
+    """
 
     __dataclass_fields__: ClassVar[dict[str, Any]]
-    #: Fields left out of :meth:`key`.
-    unkeyed: ClassVar[tuple[str, ...]] = ("instance",)
+    #: Fields left out of :meth:`key` (the document: :attr:`instance_sha256` is its digest).
+    unkeyed: ClassVar[tuple[str, ...]] = ("instance", "document")
+    #: Fields left out of an error record's copy of the cell (:func:`.cells.cell_config`).
+    unrecorded: ClassVar[tuple[str, ...]] = ("document",)
     instance: str  # path of the instance file
     instance_sha256: str  # the file's content digest, filled in when the cell is made
+    document: str  # the file's text, filled in when the cell is made
     method: str
     seed: int
     time_limit: float | None
     params: dict[str, Any]
 
     def __post_init__(self) -> None:
-        if not self.instance_sha256:
-            object.__setattr__(self, "instance_sha256", file_digest(self.instance))
+        if not self.instance_sha256 or not self.document:
+            digest, text = instance_fields(self.instance)
+            if not self.instance_sha256:
+                object.__setattr__(self, "instance_sha256", digest)
+            if not self.document and digest == self.instance_sha256:
+                object.__setattr__(self, "document", text)
+
+    def load(self) -> Instance:
+        """The cell's instance, from the text it carries (from the file when it carries none:
+        the file could not be read, and the loader says why)."""
+        from ..instance import load, loads
+
+        return loads(self.document, self.instance) if self.document else load(self.instance)
 
     def key(self) -> str:
         """A stable file-name key for this cell's saved result: the instance's stem, method
@@ -78,28 +98,41 @@ class CompareCell(SolveCell):
     params: dict[str, Any] = field(default_factory=dict)
     overrides: dict[str, Any] = field(default_factory=dict)  # delivery_time, weights, ...
     instance_sha256: str = ""  # the file's content digest, filled in when the cell is made
+    document: str = field(default="", repr=False)  # the file's text, filled in likewise
 
 
 def file_digest(path: str | Path) -> str:
     """SHA-256 of a file's bytes (empty string when it cannot be read: the cell then fails
     with the loader's message)."""
+    return instance_fields(path)[0]
+
+
+def instance_fields(path: str | Path) -> tuple[str, str]:
+    """The SHA-256 of a file's bytes and its text, read once (both empty when it cannot be
+    read, the text empty when it is not UTF-8: the cell then fails with the loader's
+    message). Cells of one file made from one call share its text."""
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        data = Path(path).read_bytes()
     except OSError:
-        return ""
+        return "", ""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = ""
+    return hashlib.sha256(data).hexdigest(), text
 
 
 def compare_cell(cell: CompareCell) -> dict[str, Any]:
     """Solve one cell and return its record (metrics, status, bound, checker verdict)."""
     from ..errors import BilevelKitError
-    from ..instance import load
+    from .cells import cell_config
 
-    inst = load(cell.instance).with_overrides(**cell.overrides)
+    inst = cell.load().with_overrides(**cell.overrides)
     record: dict[str, Any] = {**cell.head(inst.name), "n_tasks": inst.n_tasks}
     try:
         res = cell.solve(inst)
     except BilevelKitError as exc:  # a failed cell: its error and its configuration
-        return {**record, "status": "error", "error": str(exc), "cell": asdict(cell)}
+        return {**record, "status": "error", "error": str(exc), "cell": cell_config(cell)}
     from ..solution import result_to_dict
     from ..validate import CLAIM_KINDS
 

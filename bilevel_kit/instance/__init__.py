@@ -32,7 +32,7 @@ from .model import (
     Tray,
     topological_order,
 )
-from .parser import document, from_dict, load, read_json
+from .parser import document, from_dict, load, loads, read_json
 from .ranges import (
     ID_PATTERN,
     MAX_LENGTH,
@@ -72,6 +72,7 @@ __all__ = [
     "document",
     "from_dict",
     "load",
+    "loads",
     "parse_trays",
     "read_json",
     "schema",

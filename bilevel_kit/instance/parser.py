@@ -43,6 +43,12 @@ def load(path: str | Path) -> Instance:
     return from_dict(read_json(path, InstanceError), str(path))
 
 
+def loads(text: str, source: str) -> Instance:
+    """Validate the text of the instance file ``source`` (read elsewhere: a cell carries its
+    instance's text to the worker, docs/cluster.md); errors name ``source`` as :func:`load`'s."""
+    return from_dict(jsonio.parse_json(text, source, InstanceError), source)
+
+
 def document(
     name: str,
     part_types: list[dict[str, Any]],

@@ -14,13 +14,15 @@ from bilevel_kit.experiments import (
     run_cells_counted,
     write_csv,
 )
+from bilevel_kit.experiments.provenance import code_identity
 
 
 def test_resume_computes_only_missing_cells(tmp_path):
     cells = [Square(i) for i in range(4)]
     recs, n = run_cells_counted(cells, square, cell_dir=tmp_path, progress=False)
     assert n == 4 and [r["y"] for r in recs] == [0, 1, 4, 9]
-    assert json.loads((tmp_path / "sq2.json").read_text()) == {"x": 2, "y": 4}
+    saved = json.loads((tmp_path / "sq2.json").read_text())
+    assert saved == {"x": 2, "y": 4, "code": code_identity()}  # the code, on disk only
     (tmp_path / "sq1.json").unlink()
     seen = []
 

@@ -9,6 +9,7 @@ or written twice.
 from __future__ import annotations
 
 import contextlib
+import csv
 import json
 import os
 import signal
@@ -35,9 +36,9 @@ CLI = "from bilevel_kit.cli import main; raise SystemExit(main())"
 pytestmark = pytest.mark.slow
 
 
-def _spawn(args: list[str], log: Path) -> subprocess.Popen[bytes]:
+def _spawn(args: list[str], log: Path, cwd: Path = ROOT) -> subprocess.Popen[bytes]:
     with open(log, "wb") as fh:
-        return subprocess.Popen(args, cwd=ROOT, env=ENV, stdout=fh, stderr=subprocess.STDOUT)
+        return subprocess.Popen(args, cwd=cwd, env=ENV, stdout=fh, stderr=subprocess.STDOUT)
 
 
 def _stop(proc: subprocess.Popen[bytes]) -> None:
@@ -52,9 +53,10 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
 
 
 class Cluster:
-    """A scheduler and two workers (``--no-nanny``: the worker's PID is the worker)."""
+    """A scheduler and ``n`` workers (``--no-nanny``: the worker's PID is the worker), all
+    started in the folder ``cwd``."""
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, n: int = 2, cwd: Path = ROOT) -> None:
         self.folder = folder
         sfile = folder / "scheduler.json"
         self.scheduler = _spawn(
@@ -64,6 +66,7 @@ class Cluster:
                 *("--scheduler-file", str(sfile)),
             ],
             folder / "scheduler.log",
+            cwd,
         )
         deadline = time.monotonic() + 30
         while not sfile.exists() or not sfile.read_text().strip():
@@ -78,13 +81,15 @@ class Cluster:
                     *("--host", "127.0.0.1", "--name", f"w{i}"),
                 ],
                 folder / f"worker{i}.log",
+                cwd,
             )
-            for i in range(2)
+            for i in range(n)
         ]
         from distributed import Client
 
         with Client(self.address, timeout=30) as client:
-            client.wait_for_workers(2, timeout=30)
+            client.wait_for_workers(n, timeout=30)
+            self.worker_cwds = set(client.run(os.getcwd).values())
 
     def close(self) -> None:
         for proc in [*self.workers, self.scheduler]:
@@ -250,3 +255,55 @@ def test_a_scheduler_that_is_not_there_is_reported_before_dask_s_timeout(tmp_pat
     assert "no Dask scheduler to connect to" in err[0]
     assert kind != "refused" or "Connection refused" in err[0]
     assert not out.exists() and seconds < 25  # Dask alone took its 30 s timeout
+
+
+def test_cells_carry_their_instances_to_workers_in_another_folder(tmp_path, root):
+    """A worker started in another folder (as on any cluster node) cannot read the client's
+    relative instance paths: the cells carry the instance documents (docs/cluster.md)."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    cluster = Cluster(tmp_path, n=1, cwd=elsewhere)
+    try:
+        assert cluster.worker_cwds == {str(elsewhere)}  # not the client's folder
+        sweep = ["-q", "--scheduler", cluster.address]
+        compare = ["compare", "instances/tiny.json", "--methods", "single-task,whole-assembly"]
+        out = tmp_path / "compare.csv"
+        proc = subprocess.run(
+            [sys.executable, "-c", CLI, *compare, *sweep, "--csv", str(out)],
+            cwd=ROOT,
+            env=ENV,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert "compare: 2 done, 0 skipped, 0 failed of 2 cells" in proc.stderr
+        here = tmp_path / "here.csv"
+        assert (
+            main([*compare[:1], str(root / compare[1]), *compare[2:], "-q", "--csv", str(here)])
+            == 0
+        )
+
+        def rows(path: Path) -> list[tuple[str, str, str, str]]:
+            with path.open() as fh:
+                return [
+                    (r["method"], r["status"], r["makespan"], r["n_kits"])
+                    for r in csv.DictReader(fh)
+                ]
+
+        assert rows(out) == rows(here) and rows(out)[0][1] == "feasible"
+        bench = ["bench", "run", "--methods", "single-task", "--filter", "tasks<=12"]
+        run = tmp_path / "bench"
+        proc = subprocess.run(
+            [sys.executable, "-c", CLI, *bench, *sweep, "--out", str(run)],
+            cwd=ROOT,
+            env=ENV,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert "bench: 9 done, 0 skipped, 0 failed of 9 cells" in proc.stderr
+        assert (run / "profile.png").is_file() and (run / "gap_size.png").is_file()
+    finally:
+        cluster.close()

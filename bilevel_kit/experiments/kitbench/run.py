@@ -39,20 +39,21 @@ class BenchCell(SolveCell):
     seed: int = 0
     params: dict[str, Any] = field(default_factory=dict)
     instance_sha256: str = ""  # the file's digest, filled in when the cell is made
-    commit: str = ""  # the code's version: recorded, not part of the key
+    commit: str = ""  # the code's commit: recorded, not part of the key
+    document: str = field(default="", repr=False)  # the file's text, filled in likewise
 
-    #: a rerun with new code resumes
-    unkeyed: ClassVar[tuple[str, ...]] = ("instance", "commit")
+    #: the commit is recorded only: whether a saved cell's code is this code is the cell
+    #: runner's check of the record's code identity (docs/cluster.md)
+    unkeyed: ClassVar[tuple[str, ...]] = ("instance", "document", "commit")
 
 
 def bench_cell(cell: BenchCell) -> dict[str, Any]:
     """Solve one cell; a method that declines the instance (a size it refuses, a kit it
     cannot lay out) gives a ``refused`` record, another reported error an ``error`` one."""
     from ...errors import BilevelKitError, KitDoesNotFit, UsageError
-    from ...instance import load
     from ...solution import result_to_dict
 
-    inst = load(cell.instance)
+    inst = cell.load()
     record: dict[str, Any] = {
         "format": CELL_FORMAT,
         **cell.head(inst.name),
@@ -88,19 +89,28 @@ def make_cells(
     params: dict[str, dict[str, Any]],
     commit: str,
 ) -> list[BenchCell]:
-    """One cell per (instance, method), instances in index order."""
-    return [
-        BenchCell(
-            str(library.instance_path(r.instance)),
-            m,
-            time_limit,
-            seed,
-            dict(params.get(m, {})),
-            commit=commit,
-        )
-        for r in records
-        for m in methods
-    ]
+    """One cell per (instance, method), instances in index order; the cells of one instance
+    share its text, read once."""
+    from ..compare import instance_fields
+
+    cells = []
+    for r in records:
+        path = str(library.instance_path(r.instance))
+        digest, text = instance_fields(path)
+        cells += [
+            BenchCell(
+                path,
+                m,
+                time_limit,
+                seed,
+                dict(params.get(m, {})),
+                instance_sha256=digest,
+                commit=commit,
+                document=text,
+            )
+            for m in methods
+        ]
+    return cells
 
 
 # ---------------------------------------------------------------------------------------------
@@ -221,6 +231,7 @@ class BenchRun:
     summary: list[dict[str, Any]]
     files: list[Path]
     failed: int
+    all_failed: str | None = None  # the line of a run whose every cell failed
 
 
 def run_bench(
@@ -236,7 +247,7 @@ def run_bench(
 ) -> BenchRun:
     """Run every (record, method) cell under ``out/cells`` (resumable) and write
     ``results.csv``, ``results.md``, ``profile.png``, ``gap_size.png`` and ``run.json``."""
-    from ..cells import run_sweep, write_json
+    from ..cells import all_failed_line, run_sweep, write_json
     from ..tables import write_csv
     from .library import code_version
     from .report import run_markdown
@@ -259,6 +270,7 @@ def run_bench(
         },
     )
     raw, _ = run_sweep(cells, bench_cell, cell_dir=folder / "cells", desc="bench")
+    raw = [_named(c, r) for c, r in zip(cells, raw, strict=True)]
     rows = result_rows(records, raw)
     table = summary(rows, methods)
     files = [
@@ -270,7 +282,15 @@ def run_bench(
     write_text(files[1], run_markdown(rows, table, methods, time_limit))
     files += write_figures(rows, methods, folder, time_limit)
     failed = sum(c.get("status") == "error" for c in raw)
-    return BenchRun(rows, table, files, failed)
+    return BenchRun(rows, table, files, failed, all_failed_line("bench", raw))
+
+
+def _named(cell: BenchCell, record: dict[str, Any]) -> dict[str, Any]:
+    """A cell's record with its instance and method even when the cell raised (an error
+    record of the runner names neither; a library instance's name is its file's stem)."""
+    if "method" in record:
+        return record
+    return {"instance": Path(cell.instance).stem, "method": cell.method, **record}
 
 
 def write_figures(
@@ -280,17 +300,21 @@ def write_figures(
     time_limit: float | None,
     stem: str = "",
 ) -> list[Path]:
-    """The performance profile and the gap-versus-size plot of a run's rows."""
+    """The performance profile and the gap-versus-size plot of a run's rows; a figure with
+    nothing to draw (no plan at all; no plan with a bound) is not written."""
     from ... import plots
 
     limit = "no time limit" if time_limit is None else f"{time_limit:g} s per solve"
-    ax = plots.plot_profile(profile_ratios(rows, methods))
-    ax.set_title(f"KitBench performance profile ({limit})")
-    profile = plots.save_figure(ax.figure, folder / f"{stem}profile.png")
-    ax = plots.plot_gap_vs_size(rows, methods=methods)
-    ax.set_title(f"KitBench: certified gap against size ({limit})")
-    size = plots.save_figure(ax.figure, folder / f"{stem}gap_size.png")
-    return [profile, size]
+    files = []
+    if any(r["above_best_known"] is not None for r in rows):
+        ax = plots.plot_profile(profile_ratios(rows, methods))
+        ax.set_title(f"KitBench performance profile ({limit})")
+        files.append(plots.save_figure(ax.figure, folder / f"{stem}profile.png"))
+    if any(r["certified_gap"] is not None and (r["tasks"] or 0) > 0 for r in rows):
+        ax = plots.plot_gap_vs_size(rows, methods=methods)
+        ax.set_title(f"KitBench: certified gap against size ({limit})")
+        files.append(plots.save_figure(ax.figure, folder / f"{stem}gap_size.png"))
+    return files
 
 
 def read_cells(folder: str | Path) -> list[dict[str, Any]]:
