@@ -197,8 +197,11 @@ class Output:
         """Why this output cannot be written where it is asked for (None: it can)."""
         if self.kind == "folder":
             return folder_problem(self.path)
+        writes = self.writes
+        if self.kind == "figure" and writes == TEXT:  # a figure holds what its suffix says
+            writes = FIGURE_KINDS.get(Path(self.path).suffix.lower(), TEXT)
         return file_problem(self.path, figure=self.kind == "figure") or clobber_problem(
-            self.path, self.writes
+            self.path, writes
         )
 
 
