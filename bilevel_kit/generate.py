@@ -343,6 +343,7 @@ def generate(
         raise UsageError(f"--tightness must be a finite number > 0, got {tightness!r}")
     if tightness is not None and tray is not None:
         raise UsageError("give --tray or --tightness, not both (both set the tray)")
+    check_size(family, size, stations)  # before building: a size is a promise of memory
     if family == "table":
         doc = table(size, delivery_time)
     elif family == "mixed":
@@ -371,6 +372,47 @@ def generate(
     if family not in PRODUCTS or tray is not None:
         _check_solvable(doc, tightness, tray)
     return doc
+
+
+def tasks_per_unit(family: str, size: int) -> int:
+    """How many tasks one unit of ``family`` has (a random family: one unit of ``size``
+    tasks), found without building ``size`` of anything."""
+    if family == "table":
+        return len(table(1)["tasks"])
+    if family == "stool":
+        return len(stool(1)["tasks"])
+    if family == "mixed":
+        return len(mixed(1)["tasks"])
+    return size
+
+
+def check_size(family: str, size: int, stations: int | None = None) -> None:
+    """A :class:`UsageError` with the allowed range when the instance would have more than
+    :data:`~bilevel_kit.instance.MAX_TASKS` tasks over all units and stations
+    (docs/formats.md#ranges), decided from the numbers alone: ``--stations 1000000000``
+    would otherwise build a list of a billion units before any check."""
+    from .instance import MAX_TASKS
+
+    n = 1 if stations is None else stations
+    per_unit = tasks_per_unit(family, size)
+    units = size if family in PRODUCTS else 1
+    total = per_unit * units * n
+    if total <= MAX_TASKS:
+        return
+    what = "units" if family in PRODUCTS else "tasks"
+    size_max = MAX_TASKS // ((per_unit if family in PRODUCTS else 1) * n)
+    stations_max = MAX_TASKS // (per_unit * units)
+    if stations is None or stations_max < 1:
+        on = "" if stations is None else f" on {n:,} station(s)"
+        rng = f"--size must be in [1, {size_max:,}] {what} for {family!r}{on}"
+        culprit = f"--size {size:,}"
+    else:
+        rng = f"--stations must be in [1, {stations_max:,}] for {family!r} --size {size:,}"
+        culprit = f"--stations {n:,}"
+    raise UsageError(
+        f"{culprit}: {per_unit:,} task(s) x {units:,} unit(s) x {n:,} station(s) = {total:,} "
+        f"tasks, above the limit of {MAX_TASKS:,} (docs/formats.md#ranges); {rng}"
+    )
 
 
 def _apply_options(

@@ -18,8 +18,34 @@ from typing import Literal, Protocol
 import numpy as np
 
 #: Length tolerance (mm) of every geometric test: touching parts and parts flush with the tray
-#: edge are fine; penetrations deeper than this are violations.
+#: edge are fine; penetrations deeper than this are violations. The one rule of every packer
+#: and of the checker (docs/timeline.md#packing-tolerance): :func:`length_fits`,
+#: :func:`area_fits`, :func:`cells_needed` and :func:`cells_available` say it for them.
 TOL = 1e-6
+
+
+def length_fits(length: float, room: float) -> bool:
+    """Does ``length`` (mm, e.g. parts side by side) fit in ``room``? Up to :data:`TOL`, as
+    the checker measures: three 30.1 mm parts, 90.30000000000001 mm in floats, fit 90.3 mm."""
+    return length <= room + TOL
+
+
+def area_fits(area: float, width: float, height: float) -> bool:
+    """Can parts of total ``area`` (mm^2) fit a ``width`` x ``height`` tray? The necessary
+    condition, with the room each side gains from :data:`TOL`."""
+    return area <= (width + TOL) * (height + TOL)
+
+
+def cells_needed(length: float, resolution: float) -> int:
+    """Grid cells a part of ``length`` takes at ``resolution`` (rounded up, at least 1): a
+    part never shrinks by more than :data:`TOL`."""
+    return max(1, math.ceil((length - TOL) / resolution))
+
+
+def cells_available(length: float, resolution: float) -> int:
+    """Grid cells a tray of ``length`` holds at ``resolution`` (rounded down): a tray never
+    grows by more than :data:`TOL`."""
+    return math.floor((length + TOL) / resolution)
 
 
 def corners(x: float, y: float, w: float, h: float, theta_deg: float) -> np.ndarray:

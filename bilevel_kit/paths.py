@@ -12,7 +12,12 @@ option is checked up front (:func:`check_outputs`, docs/cli.md#output-paths):
 * a folder is an existing folder new files can be created in, or a new one;
 * a figure's suffix names a format the figures can be saved in (none: PNG);
 * no two outputs, and no output and an input, are the same file once the paths are resolved
-  (``a/../y.png`` is ``y.png``; links are followed).
+  (``a/../y.png`` is ``y.png``; links are followed), and no output is inside a folder another
+  output replaces as a whole (a ROS 2 bag). The files a command names itself (the bags in
+  ``--bag DIR``, the figures in ``--figures DIR``) are declared too (:class:`Output`);
+* an existing file of a kind told apart by its first bytes (:data:`SIGNATURES`: a ROS 1 bag,
+  an HTML page, a PNG, a PDF) is replaced only by a file of the same kind: ``--html x.bag``
+  over a bag is refused, as a CSV over a PNG.
 
 Whether a folder takes new files is tried, not guessed from permission bits (root passes every
 permission check, yet nothing can be created in ``/proc``): a temporary file is created and
@@ -28,7 +33,8 @@ import os
 import re
 import stat
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import UsageError
@@ -159,37 +165,124 @@ def same_file_keys(path: PathLike) -> list[tuple[object, ...]]:
     return keys
 
 
+#: Kinds of file told apart by their first bytes: an output never replaces an existing file
+#: of one of these kinds with a file of another kind (docs/cli.md#output-paths).
+SIGNATURES: dict[str, tuple[bytes, ...]] = {
+    "a ROS 1 bag": (b"#ROSBAG V",),
+    "an HTML page": (b"<!DOCTYPE html", b"<!doctype html", b"<html"),
+    "a PNG image": (b"\x89PNG\r\n\x1a\n",),
+    "a PDF document": (b"%PDF-",),
+}
+#: What a figure holds, by suffix (the kinds of :data:`SIGNATURES`; others: not told apart).
+FIGURE_KINDS = {"": "a PNG image", ".png": "a PNG image", ".pdf": "a PDF document"}
+#: What a file output holds when its option says nothing: text (JSON, CSV, Markdown).
+TEXT = "text"
+
+
+@dataclass(frozen=True)
+class Output:
+    """One file or folder a command will write. ``subject`` names it in messages (``--out
+    s.json``, or for a file the command names itself ``--bag b (its ROS 1 bag b/x.bag)``);
+    ``writes``: what a file holds (a key of :data:`SIGNATURES`, or :data:`TEXT`);
+    ``replaced``: a folder replaced as a whole (a ROS 2 bag), so nothing else may be in it."""
+
+    subject: str
+    path: PathLike
+    kind: str = "file"  # "file", "figure" or "folder"
+    writes: str = TEXT
+    replaced: bool = False
+    label: str = ""  # how a later clash names it (default: the subject)
+
+    def problem(self) -> str | None:
+        """Why this output cannot be written where it is asked for (None: it can)."""
+        if self.kind == "folder":
+            return folder_problem(self.path)
+        writes = self.writes
+        if self.kind == "figure" and writes == TEXT:  # a figure holds what its suffix says
+            writes = FIGURE_KINDS.get(Path(self.path).suffix.lower(), TEXT)
+        return file_problem(self.path, figure=self.kind == "figure") or clobber_problem(
+            self.path, writes
+        )
+
+
+def file_kind(path: PathLike) -> str | None:
+    """The kind of :data:`SIGNATURES` whose first bytes the regular file ``path`` starts
+    with; None: none, or not a readable regular file."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
+        with open(path, "rb") as fh:
+            head = fh.read(16)
+    except OSError:
+        return None
+    for kind, starts in SIGNATURES.items():
+        if head.startswith(starts):
+            return kind
+    return None
+
+
+def clobber_problem(path: PathLike, writes: str) -> str | None:
+    """Why writing ``writes`` over the existing file ``path`` would clobber something else
+    (an HTML page over a ROS bag, a CSV over a PNG); None: nothing there, or the same kind."""
+    kind = file_kind(path)
+    if kind is None or kind == writes:
+        return None
+    what = "text" if writes == TEXT else writes
+    return f"exists and is {kind}; this would replace it with {what} (remove it first)"
+
+
 def check_outputs(
     files: Mapping[str, PathLike | None],
     folders: Mapping[str, PathLike | None] | None = None,
     *,
     figures: Mapping[str, PathLike | None] | None = None,
     inputs: Mapping[str, PathLike | None] | None = None,
+    writes: Mapping[str, str] | None = None,
+    derived: Sequence[Output] = (),
 ) -> None:
     """Raise :class:`UsageError` ``OPTION PATH: reason`` for the first output that cannot be
     written (module docstring). ``files``, ``folders`` and ``figures`` map an output option
-    (``"--out"``) to its path, ``inputs`` an input's name to its path; None: not given."""
+    (``"--out"``) to its path, ``inputs`` an input's name to its path; None: not given.
+    ``writes`` says what a file option holds (default :data:`TEXT`); ``derived`` are the
+    outputs a command names itself (the bags in ``--bag DIR``, the figures in ``--figures``)."""
+    outputs: list[Output] = []
+    for option, path in files.items():
+        if path is not None:
+            what = (writes or {}).get(option, TEXT)
+            outputs.append(Output(f"{option} {path}", path, "file", what, label=option))
+    for option, path in (figures or {}).items():
+        if path is not None:
+            suffix = Path(path).suffix.lower()
+            what = FIGURE_KINDS.get(suffix, TEXT)
+            outputs.append(Output(f"{option} {path}", path, "figure", what, label=option))
+    for option, path in (folders or {}).items():
+        if path is not None:
+            outputs.append(Output(f"{option} {path}", path, "folder", label=option))
+    _check([*outputs, *derived], inputs or {})
+
+
+def _check(outputs: Sequence[Output], inputs: Mapping[str, PathLike | None]) -> None:
+    """:func:`check_outputs` on the list of every output."""
     seen: dict[tuple[object, ...], str] = {}
-    for name, path in (inputs or {}).items():
+    for name, path in inputs.items():
         if path is not None:
             for key in same_file_keys(path):
                 seen.setdefault(key, f"the input {name}")
-    for kind, given, problem in (
-        ("file", files, file_problem),
-        ("file", figures or {}, lambda p: file_problem(p, figure=True)),
-        ("folder", folders or {}, folder_problem),
-    ):
-        for option, path in given.items():
-            if path is None:
-                continue
-            why = problem(path)
-            if why is not None:
-                raise UsageError(f"{option} {path}: {why}")
-            keys = same_file_keys(path)
-            for key in keys:
-                if key in seen:
-                    raise UsageError(f"{option} {path}: the same {kind} as {seen[key]}")
-            seen.update(dict.fromkeys(keys, option))
+    replaced = [(o, os.path.realpath(o.path)) for o in outputs if o.replaced]
+    for out in outputs:
+        why = out.problem()
+        if why is not None:
+            raise UsageError(f"{out.subject}: {why}")
+        keys = same_file_keys(out.path)
+        kind = "folder" if out.kind == "folder" else "file"
+        for key in keys:
+            if key in seen:
+                raise UsageError(f"{out.subject}: the same {kind} as {seen[key]}")
+        real = os.path.realpath(out.path)
+        for folder, where in replaced:
+            if folder is not out and os.path.commonpath([real, where]) == where:
+                raise UsageError(f"{out.subject}: inside {folder.subject}, replaced as a whole")
+        seen.update(dict.fromkeys(keys, out.label or out.subject))
 
 
 def safe_name(name: str, default: str = "unnamed") -> str:

@@ -16,6 +16,7 @@ from .common import (
     add_seed,
     add_sweep_options,
     add_time_limit,
+    say,
     sweep_exit,
     sweep_session,
 )
@@ -115,12 +116,12 @@ def _run(args: argparse.Namespace) -> int:
         )
         for row in result.rows:
             if row["status"] == "error" and not result.all_failed:  # else one line says so
-                print(f"{row['instance']} / {row['method']}: {row['error']}", file=sys.stderr)
+                say(f"{row['instance']} / {row['method']}: {row['error']}")
         print(f"{Path(args.out) / 'results.md'}:")
         print("\n".join(_summary_lines(result.summary)))
         code = EXIT_OK
         if any(r["valid"] is False for r in result.rows):
-            print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
+            say("INVALID plans found (see the 'valid' column)")
             code = EXIT_INVALID
         return sweep_exit(session, code, result.failed, result.all_failed)
 
@@ -155,7 +156,7 @@ def _verify(args: argparse.Namespace) -> int:
     records, problems = verify(library, terms)
     wall = time.perf_counter() - t0
     for p in problems:
-        print(p.line(), file=sys.stderr)
+        say(p.line())
     optimal = sum(r.status == "optimal" for r in records)
     verdict = f"{len(problems)} problem(s)" if problems else "all hold"
     print(

@@ -12,10 +12,10 @@ from typing import Any
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
-    EXIT_USAGE,
     add_instance_overrides,
     instance_overrides,
     print_violations,
+    say,
 )
 
 HELP = "check a solution file against an instance"
@@ -40,6 +40,7 @@ def _fmt(overrides: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from .. import solution
+    from ..errors import InstanceError, SolutionError, UsageError
     from ..instance import load
 
     sol = solution.read(args.solution)
@@ -48,25 +49,26 @@ def run(args: argparse.Namespace) -> int:
     clash = {k for k in given.keys() & recorded.keys() if given[k] != recorded[k]}
     if clash:
         k = sorted(clash)[0]
-        print(
-            f"error: {args.solution}: $.overrides.{k}: the plan was solved with {k}="
-            f"{recorded[k]}, but --{k.replace('_', '-')} {given[k]} was given",
-            file=sys.stderr,
+        raise UsageError(
+            f"{args.solution}: $.overrides.{k}: the plan was solved with {k}="
+            f"{recorded[k]}, but --{k.replace('_', '-')} {given[k]} was given"
         )
-        return EXIT_USAGE
-    effective = {**recorded, **given}
+    instance = load(args.instance)
+    try:  # the solution's own overrides: an error in one is the solution file's
+        instance = instance.with_overrides(**recorded)
+    except InstanceError as exc:
+        raise SolutionError(args.solution, f"$.overrides{exc.path[1:]}", exc.detail) from None
+    instance = instance.with_overrides(**given)
     if recorded:
-        print(f"applying the solution's overrides: {_fmt(recorded)}", file=sys.stderr)
-    instance = load(args.instance).with_overrides(**effective)
+        say(f"applying the solution's overrides: {_fmt(recorded)}")
     violations = sol.check(instance)
     if violations:
         print_violations([str(v) for v in violations], sys.stdout)
         if not recorded and any(v.kind == "unknown_task" for v in violations):
-            print(
+            say(
                 "hint: the plan names tasks this instance lacks, and the file records no "
                 "overrides: was it solved with --units U (task ids 'task@u')? give the same "
-                "override to check",
-                file=sys.stderr,
+                "override to check"
             )
         return EXIT_INVALID
     print(f"valid: {len(sol.plan.kits)} kits, {sum(len(k.tasks) for k in sol.plan.kits)} tasks")

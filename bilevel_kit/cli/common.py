@@ -11,6 +11,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from contextvars import ContextVar
 from typing import IO, TYPE_CHECKING, Any, NoReturn, TypeVar
 
 if TYPE_CHECKING:
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
     from ..experiments.cells import SweepSession
     from ..instance import Instance
     from ..options import Registered
+    from ..paths import Output
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE, EXIT_UNKNOWN = 0, 1, 2, 3
 #: ``pack``: no layout on the chosen grid, which is not a proof that none exists.
@@ -265,16 +267,30 @@ def add_output(
     *flags: str,
     folder: bool = False,
     figure: bool = False,
+    writes: str | None = None,
     **kwargs: Any,
 ) -> None:
     """An output option: a file, a ``folder``, or a ``figure`` (a file whose suffix names its
-    format). :func:`run_command` checks its path (:mod:`bilevel_kit.paths`) before the command
-    does any work, so a bad path costs nothing and writes nothing."""
+    format); ``writes``: what the file holds when it is not text (a kind of
+    :data:`bilevel_kit.paths.SIGNATURES`). :func:`run_command` checks its path
+    (:mod:`bilevel_kit.paths`) before the command does any work, so a bad path costs nothing
+    and writes nothing."""
     action = p.add_argument(*flags, **kwargs)
     key = "output_folders" if folder else "output_figures" if figure else "output_files"
     known = dict(p.get_default(key) or {})
     known[flags[0]] = action.dest
     p.set_defaults(**{key: known})
+    if writes is not None:
+        p.set_defaults(output_writes={**(p.get_default("output_writes") or {}), flags[0]: writes})
+
+
+def add_derived_outputs(
+    p: argparse.ArgumentParser, outputs: Callable[[argparse.Namespace], list[Output]]
+) -> None:
+    """The files and folders a command names itself (the bags in ``--bag DIR``): ``outputs``
+    gives them from the arguments, and :func:`check_output_options` checks them with the
+    output options, against each other and against existing files (docs/cli.md#output-paths)."""
+    p.set_defaults(derived_outputs=outputs)
 
 
 #: The arguments that name input files, wherever a command has them: no output may be one
@@ -283,8 +299,9 @@ INPUTS = ("instance", "instances", "solution", "file")
 
 
 def check_output_options(args: argparse.Namespace) -> None:
-    """Every output option given (see :func:`add_output`), checked in one go against each
-    other and against the command's input files (:data:`INPUTS`)."""
+    """Every output the command will write (see :func:`add_output` and
+    :func:`add_derived_outputs`), checked in one go against each other, against existing
+    files and against the command's input files (:data:`INPUTS`)."""
     from ..paths import check_outputs
 
     def given(key: str) -> dict[str, Any]:
@@ -297,11 +314,14 @@ def check_output_options(args: argparse.Namespace) -> None:
         inputs.update(
             {f"{dest} {i}" if len(values) > 1 else dest: v for i, v in enumerate(values, 1)}
         )
+    derived = getattr(args, "derived_outputs", None)
     check_outputs(
         given("output_files"),
         given("output_folders"),
         figures=given("output_figures"),
         inputs={k: v for k, v in inputs.items() if isinstance(v, str)},
+        writes=getattr(args, "output_writes", None),
+        derived=[] if derived is None else derived(args),
     )
 
 
@@ -413,7 +433,7 @@ def sweep_exit(
         print(all_failed, file=sys.stderr)
         return EXIT_FAILED
     if n:
-        print(f"{n} cell(s) failed (see their error records)", file=sys.stderr)
+        say(f"{n} cell(s) failed (see their error records)")
         return EXIT_FAILED
     return code
 
@@ -472,6 +492,24 @@ def print_violations(lines: list[str], stream: IO[str], limit: int = 20, per_kin
             print(f"  ... and {len(group) - per_kind} more [{kind}]", file=stream)
 
 
+#: The command running (set by :func:`run_command`): :func:`say` names it.
+_COMMAND: ContextVar[str] = ContextVar("command", default="")
+
+
+def prefix(command: str | None = None) -> str:
+    """``bilevel-kit COMMAND:``, how every line a command writes about a failure starts (the
+    one place it is spelt; argparse's own errors start with the parser's ``prog``, the same
+    words); ``command`` None: the running one."""
+    name = _COMMAND.get() if command is None else command
+    return f"bilevel-kit {name}:" if name else "bilevel-kit:"
+
+
+def say(text: str, stream: IO[str] | None = None) -> None:
+    """``text`` on stderr (or ``stream``) after :func:`prefix`: a failed cell, an invalid
+    plan, a hint, each a line of its own."""
+    print(f"{prefix()} {text}", file=sys.stderr if stream is None else stream, flush=True)
+
+
 def run_command(
     name: str, run: Callable[[argparse.Namespace], int], args: argparse.Namespace
 ) -> int:
@@ -481,13 +519,16 @@ def run_command(
     from ..errors import BilevelKitError, PluginError, one_line
     from ..interrupt import report
 
+    token = _COMMAND.set(name)
     try:
         check_output_options(args)
         return run(args)
     except BilevelKitError as exc:
-        print(f"bilevel-kit {name}: error: {one_line(exc)}", file=sys.stderr)
+        say(f"error: {one_line(exc)}")
         # a plugin's method failed on good input: not a usage error (docs/extending.md#plugins)
         return EXIT_INVALID if isinstance(exc, PluginError) else EXIT_USAGE
     except KeyboardInterrupt as exc:
         report(exc, sys.stderr)
         return EXIT_INTERRUPTED
+    finally:
+        _COMMAND.reset(token)

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import TYPE_CHECKING, Any
 
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
     EXIT_UNKNOWN,
+    add_derived_outputs,
     add_instance_overrides,
     add_output,
     add_seed,
@@ -17,12 +17,14 @@ from .common import (
     add_time_limit,
     instance_overrides,
     param,
+    say,
     sweep_exit,
     sweep_session,
 )
 
 if TYPE_CHECKING:
     from ..experiments import CompareCell
+    from ..paths import Output
 
 HELP = "solve instances with several methods and tabulate"
 DESCRIPTION = (
@@ -68,6 +70,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "method, here",
     )
     add_output(p, "--cells", folder=True, metavar="DIR", help="save/resume per-cell results in DIR")
+    add_derived_outputs(p, _outputs)
     add_instance_overrides(p)
     add_sweep_options(p, "solves")
 
@@ -173,7 +176,7 @@ def _report(
     print(format_table(records))
     for r in records:
         if r["status"] == "error" and not quiet_errors:
-            print(f"{r['instance']} / {r['method']}: {r['error']}", file=sys.stderr)
+            say(f"{r['instance']} / {r['method']}: {r['error']}")
     if args.figures:
         _figures(records, args.figures, instance_overrides(args))
     if args.csv:
@@ -187,14 +190,14 @@ def _report(
         r.get("valid") is False and r["status"] != "error" and r["makespan"] is not None
         for r in records
     ):
-        print("INVALID plans found (see the 'valid' column)", file=sys.stderr)
+        say("INVALID plans found (see the 'valid' column)")
         code = EXIT_INVALID
     for line in inconsistencies(records):  # false claims: never printed as normal
-        print(f"INCONSISTENT: {line}", file=sys.stderr)
+        say(f"INCONSISTENT: {line}")
         code = EXIT_INVALID
     missing = [r for r in records if r["status"] != "error" and r.get("makespan") is None]
     for r in missing:  # a time limit without a plan is not success either
-        print(f"NO PLAN: {r['instance']} / {r['method']} ({r['status']})", file=sys.stderr)
+        say(f"NO PLAN: {r['instance']} / {r['method']} ({r['status']})")
     if missing and code == EXIT_OK:
         code = EXIT_UNKNOWN
     return code
@@ -214,16 +217,10 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
     by_instance: dict[str, list[dict[str, Any]]] = {}
     for r in records:
         by_instance.setdefault(r["instance_file"], []).append(r)
-    used: set[str] = set()
+    names = _figure_names(list(by_instance), overrides)
     for path, rows in by_instance.items():
         inst = load(path).with_overrides(**overrides)
-        name = safe_name(inst.name)  # a name is data, never a path
-        if name in used:  # another file has this name: tell the figures apart by file
-            base, i = f"{name}_{safe_name(Path(path).stem)}", 2
-            name = base
-            while name in used:
-                name, i = f"{base}_{i}", i + 1
-        used.add(name)
+        name = names[path]
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
@@ -236,3 +233,46 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
             plots.save_figure(ax.figure, f"{stem}_gantt.png")
             fig = plots.plot_trays(inst, sol.plan, method=str(r["method"]))
             plots.save_figure(fig, f"{stem}_trays.png")
+
+
+def _figure_names(paths: list[str], overrides: dict[str, Any]) -> dict[str, str]:
+    """Each instance file's figure name: its instance's name as a file name, told apart by
+    the file's name when two instances share one."""
+    from pathlib import Path
+
+    from ..instance import load
+    from ..paths import safe_name
+
+    names: dict[str, str] = {}
+    for path in paths:
+        name = safe_name(load(path).with_overrides(**overrides).name)  # data, never a path
+        if name in names.values():  # another file has this name: tell them apart by file
+            base, i = f"{name}_{safe_name(Path(path).stem)}", 2
+            name = base
+            while name in names.values():
+                name, i = f"{base}_{i}", i + 1
+        names[path] = name
+    return names
+
+
+def _outputs(args: argparse.Namespace) -> list[Output]:
+    """The figures ``--figures DIR`` will hold (for every method: a method may give a plan),
+    declared with the output options: ``--csv``/``--md`` can be none of them."""
+    from pathlib import Path
+
+    from ..paths import Output, safe_name
+
+    if not args.figures:
+        return []
+    paths = list(dict.fromkeys(str(p) for p in args.instances))
+    methods = parse_methods(args.methods)
+    out = []
+    for name in _figure_names(paths, instance_overrides(args)).values():
+        files = [f"{name}_compare.png"] + [
+            f"{name}_{safe_name(m)}_{kind}.png" for m in methods for kind in ("gantt", "trays")
+        ]
+        out += [
+            Output(f"--figures {args.figures} (its figure {f})", Path(args.figures) / f, "figure")
+            for f in files
+        ]
+    return out

@@ -18,9 +18,10 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import EXIT_OK, add_output, positive_int
+from .common import EXIT_OK, add_derived_outputs, add_output, positive_int
 
 if TYPE_CHECKING:
+    from ..paths import Output
     from ..sawyer.bags import BagInfo
     from ..sawyer.trajectory import Execution
 
@@ -52,7 +53,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=None,
         help="which bags to write (default: both)",
     )
-    add_output(p, "--html", metavar="FILE", help="write the animated 3-D view here")
+    add_output(
+        p, "--html", metavar="FILE", writes="an HTML page", help="write the animated 3-D view here"
+    )
+    add_derived_outputs(p, _outputs)
     p.add_argument("--kit", type=positive_int, metavar="K", help="only kit K (default: all)")
 
 
@@ -66,21 +70,47 @@ def _formats(args: argparse.Namespace) -> tuple[str, ...]:
     return ("ros1", "ros2") if args.format in (None, "both") else (args.format,)
 
 
+def _stem(args: argparse.Namespace) -> str:
+    """The bags' name: the instance's name, as a file name, and the kit of ``--kit``."""
+    from ..instance import load
+    from ..paths import safe_name
+
+    return safe_name(load(args.instance).name) + ("" if args.kit is None else f"_kit{args.kit}")
+
+
 def _bag_targets(args: argparse.Namespace, stem: str) -> dict[str, Path]:
-    """Each bag's path, refusing to replace anything that is not a bag of the same kind."""
+    """Each bag's path, refusing to replace a folder that is not a ROS 2 bag (a ROS 1 bag
+    replaces only a ROS 1 bag: :func:`_outputs`)."""
     from ..errors import UsageError
     from ..sawyer.bags import bag_name
 
     out = {}
     for fmt in _formats(args):
         target = Path(args.bag) / bag_name(stem, fmt)
-        if fmt == "ros1" and target.is_dir():
-            raise UsageError(f"--bag {args.bag}: {target} is a folder, not a ROS 1 bag")
         is_bag = target.is_dir() and (target / "metadata.yaml").is_file()
         if fmt == "ros2" and target.exists() and not is_bag:
             raise UsageError(f"--bag {args.bag}: {target} exists and is not a ROS 2 bag")
         out[fmt] = target
     return out
+
+
+def _outputs(args: argparse.Namespace) -> list[Output]:
+    """The bags ``--bag DIR`` will hold, declared with the output options so that ``--html``
+    can be neither one of them nor inside one (docs/cli.md#output-paths)."""
+    from ..paths import Output
+
+    if not _formats(args):
+        return []
+    return [
+        Output(
+            f"--bag {args.bag} (its ROS {fmt[-1]} bag {target})",
+            target,
+            "file" if fmt == "ros1" else "folder",
+            writes="a ROS 1 bag",
+            replaced=fmt == "ros2",
+        )
+        for fmt, target in _bag_targets(args, _stem(args)).items()
+    ]
 
 
 class _Staging:
@@ -224,12 +254,8 @@ def _write(
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..paths import safe_name
-
-    _formats(args)
     ex = _load(args)
-    stem = safe_name(ex.instance) + ("" if args.kit is None else f"_kit{args.kit}")
-    targets = _bag_targets(args, stem)
+    targets = _bag_targets(args, _stem(args))  # as checked up front (:func:`_outputs`)
     page = None
     if args.html:
         from ..sawyer.scene import html_page

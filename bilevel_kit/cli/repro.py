@@ -4,11 +4,12 @@ the adaptive-pace study beyond the paper (see paper_repro/)."""
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .common import (
     EXIT_OK,
     add_delivery_time,
+    add_derived_outputs,
     add_output,
     add_seed,
     add_sweep_options,
@@ -19,6 +20,9 @@ from .common import (
     sweep_exit,
     sweep_session,
 )
+
+if TYPE_CHECKING:
+    from ..paths import Output
 
 HELP = (
     "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon, adaptive and "
@@ -61,6 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_output(
         p, "--out", folder=True, metavar="DIR", help="output folder (default out/repro/EXPERIMENT)"
     )
+    add_derived_outputs(p, _default_out)
     add_seed(p)
     p.add_argument(
         "--reps",
@@ -188,13 +193,26 @@ def run(args: argparse.Namespace) -> int:
         return sweep_exit(session, _run(args))
 
 
+def _default(args: argparse.Namespace) -> str:
+    """The output folder without ``--out``."""
+    return f"out/repro/{args.experiment.replace('-', '_')}"
+
+
+def _default_out(args: argparse.Namespace) -> list[Output]:
+    """The default folder, checked up front like ``--out`` (docs/cli.md#output-paths)."""
+    from ..paths import Output
+
+    return (
+        []
+        if args.out
+        else [Output(f"--out {_default(args)} (the default)", _default(args), "folder")]
+    )
+
+
 def _run(args: argparse.Namespace) -> int:
     from .. import repro
-    from ..paths import check_outputs
 
-    default = f"out/repro/{args.experiment.replace('-', '_')}"
-    check_outputs({}, {"--out": args.out or default})  # the default folder too, before any work
-    out = args.out or default
+    out = args.out or _default(args)
     run: dict[str, Any] = {"quick": args.quick, "jobs": args.jobs, "seed": args.seed}
     grid = {"mats": args.mats, "mttfs": args.mttfs}  # the Figure 6 delay cells
     if args.experiment == "calibrate":

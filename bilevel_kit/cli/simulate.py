@@ -9,7 +9,6 @@ usage errors (exit 2). The removed ``--buffer K`` is an error that names its rep
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 from .common import (
@@ -23,6 +22,7 @@ from .common import (
     instance_overrides,
     nonneg,
     positive_int,
+    say,
     sweep_exit,
     sweep_session,
 )
@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
         records = run_cells(cells, replication_cell, desc=f"simulate {args.policy}")
     failed = [r for r in records if is_failed(r)]
     for r in failed:
-        print(f"replication {r['cell']['seed']}: {r['error']}", file=sys.stderr)
+        say(f"replication {r['cell']['seed']}: {r['error']}")
     records = [r for r in records if not is_failed(r)]
     if not records:
         return sweep_exit(session, EXIT_OK)

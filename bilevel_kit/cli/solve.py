@@ -150,41 +150,34 @@ def limit_note(result: Result) -> str:
     return " (time limit reached)" if result.extra.get("time_limit_hit") else ""
 
 
+def _pct(v: float | None) -> str:
+    return "-" if v is None else f"{100 * v:.2f}%"
+
+
 def summary(instance: Instance, result: Result, quiet: bool) -> str:
-    """The summary line and, unless ``quiet``, one line per kit."""
-    lines = []
+    """The summary line and, unless ``quiet``, one line per kit. When the status is about
+    another objective than the makespan (``-p objective=sum_completion``, bilevel-milp's J),
+    the first line states no status and calls its bound and gap the makespan's; the status
+    follows on a line of its own with that objective's numbers (docs/cli.md#shared-options),
+    so "optimal" never stands beside a gap it is not about."""
     m = result.metrics or {}
-    gap = "-" if result.gap is None else f"{100 * result.gap:.2f}%"
-    lines.append(
-        f"{instance.name}: {result.method} {result.status_text}{limit_note(result)}"
+    own = result.status_objective == "makespan"
+    head = f"{result.method} {result.status}" if own else f"{result.method}"
+    which = "" if own else "makespan "
+    lines = [
+        f"{instance.name}: {head}{limit_note(result)}"
         f"  makespan {_fmt(m.get('makespan'))} s"
         f"  human idle {_fmt(m.get('human_idle'))} s  robot idle {_fmt(m.get('robot_idle'))} s"
-        f"  kits {m.get('n_kits', '-')}  bound {_fmt(result.bound)} s  gap {gap}"
-        f"  time {result.wall_time_s:.3f} s"
-    )
+        f"  kits {m.get('n_kits', '-')}  {which}bound {_fmt(result.bound)} s"
+        f"  {which}gap {_pct(result.gap)}  time {result.wall_time_s:.3f} s"
+    ]
     for station, sm in result.extra.get("station_metrics", {}).items():
         lines.append(
             f"  station {station}: completion {_fmt(sm['completion'])} s"
             f"  human idle {_fmt(sm['human_idle'])} s  kits {sm['n_kits']}"
         )
-    value = result.extra.get("objective_value")  # another objective of several stations
-    if result.status_objective not in ("makespan", "J") and value is not None:
-        o_gap = result.extra.get("objective_gap")
-        lines.append(
-            f"  {result.status} refers to {result.status_objective}: {_fmt(value)} s"
-            f"  bound {_fmt(result.extra.get('objective_bound'))} s"
-            f"  gap {'-' if o_gap is None else f'{100 * o_gap:.2f}%'}"
-        )
-    j = result.extra.get("plan_objective_J")
-    if result.status_objective != "makespan" and j is not None:
-        # the status is about J, not the makespan: show the numbers it refers to
-        j_bound = result.extra.get("plan_objective_J_bound")
-        j_gap = result.extra.get("plan_objective_J_gap")
-        lines.append(
-            f"  {result.status} refers to J (the paper's F summed over the kits): J {_fmt(j)}"
-            f"  J bound {_fmt(j_bound)}"
-            f"  J gap {'-' if j_gap is None else f'{100 * j_gap:.2f}%'}"
-        )
+    if not own:
+        lines.append(_status_line(result))
     if quiet or result.plan is None or result.timeline is None:
         return "\n".join(lines)
     lines.append(f"{'kit':>3}  {'robot':>15}  {'arrive':>8}  {'human':>15}  tasks")
@@ -196,6 +189,27 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
             f"{t.human_start:7.1f}-{t.human_end:<7.1f}  {','.join(kit.tasks)}{at}"
         )
     return "\n".join(lines)
+
+
+def _status_line(result: Result) -> str:
+    """``  OBJECTIVE: STATUS`` and that objective's value, bound and gap (when known)."""
+    x = result.extra
+    if result.status_objective == "J":
+        numbers = ""
+        if x.get("plan_objective_J") is not None:
+            j_bound = x.get("plan_objective_J_bound")
+            numbers = (
+                f"  J {_fmt(x['plan_objective_J'])}  J bound {_fmt(j_bound)}"
+                f"  J gap {_pct(x.get('plan_objective_J_gap'))}"
+            )
+        return f"  J (the paper's F summed over the kits): {result.status}{numbers}"
+    numbers = ""
+    if x.get("objective_value") is not None:
+        numbers = (
+            f"  {_fmt(x['objective_value'])} s  bound {_fmt(x.get('objective_bound'))} s"
+            f"  gap {_pct(x.get('objective_gap'))}"
+        )
+    return f"  {result.status_objective}: {result.status}{numbers}"
 
 
 def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:

@@ -154,8 +154,8 @@ def _too_large(pt: PartType, tray: Tray) -> bool:
 def _refusal(kit: Kit) -> str | None:
     """Why the kit has no layout, by cheap sound tests (``area-bound``: more part area than
     tray; ``too-large``: a part fits in no placement), or None."""
-    if sum(t.area for t in kit.types) > kit.tray.area * (1 + 1e-12):
-        return "area-bound"
+    if not geometry.area_fits(sum(t.area for t in kit.types), kit.tray.width, kit.tray.height):
+        return "area-bound"  # the one tolerance rule (docs/timeline.md#packing-tolerance)
     if any(_too_large(t, kit.tray) for t in kit.types):
         return "too-large"
     return None

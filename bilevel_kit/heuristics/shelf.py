@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from ..geometry import area_fits, length_fits
 from ..instance import PartType, Tray
 from ..plan import Placement
 
@@ -39,15 +40,15 @@ def _ffdh(
     placed = []
     for pid, pt, rot in order:
         w, h = dims(pt, rot)
-        if w > width:
+        if not length_fits(w, width):
             return None
-        for shelf in shelves:
-            if shelf[2] + w <= width and h <= shelf[1]:
+        for shelf in shelves:  # the one tolerance rule (docs/timeline.md#packing-tolerance)
+            if length_fits(shelf[2] + w, width) and length_fits(h, shelf[1]):
                 placed.append((pid, pt, shelf[2] + w / 2, shelf[0] + h / 2, rot))
                 shelf[2] += w
                 break
         else:
-            if top + h > height:
+            if not length_fits(top + h, height):
                 return None
             shelves.append([top, h, w])
             placed.append((pid, pt, w / 2, top + h / 2, rot))
@@ -61,7 +62,7 @@ def shelf_pack(tray: Tray, items: Sequence[tuple[str, PartType]]) -> tuple[Place
     ``None`` means this packer found no layout, not a proof that none exists (the CP-SAT
     packer of :mod:`bilevel_kit.models.packing` decides that exactly).
     """
-    if sum(pt.area for _, pt in items) > tray.area:
+    if not area_fits(sum(pt.area for _, pt in items), tray.width, tray.height):
         return None
     for landscape in (True, False):
         for columns in (False, True):

@@ -11,7 +11,15 @@ from __future__ import annotations
 from typing import Any
 
 from .model import DEFAULT_HORIZON, DEFAULT_REPAIR_TIME, DEFAULT_WEIGHTS, FORMAT
-from .ranges import ID_PATTERN, MAX_LENGTH, MAX_PARTS, MAX_TASKS, MAX_TIME, MAX_WEIGHT
+from .ranges import (
+    ID_PATTERN,
+    MAX_LENGTH,
+    MAX_PARTS,
+    MAX_TASKS,
+    MAX_TIME,
+    MAX_WEIGHT,
+    SERVES_PATTERN,
+)
 
 _NONNEG = {"type": "number", "minimum": 0, "maximum": MAX_TIME}  # times (s)
 _POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_TIME}  # times > 0 (s)
@@ -208,7 +216,7 @@ def _stations_schema() -> dict[str, Any]:
                 },
                 "serves": {
                     "type": "array",
-                    "items": {"type": "string", "minLength": 1},
+                    "items": {"type": "string", "minLength": 1, "pattern": SERVES_PATTERN},
                     "description": "products ('table') or product units ('table@2') whose "
                     "tasks the station builds",
                 },

@@ -290,9 +290,9 @@ def _stations(
             raise InstanceError(source, f"$.stations[{i}].id", f"duplicate station id {e['id']!r}")
         ids.add(e["id"])
         for j, key in enumerate(e.get("serves", [])):
-            product, _, unit = key.partition("@")
+            product, at, unit = key.partition("@")  # the schema's SERVES_PATTERN held
             bad = product not in products or (
-                unit and not (unit.isdigit() and 1 <= int(unit) <= units)
+                bool(at) and not (unit.isascii() and unit.isdigit() and 1 <= int(unit) <= units)
             )
             where = f"$.stations[{i}].serves[{j}]"
             if bad:

@@ -36,6 +36,11 @@ MAX_PACK_PARTS = 3_000
 #: newline through in Python's regular expressions; the lookahead says "the end" in both
 #: Python's and JSON Schema's (ECMA-262) dialects.
 ID_PATTERN = r"^[A-Za-z0-9_.:-]+$(?!\n)"
+#: The pattern of a station's ``serves`` entry: a product (any name without ``@`` or a line
+#: break, as a task's ``product`` may be the instance's name) or ``product@unit`` with the unit
+#: a positive integer in plain digits: ``prod@``, ``prod@01`` (a second spelling of unit 1)
+#: and ``prod@１`` do not name a unit (docs/formats.md#ranges).
+SERVES_PATTERN = r"^[^@\n]+(@[1-9][0-9]*)?$(?!\n)"
 
 
 def check_size(n_tasks: int, units: int, source: str) -> None:

@@ -75,6 +75,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
+from ..geometry import area_fits, cells_available, cells_needed
 from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
 from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
@@ -82,7 +83,6 @@ from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tabl
 if TYPE_CHECKING:
     from ..reachability import ReachGrid
 
-_EPS = 1e-9
 
 #: Proof scopes of an infeasible answer (module docstring, "Grid"): no layout at all, parts at
 #: any angle (what the checker accepts) ...
@@ -144,13 +144,14 @@ class PackResult:
 
 
 def grid_up(v: float, resolution: float) -> int:
-    """Size in grid units, rounded up (a part never shrinks)."""
-    return max(1, math.ceil(v / resolution - _EPS))
+    """Size in grid units, rounded up (a part never shrinks beyond the tolerance of
+    docs/timeline.md#packing-tolerance)."""
+    return cells_needed(v, resolution)
 
 
 def grid_down(v: float, resolution: float) -> int:
-    """Tray size in grid units, rounded down (the tray never grows)."""
-    return math.floor(v / resolution + _EPS)
+    """Tray size in grid units, rounded down (the tray never grows beyond the tolerance)."""
+    return cells_available(v, resolution)
 
 
 def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
@@ -529,7 +530,7 @@ def _true_size_scope(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> str 
     :data:`AXIS_ALIGNED` (a long part may still fit along the diagonal); None without one."""
     from .packing_bounds import disks_collide
 
-    if sum(pt.area for _, pt in items) > tray.width * tray.height * (1 + _EPS):
+    if not area_fits(sum(pt.area for _, pt in items), tray.width, tray.height):
         return ANY_ANGLE
     if disks_collide([(pt.width, pt.height) for _, pt in items], tray.width, tray.height):
         return ANY_ANGLE

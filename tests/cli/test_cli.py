@@ -523,7 +523,7 @@ def test_compare_exits_3_when_a_method_gives_no_plan(capsys, tmp_path, root, mon
         table = root / "instances/hrc_table.json"
         code, text, err = run(capsys, "compare", table, "--methods", "single-task,nothing")
         assert code == 3
-        assert err.splitlines()[-1] == "NO PLAN: hrc_table / nothing (unknown)"
+        assert err.splitlines()[-1] == "bilevel-kit compare: NO PLAN: hrc_table / nothing (unknown)"
         assert "no plan" in text or "-" in text
         code, _, err = run(capsys, "compare", table, "--methods", "single-task")
         assert code == 0 and "NO PLAN" not in err

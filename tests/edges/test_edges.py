@@ -754,6 +754,176 @@ ISSUE_23B_ROWS: dict[str, Row] = {
 ROWS.update(ISSUE_23B_ROWS)
 
 
+# --- issue 35, items 3, 5, 9 (outputs a command names itself, sizes, small items) ---------
+# A block of its own, like the ones above.
+
+
+@dataclass(frozen=True)
+class Tree:
+    """A folder to build instead of a file: ``build(path)`` fills it."""
+
+    build: Callable[[Path], None]
+
+
+def _library(bom: bool = False) -> Tree:
+    """A KitBench library without records (``bom``: its index starts with a UTF-8 BOM)."""
+
+    def build(path: Path) -> None:
+        from bilevel_kit.experiments.kitbench.library import Library
+
+        path.mkdir()
+        Library(path).write([])
+        index = path / "index.csv"
+        index.write_bytes(b"\xef\xbb\xbf" * bom + index.read_bytes())
+
+    return Tree(build)
+
+
+def _run_folder(cell: str) -> Tree:
+    """A bench run folder holding one cell file of text ``cell``."""
+
+    def build(path: Path) -> None:
+        (path / "cells").mkdir(parents=True)
+        (path / "cells" / "c.json").write_text(cell)
+
+    return Tree(build)
+
+
+def _bags(name: str, content: bytes) -> Tree:
+    """A ``--bag`` folder already holding ``name`` with ``content``."""
+
+    def build(path: Path) -> None:
+        path.mkdir()
+        (path / name).write_bytes(content)
+
+    return Tree(build)
+
+
+ROSBAG = b"#ROSBAG V2.0\n" + b"\0" * 64
+PNG = b"\x89PNG\r\n\x1a\n" + b"\0" * 64
+HTML = b"<!DOCTYPE html><html></html>\n"
+ONE_STATION = instance(_set("stations", [{"id": "S1", "serves": ["tiny"]}]))
+
+ISSUE_35_ROWS: dict[str, Row] = {
+    # item 3: every output a command writes is declared and checked up front
+    "execute --html is its own ROS 1 bag": row(
+        "execute {i} {s} --bag {o}/b --html {o}/b/tiny.bag",
+        2,
+        "--html",
+        "ROS 1 bag {o}/b/tiny.bag",
+        s=solution(unchanged),
+    ),
+    "execute --html inside its ROS 2 bag": row(
+        "execute {i} {s} --bag {o}/b --html {o}/b/tiny_ros2/v.html",
+        2,
+        "--html",
+        "replaced as a whole",
+        s=solution(unchanged),
+    ),
+    "execute --html over a ROS 1 bag": row(
+        "execute {i} {s} --format ros1 --bag {o}/b --html {x}",
+        2,
+        "--html {x}",
+        "exists and is a ROS 1 bag",
+        s=solution(unchanged),
+        x=ROSBAG,
+    ),
+    "execute bag over an HTML page": row(
+        "execute {i} {s} --format ros1 --bag {b}",
+        2,
+        "--bag {b}",
+        "exists and is an HTML page",
+        s=solution(unchanged),
+        b=_bags("tiny.bag", HTML),
+    ),
+    "execute kit bag is the --html": row(
+        "execute {i} {s} --kit 1 --bag {o}/b --format ros1 --html {o}/b/tiny_kit1.bag",
+        2,
+        "tiny_kit1.bag",
+        "the same file as --html",
+        s=solution(unchanged),
+    ),
+    "compare --csv is one of its figures": row(
+        "compare {i} --methods single-task --figures {o}/f --csv {o}/f/tiny_compare.png",
+        2,
+        "its figure tiny_compare.png",
+        "the same file as --csv",
+    ),
+    "compare --md is a method's Gantt chart": row(
+        "compare {i} --methods single-task --figures {o}/f --md {o}/f/tiny_single-task_gantt.png",
+        2,
+        "--md",
+    ),
+    "solve -o over a PNG": row(
+        "solve {i} -m single-task -o {x}", 2, "--out {x}", "exists and is a PNG image", x=PNG
+    ),
+    "solve --gantt over a ROS 1 bag": row(
+        "solve {i} -m single-task --gantt {x}", 2, "--gantt", "a ROS 1 bag", x=ROSBAG
+    ),
+    # item 5: sizes checked before building, with the range
+    "generate table on 1e9 stations": row(
+        "generate table --size 1 --stations 1000000000", 2, "--stations", "[1, 16,666]"
+    ),
+    "generate table on 1e6 stations": row(
+        "generate table --size 1 --stations 1000000", 2, "--stations", "above the limit"
+    ),
+    "generate intree of 1e7 tasks": row(
+        "generate intree --size 10000000", 2, "--size", "[1, 200,000] tasks"
+    ),
+    "generate sparse on 1e6 stations": row(
+        "generate sparse --size 3 --stations 1000000", 2, "--stations", "[1, 66,666]"
+    ),
+    "generate mixed of 1e5 units on 3 stations": row(
+        "generate mixed --size 100000 --stations 3", 2, "--size", "[1, 2,564] units"
+    ),
+    "generate stool of 1e9 units": row("generate stool --size 1000000000", 2, "--size", "stool"),
+    # item 9: the smaller ones
+    "solution overrides units 1e8": bad_solution(
+        _set("overrides", {"units": 100_000_000}), "$.overrides.units", "above the limit"
+    ),
+    "solution overrides trays 0": bad_solution(_set("overrides", {"trays": 0}), "$.overrides"),
+    "check override clash has the prefix": row(
+        "check {i} {s} --units 3",
+        2,
+        "bilevel-kit check: error: {s}: $.overrides.units",
+        s=solution(_set("overrides", {"units": 2})),
+    ),
+    "bench update bare NaN bound": row(
+        "bench update {r} --library {l}",
+        2,
+        "{r}/cells/c.json: $.bound",
+        "finite",
+        l=_library(),
+        r=_run_folder('{"format": "kitbench-cell/1", "bound": NaN}'),
+    ),
+    "bench update cell not an object": row(
+        "bench update {r} --library {l}",
+        2,
+        "not a bench cell record",
+        l=_library(),
+        r=_run_folder("[1, 2]"),
+    ),
+    "bench verify index with a BOM": row(
+        "bench verify --library {l}", 0, "0 records", "all hold", l=_library(bom=True)
+    ),
+    **{
+        f"serves {key!r}": bad_instance(
+            _set("stations", [{"id": "S1", "serves": [key]}]), "$.stations[0].serves[0]"
+        )
+        for key in ("tiny@", "tiny@01", "tiny@1\n", "tiny@\uff11", "@1")
+    },
+    "one station sum_completion status on its own line": row(
+        "solve {i} -m cpsat -p objective=sum_completion --time-limit 20 -q",
+        0,
+        "makespan bound",
+        "makespan gap",
+        "  sum_completion: optimal  25.00 s  bound 25.00 s  gap 0.00%",
+        i=ONE_STATION,
+    ),
+}
+ROWS.update(ISSUE_35_ROWS)
+
+
 def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
     """Every path under ``folder`` with its size and mtime (what "nothing written" compares)."""
     out = {}
@@ -782,6 +952,12 @@ def test_edge(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], mon
             continue
         if content is FIFO:
             os.mkfifo(path)
+            continue
+        if isinstance(content, Tree):
+            content.build(path)
+            continue
+        if isinstance(content, bytes):
+            path.write_bytes(content)
             continue
         text = content() if callable(content) else content
         if "\udcff" in text:

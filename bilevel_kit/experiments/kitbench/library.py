@@ -299,7 +299,10 @@ class Library:
 
     def read(self) -> list[Record]:
         """Every record, in the index's order; a malformed index is a :class:`UsageError`."""
-        text = self.index_path.read_text(encoding="utf-8")
+        try:  # a spreadsheet's UTF-8 byte order mark is no part of the first column's name
+            text = self.index_path.read_text(encoding="utf-8-sig")
+        except (OSError, UnicodeError) as exc:
+            raise UsageError(f"{self.index_path}: cannot read file ({exc})") from None
         reader = csv.DictReader(io.StringIO(text))
         missing = [c for c in COLUMNS if c not in (reader.fieldnames or [])]
         if missing:

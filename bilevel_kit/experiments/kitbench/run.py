@@ -15,7 +15,6 @@ library's or this run's, whichever is lower).
 
 from __future__ import annotations
 
-import json
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -318,8 +317,11 @@ def write_figures(
 
 
 def read_cells(folder: str | Path) -> list[dict[str, Any]]:
-    """The cell records of a run folder (``DIR/cells/*.json``), in file-name order."""
-    from ...errors import UsageError
+    """The cell records of a run folder (``DIR/cells/*.json``), in file-name order, read as
+    strictly as an instance (:func:`bilevel_kit.jsonio.read_json`): a bare ``NaN`` bound, a
+    duplicate key or a file that is no JSON object is exit 2 naming the file and the field."""
+    from ...errors import DocumentError, UsageError
+    from ...jsonio import read_json
 
     cells = Path(folder) / "cells"
     if not cells.is_dir():
@@ -328,8 +330,8 @@ def read_cells(folder: str | Path) -> list[dict[str, Any]]:
     for path in sorted(cells.glob("*.json")):
         if path.name.startswith("."):
             continue
-        try:
-            out.append({**json.loads(path.read_text(encoding="utf-8")), "_file": str(path)})
-        except (OSError, json.JSONDecodeError) as exc:
-            raise UsageError(f"{path}: not a bench cell record ({exc})") from None
+        doc = read_json(path, DocumentError)
+        if not isinstance(doc, dict):
+            raise UsageError(f"{path}: $: not a bench cell record (not a JSON object)")
+        out.append({**doc, "_file": str(path)})
     return out

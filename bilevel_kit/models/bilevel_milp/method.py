@@ -128,11 +128,16 @@ def run(
     """
     budget = Budget(time_limit)
     _check_size(instance, options.max_tasks)
-    ensure_ortools()
+    ensure_ortools(options.solver)
     opt = make_solver(options.solver)
     live = progress.tracker("J", unit="")  # the terminal's live line: which step runs now
     live.report(stage="enumerating kits")
     kits = enumerate_kits(instance, options.max_columns)
+    if budget.expired() and values is None:  # the lower level alone loads numba (1-3 s)
+        extra = {"solver": options.solver, "candidates": len(kits), "termination": "time"}
+        extra.update(reason="the time limit ran out before the lower level")
+        extra["wall_time_s"] = budget.elapsed()
+        return MethodOutput(None, Status.UNKNOWN, best_bound(instance), extra, "J")
     lower_level = values or LowerLevel(
         instance,
         seed=seed,

@@ -192,7 +192,7 @@ def run(
     if not instance.stations and options.objective == "sum_completion":  # = the makespan
         options = replace(options, objective="makespan")
     budget = Budget(time_limit)
-    ensure_ortools()
+    ensure_ortools(options.solver)
     opt = make_solver(options.solver)
     closed = best_bound(instance)
     pack_tl = pack_time_limit(budget)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
+import sys
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -82,13 +83,18 @@ def _quiet_pyomo() -> Iterator[None]:
         logger.setLevel(old)
 
 
-def ensure_ortools() -> None:
+def ensure_ortools(solver: str | None = None) -> None:
     """Load OR-Tools (the packing oracle) before anything can load highspy in-process.
 
     Whichever of the two is loaded first wins the ``libhighs.so.1`` soname; once highspy is in
     (cvxpy imports it on its first solve, Pyomo's in-process HiGHS interfaces too), OR-Tools
-    can no longer be imported in this process, which deserves a clear message.
+    can no longer be imported in this process, which deserves a clear message. ``solver``
+    ``"highs"`` runs HiGHS in a subprocess, so highspy never enters this process and OR-Tools
+    is left to load when the oracle first needs it: its import (pandas with it) takes 1-3 s,
+    which a short time limit cannot pay up front (docs/cli.md#shared-options).
     """
+    if solver == "highs" and "highspy" not in sys.modules:
+        return
     try:
         from ortools.sat.python import cp_model  # noqa: F401
     except ImportError as exc:
