@@ -105,3 +105,38 @@ def slow_packing_clock(monkeypatch: Any) -> None:
     clock = SimpleNamespace(perf_counter=perf_counter)
     monkeypatch.setattr(packing, "time", clock)
     monkeypatch.setattr(packing_oracle, "time", clock)
+
+
+#: The modules whose clocks a reproducible solve (``deterministic=True``) no longer reads: the
+#: Benders seed cuts, the cut shrinking and the quick plans (``common``), the quick plans' best
+#: cut (``segment``) and the packing calls (``packing``, ``packing_oracle``: their wall-clock
+#: safety nets are ten times their limit, from the start of each call).
+STEP_CLOCKS = (
+    "bilevel_kit.models.common",
+    "bilevel_kit.models.segment",
+    "bilevel_kit.models.packing",
+    "bilevel_kit.models.packing_oracle",
+)
+#: ... and the run's own safety nets: its budget and the kit-count LP's scan.
+NET_CLOCKS = (
+    "bilevel_kit.models.budget",
+    "bilevel_kit.models.relax",
+    "bilevel_kit.models.relax.kit_lp",
+)
+
+
+def slow_clock(monkeypatch: Any, modules: tuple[str, ...]) -> None:
+    """Make ``time.perf_counter`` jump 100 s at every reading in ``modules``: every wall-clock
+    limit they compute has passed by the time they look at it."""
+    import importlib
+    import time
+
+    now = [time.perf_counter()]
+
+    def perf_counter() -> float:
+        now[0] += 100.0
+        return now[0]
+
+    clock = SimpleNamespace(perf_counter=perf_counter)
+    for name in modules:
+        monkeypatch.setattr(importlib.import_module(name), "time", clock)

@@ -107,14 +107,27 @@ def all_failed_line(desc: str, records: Sequence[Record]) -> str | None:
     return f"{desc}: all {len(records)} cells failed ({how} {errors[0]})"
 
 
-def fresh_process_state() -> None:
-    """Forget what earlier cells left in this process and could change a result: the packing
-    oracle's memo (a kit implied to fit by an earlier, larger kit takes that kit's layout, and
-    a layout sets the robot's pick times). A cell is then a pure function of (config, seed),
-    whichever worker runs it and whatever ran there before (docs/cluster.md)."""
+def _clear_packing_memo() -> None:
     from ..models import packing_oracle
 
     packing_oracle.clear_cache()
+
+
+#: Every process-wide state an earlier cell can leave behind that could change a result, with
+#: its reset (docs/cluster.md): add a module's cache or solver object here, not a call of its
+#: own. ``packing oracle memo``: a kit implied to fit by an earlier, larger kit takes that
+#: kit's layout (a layout sets the robot's pick times), and a verdict decided with a longer
+#: limit stands for this cell's. (The kit-count LP makes a HiGHS object per LP: a reused one
+#: timed every later LP out once the process had spent its limit, docs/simulation.md.)
+PROCESS_RESETS: dict[str, Callable[[], None]] = {"packing oracle memo": _clear_packing_memo}
+
+
+def fresh_process_state() -> None:
+    """Forget what earlier cells left in this process and could change a result
+    (:data:`PROCESS_RESETS`). A cell is then a pure function of (config, seed), whichever
+    worker runs it and whatever ran there before (docs/cluster.md)."""
+    for reset in PROCESS_RESETS.values():
+        reset()
 
 
 @dataclass(frozen=True)

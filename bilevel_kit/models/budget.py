@@ -21,10 +21,12 @@ class Budget:
     """``time_limit`` seconds from ``start``; the ``deadline`` keeps ``keep_back`` x the limit
     in reserve (CP-SAT stops a little after its own limit on large models).
 
-    ``stretch`` (> 1 for a reproducible run, docs/simulation.md#determinism): the sub-steps'
-    shares (:meth:`share`, :meth:`next`, :meth:`head`) are that many times larger, up to the
-    whole budget, so that on a loaded machine they still finish as on an idle one; they are
-    then wall-clock safety nets only, and the budget's own deadline the last one."""
+    ``stretch`` (> 1 for a reproducible run, :attr:`deterministic`,
+    docs/simulation.md#determinism): every sub-step's share (:meth:`share`, :meth:`next`,
+    :meth:`head`) is the whole budget, so the steps are limited by work or deterministic time
+    alone and the budget's deadline is their one wall-clock safety net, far above what they
+    need; when a step sees it (or a wall-clock safety net of its own fires) it says so with
+    :meth:`net_fired`, which a run reports (:attr:`net`, shared with every sub-budget)."""
 
     def __init__(
         self,
@@ -34,6 +36,7 @@ class Budget:
         start: float | None = None,
         deadline: float | None = None,
         stretch: float = 1.0,
+        record: list[bool] | None = None,
     ) -> None:
         self.start = time.perf_counter() if start is None else start
         self.time_limit = DEFAULT_TIME_LIMIT if time_limit is None else float(time_limit)
@@ -41,9 +44,25 @@ class Budget:
             deadline = self.start + self.time_limit - keep_back * self.time_limit
         self.deadline = deadline
         self.stretch = stretch
+        self._record = record if record is not None else []
+
+    @property
+    def deterministic(self) -> bool:
+        """A reproducible run's budget: its clock is a safety net only (class docstring)."""
+        return self.stretch != 1.0
+
+    @property
+    def net(self) -> bool:
+        """Has a wall-clock safety net of this reproducible run fired (:meth:`net_fired`)?"""
+        return bool(self._record)
+
+    def net_fired(self) -> None:
+        """Record that a wall-clock safety net cut a step of this run short."""
+        if not self._record:
+            self._record.append(True)
 
     def _part(self, fraction: float) -> float:
-        return min(1.0, fraction * self.stretch)
+        return 1.0 if self.deterministic else min(1.0, fraction * self.stretch)
 
     def __repr__(self) -> str:
         return f"Budget(time_limit={self.time_limit!r}, remaining={self.remaining():.3f})"
@@ -53,8 +72,12 @@ class Budget:
         return self.deadline - time.perf_counter() - margin
 
     def expired(self, margin: float = 0.0) -> bool:
-        """Has the deadline (less ``margin``) passed?"""
-        return time.perf_counter() > self.deadline - margin
+        """Has the deadline (less ``margin``) passed? (In a reproducible run: its safety net
+        fired, recorded.)"""
+        out = time.perf_counter() > self.deadline - margin
+        if out and self.deterministic:
+            self.net_fired()
+        return out
 
     def elapsed(self) -> float:
         """Seconds since the budget started."""
@@ -79,7 +102,13 @@ class Budget:
         return self._sub(min(self.deadline, self.start + self._part(fraction) * self.time_limit))
 
     def _sub(self, deadline: float) -> Budget:
-        return Budget(self.time_limit, start=self.start, deadline=deadline, stretch=self.stretch)
+        return Budget(
+            self.time_limit,
+            start=self.start,
+            deadline=deadline,
+            stretch=self.stretch,
+            record=self._record,
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -145,5 +174,9 @@ def no_model_reason(
 
 def too_slow_to_build(budget: Budget, estimate_s: float, margin: float = 0.0) -> bool:
     """Would building a model (``estimate_s`` seconds) take more than :data:`BUILD_SHARE` of
-    the time left? Then the run keeps its incumbent instead of overrunning its limit."""
-    return estimate_s > BUILD_SHARE * budget.remaining(margin)
+    the time left? Then the run keeps its incumbent instead of overrunning its limit (in a
+    reproducible run that is its safety net firing, recorded)."""
+    out = estimate_s > BUILD_SHARE * budget.remaining(margin)
+    if out and budget.deterministic:
+        budget.net_fired()
+    return out

@@ -257,7 +257,7 @@ class Packer:
         no plan exists, or none with 0/90-degree layouts); stops (None) once the budget has
         expired."""
         for t in self.instance.tasks:
-            if self.budget.expired():
+            if not self.deterministic and self.budget.expired():
                 return None
             fit = self.verdict(self.instance.kit_parts([t.id]))
             if fit.fits is False:
@@ -292,10 +292,13 @@ class Packer:
         """Deletion filter: drop parts (smallest types first) while the rest provably does not
         fit, with a proof of ``scope`` (one for every layout stays one); stops early at
         ``until`` (a larger non-fitting multiset is still a valid cut); ``deterministic`` as
-        in :meth:`verdict`."""
+        in :meth:`verdict`. A reproducible packer (``self.deterministic``) ignores ``until``:
+        at most one call per part, each limited by deterministic time
+        (docs/simulation.md#determinism)."""
         cur = {k: n for k, n in counts.items() if n > 0}
+        clock = not self.deterministic
         for t in sorted(cur, key=lambda q: (self.instance.part_types[q].area, q)):
-            while cur.get(t, 0) > 0 and time.perf_counter() < until:
+            while cur.get(t, 0) > 0 and (not clock or time.perf_counter() < until):
                 trial = dict(cur)
                 trial[t] -= 1
                 if trial[t] == 0:
@@ -385,14 +388,16 @@ class NoGoodCuts:
 
     def seed_pairs(self) -> None:
         """Cut every pair of tasks (distinct part multisets) that provably does not fit
-        together, while a tenth of the time left lasts."""
+        together, while a tenth of the time left lasts (a reproducible packer: every pair,
+        each call limited by deterministic time, docs/simulation.md#determinism)."""
         instance = self.packer.instance
         seed_until = self.budget.share(0.1, self.margin)
+        clock = not self.packer.deterministic
         reps = list(
             {frozenset(instance.kit_parts([t.id]).items()): t.id for t in instance.tasks}.values()
         )
         for a, b in itertools.combinations_with_replacement(reps, 2):
-            if time.perf_counter() > seed_until:
+            if clock and time.perf_counter() > seed_until:
                 break
             counts = instance.kit_parts([a, b])
             fit = self.packer.verdict(counts)
@@ -466,9 +471,10 @@ def quick_plan(
     one_tray = instance.tray_limit == 1
     if one_tray and (cut := best_cut(instance, order, packer)) is not None:
         consider(cut)
+    clock = not packer.deterministic  # (reproducible: every size, each call limited by work)
     for s in range(1, min(len(order), max_size) + 1):
         if best is not None and (
-            packer.budget.expired() or (target is not None and best[0] <= target)
+            (clock and packer.budget.expired()) or (target is not None and best[0] <= target)
         ):
             break
         kits: list[list[str]] = []
@@ -478,7 +484,8 @@ def quick_plan(
                 return best[1] if best else None
             kits += parts
         consider(kits)
-    if not one_tray and not packer.budget.expired() and (cut := best_cut(instance, order, packer)):
+    late = clock and packer.budget.expired()
+    if not one_tray and not late and (cut := best_cut(instance, order, packer)):
         consider(cut)
     return best[1] if best else None
 
@@ -504,7 +511,8 @@ def best_cut(instance: Instance, order: Sequence[str], packer: Packer) -> list[l
     def fits(b: int, c: int) -> bool:
         return packer.counts(instance.kit_parts(order[b:c]), limit)[0] is True
 
-    ext = fit_extents(len(order), fits, packer.budget.deadline)
+    # a reproducible packer: no clock, its calls are limited by deterministic time
+    ext = fit_extents(len(order), fits, None if packer.deterministic else packer.budget.deadline)
     return None if ext is None else one_tray_cut(instance, order, ext)[1]
 
 

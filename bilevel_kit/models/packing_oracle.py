@@ -97,6 +97,8 @@ class _FitCache:
         default_factory=dict
     )
     solves: int = 0
+    #: reproducible solves a wall-clock safety net cut short (docs/simulation.md#determinism)
+    nets: int = 0
 
 
 _CACHES: dict[tuple[Any, ...], _FitCache] = {}
@@ -120,6 +122,12 @@ def _cache_for(
 def pack_solves() -> int:
     """Packing solves so far, over every cache (a run reports its own by difference)."""
     return sum(c.solves for c in _CACHES.values())
+
+
+def safety_nets() -> int:
+    """Reproducible packing solves cut by their wall-clock safety net so far, over every cache
+    (a run reports its own by difference: then its answers are not reproducible)."""
+    return sum(c.nets for c in _CACHES.values())
 
 
 def _leq(a: Mapping[str, int], b: Mapping[str, int]) -> bool:
@@ -193,6 +201,7 @@ def fit_verdict(
     if fit is None:
         if res.extra.get("safety_net"):  # the wall clock stopped it: no deterministic answer
             kind, budget = WALL, time_limit
+            cache.nets += 1
         cache.unknown[(key, kind)] = (budget if why == WHY_TIME else math.inf, why)
         return Fit(None, why=why)
     return fit

@@ -35,14 +35,14 @@ within the limit). Online information enters the sub-problem as:
 deterministic units (``max_deterministic_time`` = ``deterministic_time``) with ``workers``
 fixed (1: CP-SAT is then deterministic), and the solve runs in its reproducible mode
 (:func:`bilevel_kit.models.cpsat.solve`, ``deterministic=True``): its packing calls are
-limited by deterministic time too, with one worker, and its clock-bounded steps (quick plans,
-Benders seed cuts, cut shrinking, the kit-count LP bound) get ten times their share of
-``time_limit``. So a simulation run is meant to be a function of (instance, policy,
-parameters, seed) on an idle or a loaded machine alike (docs/simulation.md#determinism names
-one case, still open, where it is not); ``time_limit`` and the packing calls' wall-clock limits are
-safety nets only: a decision that hits one (a pathologically loaded machine, about ten times
-slower than an idle one) is no longer reproducible. Committed layouts come from the policy's
-own shelf-packer cache, not from the packing oracle's process-wide cache.
+limited by deterministic time too, with one worker, and its other steps (quick plans,
+Benders seed cuts, cut shrinking, the kit-count LP bound) by work, not by the clock, within
+``time_limit``. So a simulation run is a function of (instance, policy, parameters, seed)
+on an idle or a loaded machine alike; ``time_limit`` and the packing calls' wall-clock limits
+are safety nets only: a decision that hits one (a pathologically loaded machine) is no longer
+reproducible, and is counted in :attr:`CPSATRollingPolicy.safety_nets`. Committed layouts
+come from the policy's own shelf-packer cache, not from the packing oracle's process-wide
+cache.
 
 **Warm start.** Each decision is hinted with the previous decision's plan minus the kit it
 committed (restricted to the window, the window's new tasks appended as single kits), or a
@@ -127,6 +127,8 @@ class CPSATRollingPolicy:
         self._memo: dict[tuple[Any, ...], tuple[Kit, tuple[tuple[str, ...], ...]]] = {}
         self._rest: tuple[tuple[str, ...], ...] = ()  # the previous plan after its first kit
         self.solves = 0
+        #: decisions whose solve a wall-clock safety net cut short (not reproducible)
+        self.safety_nets = 0
         #: the human time of a task in the window's model: the mean (the adaptive variants,
         #: :mod:`.adaptive`, set their pace estimate here before each decision)
         self.human_time: Callable[[str], float] = instance.human_time
@@ -296,6 +298,7 @@ class CPSATRollingPolicy:
             deterministic=True,
         )
         self.solves += 1
+        self.safety_nets += bool(out.extra.get("safety_net"))
         plan = out.plan or hint
         if any(rel.values()):  # (else the model's plan as it is: no-delay decisions unchanged)
             plan = self._merge_first(sub, plan, len(dummy), rel, back)

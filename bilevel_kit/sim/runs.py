@@ -45,6 +45,9 @@ class SimResult:
     feeders: Mapping[str, Mapping[str, float | int]]
     params: SimParams
     arrival_times: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    #: decisions a wall-clock safety net cut short (``cpsat-rolling``: not reproducible,
+    #: docs/simulation.md#determinism); 0 for the other policies
+    safety_nets: int = 0
 
     @property
     def kit_times(self) -> tuple[KitTimes, ...]:
@@ -202,10 +205,11 @@ def simulate(
     )
     shop = ShopFloor(inst, pol, params, times, seed)
     env = shop.env
+    nets = getattr(pol, "safety_nets", 0)  # (a shared policy counts over its runs)
     env.run(until=shop.finished | env.timeout(params.max_time))
     if not shop.finished.triggered:
         raise SimulationError(f"the run did not finish within {params.max_time:g} s")
-    return _result(shop, pol, seed)
+    return replace(_result(shop, pol, seed), safety_nets=getattr(pol, "safety_nets", 0) - nets)
 
 
 def run(

@@ -89,10 +89,16 @@ def test_packer_limits(table):
     assert det.limits(deterministic=False) == wall.limits()
 
 
-def test_a_stretched_budget_gives_sub_steps_larger_shares():
+def test_a_deterministic_budget_gives_sub_steps_the_whole_budget_and_records_its_net():
+    """docs/simulation.md#determinism: a reproducible run's steps are limited by work, the
+    budget's deadline is their one safety net, and a sub-budget that sees it records it."""
     plain = Budget(10.0, start=0.0, deadline=10.0)
     stretched = Budget(10.0, start=0.0, deadline=10.0, stretch=10.0)
     assert plain.head(0.05).deadline == pytest.approx(0.5)
-    assert stretched.head(0.05).deadline == pytest.approx(5.0)
+    assert not plain.deterministic and stretched.deterministic
+    assert stretched.head(0.05).deadline == pytest.approx(10.0)
     assert stretched.head(0.5).deadline == pytest.approx(10.0)  # never past the deadline
-    assert stretched.cut(1.0).next(0.1).stretch == 10.0
+    sub = stretched.cut(1.0).next(0.1)
+    assert sub.stretch == 10.0 and not stretched.net
+    assert sub.expired() and stretched.net  # (start 0: the deadline has long passed)
+    assert plain.expired() and not plain.net  # a wall-clock run has no net to record

@@ -80,3 +80,63 @@ def test_kit_lp_beats_the_closed_forms_on_the_table():
     assert bound.value == pytest.approx(430.37, abs=0.01)
     assert best_bound(inst) == pytest.approx(415.78)
     assert time_grid(inst) == pytest.approx(0.005)
+
+
+def test_kit_count_lp_gives_the_same_bound_after_many_lps() -> None:
+    """Each LP gets a HiGHS object of its own (docs/simulation.md#determinism): a reused one
+    (HiGHS before 2.0 measures ``time_limit`` against the run time it accumulated over all its
+    runs) timed every LP out once the process had spent one LP's limit in earlier ones, which
+    made a stations-study cell's result depend on the cells its worker ran before it."""
+    import time
+
+    from bilevel_kit.bounds import min_kits
+    from bilevel_kit.models.relax.kit_lp import kit_count_bound
+
+    inst = load("instances/hrc_table.json")
+    closed = closed_at(inst)
+
+    def scan() -> dict[int, float]:
+        deadline = time.perf_counter() + 0.5  # each LP a limit of under 0.5 s
+        return kit_count_bound(inst, closed, m_min=min_kits(inst), deadline=deadline).per_kits
+
+    first = scan()
+    assert first and round(min(first.values()), 2) == 430.37
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < 1.5:  # more than one LP's limit spent in earlier LPs
+        assert scan() == first
+
+
+def test_deterministic_kit_count_scan_is_limited_by_work() -> None:
+    """``deterministic``: the scan stops by its LPs' task x kit variables, not the clock; a
+    wall-clock safety net that fires is recorded."""
+    import time
+    from types import SimpleNamespace
+
+    from bilevel_kit.models import relax
+    from bilevel_kit.models.relax import kit_lp
+
+    inst = load("instances/hrc_table.json")
+    full = proven_bound(inst, time_limit=0.5, deterministic=True)
+    assert full.value == 430.37 and not full.safety_net
+    # work for the first kit count's LP alone: the scan stops there, whatever the clock says
+    m0 = min(full.per_kits)
+    one = kit_lp.kit_count_bound(
+        inst,
+        closed_at(inst),
+        m_min=m0,
+        deadline=time.perf_counter() + 60.0,
+        work=inst.n_tasks * m0,
+    )
+    assert list(one.per_kits) == [m0] and not one.safety_net
+    now = [time.perf_counter()]
+
+    def late() -> float:  # every reading 100 s later: the safety net has passed
+        now[0] += 100.0
+        return now[0]
+
+    clock = SimpleNamespace(perf_counter=late)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(relax, "time", clock)
+        mp.setattr(kit_lp, "time", clock)
+        cut = proven_bound(inst, time_limit=0.5, deterministic=True)
+    assert cut.safety_net and cut.per_kits == {}

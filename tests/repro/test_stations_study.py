@@ -111,3 +111,29 @@ def test_cli_quick_subset(tmp_path, capsys) -> None:
     text = capsys.readouterr().out
     assert "S_max" in text and "cpsat-rolling" in text
     assert (out / "stations_stool.png").exists()
+
+
+@pytest.mark.slow
+def test_lines_sharing_an_instance_give_identical_rows(tmp_path) -> None:
+    """The table and mix lines at S = 1 are the same instance (docs/stations.md), so every
+    policy's row must be the same, though the mix cells run after the table's in the same
+    process (docs/simulation.md#determinism: a process-wide HiGHS object once made later cells
+    differ)."""
+    res = run_stations(
+        tmp_path, reps=2, units=2, lines=["table", "mix"], stations=[1], delays=["none"]
+    )
+    assert res["failed"] == []
+
+    def same(rows: list[dict], drop: tuple[str, ...]) -> dict[str, list[dict]]:
+        out: dict[str, list[dict]] = {}
+        for r in rows:
+            kept = {k: v for k, v in r.items() if k not in drop}
+            out.setdefault(r["line"], []).append(kept)
+        return out
+
+    rows = same(res["rows"], ("line", "wall_s"))
+    assert rows["table"] == rows["mix"] and len(rows["table"]) == 4
+    served_rows = same(res["served"], ("line",))
+    assert served_rows["table"] == served_rows["mix"]
+    cpsat = next(r for r in rows["table"] if r["policy"] == "cpsat-rolling")
+    assert (cpsat["throughput"], cpsat["idle"]) == (9.52, 6.25)  # seeds 0 and 1: 792.2, 723.2 s

@@ -110,6 +110,7 @@ class _Benders:
             live.bound_valid = self.cuts.scope == ANY_ANGLE
             live.tracker.report(stage=f"CP-SAT Benders, {self.mdl.n_cuts} cuts")
         st = stoppable.solve(solver, mdl.model, self.ctx.callback)
+        self.ctx.left()  # (a reproducible run records a wall limit the solve ran into)
         state.status_name = solver.status_name(st)
         if st == cp_model.INFEASIBLE:
             # the master holds C <= U, so without an unproven cut the incumbent is optimal

@@ -47,9 +47,11 @@ what is left of that share as its own ``time_limit``), the proven bound of
 model run gets the rest; 1 % of the run's limit and 0.15 s are kept back (CP-SAT stops a
 little after its own limit on large models). ``deterministic`` (:func:`solve`, for callers
 that limit CP-SAT by ``max_deterministic_time``, docs/simulation.md#determinism): packing
-calls are limited by deterministic time too (:class:`..common.Packer`) and the sub-steps'
-shares of the limit are :data:`~..packing_oracle.SAFETY_NET` times larger
-(:class:`..budget.Budget`), so the time limit is a safety net only. A model whose size
+calls are limited by deterministic time too (:class:`..common.Packer`), the other steps by
+work (quick plans, seed cuts, cut shrinking: their number of packing calls; the kit-count LP:
+its variables), every sub-step's share is the whole budget (:class:`..budget.Budget`), so
+the time limit is a safety net only, and ``extra["safety_net"]`` says whether a net fired
+(then the result is not reproducible). A model whose size
 exceeds the memory limit is not built: the incumbent is returned as feasible with the proven
 bound (``cpsat_status`` ``TOO_LARGE``), or the run is refused when there is none
 (:mod:`..budget`). Without a model (``TOO_LARGE``, ``NOT_BUILT``) option ``fallback="lns"``
@@ -324,11 +326,15 @@ class _Report:
         self.budget = budget
         self.extra = extra
         self.solves_before = packing_oracle.pack_solves()
+        self.nets_before = packing_oracle.safety_nets()
 
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         extra = self.extra
         extra["pack_solves"] = packing_oracle.pack_solves() - self.solves_before
         extra["wall_time_s"] = self.budget.elapsed()
+        if self.budget.deterministic:  # did a wall-clock safety net fire (not reproducible)?
+            nets = packing_oracle.safety_nets() - self.nets_before
+            extra["safety_net"] = self.budget.net or nets > 0
         return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
 
 

@@ -22,10 +22,12 @@ def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> 
     from ..relax import for_model
 
     t0 = ctx.budget.elapsed()
-    s = ctx.budget.stretch  # a reproducible run: its share is a safety net (budget.py)
+    budget = ctx.budget  # a reproducible run: the scan is limited by work (relax/__init__.py)
     ctx.proven = for_model(
-        ctx.instance, s * ctx.budget.time_limit, s * ctx.budget.remaining(), upper_s
+        ctx.instance, budget.time_limit, budget.remaining(), upper_s, budget.deterministic
     )
+    if ctx.proven.safety_net:
+        budget.net_fired()
     extra.update(
         bound_sources=ctx.proven.sources,
         bound_lp_kits=dict(ctx.proven.per_kits),

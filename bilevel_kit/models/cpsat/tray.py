@@ -115,6 +115,8 @@ def embed_scope(instance: Instance, packer: Packer) -> str | None:
             else {"time_limit": min(limit, max(0.01, packer.budget.remaining()))}
         ),
     )
+    if whole.extra.get("safety_net"):  # a reproducible call cut by the wall clock: recorded
+        packer.budget.net_fired()
     if whole.layout is not None:
         return ANY_ANGLE
     sizes = [instance.tray.width, instance.tray.height]

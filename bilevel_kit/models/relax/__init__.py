@@ -36,6 +36,8 @@ class ProvenBound:
     per_kits: dict[int, float] = field(default_factory=dict)
     stop: int = 1
     grid: float | None = None
+    #: a reproducible scan cut by its wall-clock safety net (:func:`proven_bound`)
+    safety_net: bool = False
 
     def at(self, m: int, closed: Callable[[int], float]) -> float:
         """A lower bound on the makespan of every plan of exactly ``m`` kits."""
@@ -101,10 +103,18 @@ def proven_bound(
     time_limit: float = 1.0,
     upper: float | None = None,
     lp: bool = True,
+    deterministic: bool = False,
 ) -> ProvenBound:
     """The best of the closed forms, the precedence bounds and (``lp``) the kit-count LP
     bound, this one scanned for at most ``time_limit`` s; ``upper`` (a known plan's makespan)
-    ends the scan at the counts whose closed-form bound exceeds it."""
+    ends the scan at the counts whose closed-form bound exceeds it. ``deterministic``
+    (docs/simulation.md#determinism): the scan is limited by work instead, the LPs' task x kit
+    variables that ``time_limit`` allows at :data:`.kit_lp.LP_S_PER_CELL`, with
+    :data:`~..packing_oracle.SAFETY_NET` times ``time_limit`` as a wall-clock safety net
+    (``ProvenBound.safety_net`` when it fires), so the bound does not depend on the load."""
+    from ..packing_oracle import SAFETY_NET
+    from .kit_lp import LP_S_PER_CELL
+
     lb = lower_bounds(instance)
     sources = {
         "closed_form_human": lb["human"],
@@ -115,22 +125,25 @@ def proven_bound(
     grid = time_grid(instance)
     per: dict[int, float] = {}
     stop = int(lb["min_kits"])
+    net = False
     if lp:
         closed = closed_at(instance)
         scan = kit_count_bound(
             instance,
             closed,
             m_min=min_kits(instance),
-            deadline=time.perf_counter() + time_limit,
+            deadline=time.perf_counter() + (SAFETY_NET if deterministic else 1.0) * time_limit,
             upper=upper,
+            work=int(time_limit / LP_S_PER_CELL) if deterministic else None,
         )
         per = {m: on_grid(v, grid) for m, v in scan.per_kits.items()}
         stop = scan.stop
+        net = scan.safety_net
         if per:  # no LP solved in time: its value is a closed form's, named as such
             sources["kit_lp"] = scan.value
     sources = {k: on_grid(v, grid) for k, v in sources.items()}
     source = max(sources, key=lambda k: (sources[k], k == "kit_lp"))
-    return ProvenBound(sources[source], source, sources, per, stop, grid)
+    return ProvenBound(sources[source], source, sources, per, stop, grid, net)
 
 
 #: The share of a run's time limit the exact models give :func:`proven_bound` (at least
@@ -139,12 +152,22 @@ BOUND_SHARE, MIN_BOUND_S = 0.05, 0.2
 
 
 def for_model(
-    instance: Instance, time_limit: float, left: float, upper: float | None
+    instance: Instance,
+    time_limit: float,
+    left: float,
+    upper: float | None,
+    deterministic: bool = False,
 ) -> ProvenBound:
     """:func:`proven_bound` within an exact model's share of its run (:data:`BOUND_SHARE` of
-    ``time_limit``, at least :data:`MIN_BOUND_S`, at most a tenth of the ``left`` seconds)."""
-    share = min(max(BOUND_SHARE * time_limit, MIN_BOUND_S), 0.1 * max(0.0, left))
-    return proven_bound(instance, time_limit=share, upper=upper, lp=share > 0.02)
+    ``time_limit``, at least :data:`MIN_BOUND_S`, at most a tenth of the ``left`` seconds).
+    ``deterministic``: the share of ``time_limit`` alone (what is left depends on the clock),
+    as work (:func:`proven_bound`)."""
+    share = max(BOUND_SHARE * time_limit, MIN_BOUND_S)
+    if not deterministic:
+        share = min(share, 0.1 * max(0.0, left))
+    return proven_bound(
+        instance, time_limit=share, upper=upper, lp=share > 0.02, deterministic=deterministic
+    )
 
 
 def scaled_kit_bounds(bound: ProvenBound, res: float, exact: bool) -> dict[int, int]:

@@ -146,15 +146,22 @@ class _Rows:
         return start, keys % n_cols, value
 
 
-_HIGHS: list[Any] = []
+#: Set once this process made its first HiGHS object (whose banner went to the null device).
+_QUIET: list[bool] = []
 
 
 def _highs() -> Any:
-    """A HiGHS instance without output. HiGHS prints a banner on the process's standard output
-    (the file descriptor, past Python) when the first one is made: it goes to the null device."""
+    """A new HiGHS instance without output, one per LP. Not one per process: HiGHS (before
+    2.0) measures ``time_limit`` against the run time an instance accumulated over all its
+    runs, so a reused instance reports every LP as timed out once the process has spent the
+    limit in earlier LPs, earlier experiment cells included (docs/simulation.md#determinism).
+    HiGHS prints a banner on the process's standard output (the file descriptor, past Python)
+    when the first one is made: it goes to the null device."""
     import highspy
 
-    if not _HIGHS:
+    if _QUIET:
+        h = highspy.Highs()
+    else:
         sys.stdout.flush()
         saved = os.dup(1)
         try:
@@ -164,9 +171,7 @@ def _highs() -> Any:
         finally:
             os.dup2(saved, 1)
             os.close(saved)
-        _HIGHS.append(h)
-    h = _HIGHS[0]
-    h.clearModel()
+        _QUIET.append(True)
     h.setOptionValue("output_flag", False)
     h.setOptionValue("threads", 1)
     return h
@@ -309,12 +314,14 @@ class KitCountBound:
     """The kit-count LP bound: ``value`` (s, lowered by :data:`LP_TOL`), the LP optimum of
     every kit count scanned (``per_kits``: m -> L(m), inf when no plan of m kits exists) and
     the first count not scanned, ``stop`` (its closed-form bound and the larger counts' are
-    at least ``value``)."""
+    at least ``value``). ``safety_net``: a scan limited by work (``work``) was cut by its
+    wall-clock safety net instead, so it is not reproducible."""
 
     value: float
     per_kits: dict[int, float]
     stop: int
     complete: bool
+    safety_net: bool = False
 
 
 def kit_count_bound(
@@ -325,31 +332,43 @@ def kit_count_bound(
     deadline: float,
     upper: float | None = None,
     max_cells: int = 60_000,
+    work: int | None = None,
 ) -> KitCountBound:
     """Scan m = m_min, m_min + 1, ... while the closed-form bound with m kits
     (``closed_at(m)``) is below the best LP value so far (and below ``upper``, a known plan's
     makespan, if given), until ``deadline`` (``time.perf_counter``), a model of more than
     ``max_cells`` task x kit variables or one that would not fit the time left
-    (:data:`LP_S_PER_CELL`); see :class:`KitCountBound`."""
+    (:data:`LP_S_PER_CELL`); see :class:`KitCountBound`.
+
+    ``work`` (a reproducible scan, docs/simulation.md#determinism): the scan stops instead
+    before its LPs' task x kit variables would add up to more than ``work``, whatever the
+    clock says; ``deadline`` is then a wall-clock safety net only (its firing is recorded)."""
     data = _Data.of(instance)
     best = math.inf
     per: dict[int, float] = {}
     m = m_min
-    complete = False
+    complete = net = False
+    spent = 0
     while True:
         cap = closed_at(m)  # type: ignore[operator]
         if cap >= best or (upper is not None and cap > upper) or m > data.n:
             complete = True
             break
+        cells = data.n * m
         left = deadline - time.perf_counter()
-        if left <= 0.02 or data.n * m > max_cells or data.n * m * LP_S_PER_CELL > left:
+        if cells > max_cells or (work is not None and spent + cells > work):
+            break
+        if left <= 0.02 or (work is None and cells * LP_S_PER_CELL > left):
+            net = work is not None
             break
         value = kit_lp(data, m, left)
+        spent += cells
         if value is None:
+            net = work is not None and time.perf_counter() >= deadline - 0.02
             break
         value = value - LP_TOL * max(1.0, abs(value)) if math.isfinite(value) else value
         per[m] = value
         best = min(best, value)
         m += 1
     final = min(best, closed_at(m))  # type: ignore[operator]
-    return KitCountBound(final, per, m, complete)
+    return KitCountBound(final, per, m, complete, net)
