@@ -326,6 +326,7 @@ def solve(
         extra["station_metrics"] = {s: per[s] for s in instance.station_ids if s in per}
     result_gap = gap(objective, bound)
     if check and out.plan is not None:
+        from .objectives import extra_claims
         from .validate import Claims
         from .validate import check as run_check
 
@@ -338,6 +339,7 @@ def solve(
             gap=result_gap,
             has_gap=True,
             status_objective=out.status_objective,
+            objective_claims=extra_claims(out.status_objective, extra),
         )
         extra["violations"] = [v.to_dict() for v in run_check(instance, out.plan, claims=claims)]
     return Result(

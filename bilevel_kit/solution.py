@@ -24,6 +24,7 @@ from .errors import SolutionError
 from .instance import Instance
 from .jsonio import read_json, validate_document
 from .methods import Result
+from .objectives import OBJECTIVES
 from .plan import Kit, KitTimes, Placement, Plan
 from .validate import Claims, Violation, check
 
@@ -327,13 +328,15 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         read = {k: num(v, f"$.metrics.{k}") for k, v in metrics.items()}
         metrics = {k: v for k, v in read.items() if not math.isnan(v)}
     stated = {k: num.optional(doc.get(k), f"$.{k}") for k in ("objective", "bound", "gap")}
+    status_objective = doc.get("status_objective", "makespan")
     claims = Claims(
         status=doc["status"],
         objective=stated["objective"],
         bound=stated["bound"],
         gap=stated["gap"],
         has_gap="gap" in doc,
-        status_objective=doc.get("status_objective", "makespan"),
+        status_objective=status_objective,
+        objective_claims=_objective_claims(status_objective, doc.get("extra") or {}, num),
         timeline=_timeline(doc.get("timeline_params"), num),
         refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
     )
@@ -354,6 +357,27 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         per_station,
         tuple(kit_stations) if any(s is not None for s in kit_stations) else None,
     )
+
+
+def _objective_claims(
+    name: str, extra: dict[str, Any], num: _Numbers
+) -> tuple[float | None, float | None, float | None, bool] | None:
+    """The value, bound and gap ``extra`` states for the objective ``name`` where the
+    registry keeps them there (:mod:`bilevel_kit.objectives`), read strictly: anything but a
+    number or null is a ``bad_number`` violation and reads as not stated."""
+    obj = OBJECTIVES.get(name)
+    if obj is None or obj.top_level:
+        return None
+    *stated, has_gap = obj.stated({}, extra)
+    keys = (obj.value_keys, obj.bound_keys, obj.gap_keys)
+    out: list[float | None] = []
+    for value, names in zip(stated, keys, strict=True):
+        key = next((k for k in names if extra.get(k) is not None), names[0])
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)):
+            num.faults.append(Violation("bad_number", f"$.extra.{key}: {value!r} is not a number"))
+            value = None
+        out.append(num.optional(value, f"$.extra.{key}"))
+    return out[0], out[1], out[2], has_gap
 
 
 def _timeline(params: dict[str, Any] | None, num: _Numbers) -> dict[str, Any] | None:

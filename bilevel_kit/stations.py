@@ -3,7 +3,8 @@
 The evaluator (:mod:`bilevel_kit.plan`) and the checker take stations themselves; this module
 holds what methods and bounds share about them: a station's tasks as an instance of their own
 (:func:`station_instance`, whose closed-form bounds hold for that station's completion), the
-objectives the exact models may minimise over them (:func:`objective_of`; their closed-form
+objectives the exact models may minimise over them (:func:`objective_of`, the registry
+:mod:`bilevel_kit.objectives`; their closed-form
 bounds: :func:`bilevel_kit.bounds.objective_bound`) and the list of the methods that model
 stations.
 """
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from .errors import UsageError
 from .instance import Instance
+from .objectives import get as get_objective
 
 if TYPE_CHECKING:
     from .plan import Timeline
@@ -24,22 +26,14 @@ if TYPE_CHECKING:
 STATION_METHODS = frozenset({"single-task", "whole-assembly", "greedy-ce", "cpsat", "milp"})
 
 
-#: What ``-p objective=...`` of ``cpsat``/``milp`` may name (docs/timeline.md#several-stations):
-#: the makespan (max of the completions), the sum of the stations' completions, and the total
-#: human idle (the one-station objective ``human_idle``, summed over the stations).
-OBJECTIVES = ("makespan", "sum_completion", "human_idle")
-
-
 def objective_of(timeline: Timeline, objective: str) -> float:
-    """The value of ``objective`` (:data:`OBJECTIVES`) on ``timeline`` in seconds: with one
-    station ``sum_completion`` is the makespan; ``human_idle`` is the timeline's, already the
-    sum over the stations of ``station_metrics()``'s idle."""
-    if objective == "human_idle":
-        return timeline.human_idle
-    if objective == "sum_completion" and timeline.kit_stations:  # else one station
-        per = timeline.station_metrics()
-        return sum(float(m["completion"]) for m in per.values())
-    return timeline.makespan
+    """The value of ``objective`` on ``timeline`` in seconds: the registry's evaluation
+    (:data:`bilevel_kit.objectives.OBJECTIVES`; with one station ``sum_completion`` is the
+    makespan, ``human_idle`` is the timeline's, the sum over the stations)."""
+    value = get_objective(objective).value(timeline)
+    if value is None:
+        raise ValueError(f"{objective!r} is not a function of the timeline")
+    return value
 
 
 def makespan_horizon(instance: Instance, timeline: Timeline, objective: str) -> float:

@@ -27,6 +27,7 @@ from typing import Any
 
 from . import geometry
 from .instance import Instance
+from .objectives import OBJECTIVES
 from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate
 
 #: Absolute tolerance (s) when comparing reported times with the evaluator's.
@@ -51,6 +52,7 @@ KINDS = (
     "tray_not_returned",
     "objective_mismatch",
     "bound_above_makespan",
+    "bound_above_objective",
     "gap_mismatch",
     "status_mismatch",
     "instance_mismatch",
@@ -58,12 +60,17 @@ KINDS = (
 )
 
 #: The kinds that concern what a result claims about its plan (not the plan itself).
-CLAIM_KINDS = ("objective_mismatch", "bound_above_makespan", "gap_mismatch", "status_mismatch")
+CLAIM_KINDS = (
+    "objective_mismatch",
+    "bound_above_makespan",
+    "bound_above_objective",
+    "gap_mismatch",
+    "status_mismatch",
+)
 
-#: The objectives a status may refer to (``status_objective``): the makespan, the human idle
-#: time and (several stations) the sum of the stations' completions the exact models may
-#: minimise instead, and the paper's objective J (bilevel-milp).
-KNOWN_OBJECTIVES = ("makespan", "human_idle", "sum_completion", "J")
+#: The objectives a status may refer to (``status_objective``): the registry's
+#: (:mod:`bilevel_kit.objectives`), each checked by :func:`_check_objective`.
+KNOWN_OBJECTIVES = tuple(OBJECTIVES)
 
 #: Overlapping pairs listed per kit; more are summarised in one violation (a tampered file with
 #: thousands of stacked parts would otherwise list every pair).
@@ -85,6 +92,10 @@ class Claims:
     #: The objective ``status`` refers to; "optimal" only promises a zero makespan gap when it
     #: is ``makespan``.
     status_objective: str = "makespan"
+    #: What the file states about ``status_objective`` when the registry keeps it in
+    #: ``extra`` (:meth:`bilevel_kit.objectives.Objective.stated`): value, bound, gap (None:
+    #: not stated) and whether a gap key is present.
+    objective_claims: tuple[float | None, float | None, float | None, bool] | None = None
     #: The instance parameters the times were computed for (:func:`timeline_params`).
     timeline: Mapping[str, Any] | None = None
     #: The claims whose number the strict reader refused (``bound``, ``gap`` ...): reported
@@ -268,6 +279,48 @@ def _check_claims(
             out.append(Violation("status_mismatch", msg))
     elif claims.status == "infeasible" and plan_valid:
         out.append(Violation("status_mismatch", "status 'infeasible' but the plan is valid"))
+    return out + _check_objective(instance, plan, claims, plan_valid=plan_valid)
+
+
+def _check_objective(
+    instance: Instance, plan: Plan, claims: Claims, *, plan_valid: bool
+) -> list[Violation]:
+    """The claims on a ``status_objective`` stated in ``extra`` (every registered objective
+    but the makespan, checked above): the value is the registry's evaluation of the plan, the
+    bound is at most that value on a valid plan, the gap is the objective's gap of the two,
+    and ``optimal`` needs a bound equal to the value (within :data:`TIME_TOL` plus the
+    objective's ``rel_tol``). J is not a function of the timeline: its stated value stands in."""
+    obj = OBJECTIVES.get(claims.status_objective)
+    if obj is None or obj.top_level:
+        return []
+    value, bound, gap, has_gap = claims.objective_claims or (None, None, None, False)
+    real = obj.value(evaluate(instance, plan))
+    keys = f"extra.{obj.value_keys[0]}"
+    out: list[Violation] = []
+    if value is not None and real is not None and not _close(value, real):
+        msg = f"{keys} {value:.6g} for {obj.name}, the plan's is {real:.6g}"
+        out.append(Violation("objective_mismatch", msg))
+    ref = value if real is None else real
+    if ref is None:
+        if claims.status == "optimal":
+            msg = f"status 'optimal' for {obj.name} without its value ({keys})"
+            out.append(Violation("status_mismatch", msg))
+        return out
+    tol = TIME_TOL + obj.rel_tol * max(1.0, abs(ref))
+    if plan_valid and bound is not None and bound > ref + tol:
+        msg = f"bound {bound:.6g} on {obj.name} is above its value {ref:.6g} for a valid plan"
+        out.append(Violation("bound_above_objective", msg))
+    want = None if bound is None else obj.gap(ref, bound)
+    if has_gap and ((want is None) != (gap is None) or abs((gap or 0.0) - (want or 0.0)) > 1e-9):
+        shown, wanted = (f"{g:.6g}" if g is not None else "null" for g in (gap, want))
+        msg = f"{obj.name} gap {shown}, recomputed from its value and bound: {wanted}"
+        out.append(Violation("gap_mismatch", msg))
+    if claims.status == "optimal" and bound is None:
+        msg = f"status 'optimal' for {obj.name} without a bound (extra.{obj.bound_keys[0]})"
+        out.append(Violation("status_mismatch", msg))
+    elif claims.status == "optimal" and bound is not None and ref - bound > tol:
+        msg = f"status 'optimal' but {obj.name} {ref:.6g} is above its bound {bound:.6g}"
+        out.append(Violation("status_mismatch", msg))
     return out
 
 

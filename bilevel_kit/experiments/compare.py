@@ -157,8 +157,30 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         "violations": len(violations),
         # the result's status, bound and gap against its own makespan (the checker's claims)
         "false_claims": [f"[{v['kind']}] {v['message']}" for v in claims],
+        **objective_record(inst, res),
         "solution": result_to_dict(res, cell.overrides),
     }
+
+
+def objective_record(inst: Instance, res: Result) -> dict[str, Any]:
+    """What a row needs for the cross-method test of every registered objective
+    (:func:`objective_conflicts`): ``objective_values``, each objective's value on the plan
+    (the registry's evaluation; empty without a plan), and ``objective_claim``, the status
+    objective, whether it is claimed optimal and the bound stated on it."""
+    from ..objectives import OBJECTIVES, evaluated
+    from ..plan import evaluate
+
+    values = {}
+    if res.plan is not None and res.plan.kits:
+        tl = evaluate(inst, res.plan)
+        values = {o.name: o.value(tl) for o in evaluated()}
+    obj = OBJECTIVES.get(res.status_objective)
+    bound = None
+    if obj is not None and obj.bound_holds_for_every_plan:
+        fields = {"objective": res.objective, "bound": res.bound, "gap": res.gap}
+        bound = obj.stated(fields, res.extra)[1]
+    claim = {"name": res.status_objective, "optimal": res.status == "optimal", "bound": bound}
+    return {"objective_values": values, "objective_claim": claim}
 
 
 def _file_of(record: dict[str, Any]) -> str:
@@ -207,13 +229,56 @@ def _inconsistency(rows: list[dict[str, Any]], f: str, bound: float, makespan: f
     )
 
 
+def objective_conflicts(records: Iterable[dict[str, Any]]) -> list[str]:
+    """For every registered objective a row claims (:mod:`bilevel_kit.objectives`): a claimed
+    optimum above the value of another row's valid plan of the same file, or a bound stated
+    on it (besides the ``bound`` column, which :func:`add_best_bound_gap` holds) above such a
+    value, one line naming both methods. A row without these keys (an older cell) claims
+    nothing here."""
+    from ..objectives import OBJECTIVES
+    from ..validate import TIME_TOL
+
+    rows = list(records)
+    out: list[str] = []
+    for r in rows:
+        claim = r.get("objective_claim") or {}
+        obj = OBJECTIVES.get(str(claim.get("name")))
+        if obj is None or obj.evaluate is None:
+            continue
+        own = (r.get("objective_values") or {}).get(obj.name)
+        said = [("claims the optimum", own)] if claim.get("optimal") and own is not None else []
+        if not obj.top_level and claim.get("bound") is not None:
+            said.append(("states the bound", claim["bound"]))
+        others = [
+            (o["objective_values"][obj.name], str(o["method"]))
+            for o in rows
+            if _file_of(o) == _file_of(r)
+            and o.get("valid") is True
+            and (o.get("objective_values") or {}).get(obj.name) is not None
+        ]
+        if not others:
+            continue
+        low, by = min(others)
+        for what, v in said:
+            if v > low + max(TIME_TOL, 1e-9 * abs(low)):
+                out.append(
+                    f"{r.get('instance')}: {r['method']} {what} {v:.6g} on {obj.name}, above "
+                    f"the {obj.name} {low:.6g} of a valid plan of {by}"
+                )
+    return out
+
+
 def inconsistencies(records: Iterable[dict[str, Any]]) -> list[str]:
     """Every false claim of a comparison, one line each: a best bound above a valid plan's
-    makespan (:func:`add_best_bound_gap`), and a row's own status, bound or gap against its
-    makespan (the checker's claims)."""
+    makespan (:func:`add_best_bound_gap`), a claimed optimum or bound of any registered
+    objective above another method's valid plan (:func:`objective_conflicts`), and a row's
+    own status, bound or gap against its own plan (the checker's claims)."""
+    rows = list(records)
     out: list[str] = []
-    for r in records:
+    for r in rows:
         if r.get("inconsistent") and r["inconsistent"] not in out:
             out.append(r["inconsistent"])
+    out += [c for c in objective_conflicts(rows) if c not in out]
+    for r in rows:
         out += [f"{r['instance']} / {r['method']}: {c}" for c in r.get("false_claims") or ()]
     return out

@@ -26,6 +26,7 @@ CORE = (
     "instance",
     "plan",
     "validate",
+    "objectives",
     "bounds",
     "stations",
     "geometry",

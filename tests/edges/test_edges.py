@@ -467,6 +467,67 @@ ROWS: dict[str, Row] = {
         "[status_mismatch]",
     ),
     "infeasible with a plan": invalid_solution(_set("status", "infeasible"), "[status_mismatch]"),
+    # issue 35, items 1, 2 and 4: every objective a status names is checked (the registry of
+    # bilevel_kit/objectives.py), not the makespan alone
+    **{
+        f"{name} optimal without a bound": invalid_solution(
+            _all(_set("status_objective", name), _set("status", "optimal")),
+            f"[status_mismatch] status 'optimal' for {name} without a bound",
+        )
+        for name in ("human_idle", "sum_completion")
+    },
+    "J optimal without a bound": invalid_solution(
+        _all(
+            _set("status_objective", "J"),
+            _set("status", "optimal"),
+            _set("extra.plan_objective_J", -3.0),
+        ),
+        "[status_mismatch] status 'optimal' for J without a bound",
+    ),
+    "J optimal without its value": invalid_solution(
+        _all(_set("status_objective", "J"), _set("status", "optimal")),
+        "[status_mismatch] status 'optimal' for J without its value",
+    ),
+    **{
+        f"human_idle value tampered to {v:g}": invalid_solution(
+            _all(_set("status_objective", "human_idle"), _set("extra.objective_value", v)),
+            f"[objective_mismatch] extra.objective_value {v:g} for human_idle, the plan's is 4",
+        )
+        for v in (1.0, 1e9, 0.0)
+    },
+    "sum_completion bound 1e9": invalid_solution(
+        _all(_set("status_objective", "sum_completion"), _set("extra.objective_bound", 1e9)),
+        "[bound_above_objective] bound 1e+09 on sum_completion is above its value 25.5",
+    ),
+    "human_idle optimal, bound 1": invalid_solution(
+        _all(
+            _set("status_objective", "human_idle"),
+            _set("status", "optimal"),
+            _set("extra.objective_bound", 1.0),
+        ),
+        "[status_mismatch] status 'optimal' but human_idle 4 is above its bound 1",
+    ),
+    "human_idle gap 0 with a bound 1": invalid_solution(
+        _all(
+            _set("status_objective", "human_idle"),
+            _set("extra.objective_bound", 1.0),
+            _set("extra.objective_gap", 0.0),
+        ),
+        "[gap_mismatch] human_idle gap 0, recomputed from its value and bound: 0.75",
+    ),
+    "J gap tampered": invalid_solution(
+        _all(
+            _set("status_objective", "J"),
+            _set("extra.plan_objective_J", -3.0),
+            _set("extra.plan_objective_J_bound", -5.0),
+            _set("extra.plan_objective_J_gap", 0.0),
+        ),
+        "[gap_mismatch] J gap 0, recomputed from its value and bound: 0.666667",
+    ),
+    "objective_value a string": invalid_solution(
+        _all(_set("status_objective", "human_idle"), _set("extra.objective_value", "4")),
+        "[bad_number] $.extra.objective_value: '4' is not a number",
+    ),
     "makespan off": invalid_solution(_set("metrics.makespan", 20.0), "[times_inconsistent]"),
     "n_kits off": invalid_solution(_set("metrics.n_kits", 8), "reported n_kits 8"),
     "idle off": invalid_solution(_set("metrics.human_idle", 0.0), "reported human_idle"),

@@ -8,8 +8,8 @@ docs/formulations.md; the result and its ``extra`` keys are listed in :mod:`.met
 Importing this package loads no OR-Tools.
 """
 
+from ...objectives import MODEL_OBJECTIVES as OBJECTIVES  # the registry's
 from .method import (
-    OBJECTIVES,
     TRAY_MODES,
     CpsatOptions,
     ScheduleOptions,

@@ -138,7 +138,6 @@ TrayMode = Literal["auto", "embedded", "benders"]
 Objective = Literal["makespan", "sum_completion", "human_idle"]
 Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
-OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
 #: The share of the time limit the warm start (``hint``) may use; the model gets the rest.

@@ -8,7 +8,8 @@ several assembly stations, docs/timeline.md#several-stations). The formulation i
 docs/formulations.md. Importing this package loads neither Pyomo nor a solver.
 """
 
-from .method import MARGIN, OBJECTIVES, TRAY_MODES, MilpOptions, milp, run, solve
+from ...objectives import MODEL_OBJECTIVES as OBJECTIVES  # the registry's
+from .method import MARGIN, TRAY_MODES, MilpOptions, milp, run, solve
 from .model import canonical_kits, human_order, kit_cap
 from .solver import SOLVER_OPTIONS, SolveInfo, ensure_ortools, make_solver, run_solver
 

@@ -103,7 +103,6 @@ from .nomodel import buildable, handoff
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
-OBJECTIVES: tuple[str, ...] = ("makespan", "sum_completion", "human_idle")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
 #: The share of the time limit the ``hint`` method may use.

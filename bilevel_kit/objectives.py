@@ -1,0 +1,171 @@
+r"""Every objective a result's ``status`` may refer to, in one registry.
+
+Each :class:`Objective` declares how it is evaluated from a plan's
+:class:`~bilevel_kit.plan.Timeline` (the one evaluator, docs/timeline.md), where a result states
+its value, bound and gap, how the gap is formed, and whether a stated bound is a claim about
+every valid plan (so that any other valid plan's value may refute it). The checker
+(:mod:`bilevel_kit.validate`), ``compare``'s cross-method consistency test
+(:mod:`bilevel_kit.experiments.compare`) and the brute-force tests iterate over
+:data:`OBJECTIVES`: an objective added here is checked everywhere without a special case.
+
+The objectives (docs/timeline.md#metrics, docs/timeline.md#several-stations,
+docs/formulations.md):
+
+.. math::
+
+    \text{makespan} = \max_s C_s, \qquad
+    \text{sum\_completion} = \sum_s C_s, \qquad
+    \text{human\_idle} = \sum_s \Bigl(C_s - \sum_{k \text{ at } s} H_k\Bigr)
+
+with :math:`C_s` the end of station ``s``'s last kit (one station: the makespan), and the
+paper's J (docs/formulations.md#exact-bilevel-milp-over-kit-columns), which also needs the
+lower level's kit values and so is not a function of the timeline: its value is stated, never
+recomputed, and its bound and gap are checked against that stated value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .plan import Timeline
+
+
+def _relative_gap(value: float, bound: float) -> float | None:
+    """``(value - bound) / value`` clipped at 0 (docs/timeline.md#terms); None for value <= 0."""
+    if value <= 0:
+        return None
+    return max(0.0, (value - bound) / value)
+
+
+def _signed_gap(value: float, bound: float) -> float | None:
+    """``|J - bound| / max(1, |J|)``: J may be negative (``plan_objective_J_gap``)."""
+    return abs(value - bound) / max(1.0, abs(value))
+
+
+@dataclass(frozen=True)
+class Objective:
+    """One objective: its ``name`` (``status_objective``, ``-p objective=``), how it is
+    evaluated and stated, and what a bound on it promises."""
+
+    name: str
+    #: Words for messages ("the sum of the stations' completions").
+    label: str
+    #: Its value on a timeline (s); None: not a function of the timeline (J).
+    evaluate: Callable[[Timeline], float] | None
+    #: Keys holding its value, bound and gap, first found wins: in a result's ``extra``, or
+    #: (``top_level``) the result's own fields, as the makespan's ``objective``, ``bound``,
+    #: ``gap``.
+    value_keys: tuple[str, ...]
+    bound_keys: tuple[str, ...]
+    gap_keys: tuple[str, ...]
+    #: The gap from its value and its bound.
+    gap: Callable[[float, float], float | None] = _relative_gap
+    #: A stated bound is a lower bound on its value over every valid plan (any method's).
+    bound_holds_for_every_plan: bool = True
+    #: ``cpsat`` and ``milp`` minimise it (``-p objective=``).
+    modelled: bool = True
+    #: Absolute tolerance (in its unit) of "optimal => bound equals value" on top of
+    #: :data:`bilevel_kit.validate.TIME_TOL`, relative to ``max(1, |value|)``: 0 where the
+    #: methods copy the value into the bound, the MILP's relative tolerance (1e-6) for J.
+    rel_tol: float = 0.0
+    top_level: bool = False
+
+    def value(self, timeline: Timeline) -> float | None:
+        """The objective on ``timeline``; None when it is not a function of it."""
+        return None if self.evaluate is None else self.evaluate(timeline)
+
+    def stated(
+        self, fields: Mapping[str, Any], extra: Mapping[str, Any]
+    ) -> tuple[Any, Any, Any, bool]:
+        """The value, bound and gap a result states (its own ``fields`` or its ``extra``; None:
+        not stated) and whether it has a gap key at all (its null then claims no gap)."""
+        source = fields if self.top_level else extra
+
+        def first(keys: tuple[str, ...]) -> Any:
+            return next((source[k] for k in keys if source.get(k) is not None), None)
+
+        has_gap = any(k in source for k in self.gap_keys)
+        return first(self.value_keys), first(self.bound_keys), first(self.gap_keys), has_gap
+
+
+def _sum_completion(timeline: Timeline) -> float:
+    """``sum_s C_s`` (``station_metrics()``); with one station the makespan."""
+    if not timeline.kit_stations:
+        return timeline.makespan
+    return sum(float(m["completion"]) for m in timeline.station_metrics().values())
+
+
+_EXTRA_KEYS = (("objective_value",), ("objective_bound",), ("objective_gap",))
+
+#: The registry, by name.
+OBJECTIVES: dict[str, Objective] = {
+    o.name: o
+    for o in (
+        Objective(
+            "makespan",
+            "the makespan",
+            lambda tl: tl.makespan,
+            ("objective",),
+            ("bound",),
+            ("gap",),
+            top_level=True,
+        ),
+        Objective(
+            "sum_completion", "the sum of the stations' completions", _sum_completion, *_EXTRA_KEYS
+        ),
+        Objective(
+            "human_idle",
+            "the total human idle",
+            lambda tl: tl.human_idle,
+            ("objective_value",),
+            ("objective_bound", "idle_bound"),  # idle_bound: the one-station models' key
+            ("objective_gap",),
+        ),
+        Objective(
+            "J",
+            "the paper's objective J",
+            None,
+            ("plan_objective_J",),
+            ("plan_objective_J_bound",),
+            ("plan_objective_J_gap",),
+            gap=_signed_gap,
+            modelled=False,
+            rel_tol=1e-6,
+        ),
+    )
+}
+
+#: The objectives ``cpsat`` and ``milp`` take (``-p objective=``), the makespan first.
+MODEL_OBJECTIVES: tuple[str, ...] = tuple(n for n, o in OBJECTIVES.items() if o.modelled)
+
+
+def extra_claims(
+    name: str, extra: Mapping[str, Any]
+) -> tuple[float | None, float | None, float | None, bool] | None:
+    """A fresh result's value, bound and gap on objective ``name`` where the registry keeps
+    them in ``extra`` (None for the makespan and unknown names; a non-number reads as not
+    stated), for :class:`bilevel_kit.validate.Claims`."""
+    obj = OBJECTIVES.get(name)
+    if obj is None or obj.top_level:
+        return None
+    *stated, has_gap = obj.stated({}, extra)
+    value, bound, gap = (
+        float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None for v in stated
+    )
+    return value, bound, gap, has_gap
+
+
+def get(name: str) -> Objective:
+    """The registered objective ``name``; KeyError naming the known ones."""
+    try:
+        return OBJECTIVES[name]
+    except KeyError:
+        raise KeyError(f"unknown objective {name!r} (known: {', '.join(OBJECTIVES)})") from None
+
+
+def evaluated() -> list[Objective]:
+    """The objectives that are functions of the timeline (the brute forces' and ``compare``'s)."""
+    return [o for o in OBJECTIVES.values() if o.evaluate is not None]

@@ -1,0 +1,127 @@
+"""The objective registry (bilevel_kit/objectives.py) is the one list of objectives: the
+checker's known names, the exact models' ``-p objective=`` choices and the evaluation from a
+timeline all come from it; and the checker holds every registered objective's claims
+(issue 35, "Make the next objective safe by construction")."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import typing
+
+import pytest
+from stations_example import worked_example_doc
+
+from bilevel_kit import solution
+from bilevel_kit.instance import from_dict
+from bilevel_kit.methods import MethodOutput, Result, Status
+from bilevel_kit.objectives import MODEL_OBJECTIVES, OBJECTIVES, evaluated, extra_claims, get
+from bilevel_kit.plan import Kit, Plan, evaluate
+from bilevel_kit.stations import objective_of
+from bilevel_kit.validate import KNOWN_OBJECTIVES, timeline_params
+
+
+def test_every_list_of_objective_names_is_the_registry():
+    from bilevel_kit.models.cpsat import OBJECTIVES as CPSAT
+    from bilevel_kit.models.cpsat import CpsatOptions
+    from bilevel_kit.models.milp import OBJECTIVES as MILP
+    from bilevel_kit.models.milp import MilpOptions
+
+    assert (
+        KNOWN_OBJECTIVES == tuple(OBJECTIVES) == ("makespan", "sum_completion", "human_idle", "J")
+    )
+    assert CPSAT == MILP == MODEL_OBJECTIVES == ("makespan", "sum_completion", "human_idle")
+    for options in (CpsatOptions, MilpOptions):  # the option's type spells the same names
+        field = next(f for f in dataclasses.fields(options) if f.name == "objective")
+        hints = typing.get_type_hints(options)
+        assert typing.get_args(hints[field.name]) == MODEL_OBJECTIVES
+
+
+def test_the_worked_example_values():
+    """docs/timeline.md#several-stations: [a1] [a2] [b1] ends A at 19 s, B at 23.5 s, with
+    4 + 17.5 = 21.5 s of idle."""
+    inst = from_dict(worked_example_doc())
+    tl = evaluate(inst, Plan((Kit(("a1",)), Kit(("a2",)), Kit(("b1",)))))
+    want = {"makespan": 23.5, "sum_completion": 42.5, "human_idle": 21.5}
+    assert {o.name: o.value(tl) for o in evaluated()} == want
+    assert {name: objective_of(tl, name) for name in want} == want
+    assert OBJECTIVES["J"].value(tl) is None
+    with pytest.raises(ValueError, match="not a function of the timeline"):
+        objective_of(tl, "J")
+    with pytest.raises(KeyError, match="unknown objective 'idle'"):
+        get("idle")
+
+
+def _doc(inst, plan, name, status, extra):
+    """A solution file of ``plan`` whose status refers to objective ``name``."""
+    tl = evaluate(inst, plan)
+    res = Result(
+        method="x",
+        status=Status(status),
+        plan=plan,
+        timeline=tl,
+        objective=tl.makespan,
+        bound=None,
+        gap=None,
+        wall_time_s=0.0,
+        seed=0,
+        params={},
+        instance=inst.name,
+        extra=extra,
+        status_objective=name,
+        timeline_params=timeline_params(inst),
+    )
+    return json.loads(json.dumps(solution.result_to_dict(res)))
+
+
+@pytest.mark.parametrize("obj", [o for o in OBJECTIVES.values() if not o.top_level])
+def test_every_stated_objective_is_held_to_its_numbers(obj):
+    """For each registered objective stated in ``extra``: its true numbers pass; a tampered
+    value, a bound above the value, a wrong gap and "optimal" without a bound are each named."""
+    inst = from_dict(worked_example_doc())
+    plan = Plan((Kit(("a1",)), Kit(("a2",)), Kit(("b1",))))
+    real = obj.value(evaluate(inst, plan))
+    value = -3.0 if real is None else real  # J: its stated value stands in
+    key_v, key_b, key_g = obj.value_keys[0], obj.bound_keys[0], obj.gap_keys[0]
+    good = {key_v: value, key_b: value, key_g: 0.0}
+
+    def kinds(status, **extra):
+        doc = _doc(inst, plan, obj.name, status, {**good, **extra})
+        return sorted(v.kind for v in solution.from_dict(doc).check(inst))
+
+    assert kinds("optimal") == []
+    assert extra_claims(obj.name, good) == (value, value, 0.0, True)
+    if real is not None:
+        for tampered in (1.0, 1e9, 0.0):
+            assert "objective_mismatch" in kinds("feasible", **{key_v: tampered})
+        # the gap clips at 0, as the stated one: only the bound is named
+        assert kinds("feasible", **{key_b: value + 1}) == ["bound_above_objective"]
+    assert kinds("feasible", **{key_g: 0.5}) == ["gap_mismatch"]
+    assert kinds("optimal", **{key_b: None, key_g: None}) == ["status_mismatch"]
+    assert kinds("optimal", **{key_b: value - 2, key_g: obj.gap(value, value - 2)}) == [
+        "status_mismatch"
+    ]
+
+
+def test_solve_check_holds_a_fresh_result_to_its_objective(tiny):
+    """``solve --check``: an optimal human-idle claim without a bound is named at once."""
+    from bilevel_kit.methods import REGISTRY, register
+    from bilevel_kit.methods import solve as run
+
+    if "idle-nobound-test" not in REGISTRY:
+        register(
+            "idle-nobound-test",
+            f"{__name__}:no_bound",
+            "claims an idle optimum without a bound",
+            "bilevel_kit.options:NoOptions",
+        )
+    res = run(tiny, "idle-nobound-test", check=True)
+    assert [v["kind"] for v in res.extra["violations"]] == ["status_mismatch"]
+
+
+def no_bound(instance, options, *, seed=0, time_limit=None):
+    """Single-task's plan claimed optimal for the human idle, with no bound."""
+    from bilevel_kit.heuristics.baselines import single_task
+
+    plan = single_task(instance).plan
+    return MethodOutput(plan, Status.OPTIMAL, None, {}, status_objective="human_idle")

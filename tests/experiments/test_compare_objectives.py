@@ -1,0 +1,117 @@
+"""``compare`` holds every registered objective's claims against the other methods' valid plans
+(issue 35, item 2): a claimed optimum, or a bound, on the status objective above another
+method's valid plan's value of it is exit 1 naming both methods."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+
+import pytest
+
+from bilevel_kit.experiments.compare import inconsistencies, objective_conflicts
+from bilevel_kit.methods import MethodOutput, Status
+
+
+def _row(method, claim, values, valid=True):
+    return {
+        "instance": "a",
+        "method": method,
+        "valid": valid,
+        "objective_claim": claim,
+        "objective_values": values,
+    }
+
+
+def test_a_claimed_optimum_above_another_valid_plan_names_both():
+    rows = [
+        _row(
+            "milp", {"name": "human_idle", "optimal": True, "bound": 33.38}, {"human_idle": 33.38}
+        ),
+        _row(
+            "cpsat", {"name": "human_idle", "optimal": True, "bound": 28.62}, {"human_idle": 28.62}
+        ),
+    ]
+    assert objective_conflicts(rows) == [
+        "a: milp claims the optimum 33.38 on human_idle, above the human_idle 28.62 of a valid "
+        "plan of cpsat",
+        "a: milp states the bound 33.38 on human_idle, above the human_idle 28.62 of a valid "
+        "plan of cpsat",
+    ]
+    assert inconsistencies(rows) == objective_conflicts(rows)
+
+
+@pytest.mark.parametrize("name", ["sum_completion", "human_idle"])
+def test_a_bound_alone_above_another_valid_plan_is_a_conflict(name):
+    rows = [
+        _row("x", {"name": name, "optimal": False, "bound": 30.0}, {name: 35.0}),
+        _row("y", {"name": "makespan", "optimal": False, "bound": 1.0}, {name: 29.0}),
+    ]
+    assert objective_conflicts(rows) == [
+        f"a: x states the bound 30 on {name}, above the {name} 29 of a valid plan of y"
+    ]
+
+
+def test_consistent_claims_and_invalid_plans_are_no_conflict():
+    rows = [
+        _row(
+            "x",
+            {"name": "sum_completion", "optimal": True, "bound": 30.0},
+            {"sum_completion": 30.0},
+        ),
+        _row("y", {"name": "makespan", "optimal": False, "bound": 1.0}, {"sum_completion": 31.0}),
+        # an invalid plan refutes nothing
+        _row(
+            "z",
+            {"name": "makespan", "optimal": False, "bound": 1.0},
+            {"sum_completion": 2.0},
+            False,
+        ),
+        # an older cell without these keys claims nothing
+        {"instance": "a", "method": "w", "valid": True},
+    ]
+    assert objective_conflicts(rows) == []
+
+
+def test_j_is_not_a_function_of_the_timeline_so_it_is_not_compared():
+    rows = [_row("bilevel-milp", {"name": "J", "optimal": True, "bound": -3.0}, {"makespan": 20})]
+    assert objective_conflicts(rows) == []
+
+
+def idle_boaster(instance, options, *, seed=0, time_limit=None):
+    """Whole-assembly's plan on the tiny instance (human idle 12 s), claimed optimal for the
+    human idle with a bound equal to its value; single-task's valid plan idles 4 s."""
+    from bilevel_kit.heuristics.baselines import whole_assembly
+    from bilevel_kit.plan import evaluate
+
+    plan = whole_assembly(instance).plan
+    idle = evaluate(instance, plan).human_idle
+    extra = {"objective_value": idle, "objective_bound": idle, "objective_gap": 0.0}
+    return MethodOutput(plan, Status.OPTIMAL, None, extra, status_objective="human_idle")
+
+
+@dataclass(frozen=True)
+class IdleOptions:
+    status: str = field(default="optimal", metadata={"help": "unused"})
+
+
+def test_compare_exits_1_on_a_false_optimum_of_another_objective(tiny, capsys):
+    from bilevel_kit import methods
+    from bilevel_kit.cli import main
+
+    module = sys.modules[__name__]
+    if "idle-boaster-test" not in methods.REGISTRY:
+        methods.register(
+            "idle-boaster-test",
+            f"{module.__name__}:idle_boaster",
+            "claims an idle optimum",
+            f"{module.__name__}:IdleOptions",
+        )
+    code = main(["compare", str(tiny.source), "--methods", "single-task,idle-boaster-test"])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert (
+        "INCONSISTENT: tiny: idle-boaster-test claims the optimum 12 on human_idle, above the "
+        "human_idle 4 of a valid plan of single-task" in err
+    )
+    assert "Traceback" not in out + err
