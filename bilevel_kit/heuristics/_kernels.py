@@ -554,17 +554,16 @@ def compile_in(namespace: dict[str, Any], helpers: Sequence[str], entry: str) ->
 
 def cache_missing() -> bool:
     """True when numba will compile kernels on their first call (no on-disk cache yet of one
-    of :func:`cache_indexes`: the first run after an install takes ~15 s longer), so that a
-    command can say so instead of staying silent. numba caches beside the sources, or under
-    ``NUMBA_CACHE_DIR``."""
+    of :func:`cache_indexes`: the first run after an install compiles for 10-70 s), so that a
+    command can say so instead of staying silent. numba caches beside the sources, or only
+    under ``NUMBA_CACHE_DIR`` when that is set (docs/scaling.md#first-run)."""
     if njit() is None:
         return False
     import os
 
-    here = Path(__file__).parent / "__pycache__"
-    places = [here]
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        places.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+    # numba uses NUMBA_CACHE_DIR alone when it is set, else the folder beside the sources
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    places = [Path(user)] if user else [Path(__file__).parent / "__pycache__"]
     return not all(
         any(any(p.rglob(index)) for p in places if p.is_dir()) for index in cache_indexes()
     )

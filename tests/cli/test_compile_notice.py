@@ -97,3 +97,23 @@ def test_cache_missing_follows_numbas_index_of_the_ce_block(tmp_path, monkeypatc
         (cache / pattern.replace("py*", "py311")).write_text("")
     assert len(others) == 3
     assert not _kernels.cache_missing()
+
+
+def test_a_cache_folder_of_the_users_own_is_the_only_one_numba_reads(tmp_path, monkeypatch):
+    """With ``NUMBA_CACHE_DIR`` set numba reads and writes that folder alone: an empty one
+    means a compile, whatever lies beside the sources (a first run there was silent)."""
+    if _kernels.njit() is None:
+        pytest.skip("numba is disabled or missing")
+    beside = tmp_path / "src" / "__pycache__"
+    beside.mkdir(parents=True)
+    for pattern in _kernels.cache_indexes():
+        (beside / pattern.replace("py*", "py311")).write_text("")
+    monkeypatch.setattr(_kernels, "__file__", str(tmp_path / "src" / "_kernels.py"))
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert not _kernels.cache_missing()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert _kernels.cache_missing()
+    (tmp_path / "mine").mkdir()
+    for pattern in _kernels.cache_indexes():
+        (tmp_path / "mine" / pattern.replace("py*", "py311")).write_text("")
+    assert not _kernels.cache_missing()
