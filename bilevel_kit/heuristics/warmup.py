@@ -40,12 +40,20 @@ def ready() -> bool:
 
 
 def _warm_instances() -> list[object]:
-    """Small instances that reach every compiled entry (module docstring)."""
-    from ..generate import generate
+    """Small instances that reach every compiled entry (module docstring): a graph of ten
+    tasks with branches (whose prefix sets outgrow the warm-up's cap, so the search turns
+    into a beam and its rest searches run), and a crowded tray."""
     from ..instance import document, from_dict
 
+    parts = [{"id": p, "width": w, "height": h, "pick_time": 1.0} for p, w, h in _PARTS]
+    tasks = [
+        {"id": f"t{i}", "parts": [{"type": _PARTS[i % 3][0], "count": 1 + i % 2}],
+         "human_time": {"mean": 4.0 + 3 * (i % 4)}}
+        for i in range(10)
+    ]  # fmt: skip
+    branches = document("warm-up-graph", parts, tasks, tray=(150.0, 120.0), precedence=_EDGES)
     crowded = document(
-        "warm-up",
+        "warm-up-tray",
         [
             # its diagonal is 101.2 mm: turned, it can stick out of the 100 mm tray, which
             # sends its kit to the numpy loop and its compiled scorer
@@ -59,7 +67,14 @@ def _warm_instances() -> list[object]:
         ],
         precedence=[["a", "c"]],
     )
-    return [from_dict(generate("sparse", 10, 0)), from_dict(crowded)]
+    return [from_dict(branches), from_dict(crowded)]
+
+
+#: The graph warm-up's part types (id, width, height in mm) and precedence (a few chains
+#: that branch and join, as KitBench's sparse graphs do).
+_PARTS = (("p", 40.0, 30.0), ("q", 25.0, 25.0), ("r", 60.0, 20.0))
+_EDGES = [["t0", "t3"], ["t1", "t3"], ["t3", "t6"], ["t2", "t5"], ["t4", "t7"], ["t5", "t8"],
+          ["t6", "t9"], ["t8", "t9"]]  # fmt: skip
 
 
 def compile_kernels(notify: Callable[[str], None] | None = None) -> float | None:
