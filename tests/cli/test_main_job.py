@@ -17,7 +17,8 @@ BIN = Path(sys.executable).parent
 
 def _table(md: Path) -> list[list[str]]:
     """The Markdown table's cells without the wall-time column."""
-    rows = [[c.strip() for c in line.strip("|\n").split("|")] for line in md.open()]
+    lines = [line for line in md.open() if not line.startswith("|---")]
+    rows = [[c.strip() for c in line.strip("|\n").split("|")] for line in lines]
     drop = rows[0].index("time (s)")
     return [r[:drop] + r[drop + 1 :] for r in rows]
 
