@@ -27,6 +27,7 @@ RECORDED = json.loads(REFERENCE.read_text())
 SCORE_REL = 0.01
 
 
+@pytest.mark.slow  # 13 greedy-ce runs of up to 250 tasks: about 50 s
 @pytest.mark.parametrize(
     ("name", "source", "options", "time_limit"), CASES, ids=[c[0] for c in CASES]
 )
