@@ -223,12 +223,13 @@ def default_method_names() -> list[str]:
 def time_limit_reached(out: MethodOutput, wall: float, time_limit: float | None) -> bool:
     """Whether a run stopped at its time limit rather than on its own: the method's own word
     (``extra["time_limit_hit"]``) where it gives one, else a run that proved nothing and used
-    at least 95 % of the limit. Every output shows it (docs/cli.md#time-limits)."""
+    at least 90 % of the limit (the exact methods keep a margin back for their last steps:
+    cpsat on 600 tasks at 10 s ended at 9.4 s). Every output shows it (docs/cli.md)."""
     if "time_limit_hit" in out.extra:
         return bool(out.extra["time_limit_hit"])
     if time_limit is None or out.status in (Status.OPTIMAL, Status.INFEASIBLE):
         return False
-    return wall >= 0.95 * time_limit
+    return wall >= 0.9 * time_limit
 
 
 def get_method(name: str) -> MethodSpec:
