@@ -149,12 +149,17 @@ class MethodSpec(Registered):
         except (KeyboardInterrupt, UsageError):
             raise
         except BaseException as exc:  # a plugin's failure is one line naming it
-            text = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
-            raise _plugin_failure(plugin, self.name, f"prepare step failed: {text}") from None
+            what = f"prepare step failed: {_named(exc)}"
+            raise _plugin_failure(plugin, self.name, what) from None
 
 
 def _plugin_failure(plugin: str, method: str, what: str) -> PluginError:
     return PluginError(one_line(f"plugin {plugin!r}: method {method!r} {what}"))
+
+
+def _named(exc: BaseException) -> str:
+    """``Type: message`` of a plugin's exception (its type alone when it has no message)."""
+    return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
 
 
 def _plugin_import(plugin: str, method: str, target: str) -> Any:
@@ -178,8 +183,7 @@ def _plugin_call(plugin: str, method: str, fn: Any) -> Callable[..., MethodOutpu
         except (KeyboardInterrupt, BilevelKitError):
             raise
         except BaseException as exc:
-            text = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
-            raise _plugin_failure(plugin, method, f"failed: {text}") from None
+            raise _plugin_failure(plugin, method, f"failed: {_named(exc)}") from None
         if not isinstance(out, MethodOutput):
             got = type(out).__name__
             raise _plugin_failure(plugin, method, f"returned {got}, not a MethodOutput")

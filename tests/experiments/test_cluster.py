@@ -257,6 +257,18 @@ def test_a_scheduler_that_is_not_there_is_reported_before_dask_s_timeout(tmp_pat
     assert not out.exists() and seconds < 25  # Dask alone took its 30 s timeout
 
 
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    """The command line in a process of its own, from the repository's folder."""
+    return subprocess.run(
+        [sys.executable, "-c", CLI, *args],
+        cwd=ROOT,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
 def test_cells_carry_their_instances_to_workers_in_another_folder(tmp_path, root):
     """A worker started in another folder (as on any cluster node) cannot read the client's
     relative instance paths: the cells carry the instance documents (docs/cluster.md)."""
@@ -268,14 +280,7 @@ def test_cells_carry_their_instances_to_workers_in_another_folder(tmp_path, root
         sweep = ["-q", "--scheduler", cluster.address]
         compare = ["compare", "instances/tiny.json", "--methods", "single-task,whole-assembly"]
         out = tmp_path / "compare.csv"
-        proc = subprocess.run(
-            [sys.executable, "-c", CLI, *compare, *sweep, "--csv", str(out)],
-            cwd=ROOT,
-            env=ENV,
-            capture_output=True,
-            text=True,
-            timeout=300,
-        )
+        proc = _cli(*compare, *sweep, "--csv", str(out))
         assert proc.returncode == 0, proc.stderr[-3000:]
         assert "compare: 2 done, 0 skipped, 0 failed of 2 cells" in proc.stderr
         here = tmp_path / "here.csv"
@@ -294,14 +299,7 @@ def test_cells_carry_their_instances_to_workers_in_another_folder(tmp_path, root
         assert rows(out) == rows(here) and rows(out)[0][1] == "feasible"
         bench = ["bench", "run", "--methods", "single-task", "--filter", "tasks<=12"]
         run = tmp_path / "bench"
-        proc = subprocess.run(
-            [sys.executable, "-c", CLI, *bench, *sweep, "--out", str(run)],
-            cwd=ROOT,
-            env=ENV,
-            capture_output=True,
-            text=True,
-            timeout=300,
-        )
+        proc = _cli(*bench, *sweep, "--out", str(run))
         assert proc.returncode == 0, proc.stderr[-3000:]
         assert "bench: 9 done, 0 skipped, 0 failed of 9 cells" in proc.stderr
         assert (run / "profile.png").is_file() and (run / "gap_size.png").is_file()
