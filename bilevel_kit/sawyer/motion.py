@@ -119,7 +119,10 @@ def move_profile(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions, velocities and accelerations at time(s) ``t`` of :func:`move_time`'s move.
 
-    Shapes (..., 7). Lets tests and animations check the limits.
+    Shapes (..., 7). Lets tests and animations check the limits. At rest (``t <= 0`` or
+    ``t >= T``) the acceleration is 0: the profile's acceleration steps there, and a point
+    with zero velocity and non-zero acceleration makes a controller's quintic overshoot the
+    stop (docs/execution.md, "What a controller makes of the points").
     """
     d, v, a = _path_limits(q0, q1, params)
     t = np.asarray(t, dtype=float)[..., None]
@@ -140,6 +143,7 @@ def move_profile(
     )
     sd = np.where(tc < ta, a * tc, np.where(tc <= total - ta, vp, a * (total - tc)))
     sdd = np.where(tc < ta, a, np.where(tc <= total - ta, 0.0, -a))
+    sdd = np.where((t <= 0.0) | (t >= total), 0.0, sdd)
     return q0 + s * d, sd * d, sdd * d
 
 

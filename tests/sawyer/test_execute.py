@@ -354,3 +354,44 @@ def test_joint_trajectory_figure(instance, plan):
     figure = plot_kit_trajectory(kt)
     assert len(figure.axes) == 2
     plt.close("all")
+
+
+def _points(msg) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """``time_from_start`` and (positions, velocities, accelerations) of a read-back message."""
+    t = np.array([_tfs(p) for p in msg.points])
+    arrays = tuple(
+        np.array([getattr(p, name) for p in msg.points], dtype=float)
+        for name in ("positions", "velocities", "accelerations")
+    )
+    return t, (arrays[0], arrays[1], arrays[2])
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "ros2"])
+def test_a_controllers_quintic_holds_the_tool_still_while_the_gripper_works(
+    fmt, written, instance, plan
+):
+    """ros2_control's trajectory controller fits a quintic (position, velocity, acceleration
+    at both ends) between points: through the bag's points, the tool moves at most 0.5 mm
+    during every grasp and release, and every stop has zero acceleration."""
+    from bilevel_kit.sawyer.controller import dwell_deviation, quintic
+
+    topics = bags.read_bag(written / "bags" / bags.bag_name("hrc_table", fmt))
+    times, points = [], []
+    for _, msg in topics[bags.TRAJECTORY_TOPIC]:
+        t, (q, qd, qdd) = _points(msg)
+        still = np.all(qd == 0.0, axis=1)
+        assert still.sum() > 0 and np.all(qdd[still] == 0.0)
+        np.testing.assert_allclose(quintic(t, q, qd, qdd, t), q, atol=1e-9)  # through the points
+        times.append(t)
+        points.append((q, qd, qdd))
+    ex = plan_execution(instance, plan.plan)
+    worst = dwell_deviation(ex.kits, ST.tool_offset_m, times=times, points=points)
+    assert worst.deviation <= 0.5e-3, worst
+    # The same measure sees stops that carry the braking deceleration (as before the fix).
+    kt = ex.kits[0]
+    braking = np.diff(kt.velocities, axis=0) / np.diff(kt.times)[:, None]
+    still = np.all(kt.velocities[1:] == 0.0, axis=1)
+    qdd = kt.accelerations.copy()
+    qdd[1:][still] = braking[still]
+    bad = dwell_deviation([kt], ST.tool_offset_m, points=[(kt.positions, kt.velocities, qdd)])
+    assert bad.deviation > 0.5e-3

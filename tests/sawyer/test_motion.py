@@ -48,6 +48,7 @@ def test_move_time_slowest_joint_governs_and_limits_hold() -> None:
             np.testing.assert_allclose(q[0], q0, atol=1e-12)
             np.testing.assert_allclose(q[-1], q1, atol=1e-9)
             np.testing.assert_allclose(qd[[0, -1]], 0.0, atol=1e-9)
+            np.testing.assert_array_equal(qdd[[0, -1]], 0.0)  # at rest: no acceleration
             # some joint actually hits a limit: the timing is tight
             assert (np.abs(qd) >= params.v_max * (1 - 1e-6)).any() or (
                 np.abs(qdd) >= params.a_max * (1 - 1e-6)
