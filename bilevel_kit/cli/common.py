@@ -181,6 +181,11 @@ def positive(text: str) -> float:
     return _checked(text, float, lambda v: v > 0 and math.isfinite(v), "a finite number > 0")
 
 
+def speed_scale(text: str) -> float:
+    """A speed scale in (0, 1]."""
+    return _checked(text, float, lambda v: 0 < v <= 1, "a number in (0, 1]")
+
+
 def scalar(value: str) -> Any:
     """A loose option value: a boolean word, an int, a float, or else the string itself."""
     low = value.lower()

@@ -18,7 +18,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import EXIT_OK, add_derived_outputs, add_output, positive_int
+from .common import EXIT_OK, add_derived_outputs, add_output, positive, positive_int, speed_scale
+
+#: Default ``--tool-speed`` [m/s] (:data:`bilevel_kit.sawyer.motion.TOOL_SPEED`, kept here so
+#: that building the parser does not import the Sawyer model).
+TOOL_SPEED = 0.6
 
 if TYPE_CHECKING:
     from ..paths import Output
@@ -58,6 +62,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_derived_outputs(p, _outputs)
     p.add_argument("--kit", type=positive_int, metavar="K", help="only kit K (default: all)")
+    p.add_argument(
+        "--speed-scale",
+        type=speed_scale,
+        default=1.0,
+        metavar="S",
+        help="run S times as fast (0 < S <= 1): times / S, velocities x S, accelerations x S^2 "
+        "(default: 1); the gripper's dwells are not scaled",
+    )
+    p.add_argument(
+        "--tool-speed",
+        type=positive,
+        default=TOOL_SPEED,
+        metavar="V",
+        help=f"cap on the tool tip's speed in m/s (default: {TOOL_SPEED}, Intera's default "
+        "Cartesian limit; the motion model uses the same cap)",
+    )
 
 
 def _formats(args: argparse.Namespace) -> tuple[str, ...]:
@@ -164,6 +184,7 @@ def _load(args: argparse.Namespace) -> Execution:
     from .. import solution
     from ..errors import UsageError
     from ..instance import load
+    from ..sawyer.motion import MotionParams
     from ..sawyer.trajectory import plan_execution
 
     instance = load(args.instance)
@@ -178,10 +199,11 @@ def _load(args: argparse.Namespace) -> Execution:
     if args.kit is not None and args.kit > n:
         raise UsageError(f"--kit {args.kit}: the solution has {n} kit{'s' * (n != 1)}")
     kits = None if args.kit is None else [args.kit]
-    return plan_execution(instance, sol.plan, kits=kits)
+    params = MotionParams(speed_scale=args.speed_scale, tool_speed=args.tool_speed)
+    return plan_execution(instance, sol.plan, kits=kits, params=params)
 
 
-def _report(ex: Execution) -> None:
+def _report(ex: Execution, cap: float) -> None:
     from ..sawyer.trajectory import verify
 
     n_parts = sum(len(layout) for layout in ex.layouts.values())
@@ -199,14 +221,19 @@ def _report(ex: Execution) -> None:
         if kt.extra > 0:
             print(f"     kit {kt.kit}: {kt.extra:.3f} s of bin changes (not in the motion model)")
         if kt.overrun > 0:
-            print(f"     warning: kit {kt.kit}'s arm ends {kt.overrun:.3f} s after the plan's push")
+            print(
+                f"     warning: kit {kt.kit}'s arm ends {kt.overrun:.3f} s after the plan's "
+                'push; "robot_times": "motion" in the instance makes the plan use the arm\'s '
+                "times (docs/execution.md#what-the-robot-does-and-when)"
+            )
     v = verify(ex)
     print(
         f"largest |trajectory - modelled - bin changes|: {v.duration_error:.1e} s; closest to a "
         f"joint position limit: {v.position_margin:.3f} rad ({v.margin_joint}); peak speed "
         f"{100 * v.speed_share:.1f}% of the velocity limit ({100 * v.fd_speed_share:.1f}% by "
         f"finite differences); FK error at place waypoints {1000 * v.place_error:.4f} mm, at "
-        f"grasp waypoints {1000 * v.grasp_error:.4f} mm"
+        f"grasp waypoints {1000 * v.grasp_error:.4f} mm; peak tool speed "
+        f"{v.tool_speed:.3f} m/s (cap {cap:g} m/s)"
     )
 
 
@@ -262,7 +289,7 @@ def run(args: argparse.Namespace) -> int:
 
         page = html_page(ex)
     infos = _write(ex, targets, args.html, page)
-    _report(ex)
+    _report(ex, args.tool_speed)
     for info in infos:
         print(_describe(info))
     if page is not None:

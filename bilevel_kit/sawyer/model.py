@@ -212,15 +212,16 @@ class Arm:
 
 
 @lru_cache(maxsize=16)
-def _arm(tool_offset: float) -> Arm:
+def tool_arm(tool_offset: float) -> Arm:
+    """A shared :class:`Arm` with the tool tip ``tool_offset`` metres out (not thread-safe)."""
     return Arm(tool_offset)
 
 
 def fk_hand(q: np.ndarray) -> np.ndarray:
     """4 x 4 pose of ``right_hand`` in the base frame at ``q`` (convenience, not thread-safe)."""
-    return _arm(0.0).fk(q, "right_hand")
+    return tool_arm(0.0).fk(q, "right_hand")
 
 
 def fk_tool(q: np.ndarray, tool_offset: float = 0.0) -> np.ndarray:
     """4 x 4 pose of the tool tip ``tool_offset`` metres along the hand z axis at ``q``."""
-    return _arm(float(tool_offset)).fk(q, "tool")
+    return tool_arm(float(tool_offset)).fk(q, "tool")

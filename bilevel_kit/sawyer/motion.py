@@ -8,10 +8,16 @@ joint governs; the profile accelerates at the limit, cruises at the speed limit,
 at the limit (a triangle when the move is too short to reach the cruise speed). This is the
 time-optimal timing of that joint path under the box limits.
 
-Limits: velocities are the Sawyer's (``model.V_MAX``, times ``speed_scale``); the Sawyer
-publishes no acceleration limits, so we assume each joint reaches its velocity limit in
-:data:`ACCEL_RAMP` = 0.5 s, i.e. ``a_i = 2 v_i`` (3.5 rad/s^2 for ``right_j0`` up to 9.1
-rad/s^2 for ``right_j6``), also scaled by ``accel_scale``.
+Limits: velocities are the Sawyer's (``model.V_MAX``); for accelerations we assume each joint
+reaches its velocity limit in :data:`ACCEL_RAMP` = 0.5 s, i.e. ``a_i = 2 v_i`` (3.5 rad/s^2 for
+``right_j0`` up to 9.1 rad/s^2 for ``right_j6``; Intera's own acceleration presets differ),
+scaled by ``accel_scale``. ``speed_scale`` S slows every move down in time: velocity limits
+times S, acceleration limits times S^2, so a move lasts 1/S times as long and keeps its shape.
+On top, the tool tip's Cartesian speed is capped at ``tool_speed`` (default
+:data:`TOOL_SPEED` = 0.6 m/s, Intera's default Cartesian speed limit): along a joint-space
+line the tool moves at ``|J(q(s)) d| s'``, so the path speed is also limited by ``tool_speed``
+over the largest ``|J d|`` at :data:`TOOL_SAMPLES` points of the line. The gripper's dwell
+times are not scaled.
 
 One pick-and-place cycle starts and ends above the part's bin (``approach_height`` above the
 grasp point) and is, in order:
@@ -32,7 +38,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
@@ -40,13 +46,17 @@ import numpy as np
 
 from .errors import UnreachableError
 from .ik import IKSolution, solve_top_down
-from .model import V_MAX, Arm
+from .model import ELECTRIC_GRIPPER_TIP, V_MAX, Arm, tool_arm
 from .station import Station
 
 #: Seconds for a joint to reach its velocity limit from rest (defines the assumed accels).
 ACCEL_RAMP = 0.5
 #: Assumed joint acceleration limits [rad/s^2].
 A_MAX = V_MAX / ACCEL_RAMP
+#: Default cap on the tool tip's Cartesian speed [m/s] (Intera's default Cartesian limit).
+TOOL_SPEED = 0.6
+#: Points of a joint-space line at which the tool speed is evaluated (ends included).
+TOOL_SAMPLES = 33
 #: Gripper close time at the bin [s] (assumed, Rethink electric gripper class).
 GRASP_TIME = 0.5
 #: Gripper open time at the slot [s] (assumed).
@@ -57,18 +67,25 @@ RELEASE_TIME = 0.3
 class MotionParams:
     """Timing assumptions; the defaults are documented in the module docstring."""
 
-    #: Fraction of the velocity limits used (Intera's own default joint speed ratio is 0.3).
+    #: Time scaling in (0, 1]: velocity limits times S, acceleration limits times S^2.
     speed_scale: float = 1.0
-    #: Fraction of :data:`A_MAX` used.
+    #: Fraction of :data:`A_MAX` used (before ``speed_scale``).
     accel_scale: float = 1.0
     grasp_time: float = GRASP_TIME
     release_time: float = RELEASE_TIME
     #: Whether a cycle includes the move back above the bin.
     return_to_bin: bool = True
+    #: Cap on the tool tip's Cartesian speed [m/s]; None: no cap.
+    tool_speed: float | None = TOOL_SPEED
+    #: Tool tip distance beyond the flange [m] at which ``tool_speed`` applies (the
+    #: station's ``tool_offset``: :meth:`for_station`).
+    tool_offset: float = ELECTRIC_GRIPPER_TIP
 
     def __post_init__(self) -> None:
-        if not (self.speed_scale > 0 and self.accel_scale > 0):
-            raise ValueError("speed_scale and accel_scale must be positive")
+        if not (0 < self.speed_scale <= 1 and self.accel_scale > 0):
+            raise ValueError("speed_scale must be in (0, 1] and accel_scale positive")
+        if self.tool_speed is not None and not (0 < self.tool_speed < math.inf):
+            raise ValueError("tool_speed must be a finite number > 0 (or None)")
         if self.grasp_time < 0 or self.release_time < 0:
             raise ValueError("grasp_time and release_time must be >= 0")
 
@@ -78,7 +95,13 @@ class MotionParams:
 
     @property
     def a_max(self) -> np.ndarray:
-        return A_MAX * self.accel_scale
+        return A_MAX * self.accel_scale * self.speed_scale**2
+
+    def for_station(self, station: Station) -> MotionParams:
+        """These parameters with the station's tool tip."""
+        if self.tool_offset == station.tool_offset_m:
+            return self
+        return replace(self, tool_offset=station.tool_offset_m)
 
 
 DEFAULT_PARAMS = MotionParams()
@@ -105,7 +128,23 @@ def _path_limits(
         return d, math.inf, math.inf
     v = float(np.min(params.v_max[moving] / ad[moving]))
     a = float(np.min(params.a_max[moving] / ad[moving]))
+    if params.tool_speed is not None:
+        gain = _tool_gain(np.asarray(q0, dtype=float).tobytes(), d.tobytes(), params.tool_offset)
+        if gain > 0.0:
+            v = min(v, params.tool_speed / gain)
     return d, v, a
+
+
+@lru_cache(maxsize=4096)
+def _tool_gain(q0: bytes, d: bytes, tool_offset: float) -> float:
+    """Largest tool tip speed [m/s] per unit path speed along the line ``q0 + s d``,
+    ``max |J(q(s)) d|`` over :data:`TOOL_SAMPLES` values of s in [0, 1]."""
+    arm = tool_arm(tool_offset)
+    start, step = np.frombuffer(q0), np.frombuffer(d)
+    return max(
+        float(np.linalg.norm(arm.jacobian(start + s * step)[:3] @ step))
+        for s in np.linspace(0.0, 1.0, TOOL_SAMPLES)
+    )
 
 
 def move_time(q0: np.ndarray, q1: np.ndarray, params: MotionParams = DEFAULT_PARAMS) -> float:
@@ -201,6 +240,7 @@ def pick_place(
     the tray x axis); raises :class:`UnreachableError` when the bin or the slot (release or
     approach pose) cannot be reached."""
     arm = Arm(station.tool_offset_m)
+    params = params.for_station(station)
     q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type))
     x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
     place = station.tray_to_base(x, y, station.place_height)

@@ -315,6 +315,7 @@ def kit_trajectory(
     is (the previous kit's end); None: above the first part's bin."""
     if not layout:
         return None
+    params = params.for_station(station)
     steps, parts, extra = _plan_parts(station, layout, kit, params, q_start)
     segments, t, q, qd, qdd = _sample(steps, params, dt)
     return KitTrajectory(
@@ -415,6 +416,8 @@ class Verification:
     grasp_error: float
     #: Largest |duration - modelled time - bin changes| [s].
     duration_error: float
+    #: Largest tool tip speed at the samples [m/s] (``|J(q) qd|``).
+    tool_speed: float
 
 
 def verify(execution: Execution) -> Verification:
@@ -422,7 +425,7 @@ def verify(execution: Execution) -> Verification:
     station = execution.station
     arm = Arm(station.tool_offset_m)
     margin, joint, share, fd_share = math.inf, JOINT_NAMES[0], 0.0, 0.0
-    place_err = grasp_err = dur_err = 0.0
+    place_err = grasp_err = dur_err = tool = 0.0
     for kt in execution.kits:
         v_max = kt.params.v_max
         gaps = np.minimum(kt.positions - Q_LOWER, Q_UPPER - kt.positions)
@@ -433,6 +436,9 @@ def verify(execution: Execution) -> Verification:
         fd = np.diff(kt.positions, axis=0) / np.diff(kt.times)[:, None]
         fd_share = max(fd_share, float((np.abs(fd) / v_max).max()))
         dur_err = max(dur_err, abs(kt.duration - kt.modelled - kt.extra))
+        jac = (arm.jacobian(q)[:3] for q in kt.positions)
+        speeds = [float(np.linalg.norm(j @ qd)) for j, qd in zip(jac, kt.velocities, strict=True)]
+        tool = max(tool, *speeds)
         for p in kt.parts:
             q_place = kt.positions_at(p.release_at)
             target = station.tray_to_base(p.x, p.y, station.place_height)
@@ -440,4 +446,4 @@ def verify(execution: Execution) -> Verification:
             q_grasp = kt.positions_at(p.grasp_at)
             bin_point = station.bin_point(p.type)
             grasp_err = max(grasp_err, float(np.linalg.norm(arm.position(q_grasp) - bin_point)))
-    return Verification(margin, joint, share, fd_share, place_err, grasp_err, dur_err)
+    return Verification(margin, joint, share, fd_share, place_err, grasp_err, dur_err, tool)

@@ -395,3 +395,48 @@ def test_a_controllers_quintic_holds_the_tool_still_while_the_gripper_works(
     qdd[1:][still] = braking[still]
     bad = dwell_deviation([kt], ST.tool_offset_m, points=[(kt.positions, kt.velocities, qdd)])
     assert bad.deviation > 0.5e-3
+
+
+def test_speed_scale_and_tool_speed_options(capsys, tmp_path, solution_file, plan):
+    """``--speed-scale`` slows the arm (the motion model with the same parameters times it),
+    ``--tool-speed`` caps the tool tip's speed; a late arm's warning names the fix."""
+    argv = ("execute", TABLE, solution_file, "--kit", 1, "--format", "ros2", "--bag", tmp_path)
+    code, out, err = run(capsys, *argv, "--speed-scale", 0.5, "--tool-speed", 0.3)
+    assert code == 0 and err == ""
+    assert '"robot_times": "motion"' in out  # the slowed arm ends after the plan's push
+    topics = bags.read_bag(tmp_path / "hrc_table_kit1_ros2")
+    ((_, msg),) = topics[bags.TRAJECTORY_TOPIC]
+    t, (q, qd, _) = _points(msg)
+    params = S.MotionParams(speed_scale=0.5, tool_speed=0.3)
+    assert t[-1] == pytest.approx(S.layout_time(ST, plan.plan.kits[0].layout, params), abs=1e-6)
+    assert np.all(np.abs(qd) <= 0.5 * S.V_MAX * (1 + 1e-9))
+    arm = S.Arm(ST.tool_offset_m)
+    speeds = [np.linalg.norm(arm.jacobian(c)[:3] @ v) for c, v in zip(q, qd, strict=True)]
+    assert 0.25 <= max(speeds) <= 0.3 * 1.01
+    for bad in (("--speed-scale", 0), ("--speed-scale", 1.5), ("--tool-speed", -1)):
+        code, _, err = run(capsys, *argv, *bad)
+        assert code == 2 and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.slow
+def test_the_documented_table_run(instance):
+    """docs/execution.md's table and numbers for greedy-ce's plan of the paper's table."""
+    text = (ROOT / "docs" / "execution.md").read_text(encoding="utf-8")
+    section = text[text.index("### The paper's table with greedy-ce's plan") :]
+    rows = [
+        [float(c) for c in line.strip("|").split("|")]
+        for line in section.splitlines()
+        if re.match(r"\| \d", line)
+    ]
+    ex = plan_execution(instance, solve(instance, "greedy-ce").plan)
+    assert len(rows) == len(ex.kits) == 8
+    for row, kt in zip(rows, ex.kits, strict=True):
+        plan_robot = kt.plan.robot_end - kt.plan.robot_start - (kt.start - kt.plan.robot_start)
+        mine = [kt.kit, len(kt.parts), kt.plan.robot_start, kt.start, kt.duration, kt.modelled]
+        mine += [plan_robot, kt.plan.robot_end - kt.end]
+        assert row == [round(v, 3) for v in mine]
+    late = max(kt.overrun for kt in ex.kits)
+    assert f"arms end {late:.3f} s after" in section
+    v = verify(ex)
+    assert f"peaks at the cap, {v.tool_speed:.3f} m/s" in section and v.speed_share < 1.0
+    assert v.place_error <= 1e-6 and v.grasp_error <= 1e-6
