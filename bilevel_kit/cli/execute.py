@@ -71,6 +71,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "(default: 1); the gripper's dwells are not scaled",
     )
     p.add_argument(
+        "--limits",
+        choices=("robot", "gazebo"),
+        default="robot",
+        help="joint-limit profile: the real arm's (default) or the Gazebo simulator's, whose "
+        "right_j6 stays within +-3.14 rad",
+    )
+    p.add_argument(
         "--tool-speed",
         type=positive,
         default=TOOL_SPEED,
@@ -199,7 +206,9 @@ def _load(args: argparse.Namespace) -> Execution:
     if args.kit is not None and args.kit > n:
         raise UsageError(f"--kit {args.kit}: the solution has {n} kit{'s' * (n != 1)}")
     kits = None if args.kit is None else [args.kit]
-    params = MotionParams(speed_scale=args.speed_scale, tool_speed=args.tool_speed)
+    params = MotionParams(
+        speed_scale=args.speed_scale, tool_speed=args.tool_speed, limits=args.limits
+    )
     return plan_execution(instance, sol.plan, kits=kits, params=params)
 
 

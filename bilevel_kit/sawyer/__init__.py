@@ -29,6 +29,7 @@ from .ik import (
 from .model import (
     ELECTRIC_GRIPPER_TIP,
     JOINT_NAMES,
+    LIMIT_PROFILES,
     Q_LOWER,
     Q_NEUTRAL,
     Q_UPPER,
@@ -68,6 +69,7 @@ __all__ = [
     "DEFAULT_STATION",
     "ELECTRIC_GRIPPER_TIP",
     "JOINT_NAMES",
+    "LIMIT_PROFILES",
     "POS_TOL",
     "Q_LOWER",
     "Q_NEUTRAL",

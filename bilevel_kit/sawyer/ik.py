@@ -267,13 +267,15 @@ def solve_top_down(
     seed: int = 0,
     max_iter: int = MAX_ITER,
     q6_ref: float | None = None,
+    q6_bounds: tuple[float, float] | None = None,
 ) -> IKSolution | None:
     """Top-down grasp IK: tool tip at ``point`` [m, base frame], tool z down, tool x heading
     one of ``yaws_deg`` (degrees, base frame). None when unreachable.
 
     Solves the 5-D problem (:func:`clik_down`) from the seeds, then picks the allowed yaw whose
     ``right_j6`` value lies closest to ``q6_ref`` (default: the converged ``right_j6``); ties go
-    to the earlier yaw in ``yaws_deg``.
+    to the earlier yaw in ``yaws_deg``. ``q6_bounds``: tighter ``right_j6`` limits (a joint-limit
+    profile, :data:`.model.LIMIT_PROFILES`); the tool's position does not depend on that joint.
     """
     p = np.asarray(point, dtype=float)
     yaws = [float(y) for y in yaws_deg]
@@ -289,7 +291,7 @@ def solve_top_down(
         ref = q[6] if q6_ref is None else q6_ref
         best: tuple[float, np.ndarray, float] | None = None
         for yaw in yaws:
-            qy = with_yaw(q, now, yaw, ref)
+            qy = with_yaw(q, now, yaw, ref, q6_bounds)
             if qy is not None and (best is None or abs(qy[6] - ref) < best[0] - 1e-9):
                 best = (abs(qy[6] - ref), qy, yaw)
         if best is None:  # pragma: no cover - right_j6 spans more than a full turn
@@ -299,20 +301,26 @@ def solve_top_down(
 
 
 def with_yaw(
-    q: np.ndarray, yaw_from_deg: float, yaw_to_deg: float, q6_ref: float | None = None
+    q: np.ndarray,
+    yaw_from_deg: float,
+    yaw_to_deg: float,
+    q6_ref: float | None = None,
+    q6_bounds: tuple[float, float] | None = None,
 ) -> np.ndarray | None:
     """Turn a top-down solution from one tool yaw to another by moving ``right_j6`` only.
 
     Raising ``right_j6`` by d turns a downward tool by -d about the base z axis. Among the
     2*pi-equivalent values within the joint limits, the one closest to ``q6_ref`` (default:
-    the current ``right_j6``) is taken; None if none fits (cannot happen for the Sawyer).
+    the current ``right_j6``) is taken; None if none fits (cannot happen for the Sawyer's
+    own limits). ``q6_bounds`` replaces those limits.
     """
+    low, high = (Q_LOWER[6], Q_UPPER[6]) if q6_bounds is None else q6_bounds
     q = np.array(q, dtype=float)
     ref = q[6] if q6_ref is None else q6_ref
     base = q[6] - math.radians(yaw_to_deg - yaw_from_deg)
     k = round((ref - base) / (2 * math.pi))
     options = [base + 2 * math.pi * m for m in (k - 1, k, k + 1)]
-    options = [v for v in options if Q_LOWER[6] <= v <= Q_UPPER[6]]
+    options = [v for v in options if low <= v <= high]
     if not options:
         return None
     q[6] = min(options, key=lambda v: abs(v - ref))

@@ -59,6 +59,13 @@ ELECTRIC_GRIPPER_TIP = 0.13562
 
 Q_LOWER = np.array([row[3] for row in JOINT_TABLE])
 Q_UPPER = np.array([row[4] for row in JOINT_TABLE])
+#: Joint-limit profiles (lower, upper) [rad]: ``robot`` is the real arm's description;
+#: ``gazebo`` is its simulator variant (``gazebo:=true`` in Rethink's ``sawyer_base.urdf.xacro``),
+#: which limits ``right_j6`` to +-3.14 rad instead of +-4.7124 (docs/execution.md).
+LIMIT_PROFILES: dict[str, tuple[np.ndarray, np.ndarray]] = {
+    "robot": (Q_LOWER, Q_UPPER),
+    "gazebo": (np.r_[Q_LOWER[:6], -3.14], np.r_[Q_UPPER[:6], 3.14]),
+}
 #: Joint velocity limits [rad/s].
 V_MAX = np.array([row[5] for row in JOINT_TABLE])
 EFFORT_MAX = np.array([row[6] for row in JOINT_TABLE])

@@ -46,7 +46,7 @@ import numpy as np
 
 from .errors import UnreachableError
 from .ik import IKSolution, solve_top_down
-from .model import ELECTRIC_GRIPPER_TIP, V_MAX, Arm, tool_arm
+from .model import ELECTRIC_GRIPPER_TIP, LIMIT_PROFILES, V_MAX, Arm, tool_arm
 from .station import Station
 
 #: Seconds for a joint to reach its velocity limit from rest (defines the assumed accels).
@@ -80,12 +80,16 @@ class MotionParams:
     #: Tool tip distance beyond the flange [m] at which ``tool_speed`` applies (the
     #: station's ``tool_offset``: :meth:`for_station`).
     tool_offset: float = ELECTRIC_GRIPPER_TIP
+    #: Joint-limit profile the IK keeps to (:data:`.model.LIMIT_PROFILES`).
+    limits: str = "robot"
 
     def __post_init__(self) -> None:
         if not (0 < self.speed_scale <= 1 and self.accel_scale > 0):
             raise ValueError("speed_scale must be in (0, 1] and accel_scale positive")
         if self.tool_speed is not None and not (0 < self.tool_speed < math.inf):
             raise ValueError("tool_speed must be a finite number > 0 (or None)")
+        if self.limits not in LIMIT_PROFILES:
+            raise ValueError(f"limits must be one of {', '.join(LIMIT_PROFILES)}")
         if self.grasp_time < 0 or self.release_time < 0:
             raise ValueError("grasp_time and release_time must be >= 0")
 
@@ -96,6 +100,16 @@ class MotionParams:
     @property
     def a_max(self) -> np.ndarray:
         return A_MAX * self.accel_scale * self.speed_scale**2
+
+    @property
+    def q_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper joint limits of the profile [rad]."""
+        return LIMIT_PROFILES[self.limits]
+
+    @property
+    def q6_bounds(self) -> tuple[float, float]:
+        low, high = self.q_limits
+        return float(low[6]), float(high[6])
 
     def for_station(self, station: Station) -> MotionParams:
         """These parameters with the station's tool tip."""
@@ -205,27 +219,34 @@ class PickPlace:
 
 
 def _solve(
-    arm: Arm, point: np.ndarray, yaws: tuple[float, ...], q_start: np.ndarray | None, what: str
+    arm: Arm,
+    point: np.ndarray,
+    yaws: tuple[float, ...],
+    q_start: np.ndarray | None,
+    what: str,
+    q6_bounds: tuple[float, float],
 ) -> IKSolution:
     """Top-down IK warm-started from ``q_start`` (so it stays on that branch, with the yaw
     needing the least ``right_j6`` travel), falling back to the seeds; raises when
     unreachable."""
     q6 = None if q_start is None else float(q_start[6])
-    sol = solve_top_down(arm, point, yaws, q_init=q_start, q6_ref=q6)
+    sol = solve_top_down(arm, point, yaws, q_init=q_start, q6_ref=q6, q6_bounds=q6_bounds)
     if sol is None:
         raise UnreachableError(f"{what} is out of the Sawyer's reach")
     return sol
 
 
 @lru_cache(maxsize=256)
-def _bin_configs(station: Station, part_type: str) -> tuple[np.ndarray, np.ndarray]:
-    """IK above and at the bin of ``part_type`` (cached per station and part type)."""
+def _bin_configs(
+    station: Station, part_type: str, q6_bounds: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray]:
+    """IK above and at the bin of ``part_type`` (cached per station, part type and limits)."""
     arm = Arm(station.tool_offset_m)
     grasp = station.bin_point(part_type)
     above = grasp + np.array([0.0, 0.0, station.approach_height / 1000.0])
     where = f"the bin of part type {part_type!r} at {station.bin_xyz(part_type)} mm"
-    sol = _solve(arm, above, station.grasp_yaws, None, f"the pose above {where}")
-    q_grasp = _solve(arm, grasp, (sol.yaw_deg,), sol.q, f"the grasp pose in {where}").q
+    sol = _solve(arm, above, station.grasp_yaws, None, f"the pose above {where}", q6_bounds)
+    q_grasp = _solve(arm, grasp, (sol.yaw_deg,), sol.q, f"the grasp pose in {where}", q6_bounds).q
     return sol.q, q_grasp
 
 
@@ -241,15 +262,16 @@ def pick_place(
     approach pose) cannot be reached."""
     arm = Arm(station.tool_offset_m)
     params = params.for_station(station)
-    q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type))
+    bounds = params.q6_bounds
+    q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type, bounds))
     x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
     place = station.tray_to_base(x, y, station.place_height)
     above = place + np.array([0.0, 0.0, station.approach_height / 1000.0])
     where = f"tray slot ({x:g}, {y:g}) mm"
     yaws = tuple(a + float(theta) for a in station.slot_yaws())
-    sol = _solve(arm, above, yaws, q_ba, f"the approach pose above {where}")
+    sol = _solve(arm, above, yaws, q_ba, f"the approach pose above {where}", bounds)
     q_sa, yaw = sol.q, sol.yaw_deg
-    q_sp = _solve(arm, place, (yaw,), q_sa, where).q
+    q_sp = _solve(arm, place, (yaw,), q_sa, where, bounds).q
     down_bin = move_time(q_ba, q_bg, params)
     down_slot = move_time(q_sa, q_sp, params)
     steps = {

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import UnreachableError
-from .model import JOINT_NAMES, Q_LOWER, Q_UPPER, Arm
+from .model import JOINT_NAMES, Arm
 from .motion import DEFAULT_PARAMS, MotionParams, _path_limits, move_profile, move_time, pick_place
 from .station import DEFAULT_STATION, Station
 
@@ -428,7 +428,8 @@ def verify(execution: Execution) -> Verification:
     place_err = grasp_err = dur_err = tool = 0.0
     for kt in execution.kits:
         v_max = kt.params.v_max
-        gaps = np.minimum(kt.positions - Q_LOWER, Q_UPPER - kt.positions)
+        low, high = kt.params.q_limits
+        gaps = np.minimum(kt.positions - low, high - kt.positions)
         i = int(np.argmin(gaps.min(axis=0)))
         if gaps[:, i].min() < margin:
             margin, joint = float(gaps[:, i].min()), JOINT_NAMES[i]

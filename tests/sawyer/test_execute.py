@@ -440,3 +440,34 @@ def test_the_documented_table_run(instance):
     v = verify(ex)
     assert f"peaks at the cap, {v.tool_speed:.3f} m/s" in section and v.speed_share < 1.0
     assert v.place_error <= 1e-6 and v.grasp_error <= 1e-6
+
+
+def test_gazebo_limits_keep_j6_within_the_simulators_range(capsys, tmp_path, solution_file):
+    """``--limits gazebo``: every point within the simulator description's limits (right_j6
+    within +-3.14 rad), which the real arm's profile exceeds on this plan."""
+    low, high = S.LIMIT_PROFILES["gazebo"]
+    assert high[6] == 3.14 and low[6] == -3.14
+    np.testing.assert_array_equal(high[:6], S.Q_UPPER[:6])
+    argv = ("execute", TABLE, solution_file, "--format", "ros1")
+    code, _, _ = run(capsys, *argv, "--bag", tmp_path / "g", "--limits", "gazebo")
+    assert code == 0
+    code, _, _ = run(capsys, *argv, "--bag", tmp_path / "r")
+    assert code == 0
+    q6 = {}
+    for name in ("g", "r"):
+        topics = bags.read_bag(tmp_path / name / "hrc_table.bag")
+        arrays = [bags.trajectory_arrays(m)[2] for _, m in topics[bags.TRAJECTORY_TOPIC]]
+        q = np.concatenate(arrays)
+        q6[name] = np.abs(q[:, 6]).max()
+        assert np.all(q >= low - 1e-9) or name == "r"
+        assert np.all(q <= high + 1e-9) or name == "r"
+    assert q6["g"] <= 3.14 < q6["r"]
+    # the same numbers as Rethink's simulator description, when it is at hand
+    xacro = REFERENCE / "sawyer_robot" / "sawyer_description" / "urdf" / "sawyer_base.urdf.xacro"
+    if xacro.exists():
+        text = xacro.read_text()
+        block = text[text.index('<joint name="right_j6"') :]
+        block = block[block.index('<xacro:if value="$(arg gazebo)">') :]
+        limit = re.search(r'lower="([-\d.]+)" upper="([-\d.]+)"', block)
+        assert limit is not None
+        assert (float(limit[1]), float(limit[2])) == (low[6], high[6])
