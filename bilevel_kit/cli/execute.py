@@ -247,7 +247,13 @@ def _report(ex: Execution, cap: float) -> None:
 
 
 def _describe(info: BagInfo) -> str:
-    from ..sawyer.bags import EVENTS_TOPIC, GRIPPER_TOPIC, TRAJECTORY_TOPIC
+    from ..sawyer.bags import (
+        EVENTS_TOPIC,
+        GRIPPER_TOPIC,
+        JOINT_STATES_TOPIC,
+        TF_TOPIC,
+        TRAJECTORY_TOPIC,
+    )
     from ..style import plural
 
     c = info.counts
@@ -256,6 +262,7 @@ def _describe(info: BagInfo) -> str:
         f"{info.n_messages} messages: {c[TRAJECTORY_TOPIC]} "
         f"{'trajectory' if c[TRAJECTORY_TOPIC] == 1 else 'trajectories'}, "
         f"{plural(c[GRIPPER_TOPIC], 'gripper command')}, "
+        f"{c[JOINT_STATES_TOPIC]} on {JOINT_STATES_TOPIC}, {c[TF_TOPIC]} on {TF_TOPIC}, "
         f"{plural(c[EVENTS_TOPIC], 'event stamp')})"
     )
 

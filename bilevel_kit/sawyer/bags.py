@@ -12,6 +12,11 @@ Topics (:data:`TOPICS`):
   two finger joints, one message per command (close at a grasp, open at a release), stamped
   with the command's time. Positions are the URDF's finger limits: open
   (0.020833, -0.020833) m, closed (0, 0); a real gripper stops on the part.
+* ``/joint_states``: ``sensor_msgs/JointState`` of ``right_j0`` .. ``right_j6`` (positions and
+  velocities) every :data:`STATE_DT` seconds of each kit's arm motion and at its end, stamped
+  with the sample's time; and ``/tf``: ``tf2_msgs/TFMessage`` with the arm's link transforms
+  (:data:`.model.LINK_TREE`) at the same instants. With them RViz (RobotModel and TF displays,
+  fixed frame ``base``) and PlotJuggler play a bag with no custom node.
 * ``/bilevel_kit/events``: ``diagnostic_msgs/DiagnosticArray``, one message per instant of
   the timeline, one status per event there (name ``kit K``, message the event, key/values
   ``kit``, ``event``, ``plan_time``, ``detail``), stamped with the plan's time.
@@ -29,7 +34,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .model import JOINT_NAMES
+from .model import JOINT_NAMES, LINK_TREE, tool_arm
 from .trajectory import Event, Execution, KitTrajectory
 
 #: Seconds of ROS time at plan time 0.
@@ -40,18 +45,33 @@ EVENTS_TOPIC = "/bilevel_kit/events"
 TRAJECTORY_TYPE = "trajectory_msgs/msg/JointTrajectory"
 GRIPPER_TYPE = "sensor_msgs/msg/JointState"
 EVENTS_TYPE = "diagnostic_msgs/msg/DiagnosticArray"
+JOINT_STATES_TOPIC = "/joint_states"
+TF_TOPIC = "/tf"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+#: tf2_msgs/TFMessage's definition (not in rosbags' ROS 1 typestore) and its ROS 1 MD5.
+TF_MSGDEF = "geometry_msgs/TransformStamped[] transforms"
+TF_MD5 = "94810edda583a504dfda3829e70d7eec"
+#: Period [s] of the sampled robot state on ``/joint_states`` and ``/tf`` (20 Hz).
+STATE_DT = 0.05
 #: Topic -> message type, in the order the connections are added.
 TOPICS = {
     TRAJECTORY_TOPIC: TRAJECTORY_TYPE,
     GRIPPER_TOPIC: GRIPPER_TYPE,
+    JOINT_STATES_TOPIC: GRIPPER_TYPE,
+    TF_TOPIC: TF_TYPE,
     EVENTS_TOPIC: EVENTS_TYPE,
 }
 FINGER_JOINTS = ("right_gripper_l_finger_joint", "right_gripper_r_finger_joint")
 FINGERS_OPEN = (0.020833, -0.020833)
 FINGERS_CLOSED = (0.0, 0.0)
 FORMATS = ("ros1", "ros2")
-#: rosbag2 metadata version written (the ``rosbags`` writer supports 8 and 9).
+#: rosbag2 metadata version written by the ``rosbags`` writer (it supports 8 and 9); the
+#: bag is then rewritten as :data:`ROS2_METADATA_VERSION` (:func:`_as_humble`).
 ROS2_VERSION: Literal[8, 9] = 8
+#: Metadata version of the written ROS 2 bag: Humble's rosbag2 reads up to 5, Jazzy all.
+ROS2_METADATA_VERSION = 5
+#: sqlite3 schema version of Humble's rosbag2 storage.
+ROS2_SQLITE_SCHEMA = 3
 
 
 def to_ns(seconds: float) -> int:
@@ -121,15 +141,67 @@ def _events(types: dict[str, Any], ros1: bool, ns: int, events: Sequence[Event])
     )
 
 
+def typestore(fmt: str) -> Any:
+    """rosbags' Noetic (``ros1``) or Humble (``ros2``) typestore, with ``tf2_msgs/TFMessage``."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC if fmt == "ros1" else Stores.ROS2_HUMBLE)
+    if TF_TYPE not in store.types:
+        store.register(get_types_from_msg(TF_MSGDEF, TF_TYPE))
+    return store
+
+
+def _robot_state(
+    types: dict[str, Any], ros1: bool, kt: KitTrajectory
+) -> list[tuple[str, int, Any]]:
+    """``/joint_states`` and ``/tf`` every :data:`STATE_DT` s of the kit's motion and at its
+    end."""
+    t = np.append(np.arange(0.0, kt.duration, STATE_DT), kt.duration)
+    q, qd = kt.states_at(t)
+    arm = tool_arm(0.0)
+    tf, vec, quat = (
+        types[n]
+        for n in (
+            "geometry_msgs/msg/TransformStamped",
+            "geometry_msgs/msg/Vector3",
+            "geometry_msgs/msg/Quaternion",
+        )
+    )
+    transform = types["geometry_msgs/msg/Transform"]
+    out = []
+    for ti, qi, qdi in zip(t, q, qd, strict=True):
+        ns = to_ns(kt.start + float(ti))
+        state = types[GRIPPER_TYPE](
+            header=_header(types, ros1, ns),
+            name=list(JOINT_NAMES),
+            position=np.asarray(qi, dtype=np.float64),
+            velocity=np.asarray(qdi, dtype=np.float64),
+            effort=np.zeros(0, dtype=np.float64),
+        )
+        links = [
+            tf(
+                header=_header(types, ros1, ns, parent),
+                child_frame_id=child,
+                transform=transform(
+                    translation=vec(x=p[0], y=p[1], z=p[2]),
+                    rotation=quat(x=r[0], y=r[1], z=r[2], w=r[3]),
+                ),
+            )
+            for (parent, child), (p, r) in zip(LINK_TREE, arm.link_transforms(qi), strict=True)
+        ]
+        out.append((JOINT_STATES_TOPIC, ns, state))
+        out.append((TF_TOPIC, ns, types[TF_TYPE](transforms=links)))
+    return out
+
+
 def messages(execution: Execution, fmt: str) -> list[tuple[str, int, Any]]:
     """``(topic, ROS time ns, message)`` of every message of the bag, in time order."""
-    from rosbags.typesys import Stores, get_typestore
-
     ros1 = fmt == "ros1"
-    types = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE).types
+    types = typestore(fmt).types
     out: list[tuple[str, int, Any]] = []
     for kt in execution.kits:
         out.append((TRAJECTORY_TOPIC, to_ns(kt.start), _trajectory(types, ros1, kt)))
+        out += _robot_state(types, ros1, kt)
     for t, _kit, _part, closed in execution.gripper_commands():
         ns = to_ns(t)
         out.append((GRIPPER_TOPIC, ns, _gripper(types, ros1, ns, closed)))
@@ -166,8 +238,6 @@ def _size(path: Path) -> int:
 def write_bag(execution: Execution, path: str | Path, fmt: str) -> BagInfo:
     """Write the ``fmt`` (``"ros1"`` or ``"ros2"``) bag of ``execution`` at ``path``, which
     must not exist (a ``.bag`` file for ROS 1, a folder for ROS 2)."""
-    from rosbags.typesys import Stores, get_typestore
-
     if fmt not in FORMATS:
         raise ValueError(f"unknown bag format {fmt!r}; expected one of {', '.join(FORMATS)}")
     path = Path(path)
@@ -176,7 +246,7 @@ def write_bag(execution: Execution, path: str | Path, fmt: str) -> BagInfo:
     if fmt == "ros1":
         from rosbags.rosbag1 import Writer as Writer1
 
-        store = get_typestore(Stores.ROS1_NOETIC)
+        store = typestore(fmt)
         with Writer1(path) as w1:
             conns = {t: w1.add_connection(t, m, typestore=store) for t, m in TOPICS.items()}
             for topic, ns, msg in msgs:
@@ -185,13 +255,50 @@ def write_bag(execution: Execution, path: str | Path, fmt: str) -> BagInfo:
     else:
         from rosbags.rosbag2 import Writer as Writer2
 
-        store = get_typestore(Stores.ROS2_HUMBLE)
+        store = typestore(fmt)
         with Writer2(path, version=ROS2_VERSION) as w2:
             conns = {t: w2.add_connection(t, m, typestore=store) for t, m in TOPICS.items()}
             for topic, ns, msg in msgs:
                 w2.write(conns[topic], ns, store.serialize_cdr(msg, TOPICS[topic]))
                 counts[topic] += 1
+        _as_humble(path)
     return BagInfo(fmt, path, _size(path), counts)
+
+
+#: Keys rosbag2 added to its metadata after version 5 (``custom_data``, ``ros_distro`` and the
+#: topics' ``type_description_hash``).
+_AFTER_V5 = ("custom_data", "ros_distro")
+
+
+def _as_humble(path: Path) -> None:
+    """Rewrite a ROS 2 bag written as metadata version 8 as Humble writes it: metadata
+    version 5 without the later keys, and sqlite3 schema 3 (no ``metadata`` table)."""
+    import io
+    import sqlite3
+
+    from ruamel.yaml import YAML
+
+    yaml = YAML(typ="safe")
+    yaml.default_flow_style = False
+    meta_path = path / "metadata.yaml"
+    doc = yaml.load(meta_path.read_text(encoding="utf-8"))
+    info = doc["rosbag2_bagfile_information"]
+    for key in _AFTER_V5:
+        info.pop(key, None)
+    for topic in info["topics_with_message_count"]:
+        topic["topic_metadata"].pop("type_description_hash", None)
+    info["version"] = ROS2_METADATA_VERSION
+    text = io.StringIO()
+    yaml.dump(doc, text)
+    meta_path.write_text(text.getvalue(), encoding="utf-8")
+    for name in info["relative_file_paths"]:
+        db = sqlite3.connect(path / name)
+        try:
+            with db:
+                db.execute("DROP TABLE IF EXISTS metadata")
+                db.execute("UPDATE schema SET schema_version = ?", (ROS2_SQLITE_SCHEMA,))
+        finally:
+            db.close()
 
 
 def bag_name(stem: str, fmt: str) -> str:
@@ -205,7 +312,8 @@ def read_bag(path: str | Path) -> dict[str, list[tuple[int, Any]]]:
     from rosbags.highlevel import AnyReader
 
     out: dict[str, list[tuple[int, Any]]] = {}
-    with AnyReader([Path(path)]) as reader:
+    # A ROS 2 bag of metadata version 5 carries no message definitions: Humble's are used.
+    with AnyReader([Path(path)], default_typestore=typestore("ros2")) as reader:
         for conn, ns, raw in reader.messages():
             out.setdefault(conn.topic, []).append((ns, reader.deserialize(raw, conn.msgtype)))
     return out

@@ -212,10 +212,33 @@ class Arm:
             self.model, self.data, q, self._frame(frame), pin.LOCAL_WORLD_ALIGNED
         ).copy()
 
+    def link_transforms(self, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per :data:`LINK_TREE` entry, the child's pose in its parent: translation [m] and
+        quaternion (x, y, z, w), for ``/tf``."""
+        pin = self._pin
+        pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        poses = [pin.SE3.Identity()]
+        poses += [self.data.liMi[j] for j in range(1, self.model.njoints)]
+        poses.append(self.model.frames[self._frame("right_hand")].placement)
+        return [(p.translation.copy(), pin.Quaternion(p.rotation).coeffs().copy()) for p in poses]
+
     def manipulability(self, q: np.ndarray, frame: str = "tool") -> float:
         """Yoshikawa's measure sqrt(det(J J^T)) of the 6 x 7 Jacobian: 0 at singularities."""
         J = self.jacobian(q, frame)
         return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
+
+
+#: Parent and child frames of the arm's links as Rethink's description names them, in the
+#: order of :meth:`Arm.link_transforms`: ``right_arm_base_link`` is the model's ``base``.
+LINK_TREE: tuple[tuple[str, str], ...] = (
+    ("base", "right_arm_base_link"),
+    *zip(
+        ("right_arm_base_link", *(row[0] for row in JOINT_TABLE[:-1])),
+        (row[0] for row in JOINT_TABLE),
+        strict=True,
+    ),
+    (JOINT_TABLE[-1][0], "right_hand"),
+)
 
 
 @lru_cache(maxsize=16)

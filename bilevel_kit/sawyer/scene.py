@@ -46,6 +46,8 @@ TABLE_COLOR = 0x8D99AE
 BIN_COLOR = 0x4F6D7A
 #: Link radii [m], right_l0 .. right_l6.
 LINK_RADII = (0.06, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035)
+#: Height of a bin's rim above its grasp point [m].
+BIN_RIM = 0.01
 #: Pedestal height below the base [m] (the floor).
 FLOOR_Z = -0.91
 #: Where the view looks at (base frame) and the camera's offset from there [m].
@@ -186,17 +188,24 @@ def _station(scene: _Scene, ex: Execution) -> None:
     pedestal = _tf((-0.02, 0.0, 0.0)) @ _along([0.0, 0.0, FLOOR_Z])
     scene.solid("bk/station/pedestal", Cylinder(-FLOOR_Z, 0.16), 0x2B2B2B, pedestal)
     corners = np.array([s.tray_to_base(x, y) for x in (0, ex.tray[0]) for y in (0, ex.tray[1])])
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    bins = {tuple(s.bin_xyz(t)) for layout in ex.layouts.values() for t in {p.type for p in layout}}
     z = s.tray_z / 1000.0
-    for name, dx in (("table", 0.0), ("human_table", PUSH)):
+    # The robot's table holds the tray and the bins (whose grasp points lie above it).
+    held = np.vstack([corners, np.array(sorted(bins)).reshape(-1, 3) / 1000.0])
+    for name, dx, pts in (("table", 0.0, held), ("human_table", PUSH, corners)):
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
         size = [hi[0] - lo[0] + 0.3, hi[1] - lo[1] + 0.3, 0.04]
         centre = [(lo[0] + hi[0]) / 2 + dx, (lo[1] + hi[1]) / 2, z - 0.02 - 0.012]
         scene.solid(f"bk/station/{name}", Box(size), TABLE_COLOR, _tf(centre), 0.9)
-    bins = {tuple(s.bin_xyz(t)) for layout in ex.layouts.values() for t in {p.type for p in layout}}
     for i, xyz in enumerate(sorted(bins)):
         p = np.array(xyz) / 1000.0
+        height = max(p[2] - z + BIN_RIM, BIN_RIM)  # from the table top to above the grasp point
         scene.solid(
-            f"bk/station/bin{i}", Box([0.16, 0.16, 0.06]), BIN_COLOR, _tf(p - [0, 0, 0.04]), 0.55
+            f"bk/station/bin{i}",
+            Box([0.16, 0.16, height]),
+            BIN_COLOR,
+            _tf((p[0], p[1], z + height / 2)),
+            0.55,
         )
 
 

@@ -112,15 +112,20 @@ class KitTrajectory:
 
     def positions_at(self, t: np.ndarray | float) -> np.ndarray:
         """Exact joint positions at times ``t`` (seconds from the start), shape (..., 7)."""
+        return self.states_at(t)[0]
+
+    def states_at(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """Exact joint positions and velocities at times ``t`` (seconds from the start),
+        shapes (..., 7)."""
         shape = np.shape(t)
         flat = np.clip(np.asarray(t, dtype=float).ravel(), 0.0, self.duration)
         starts = np.array([s.start for s in self.segments])
         idx = np.clip(np.searchsorted(starts, flat, side="right") - 1, 0, len(starts) - 1)
-        out = np.empty((len(flat), 7))
+        q, qd = np.empty((len(flat), 7)), np.empty((len(flat), 7))
         for i in np.unique(idx):
             seg, mask = self.segments[i], idx == i
-            out[mask] = move_profile(seg.q0, seg.q1, flat[mask] - seg.start, self.params)[0]
-        return out.reshape(*shape, 7)
+            q[mask], qd[mask], _ = move_profile(seg.q0, seg.q1, flat[mask] - seg.start, self.params)
+        return q.reshape(*shape, 7), qd.reshape(*shape, 7)
 
 
 @dataclass(frozen=True)

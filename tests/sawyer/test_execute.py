@@ -471,3 +471,75 @@ def test_gazebo_limits_keep_j6_within_the_simulators_range(capsys, tmp_path, sol
         limit = re.search(r'lower="([-\d.]+)" upper="([-\d.]+)"', block)
         assert limit is not None
         assert (float(limit[1]), float(limit[2])) == (low[6], high[6])
+
+
+def _chain(msg, child: str) -> np.ndarray:
+    """``child``'s 4 x 4 pose in ``base`` from a read-back ``TFMessage``."""
+    parents = {t.child_frame_id: t for t in msg.transforms}
+    pose = np.eye(4)
+    while child != "base":
+        t = parents[child]
+        r, p = t.transform.rotation, t.transform.translation
+        step = np.eye(4)
+        step[:3, :3] = pin.Quaternion(r.w, r.x, r.y, r.z).toRotationMatrix()
+        step[:3, 3] = (p.x, p.y, p.z)
+        pose = step @ pose
+        child = t.header.frame_id
+    return pose
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "ros2"])
+def test_joint_states_and_tf_replay_the_trajectories(fmt, written, instance, plan):
+    """``/joint_states`` and ``/tf`` sample each kit's motion every STATE_DT s; their link
+    chain puts ``right_hand`` where forward kinematics does; the ROS 2 bag is Humble's
+    format (metadata version 5, sqlite3 schema 3) and the ROS 1 bag carries TFMessage's MD5."""
+    path = written / "bags" / bags.bag_name("hrc_table", fmt)
+    topics = bags.read_bag(path)
+    ex = plan_execution(instance, plan.plan)
+    expected = sum(math.ceil(kt.duration / bags.STATE_DT - 1e-9) + 1 for kt in ex.kits)
+    states, tfs = topics[bags.JOINT_STATES_TOPIC], topics[bags.TF_TOPIC]
+    assert len(states) == len(tfs) == expected
+    arm = S.Arm(0.0)
+    for (ns, state), (tf_ns, tf) in list(zip(states, tfs, strict=True))[::97]:
+        assert ns == tf_ns and list(state.name) == list(S.JOINT_NAMES)
+        hand = arm.fk(np.array(state.position), "right_hand")
+        np.testing.assert_allclose(_chain(tf, "right_hand"), hand, atol=1e-9)
+    if fmt == "ros2":
+        import sqlite3
+
+        meta = (path / "metadata.yaml").read_text()
+        assert "version: 5" in meta and "type_description_hash" not in meta
+        db = sqlite3.connect(next(path.glob("*.db3")))
+        assert db.execute("SELECT schema_version FROM schema").fetchall() == [(3,)]
+        db.close()
+    else:
+        from rosbags.rosbag1 import Reader
+
+        with Reader(path) as reader:
+            md5 = {c.topic: c.digest for c in reader.connections}
+        assert md5[bags.TF_TOPIC] == bags.TF_MD5
+
+
+def test_the_3d_view_stands_the_bin_on_the_table(instance, plan):
+    """The bin rests on the robot's table (its top at the tray's height), inside its edges."""
+    from bilevel_kit.sawyer.scene import scene_commands
+
+    ex = plan_execution(instance, plan.plan, kits=[1])
+    commands, _ = scene_commands(ex)
+    boxes, poses = {}, {}
+    for c in commands:
+        path = str(c.get("path", ""))
+        if c["type"] == "set_object" and path.startswith("/bk/station/"):
+            geometry = c["object"]["geometries"][0]
+            if geometry.get("type") == "BoxGeometry":
+                boxes[path] = np.array([geometry[k] for k in ("width", "height", "depth")])
+        elif c["type"] == "set_transform" and path in boxes:
+            poses[path] = np.array(c["matrix"]).reshape(4, 4).T[:3, 3]
+    table, box = poses["/bk/station/table"], boxes["/bk/station/table"]
+    top = table[2] + box[2] / 2
+    for path in (p for p in boxes if "/bin" in p):
+        centre, size = poses[path], boxes[path]
+        assert centre[2] - size[2] / 2 == pytest.approx(top, abs=0.02)  # on the table
+        assert np.all(np.abs(centre[:2] - table[:2]) + size[:2] / 2 <= box[:2] / 2 + 1e-9)
+        grasp = ST.bin_point("foot")
+        assert centre[2] + size[2] / 2 > grasp[2]  # the grasp point is inside the bin
