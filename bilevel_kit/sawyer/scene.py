@@ -46,6 +46,9 @@ TABLE_COLOR = 0x8D99AE
 BIN_COLOR = 0x4F6D7A
 #: Link radii [m], right_l0 .. right_l6.
 LINK_RADII = (0.06, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035)
+#: The floor under the pedestal: a slab, top at :data:`FLOOR_Z` [m], and its colour.
+FLOOR_SIZE = (3.0, 3.0, 0.01)
+FLOOR_COLOR = 0xC8CCD2
 #: Height of a bin's rim above its grasp point [m].
 BIN_RIM = 0.01
 #: Pedestal height below the base [m] (the floor).
@@ -185,6 +188,8 @@ def _station(scene: _Scene, ex: Execution) -> None:
     from meshcat.geometry import Box, Cylinder
 
     s = ex.station
+    floor = _tf((0.4, 0.0, FLOOR_Z - FLOOR_SIZE[2] / 2))
+    scene.solid("bk/station/floor", Box(list(FLOOR_SIZE)), FLOOR_COLOR, floor)
     pedestal = _tf((-0.02, 0.0, 0.0)) @ _along([0.0, 0.0, FLOOR_Z])
     scene.solid("bk/station/pedestal", Cylinder(-FLOOR_Z, 0.16), 0x2B2B2B, pedestal)
     corners = np.array([s.tray_to_base(x, y) for x in (0, ex.tray[0]) for y in (0, ex.tray[1])])
@@ -388,7 +393,7 @@ def scene_commands(execution: Execution) -> tuple[list[dict[str, Any]], dict[str
     scene.finish()
     centre = np.array(CENTRE)
     scene.place("bk", _tf(-centre))
-    scene.place("Grid", _tf((0.0, 0.0, FLOOR_Z - centre[2])))
+    scene.prop("Grid", "visible", False)  # meshcat's 20 m grid: replaced by the floor
     scene.prop("Axes", "visible", False)
     # The camera sits in three.js's y-up frame: our (x, y, z) is its (x, z, -y).
     eye = CAMERA

@@ -521,8 +521,9 @@ def test_joint_states_and_tf_replay_the_trajectories(fmt, written, instance, pla
 
 
 def test_the_3d_view_stands_the_bin_on_the_table(instance, plan):
-    """The bin rests on the robot's table (its top at the tray's height), inside its edges."""
-    from bilevel_kit.sawyer.scene import scene_commands
+    """The bin rests on the robot's table (its top at the tray's height), inside its edges;
+    the floor lies under the pedestal, and meshcat's own grid is hidden."""
+    from bilevel_kit.sawyer.scene import FLOOR_Z, scene_commands
 
     ex = plan_execution(instance, plan.plan, kits=[1])
     commands, _ = scene_commands(ex)
@@ -535,6 +536,10 @@ def test_the_3d_view_stands_the_bin_on_the_table(instance, plan):
                 boxes[path] = np.array([geometry[k] for k in ("width", "height", "depth")])
         elif c["type"] == "set_transform" and path in boxes:
             poses[path] = np.array(c["matrix"]).reshape(4, 4).T[:3, 3]
+    hidden = [c for c in commands if c["type"] == "set_property" and c["path"] == "/Grid"]
+    assert [(c["property"], c["value"]) for c in hidden] == [("visible", False)]
+    floor, slab = poses["/bk/station/floor"], boxes["/bk/station/floor"]
+    assert floor[2] + slab[2] / 2 == pytest.approx(FLOOR_Z, abs=1e-9)
     table, box = poses["/bk/station/table"], boxes["/bk/station/table"]
     top = table[2] + box[2] / 2
     for path in (p for p in boxes if "/bin" in p):
