@@ -548,3 +548,17 @@ def test_the_3d_view_stands_the_bin_on_the_table(instance, plan):
         assert np.all(np.abs(centre[:2] - table[:2]) + size[:2] / 2 <= box[:2] / 2 + 1e-9)
         grasp = ST.bin_point("foot")
         assert centre[2] + size[2] / 2 > grasp[2]  # the grasp point is inside the bin
+
+
+def test_the_documented_constants():
+    """The constants docs/execution.md states, as the code has them."""
+    from bilevel_kit.cli.execute import TOOL_SPEED
+    from bilevel_kit.sawyer.motion import TOOL_SAMPLES
+
+    text = " ".join((ROOT / "docs" / "execution.md").read_text(encoding="utf-8").split())
+    assert TOOL_SPEED == S.MotionParams().tool_speed == 0.6
+    assert f"(default {TOOL_SPEED:g}," in text and f"at {TOOL_SAMPLES} points" in text
+    assert f"every {bags.STATE_DT:g} s of each kit's arm motion" in text
+    assert f"metadata version {bags.ROS2_METADATA_VERSION} and sqlite3 schema" in text
+    assert f"sqlite3 schema {bags.ROS2_SQLITE_SCHEMA} " in text
+    assert f"limited to +-{S.LIMIT_PROFILES['gazebo'][1][6]:g} rad" in text
