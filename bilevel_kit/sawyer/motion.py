@@ -265,7 +265,7 @@ def pick_place(
     bounds = params.q6_bounds
     q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type, bounds))
     x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
-    place = station.tray_to_base(x, y, station.place_height)
+    place = station.tray_to_base(x, y, station.place_height_of(part_type))
     above = place + np.array([0.0, 0.0, station.approach_height / 1000.0])
     where = f"tray slot ({x:g}, {y:g}) mm"
     yaws = tuple(a + float(theta) for a in station.slot_yaws())

@@ -62,6 +62,8 @@ class Station:
     approach_height: float = 100.0
     #: Height of the tool tip above the tray surface when it releases a part.
     place_height: float = 20.0
+    #: Per part type, a release height replacing ``place_height`` (mapping or pairs, mm).
+    place_heights: Any = ()
     grasp_yaws: tuple[float, ...] = (0.0, 90.0, 180.0, -90.0)
     #: Tool tip distance along the flange (``right_hand``) z axis.
     tool_offset: float = 135.62
@@ -71,6 +73,13 @@ class Station:
         items = bins.items() if isinstance(bins, Mapping) else bins
         norm = tuple(sorted((str(k), _vec3(v, f"bins.{k}")) for k, v in items))
         object.__setattr__(self, "bins", norm)
+        heights = self.place_heights
+        pairs = heights.items() if isinstance(heights, Mapping) else heights
+        object.__setattr__(
+            self,
+            "place_heights",
+            tuple(sorted((str(k), _number(v, f"place_heights.{k}")) for k, v in pairs)),
+        )
         object.__setattr__(self, "default_bin", _vec3(self.default_bin, "default_bin"))
         object.__setattr__(self, "grasp_yaws", tuple(float(a) for a in self.grasp_yaws))
         for name in (
@@ -126,6 +135,10 @@ class Station:
                 return xyz
         return self.default_bin
 
+    def place_height_of(self, part_type: str) -> float:
+        """Release height [mm] of the tool tip above the tray for ``part_type``."""
+        return dict(self.place_heights).get(part_type, self.place_height)
+
     def bin_point(self, part_type: str) -> np.ndarray:
         """Grasp point [m, base frame] of the tool tip at the bin of ``part_type``."""
         return np.array(self.bin_xyz(part_type)) / 1000.0
@@ -149,6 +162,8 @@ class Station:
         }
         if self.bins:
             doc["bins"] = {name: list(xyz) for name, xyz in self.bins}
+        if self.place_heights:
+            doc["place_heights"] = dict(self.place_heights)
         return doc
 
     @classmethod
@@ -179,6 +194,12 @@ class Station:
             if not isinstance(doc["bins"], Mapping):
                 raise StationError("station.bins: expected an object part type -> [x, y, z]")
             kwargs["bins"] = {k: _vec3(v, f"station.bins.{k}") for k, v in doc["bins"].items()}
+        if "place_heights" in doc:
+            if not isinstance(doc["place_heights"], Mapping):
+                raise StationError("station.place_heights: expected an object part type -> mm")
+            kwargs["place_heights"] = {
+                k: _number(v, f"station.place_heights.{k}") for k, v in doc["place_heights"].items()
+            }
         if "default_bin" in doc:
             kwargs["default_bin"] = _vec3(doc["default_bin"], "station.default_bin")
         for key in ("approach_height", "place_height", "tool_offset"):
@@ -243,6 +264,12 @@ def station_schema() -> dict[str, Any]:
                 **num,
                 "default": d.place_height,
                 "description": "tool tip height above the tray when releasing",
+            },
+            "place_heights": {
+                "type": "object",
+                "description": "part type -> tool tip height above the tray when releasing "
+                "that type (mm), replacing place_height",
+                "additionalProperties": num,
             },
             "grasp_yaws": {
                 "type": "array",

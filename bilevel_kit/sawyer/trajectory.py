@@ -447,7 +447,7 @@ def verify(execution: Execution) -> Verification:
         tool = max(tool, *speeds)
         for p in kt.parts:
             q_place = kt.positions_at(p.release_at)
-            target = station.tray_to_base(p.x, p.y, station.place_height)
+            target = station.tray_to_base(p.x, p.y, station.place_height_of(p.type))
             place_err = max(place_err, float(np.linalg.norm(arm.position(q_place) - target)))
             q_grasp = kt.positions_at(p.grasp_at)
             bin_point = station.bin_point(p.type)

@@ -172,3 +172,16 @@ def test_the_tool_speed_cap_holds_along_a_pick_and_place(cap) -> None:
     # the cap holds at TOOL_SAMPLES points of the line; in between, within 1 %
     assert max(speed) <= cap * 1.01
     assert max(speed) >= cap * 0.95  # and it is reached: the timing is tight
+
+
+def test_place_height_per_part_type() -> None:
+    st = S.Station.from_dict({"place_heights": {"foot": 35.0}})
+    assert st.place_height_of("foot") == 35.0 and st.place_height_of("leg") == st.place_height
+    assert S.Station.from_dict(st.to_dict()) == st
+    arm = S.Arm(st.tool_offset_m)
+    for part_type, height in (("foot", 35.0), ("leg", 20.0)):
+        q = S.pick_place(st, part_type, (150.0, 100.0)).q_slot
+        z = arm.position(q)[2]
+        assert z == pytest.approx((st.tray_z + height) / 1000.0, abs=1e-3)
+    with pytest.raises(S.StationError, match="place_heights"):
+        S.Station.from_dict({"place_heights": {"foot": "high"}})
