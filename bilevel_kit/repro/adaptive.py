@@ -17,8 +17,9 @@ time, where taking the parts off the tray is work; the makespan), the share of
 the gap the adaptive policy closes is ``(fixed - adaptive) / (fixed - oracle)`` with a 95 %
 bootstrap interval over the runs, reported only where the oracle beats the fixed policy
 significantly (the 95 % t-interval of the paired gap above 0; otherwise there is no gap to
-close, and the row says so). "Fixed - adaptive" carries its 95 % t-interval: an interval
-containing 0 is "no significant difference", never "no loss".
+close, and the row gives the gap's verdict from its interval, :mod:`.verdict`). "Fixed -
+adaptive" carries its 95 % t-interval: an interval containing 0 is "no significant
+difference", never "no loss".
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ from ..sim import SimParams, TimingModel, effective_instance, make_policy, simul
 from ..sim.timing import PAPER_CV
 from .calibrated import load_calibration
 from .common import FIG6_REPAIR, FIG6_SUPPLIED, FIG6_UNITS, load_instance, paper_idle
+from .verdict import GAP, side, verdict
 
 FIXED, ADAPTIVE, ORACLE = "optimized", "optimized-adaptive", "optimized-oracle"
 POLICIES = (FIXED, ADAPTIVE, ORACLE)
@@ -174,7 +176,7 @@ def summarize(record: Mapping[str, Any]) -> list[dict[str, Any]]:
         gap, gap_lo, gap_hi = _t_interval(gap_runs)
         closed, closed_lo, closed_hi = _t_interval(closed_runs)
         rng = np.random.default_rng(zlib.crc32(f"{delay}|{cell['group']}|{metric}".encode()))
-        share = closed / gap if gap_lo > 0 else None
+        share = closed / gap if side(gap_lo, gap_hi) > 0 else None
         lo, hi = share_interval(gap_runs, closed_runs, rng) if share is not None else (None, None)
         out.append(
             {
@@ -239,10 +241,10 @@ def _blank(x: Any) -> bool:
 
 
 def share_text(r: Mapping[str, Any]) -> str:
-    """``90 % [81, 97]``, or why there is no share (no significant gap, or an unbounded
-    interval)."""
+    """``90 % [81, 97]``, or why there is no share: the gap's verdict from its interval (no
+    significant gap, or the oracle significantly slower), or an unbounded interval."""
     if _blank(r["share_closed"]):
-        return "no gap"
+        return f"no share: {verdict(r['gap_low'], r['gap_high'], GAP)}"
     share = f"{100 * float(r['share_closed']):.0f} %"
     if _blank(r.get("share_low")):
         return f"{share} [unbounded]"

@@ -19,13 +19,15 @@ from typing import Any
 import numpy as np
 
 from ..instance import DEFAULT_HORIZON
+from .adaptive import share_text
 from .calibration import WITHIN_CAP
 from .common import PAPER_ACTIVE, PAPER_F, READOFF
 from .fig6_stats import BETTER, NS, WORSE
 from .fmt import f, read_rows, yes
-from .horizon_tables import horizon_summary, mean_gap_by_n, typed_rows
-from .predictions import PREDICTED
+from .horizon_tables import horizon_summary, mean_gap_by_n, paired_gap_difference, typed_rows
+from .predictions import PREDICTED, follows, inside_count
 from .report_sim import duration
+from .verdict import CLOSED, GAP, GAP_DIFFERENCE, HALF, LEVEL, meets, verdict
 
 Rows = list[dict[str, str]]
 Facts = dict[str, str]
@@ -120,13 +122,14 @@ SLUGS = {
 def study_facts(pred: Rows, summary: Rows) -> Facts:
     """``us.*``: the counts, each number's median and intervals, the widening, the outliers."""
     s = {r["key"]: r["value"] for r in summary}
+    ki, ni = inside_count(pred, independent=True)  # this version's rule, whatever the CSV's
     out: Facts = {
         "us.studies": s["studies"],
         "us.cal_studies": s["cal_studies"],
         "us.predicted": s["predicted"],
         "us.inside": s["predicted_inside"],
-        "us.independent": s["independent"],
-        "us.independent_inside": s["independent_inside"],
+        "us.independent": str(ni),
+        "us.independent_inside": str(ki),
         "us.implied": s["implied"],
         "us.fitted": s["fitted"],
         "us.opt_st_ns": _pct(s["opt_vs_st_not_significant"]),
@@ -139,8 +142,18 @@ def study_facts(pred: Rows, summary: Rows) -> Facts:
         out[f"us.{slug}.cal"] = f"[{f(r['cal_low'], nd)}, {f(r['cal_high'], nd)}]"
         out[f"us.{slug}.implied"] = f(r["implied"], nd)
         out[f"us.{slug}.widened"] = "-" if not r["widened_pct"] else f"{r['widened_pct']} %"
-        out[f"us.{slug}.inside"] = "inside" if yes(r["inside"]) else "outside"
+        out[f"us.{slug}.inside"] = meets(r["cal_low"], r["cal_high"], r["paper"], r["readoff"])
     predicted = [r for r in pred if r["kind"] == PREDICTED]
+    out["us.independent_list"] = "; ".join(
+        r["quantity"].removesuffix(" (s)") for r in predicted if not follows(r)
+    )
+    # a CSV written before the within-subject Tukey has no check column (issue 38, item 3)
+    out["us.tukey"] = (
+        "the within-subject Tukey (df 34), with the independent-groups one as the check column"
+        if pred and "check_median" in pred[0]
+        else "the independent-groups Tukey (`pairwise_tukeyhsd`, df 51): the committed CSVs "
+        "predate the within-subject Tukey, and `repro user-study` rewrites them with it"
+    )
     widened = [_num(r["widened_pct"]) for r in predicted if r["widened_pct"]]
     out["us.widened_range"] = _range(widened, 0, " %")
     most = max((r for r in predicted if r["widened_pct"]), key=lambda r: _num(r["widened_pct"]))
@@ -204,9 +217,8 @@ def within_facts(rows: Rows) -> Facts:
         out[f"within.{m}.source"] = (
             "the condition means" if share > 0.5 else "the residual (participant x condition)"
         )
-        out[f"within.{m}.direction"] = (
-            "above" if _num(q["F from the medians"]["ours"]) > PAPER_F[m] else "below"
-        )
+        ours = _num(q["F from the medians"]["ours"]) - PAPER_F[m]
+        out[f"within.{m}.direction"] = verdict(ours, ours, LEVEL)
     return out
 
 
@@ -337,7 +349,6 @@ def horizon_facts(plan: Rows, window: Rows) -> Facts:
         "hz.gap_first": f"{mean[ns[0]]:.1f} %",
         "hz.gap_default": f"{mean[d]:.1f} %",
         "hz.gap_last": f"{mean[ns[-1]]:.1f} %",
-        "hz.best_mean_n": str(min(mean, key=lambda n: (round(mean[n], 9), n))),
         "hz.closed_default_mean": f"{100 * (mean[ns[0]] - mean[d]) / mean[ns[0]]:.0f} %",
         "hz.closed_default_range": _range(closed_d, 0, " %"),
         "hz.closed_default_median": f"{float(np.median(closed_d)):.0f} %",
@@ -351,6 +362,15 @@ def horizon_facts(plan: Rows, window: Rows) -> Facts:
         "hz.plans_valid": str(sum(bool(r["valid"]) for r in rows)),
         "hz.plans": str(len(rows)),
     }
+    for m, key in ((d - 1, "prev"), (d + 1, "next")):
+        diff = paired_gap_difference(rows, d, m)
+        out[f"hz.n_{key}"] = str(m)
+        out[f"hz.gap_{key}"] = f"{mean[m]:.2f} %"
+        out[f"hz.diff_{key}"] = (
+            f"{diff['mean']:+.2f} points [{diff['low']:+.2f}, {diff['high']:+.2f}]"
+        )
+        out[f"hz.diff_{key}.verdict"] = verdict(diff["low"], diff["high"], GAP_DIFFERENCE)
+    out["hz.gap_default_2"] = f"{mean[d]:.2f} %"
     win = typed_rows(window)
     roll = [r for r in win if r["window"] is not None]
     out["hz.reps"] = str(win[0]["reps"]) if win else "-"
@@ -384,24 +404,15 @@ def adaptive_facts(rows: Rows) -> Facts:
             f"{f(r['fixed_minus_adaptive'], 0)} s [{f(r['closed_low'], 0)}, "
             f"{f(r['closed_high'], 0)}]"
         )
-        low, high = _num(r["closed_low"]), _num(r["closed_high"])
-        out[f"{k}.closed_verdict"] = (
-            "significantly faster"
-            if low > 0
-            else "significantly slower"
-            if high < 0
-            else "no significant difference"
+        out[f"{k}.closed_verdict"] = verdict(r["closed_low"], r["closed_high"], CLOSED)
+        gap_word = verdict(r["gap_low"], r["gap_high"], GAP)
+        out[f"{k}.gap_verdict"] = gap_word
+        out[f"{k}.share"] = share_text(r)
+        out[f"{k}.half"] = (
+            verdict(r["share_low"], r["share_high"], HALF, at=0.5)
+            if r["share_closed"]
+            else f"no share to judge ({gap_word})"
         )
-        if r["share_closed"]:
-            share = _pct(r["share_closed"])
-            ci = f" [{_pct(r['share_low'])}, {_pct(r['share_high'])}]" if r["share_low"] else ""
-            out[f"{k}.share"] = share + ci
-            half = _num(r["share_closed"]) >= 0.5
-            sure = bool(r["share_low"]) and _num(r["share_low"]) >= 0.5
-            out[f"{k}.half"] = "met" if sure else "met by the estimate only" if half else "not met"
-        else:
-            out[f"{k}.share"] = "no significant gap"
-            out[f"{k}.half"] = "no gap to close"
         out["ad.runs"] = r["runs"] if r["group"] != "population" else out.get("ad.runs", "")
         if r["group"] == "population":
             out["ad.population"] = r["runs"]

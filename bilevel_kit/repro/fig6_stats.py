@@ -8,8 +8,9 @@ trends as regressions, and the power of the paper's test.
   replications (every policy sees the same seeds) after Holm over the cells.
 * **Trends** ("most at low MAT", "most at high MAT"): the per-replication improvement
   ``100 (baseline_r - subject_r) / mean(baseline)`` of every grid cell regressed on MAT and
-  MTTF by least squares, with standard errors clustered by replication (the same seeds run in
-  every cell); the MAT slope per 30 s (the grid's step) with its 95 % interval, and Kendall's
+  MTTF by least squares per replication (the same seeds run in every cell: a replication is a
+  cluster), and a t-test of the replications' slopes on replications - 1 degrees of freedom;
+  the MAT slope per 30 s (the grid's step) with its 95 % interval, and Kendall's
   tau of the 16 cell means against MAT. A claim is *supported* when both agree with it (the
   slope's interval on the claimed side of 0 and tau significant with the claimed sign),
   *contradicted* when both disagree, else *not shown*: a slope alone is carried by the ends of
@@ -31,8 +32,9 @@ from typing import Any
 import numpy as np
 
 from .common import CONDITIONS, LABELS, METRIC_LABELS, METRICS, SINGLE, WHOLE
+from .verdict import DIRECTION, TREND, side, tested, verdict
 
-BETTER, NS, WORSE = "better", "n.s.", "worse"
+BETTER, WORSE, NS = DIRECTION.all()
 #: Trend claims of the paper (Fig. 6 caption): baseline -> (claim, expected sign of the slope).
 CLAIMS: dict[str, tuple[str, int]] = {
     SINGLE: ("largest at low MAT", -1),
@@ -54,9 +56,8 @@ def holm(pvalues: Sequence[float | None]) -> list[bool]:
 
 
 def direction(significant: bool, pct: float | None) -> str:
-    if not significant or pct is None:
-        return NS
-    return BETTER if pct > 0 else WORSE
+    """better / worse / n.s. (:func:`.verdict.tested`: the sign of a significant gain)."""
+    return tested(significant and pct is not None, pct, DIRECTION)
 
 
 def add_directions(long_rows: list[dict[str, Any]]) -> None:
@@ -145,31 +146,50 @@ def pooled_sd(row: Mapping[str, Any], metric: str, policies: Sequence[str] = CON
     return math.sqrt(float(np.mean([float(row[f"{metric}_sd:{p}"]) ** 2 for p in policies])))
 
 
-def _cluster_ols(
-    y: np.ndarray, mat: np.ndarray, mttf: np.ndarray, groups: np.ndarray
-) -> tuple[float, float, float, float]:
-    """MAT slope per 30 s with its 95 % interval and p (OLS on MAT and MTTF, SEs clustered by
-    replication)."""
-    import statsmodels.api as sm
+#: How the MAT slope is tested (written into fig6_trends.csv's ``slope_test`` column).
+SLOPE_TEST = "t-test on the per-replication slopes, df = replications - 1"
 
-    cols = [np.ones_like(mat), mat / 30.0]
-    if np.ptp(mttf) > 0:  # a one-MTTF grid (quick) has nothing to adjust for
-        cols.append(mttf / 30.0)
-    fit = sm.OLS(y, np.column_stack(cols)).fit(cov_type="cluster", cov_kwds={"groups": groups})
-    lo, hi = fit.conf_int(alpha=ALPHA)[1]
-    return float(fit.params[1]), float(lo), float(hi), float(fit.pvalues[1])
+
+def replication_slopes(
+    y: np.ndarray, mat: np.ndarray, mttf: np.ndarray, groups: np.ndarray
+) -> tuple[float, float, float, float, int]:
+    """MAT slope per 30 s with its 95 % interval, p and degrees of freedom: each replication's
+    least-squares slope over the grid (on MAT, and MTTF when it varies), then a one-sample
+    t-test of those slopes (:data:`SLOPE_TEST`). The replications are the clusters (the same
+    seeds run in every cell), so the test has replications - 1 degrees of freedom, not the
+    normal approximation of cluster-robust errors with few clusters
+    (paper_repro/README.md, "Trends, tested")."""
+    from scipy.stats import t as student_t
+
+    slopes = []
+    for g in np.unique(groups):
+        sel = groups == g
+        cols = [np.ones(int(sel.sum())), mat[sel] / 30.0]
+        if np.ptp(mttf) > 0:  # a one-MTTF grid (quick) has nothing to adjust for
+            cols.append(mttf[sel] / 30.0)
+        coef, *_ = np.linalg.lstsq(np.column_stack(cols), y[sel], rcond=None)
+        slopes.append(float(coef[1]))
+    s = np.asarray(slopes)
+    df = len(s) - 1
+    mean = float(s.mean())
+    if df < 1:  # one replication: no interval
+        return mean, math.nan, math.nan, math.nan, df
+    se = float(s.std(ddof=1)) / math.sqrt(len(s))
+    if se == 0:  # every replication has the same slope
+        return mean, mean, mean, 0.0 if mean else 1.0, df
+    half = float(student_t.ppf(1 - ALPHA / 2, df)) * se
+    p = float(2 * student_t.sf(abs(mean) / se, df))
+    return mean, mean - half, mean + half, p, df
 
 
 def trend_verdict(sign: int, lo: float, hi: float, tau: float, tau_p: float) -> str:
     """supported / contradicted / not shown (module docstring): the slope's 95 % interval and
     the cells' rank trend must agree."""
-    slope_side = 1 if lo > 0 else -1 if hi < 0 else 0
-    rank_side = (1 if tau > 0 else -1) if tau_p < ALPHA else 0
-    if slope_side == rank_side == sign:
-        return "supported"
-    if slope_side == rank_side == -sign:
-        return "contradicted"
-    return "not shown"
+    slope_side = side(lo, hi)
+    rank_side = side(tau, tau) if tau_p < ALPHA else 0
+    agree = slope_side if slope_side == rank_side else 0
+    # the agreed side times the claimed sign: +1 with the claim, -1 against it
+    return verdict(agree * sign, agree * sign, TREND)
 
 
 def peak_mat(cell_mat: Sequence[float], cell_pct: Sequence[float]) -> float:
@@ -207,7 +227,7 @@ def trends(
                 reps.append(np.arange(len(y)))
                 cell_pct.append(float(y.mean()))
                 cell_mat.append(float(rec["cell"]["mat"]))
-            slope, lo, hi, p = _cluster_ols(
+            slope, lo, hi, p, df = replication_slopes(
                 np.concatenate(ys),
                 np.concatenate(mats),
                 np.concatenate(mttfs),
@@ -225,6 +245,8 @@ def trends(
                     "ci_low": lo,
                     "ci_high": hi,
                     "p": p,
+                    "df": df,
+                    "slope_test": SLOPE_TEST,
                     "kendall_tau": float(tau),
                     "kendall_p": float(tau_p),
                     "peak_mat": peak_mat(cell_mat, cell_pct),
@@ -240,11 +262,13 @@ __all__ = [
     "BETTER",
     "CLAIMS",
     "NS",
+    "SLOPE_TEST",
     "WORSE",
     "add_directions",
     "holm",
     "peak_mat",
     "power",
+    "replication_slopes",
     "reps_for_power",
     "trend_verdict",
     "trends",

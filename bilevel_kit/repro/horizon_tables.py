@@ -70,6 +70,23 @@ def mean_gap_by_n(rows: Sequence[Mapping[str, Any]]) -> dict[int, float]:
     return {n: float(np.mean([g[n] for g in full])) for n in ns} if full else {}
 
 
+def paired_gap_difference(rows: Sequence[Mapping[str, Any]], n: int, m: int) -> dict[str, float]:
+    """gap(N = n) - gap(N = m) paired over the instances that have both (points): the mean,
+    its 95 % t-interval on instances - 1 degrees of freedom, and the count. The unit is the
+    instance (one greedy-ce seed per plan): the interval is over instances, not over seeds
+    (docs/reproduction.md, "The horizon study")."""
+    from scipy.stats import t as student_t
+
+    gaps: dict[str, dict[int, float]] = {}
+    for r in rows:
+        if r["gap_pct"] is not None:
+            gaps.setdefault(str(r["instance_file"]), {})[int(r["horizon"])] = float(r["gap_pct"])
+    d = np.array([g[n] - g[m] for g in gaps.values() if n in g and m in g])
+    mean = float(d.mean())
+    half = float(student_t.ppf(0.975, len(d) - 1)) * float(d.std(ddof=1)) / np.sqrt(len(d))
+    return {"mean": mean, "low": mean - half, "high": mean + half, "instances": len(d)}
+
+
 def _pct(x: Any, nd: int = 1) -> str:
     return "-" if x is None else f"{x:.{nd}f}"
 

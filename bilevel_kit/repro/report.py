@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..experiments.tables import markdown_lines
 from .fmt import f, nd_of, read_rows, yes
-from .predictions import FITTED, IMPLIED, PREDICTED
+from .predictions import FITTED, IMPLIED, PREDICTED, follows
 from .report_sim import SIM_TABLES, Row, Tables
 
 
@@ -22,8 +22,8 @@ def _kind(r: Row) -> str:
     kind = str(r["kind"])
     if kind == IMPLIED:
         return f"implied ({f(r['implied'], nd_of(str(r['quantity'])))})"
-    follows = str(r.get("follows") or "")
-    return f"predicted, follows {follows}" if kind == PREDICTED and follows else kind
+    what = follows(r)
+    return f"predicted, follows {what}" if kind == PREDICTED and what else kind
 
 
 def _paper(r: Row) -> str:

@@ -9,12 +9,21 @@ import shutil
 
 import numpy as np
 import pytest
+from scipy.stats import studentized_range
 
 from bilevel_kit.errors import UsageError
 from bilevel_kit.repro import calibrated, fig6_stats, horizon, predictions
 from bilevel_kit.repro.adaptive import share_interval
-from bilevel_kit.repro.common import DEFAULT_INSTANCE, DEFAULT_TARGETS, F_TARGET, READOFF
+from bilevel_kit.repro.common import (
+    DEFAULT_INSTANCE,
+    DEFAULT_TARGETS,
+    F_TARGET,
+    PAPER_CI,
+    PAPER_F,
+    READOFF,
+)
 from bilevel_kit.repro.fig6 import calibrated_timing
+from bilevel_kit.repro.stats import paper_half_width, tukey_pairs, tukey_rm
 
 # -- the one calibration -------------------------------------------------------------------------
 
@@ -85,7 +94,50 @@ def test_paper_numbers_are_counted_by_kind():
     assert opt["kind"] == "predicted" and "Optimized" in opt["follows"]
     half = nums["Tukey 95% CI half-width (every pair), human idle time (s)"]
     assert half["paper"] == pytest.approx((-160.141 + 186.020) / 2) and not half["follows"]
-    assert sum(n["kind"] == "predicted" and not n["follows"] for n in nums.values()) == 4
+    # two independent predictions: Optimized's idle mean and the idle residual (the idle
+    # half-width); F(idle) follows both, the total half-width Optimized's idle mean
+    independent = [q for q, n in nums.items() if n["kind"] == "predicted" and not n["follows"]]
+    assert sorted(independent) == sorted(
+        [
+            "mean human idle time, Optimized (s)",
+            "Tukey 95% CI half-width (every pair), human idle time (s)",
+        ]
+    )
+    f_idle = nums["repeated-measures F(2, 34), human idle time"]["follows"]
+    assert "Optimized" in f_idle and "half-width" in f_idle
+    half_total = nums["Tukey 95% CI half-width (every pair), total task time (s)"]["follows"]
+    assert half_total == "mean human idle time, Optimized"
+
+
+def test_paper_half_widths_follow_from_its_f_and_centres():
+    # the within-subject Tukey: q(3, 34) sqrt(MS_conditions / (F 18)), the paper's numbers
+    for metric, half in (("total", 42.181), ("idle", 12.9394)):
+        centres = [(lo + hi) / 2 for lo, hi in PAPER_CI[metric].values()]
+        assert paper_half_width(centres, PAPER_F[metric], 18) == pytest.approx(half, abs=5e-4)
+        # the published ends have three decimals: their half-widths agree to rounding
+        ends = [(hi - lo) / 2 for lo, hi in PAPER_CI[metric].values()]
+        assert all(e == pytest.approx(half, abs=2e-3) for e in ends)
+
+
+def test_within_subject_tukey_uses_the_repeated_measures_error_term():
+    rng = np.random.default_rng(3)
+    speed = rng.normal(0, 30, 18)  # a participant's own speed: cancels within subject
+    rows = [
+        {"participant": p, "condition": c, "y": 100 + 20 * j + speed[p] + rng.normal(0, 5)}
+        for p in range(18)
+        for j, c in enumerate(("a", "b", "c"))
+    ]
+    within = tukey_rm(rows, "y")
+    groups = tukey_pairs([r["y"] for r in rows], [r["condition"] for r in rows])
+    y = np.array([[r["y"] for r in rows if r["participant"] == p] for p in range(18)])
+    resid = y - y.mean(1, keepdims=True) - y.mean(0, keepdims=True) + y.mean()
+    ms_error = float((resid**2).sum()) / 34  # df (3 - 1)(18 - 1)
+    half = studentized_range.ppf(0.95, 3, 34) * np.sqrt(ms_error / 18)
+    w = within[("b", "a")]
+    assert (w["hi"] - w["lo"]) / 2 == pytest.approx(half)
+    assert w["diff"] == pytest.approx(groups[("b", "a")]["diff"])
+    g = groups[("b", "a")]
+    assert (w["hi"] - w["lo"]) < (g["hi"] - g["lo"]) / 3  # the participants' spread is removed
 
 
 def _summary(opt_idle: float) -> dict:
@@ -167,10 +219,24 @@ def test_trend_slope_and_verdict_from_replications():
             )
     total, _ = fig6_stats.trends(records, [("optimized", "single-task")])
     assert total["slope_per_30s"] == pytest.approx(-3.0, abs=0.05)
+    assert total["df"] == 19 and total["slope_test"] == fig6_stats.SLOPE_TEST
     assert total["ci_low"] < total["slope_per_30s"] < total["ci_high"] < 0
     assert total["verdict"] == "supported" and total["kendall_tau"] < 0
     one_mat = [r for r in records if r["cell"]["mat"] == 60.0]
     assert fig6_stats.trends(one_mat, [("optimized", "single-task")]) == []
+
+
+def test_trend_slope_is_tested_on_replications_minus_one_df():
+    # three replications of a 4 x 1 grid: the t-test has 2 degrees of freedom
+    mat = np.tile([30.0, 60.0, 90.0, 120.0], 3)
+    reps = np.repeat([0, 1, 2], 4)
+    per_rep = np.array([-3.0, -2.5, -3.6])
+    y = 10 + per_rep[reps] * mat / 30
+    slope, lo, hi, p, df = fig6_stats.replication_slopes(y, mat, np.zeros_like(mat), reps)
+    assert df == 2 and slope == pytest.approx(per_rep.mean())
+    half = 4.302652729911275 * per_rep.std(ddof=1) / np.sqrt(3)  # t(0.975, 2)
+    assert (lo, hi) == pytest.approx((slope - half, slope + half))
+    assert 0.001 < p < 0.05  # a normal approximation would claim far more
 
 
 def test_a_trend_is_supported_only_when_slope_and_ranks_agree():
