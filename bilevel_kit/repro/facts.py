@@ -26,6 +26,7 @@ from .fmt import f, read_rows, yes
 from .horizon_tables import horizon_summary, mean_gap_by_n, typed_rows
 from .predictions import PREDICTED
 from .report_sim import duration
+from .stations_facts import stations_facts
 
 Rows = list[dict[str, str]]
 Facts = dict[str, str]
@@ -440,6 +441,7 @@ SOURCES: tuple[tuple[tuple[str, ...], Callable[..., Facts]], ...] = (
     (("horizon.csv", "horizon_window.csv"), horizon_facts),
     (("adaptive.csv",), adaptive_facts),
     (("timing.csv",), timing_facts),
+    (("stations.csv", "stations_served.csv"), stations_facts),
 )
 FIG6_RUNS = (("fig6", "fig6"), ("r100", "fig6_r100"), ("cpsat", "fig6_cpsat"))
 
