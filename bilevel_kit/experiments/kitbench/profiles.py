@@ -138,7 +138,8 @@ def profile_figure(
     methods = methods_of(rows)
     plot_profile(ratios(rows, methods, pass_best(rows)), ax=left)
     left.set_title(f"{title}: against the best of the same pass")
-    both = [*rows, *extra]
+    left.set_xlabel("above the best of the pass, τ - 1 (%; linear to 1 %, log beyond)")
+    both = [*rows, *({**r, "method": f"{r['method']} (own pass)"} for r in extra)]
     plot_profile(ratios(both, methods_of(both), records_best(records)), ax=right)
     right.set_title(f"{title}: against the {len(records)} records")
     return fig
