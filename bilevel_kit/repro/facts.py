@@ -27,6 +27,7 @@ from .fmt import f, read_rows, yes
 from .horizon_tables import horizon_summary, mean_gap_by_n, paired_gap_difference, typed_rows
 from .predictions import PREDICTED, follows, inside_count
 from .report_sim import duration
+from .stations_facts import stations_facts
 from .verdict import CLOSED, GAP, GAP_DIFFERENCE, HALF, LEVEL, meets, verdict
 
 Rows = list[dict[str, str]]
@@ -451,6 +452,7 @@ SOURCES: tuple[tuple[tuple[str, ...], Callable[..., Facts]], ...] = (
     (("horizon.csv", "horizon_window.csv"), horizon_facts),
     (("adaptive.csv",), adaptive_facts),
     (("timing.csv",), timing_facts),
+    (("stations.csv", "stations_served.csv"), stations_facts),
 )
 FIG6_RUNS = (("fig6", "fig6"), ("r100", "fig6_r100"), ("cpsat", "fig6_cpsat"))
 

@@ -4,6 +4,8 @@
 
 from __future__ import annotations
 
+import json
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -18,27 +20,79 @@ def _ci(r: Row, metric: str, nd: int) -> str:
     return f"{m:.{nd}f} [{lo:.{nd}f}, {hi:.{nd}f}]"
 
 
+def per_rep(r: Row) -> list[int]:
+    """A row's per-replication ``S_max`` (a list, or its text in the CSV)."""
+    v = r["per_rep"]
+    return [int(x) for x in (json.loads(v) if isinstance(v, str) else v)]
+
+
+def _distribution(r: Row) -> str:
+    """How many replications gave each ``S_max``: ``"0: 3, 1: 17"``."""
+    counts = Counter(per_rep(r))
+    return ", ".join(f"{k}: {counts[k]}" for k in sorted(counts))
+
+
+def _share(r: Row, k: int) -> str:
+    n, lo, hi = (float(r[f"served_{k}{x}"]) for x in ("", "_low", "_high"))
+    return f"{n:.0f}/{r['reps']} [{100 * lo:.0f}, {100 * hi:.0f} %]"
+
+
+def _main(rows: Sequence[Row]) -> list[Row]:
+    """The rows the headline table shows: the reproduction's idle at 10 %."""
+    return [r for r in rows if r["idle_def"] == "paper" and int(r["threshold"]) == 10]
+
+
 def served_markdown(rows: Sequence[Row]) -> str:
-    """``stations_served.csv``: S_max with its interval, one row per line and policy, one
-    column per supply."""
-    delays = list(dict.fromkeys(str(r["delay"]) for r in rows))
-    by = {(str(r["line"]), str(r["policy"]), str(r["delay"])): r for r in rows}
-    keys = list(dict.fromkeys((str(r["line"]), str(r["policy"])) for r in rows))
-    head = ["line", "policy", *(f"S_max, {_supply(d)} [95 % CI]" for d in delays)]
+    """``stations_served.csv`` at the reproduction's idle and 10 %: per line, policy and
+    supply, the replications' ``S_max`` values, the share serving one and two stations with
+    its Clopper-Pearson interval, the mean with its bootstrap interval, the verdict and the
+    capacity bound."""
+    head = ["line", "policy", "supply", "S_max: replications per value"]
+    head += ["serve 1 [95 % CI]", "serve 2 [95 % CI]", "mean [95 % bootstrap CI]"]
+    head += ["stations served", "capacity bound"]
     body = [
-        [line, LABELS.get(p, p), *(_ci(by[(line, p, d)], "s_max", 2) for d in delays)]
-        for line, p in keys
+        [
+            str(r["line"]),
+            LABELS.get(str(r["policy"]), str(r["policy"])),
+            _supply(str(r["delay"])),
+            _distribution(r),
+            _share(r, 1),
+            _share(r, 2),
+            _ci(r, "s_max", 2),
+            str(r["verdict"]),
+            str(r["bound"]),
+        ]
+        for r in _main(rows)
     ]
     return "\n".join(markdown_lines(head, body))
 
 
+def sweep_markdown(rows: Sequence[Row]) -> str:
+    """``stations_served.csv`` with parts in stock: the verdict at each threshold, for both
+    idle definitions, and the capacity bound of the reproduction's."""
+    mine = [r for r in rows if r["delay"] == "none"]
+    ths = sorted({int(r["threshold"]) for r in mine})
+    by = {(r["line"], r["policy"], r["idle_def"], int(r["threshold"])): r for r in mine}
+    keys = list(dict.fromkeys((r["line"], r["policy"]) for r in mine))
+    head = ["line", "policy", *(f"idle <= {t} %: reproduction's / steady (bound)" for t in ths)]
+    body = []
+    for line, p in keys:
+        cells = []
+        for t in ths:
+            a, b = by[(line, p, "paper", t)], by[(line, p, "steady", t)]
+            cells.append(f"{a['verdict']} / {b['verdict']} ({a['bound']})")
+        body.append([str(line), LABELS.get(str(p), str(p)), *cells])
+    return "\n".join(markdown_lines(head, body))
+
+
 def _supply(delay: str) -> str:
-    return "parts in stock" if delay == "none" else delay
+    return "in stock" if delay == "none" else "shared feeders"
 
 
 def by_stations_markdown(rows: Sequence[Row], delay: str) -> str:
     """``stations.csv`` for one supply: per line and policy, at each S, the throughput (units
-    per hour), the human idle per station and the robot's busy share (means)."""
+    per hour), the human idle per station (the reproduction's, then from the first kit with
+    pickups as work) and the robot's busy share (means)."""
     mine = [r for r in rows if r["delay"] == delay]
     grid = sorted({int(r["stations"]) for r in mine})
     by = {(str(r["line"]), str(r["policy"]), int(r["stations"])): r for r in mine}
@@ -53,7 +107,7 @@ def by_stations_markdown(rows: Sequence[Row], delay: str) -> str:
                 "-"
                 if r is None
                 else f"{float(r['throughput']):.1f} / {float(r['idle']):.0f} % / "
-                f"{float(r['robot_utilisation']):.0f} %"
+                f"{float(r['idle_steady']):.0f} % / {float(r['robot_utilisation']):.0f} %"
             )
         body.append([line, LABELS.get(p, p), *cells])
     return "\n".join(markdown_lines(head, body))
@@ -70,8 +124,15 @@ def feeders_markdown(rows: Sequence[Row]) -> str:
 #: Table name -> (its CSV file, its renderer), merged into :data:`.report_sim.SIM_TABLES`.
 STATION_TABLES = {
     "stations_served": ("stations_served.csv", served_markdown),
+    "stations_sweep": ("stations_served.csv", sweep_markdown),
     "stations_in_stock": ("stations.csv", in_stock_markdown),
     "stations_feeders": ("stations.csv", feeders_markdown),
 }
 
-__all__ = ["STATION_TABLES", "by_stations_markdown", "served_markdown"]
+__all__ = [
+    "STATION_TABLES",
+    "by_stations_markdown",
+    "per_rep",
+    "served_markdown",
+    "sweep_markdown",
+]

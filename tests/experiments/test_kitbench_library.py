@@ -63,7 +63,7 @@ def test_every_instance_is_what_its_command_makes(library, tmp_path, capsys):
     capsys.readouterr()
 
 
-@pytest.mark.parametrize("page", ["docs/kitbench.md", "instances/kitbench/README.md"])
+@pytest.mark.parametrize("page", ["docs/kitbench.md", "instances/kitbench/README.md", "README.md"])
 def test_published_tables_are_the_index(library, page):
     text = (ROOT / page).read_text(encoding="utf-8")
     assert blocks_in(text), f"{page} has no kitbench block"
