@@ -8,7 +8,11 @@ which for a solve can be its whole time limit. Three pieces make every command s
 * :func:`run_stoppable` runs a native call that releases the GIL (a CP-SAT solve) in a helper
   thread while the main thread waits, so the main thread takes the signal at once, asks the
   call to stop and waits for it to return; the interrupt then goes on up, and every
-  ``finally`` and ``with`` on the way cleans up (temporary files, child processes);
+  ``finally`` and ``with`` on the way cleans up (temporary files, child processes). The call
+  never outlives the command: a solver thread still running while the interpreter exits
+  aborts the process (CPython ends a thread that takes the GIL during its exit with
+  ``pthread_exit``, which a C++ frame of OR-Tools turns into ``std::terminate``: "terminate
+  called without an active exception", exit -6);
 * SIGTERM raises :class:`Terminated`, a ``KeyboardInterrupt``, so a ``kill`` cleans up like
   Ctrl-C (and exits 130 too: one code for "interrupted");
 * :func:`signal_guard`, around a whole command, watches for the signals from a thread of its
@@ -31,7 +35,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import IO, TypeVar
+from typing import IO, NoReturn, TypeVar
 
 T = TypeVar("T")
 
@@ -90,10 +94,40 @@ def checkpoint() -> None:
         raise interrupt_for(signum)
 
 
+#: Depth of :func:`deferred` blocks: the guard's handler then records a signal, and the block's
+#: end raises it.
+_DEFERRING: list[bool] = []
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """A block no signal's exception cuts in two: under the guard a signal that comes inside
+    is recorded and its interrupt raised at the block's end (:func:`checkpoint`)."""
+    _DEFERRING.append(True)
+    try:
+        yield
+    finally:
+        _DEFERRING.pop()
+    checkpoint()
+
+
 def report(exc: BaseException | None, stream: IO[str]) -> None:
     """Print the interrupt's one line (:func:`message`), once per process."""
     print(message(exc), file=stream, flush=True)
     _REPORTED.set()
+
+
+def exit_now(code: int) -> NoReturn:
+    """End the process with ``code`` at once, its output flushed, without the interpreter's
+    exit. For an interrupted command line: every cleanup has run on the way up (the
+    ``finally`` and ``with`` blocks, and none of them relies on the exit's ``atexit``), and
+    that exit, tearing down the loaded modules (numba, OR-Tools, pandas), only delayed the end
+    past the second of docs/cli.md#interrupting-a-command on a loaded machine; nor can a
+    solver thread that still runs abort the process then (module docstring)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
 
 
 def forget_unhandled_interrupt() -> None:
@@ -172,17 +206,24 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
     """``call()``, a native call that releases the GIL and returns soon after ``stop()``.
 
     In the main thread the call runs in a helper thread and the main thread waits on an
-    event, which a signal interrupts: then ``stop()`` is called, the call is waited for and
-    the interrupt is raised again (module docstring). Elsewhere ``call()`` runs directly.
+    event, which a signal interrupts: then ``stop()`` is called until the call has returned
+    (a stop that comes before the solver is set up does nothing), and the interrupt is
+    raised again (module docstring). The helper thread is started in a :func:`deferred`
+    block, so an interrupt never leaves it running unwaited for; it blocks SIGINT and SIGTERM,
+    and the solver's own threads inherit that, so the signals reach the main thread.
+    Elsewhere ``call()`` runs directly. A signal already recorded (its interrupt lost on the
+    way up) starts no call (:func:`checkpoint`).
     """
     if threading.current_thread() is not threading.main_thread():
         return call()
+    checkpoint()
     done = threading.Event()
     box: list[T] = []
     failure: list[BaseException] = []
 
     def target() -> None:
         try:
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
             box.append(call())
         except BaseException as exc:  # handed to the main thread
             failure.append(exc)
@@ -190,12 +231,18 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
             done.set()
 
     helper = threading.Thread(target=target, name="native-call", daemon=True)
-    helper.start()
+    started = False
     try:
+        with deferred():
+            helper.start()
+            started = True
         done.wait()
     except BaseException:
-        stop()
-        helper.join()
+        if started:
+            while not done.is_set():
+                stop()
+                done.wait(0.02)
+            helper.join()
         raise
     if failure:
         raise failure[0]
@@ -227,7 +274,8 @@ class _Guard:
         self.first = signum
         if not _SIGNAL:
             _SIGNAL.append(signum)
-        raise interrupt_for(signum)
+        if not _DEFERRING:  # else raised at the deferred block's end
+            raise interrupt_for(signum)
 
     def _watch(self) -> None:
         """Read the signal numbers Python's C handler writes to the wake-up socket."""
