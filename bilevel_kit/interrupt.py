@@ -254,6 +254,23 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
 # ---------------------------------------------------------------------------------------------
 
 
+#: Environment variable naming a file to which a forced exit appends every thread's stack
+#: (where the main thread was held; docs/cli.md#interrupting-a-command).
+ENV_FORCED_TRACE = "BILEVEL_KIT_FORCED_TRACE"
+
+
+def _trace_stacks() -> None:
+    path = os.environ.get(ENV_FORCED_TRACE)
+    if not path:
+        return
+    import faulthandler
+
+    with contextlib.suppress(Exception), open(path, "a") as fh:
+        fh.write(f"--- pid {os.getpid()}: forced exit\n")
+        fh.flush()
+        faulthandler.dump_traceback(fh, all_threads=True)
+
+
 class _Guard:
     """The state of :func:`signal_guard`: the first signal, and the watchdog thread."""
 
@@ -307,6 +324,7 @@ class _Guard:
         """End the process now: cleanups, one line, the exit code of the signal."""
         if self.finished.is_set():
             return
+        _trace_stacks()
         _run_cleanups()
         term = signum == signal.SIGTERM
         if not _REPORTED.is_set():  # the command's own line is enough once it is out
