@@ -33,6 +33,7 @@ import signal
 import socket
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import IO, NoReturn, TypeVar
@@ -63,6 +64,8 @@ _REPORTED = threading.Event()
 _SIGNAL: list[int] = []
 #: One entry per active guard (:func:`guarded`).
 _ACTIVE: list[bool] = []
+#: Set when our interrupt was swallowed (:func:`_quiet_unraisable`): to be raised again.
+_LOST = threading.Event()
 
 
 def guarded() -> bool:
@@ -317,8 +320,17 @@ class _Guard:
                     self._force(signum)
 
     def _deadline(self, signum: int) -> None:
-        if not self.finished.wait(self.grace):
-            self._force(signum)
+        """End the process if it still runs ``grace`` s after the first signal; meanwhile
+        raise the interrupt again in the main thread whenever it was swallowed
+        (:func:`_quiet_unraisable`)."""
+        end = time.monotonic() + self.grace
+        while not self.finished.wait(min(0.02, max(0.0, end - time.monotonic()))):
+            if _LOST.is_set():
+                _LOST.clear()
+                _raise_in_main(type(interrupt_for(signum)))
+            if time.monotonic() >= end:
+                self._force(signum)
+                return
 
     def _force(self, signum: int) -> None:
         """End the process now: cleanups, one line, the exit code of the signal."""
@@ -349,17 +361,33 @@ class _Guard:
 def _quiet_unraisable(
     previous: Callable[[sys.UnraisableHookArgs], object],
 ) -> Callable[[sys.UnraisableHookArgs], None]:
-    """An unraisable-exception hook that drops our own interrupt: raised inside a weakref
-    callback (importlib's module locks) or a ``__del__``, Python prints it as "Exception
-    ignored ... Traceback" and goes on; the command still stops by the recorded signal
-    (:func:`signalled`), so that text is noise on the interrupt's one line."""
+    """An unraisable-exception hook for our own interrupt: raised inside a weakref callback
+    (importlib's module locks, at every import) or a ``__del__``, Python prints it as
+    "Exception ignored ... Traceback" and goes on, so the command went on computing until the
+    guard ended it 2 s later. The text is dropped and, while the guard is active, the
+    guard's deadline thread raises the interrupt again in the main thread, at its next
+    instruction outside the callback (docs/cli.md#interrupting-a-command)."""
 
     def hook(args: sys.UnraisableHookArgs) -> None:
         if isinstance(args.exc_value, KeyboardInterrupt) and signalled() is not None:
+            if _ACTIVE:  # raised again by the guard's deadline thread, not from in here
+                _LOST.set()
             return
         previous(args)
 
     return hook
+
+
+def _raise_in_main(exc_type: type[BaseException]) -> None:
+    """Have the main thread raise ``exc_type`` at its next Python instruction."""
+    import ctypes
+
+    ident = threading.main_thread().ident
+    if ident is None:
+        return
+    with contextlib.suppress(Exception):  # best effort: another interpreter may lack it
+        set_async = ctypes.pythonapi.PyThreadState_SetAsyncExc
+        set_async(ctypes.c_ulong(ident), ctypes.py_object(exc_type))
 
 
 @contextlib.contextmanager
@@ -381,6 +409,7 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         return
     guard = _Guard(grace)
     _SIGNAL.clear()  # a guard's signal is its command's (tests run several in one process)
+    _LOST.clear()
     guard.thread.start()
     old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
     old_int, old_term = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
