@@ -366,14 +366,17 @@ def _quiet_unraisable(
     "Exception ignored ... Traceback" and goes on, so the command went on computing until the
     guard ended it 2 s later. The text is dropped and, while the guard is active, the
     guard's deadline thread raises the interrupt again in the main thread, at its next
-    instruction outside the callback (docs/cli.md#interrupting-a-command)."""
+    instruction outside the callback (docs/cli.md#interrupting-a-command). After a signal
+    any other unraisable error is dropped too: the interrupt caused it."""
 
     def hook(args: sys.UnraisableHookArgs) -> None:
-        if isinstance(args.exc_value, KeyboardInterrupt) and signalled() is not None:
-            if _ACTIVE:  # raised again by the guard's deadline thread, not from in here
-                _LOST.set()
+        if signalled() is None:
+            previous(args)
             return
-        previous(args)
+        # after a signal any such error is the interrupt's doing (an object it cut short
+        # mid-construction fails in its __del__: llvmlite's PassBuilder), noise on the line
+        if isinstance(args.exc_value, KeyboardInterrupt) and _ACTIVE:
+            _LOST.set()  # raised again by the guard's deadline thread, not from in here
 
     return hook
 

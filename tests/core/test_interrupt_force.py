@@ -112,6 +112,10 @@ def test_an_interrupt_swallowed_as_unraisable_is_raised_again_and_prints_nothing
         def __del__(self):
             raise KeyboardInterrupt
 
+    class HalfBuilt:  # cut short by the interrupt before its attribute was set (llvmlite)
+        def __del__(self):
+            del self.handle
+
     import sys
 
     before = sys.unraisablehook
@@ -119,6 +123,8 @@ def test_an_interrupt_swallowed_as_unraisable_is_raised_again_and_prints_nothing
     with pytest.raises(KeyboardInterrupt), interrupt.signal_guard(grace=30):
         dropped = sys.unraisablehook
         _swallowed_signal(signal.SIGINT)
+        half = HalfBuilt()
+        del half  # AttributeError, printed as "Exception ignored ..." before
         obj = Dropped()
         del obj
         t0 = time.monotonic()
