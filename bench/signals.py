@@ -153,8 +153,9 @@ def summary(rows: list[dict[str, Any]]) -> list[str]:
         "| load at signal | after the command | ended first | failures |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for method in dict.fromkeys(r["method"] for r in rows):
-        mine = [r for r in rows if r["method"] == method]
+    for name, commit in dict.fromkeys((r["method"], r.get("commit", "")) for r in rows):
+        mine = [r for r in rows if (r["method"], r.get("commit", "")) == (name, commit)]
+        method = f"{name} @{commit}" if commit else name
         hit = [r for r in mine if taken(r)]
         loads = [r["load1"] for r in hit] or [0.0]
         bad = {f"{r['signal']} exit {r['code']}: {r['stderr'][:80]}" for r in hit if not clean(r)}
@@ -176,6 +177,18 @@ def summary(rows: list[dict[str, Any]]) -> list[str]:
             f"90 % {q[1]:.2f} s, 99 % {q[2]:.2f} s, max {stops[-1]:.2f} s"
         )
     return out
+
+
+def _commit() -> str:
+    """The code measured: the short commit, ``+`` when the tree has changes."""
+    import subprocess
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True).stdout
+
+    return git("rev-parse", "--short", "HEAD").strip() + (
+        "+" if git("status", "--porcelain") else ""
+    )
 
 
 def _typed(row: dict[str, str]) -> dict[str, Any]:
@@ -231,6 +244,7 @@ def main() -> None:
         return
     rng = random.Random(args.seed)
     rows = []
+    commit = _commit()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w", newline="") as fh:  # row by row: a long run can be read as it goes
         writer: csv.DictWriter[str] | None = None
@@ -242,6 +256,7 @@ def main() -> None:
                 if signalled >= args.runs:
                     break
                 rows.append(one_run(method, args.time_limit, length * 1.1, rng))
+                rows[-1]["commit"] = commit
                 signalled += taken(rows[-1])
                 if writer is None:
                     writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
