@@ -8,7 +8,11 @@ which for a solve can be its whole time limit. Three pieces make every command s
 * :func:`run_stoppable` runs a native call that releases the GIL (a CP-SAT solve) in a helper
   thread while the main thread waits, so the main thread takes the signal at once, asks the
   call to stop and waits for it to return; the interrupt then goes on up, and every
-  ``finally`` and ``with`` on the way cleans up (temporary files, child processes);
+  ``finally`` and ``with`` on the way cleans up (temporary files, child processes). The call
+  never outlives the command: a solver thread still running while the interpreter exits
+  aborts the process (CPython ends a thread that takes the GIL during its exit with
+  ``pthread_exit``, which a C++ frame of OR-Tools turns into ``std::terminate``: "terminate
+  called without an active exception", exit -6);
 * SIGTERM raises :class:`Terminated`, a ``KeyboardInterrupt``, so a ``kill`` cleans up like
   Ctrl-C (and exits 130 too: one code for "interrupted");
 * :func:`signal_guard`, around a whole command, watches for the signals from a thread of its
@@ -29,9 +33,10 @@ import signal
 import socket
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import IO, TypeVar
+from typing import IO, NoReturn, TypeVar
 
 T = TypeVar("T")
 
@@ -59,6 +64,8 @@ _REPORTED = threading.Event()
 _SIGNAL: list[int] = []
 #: One entry per active guard (:func:`guarded`).
 _ACTIVE: list[bool] = []
+#: Set when our interrupt was swallowed (:func:`_quiet_unraisable`): to be raised again.
+_LOST = threading.Event()
 
 
 def guarded() -> bool:
@@ -90,10 +97,40 @@ def checkpoint() -> None:
         raise interrupt_for(signum)
 
 
+#: Depth of :func:`deferred` blocks: the guard's handler then records a signal, and the block's
+#: end raises it.
+_DEFERRING: list[bool] = []
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """A block no signal's exception cuts in two: under the guard a signal that comes inside
+    is recorded and its interrupt raised at the block's end (:func:`checkpoint`)."""
+    _DEFERRING.append(True)
+    try:
+        yield
+    finally:
+        _DEFERRING.pop()
+    checkpoint()
+
+
 def report(exc: BaseException | None, stream: IO[str]) -> None:
     """Print the interrupt's one line (:func:`message`), once per process."""
     print(message(exc), file=stream, flush=True)
     _REPORTED.set()
+
+
+def exit_now(code: int) -> NoReturn:
+    """End the process with ``code`` at once, its output flushed, without the interpreter's
+    exit. For an interrupted command line: every cleanup has run on the way up (the
+    ``finally`` and ``with`` blocks, and none of them relies on the exit's ``atexit``), and
+    that exit, tearing down the loaded modules (numba, OR-Tools, pandas), only delayed the end
+    past the second of docs/cli.md#interrupting-a-command on a loaded machine; nor can a
+    solver thread that still runs abort the process then (module docstring)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
 
 
 def forget_unhandled_interrupt() -> None:
@@ -172,17 +209,24 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
     """``call()``, a native call that releases the GIL and returns soon after ``stop()``.
 
     In the main thread the call runs in a helper thread and the main thread waits on an
-    event, which a signal interrupts: then ``stop()`` is called, the call is waited for and
-    the interrupt is raised again (module docstring). Elsewhere ``call()`` runs directly.
+    event, which a signal interrupts: then ``stop()`` is called until the call has returned
+    (a stop that comes before the solver is set up does nothing), and the interrupt is
+    raised again (module docstring). The helper thread is started in a :func:`deferred`
+    block, so an interrupt never leaves it running unwaited for; it blocks SIGINT and SIGTERM,
+    and the solver's own threads inherit that, so the signals reach the main thread.
+    Elsewhere ``call()`` runs directly. A signal already recorded (its interrupt lost on the
+    way up) starts no call (:func:`checkpoint`).
     """
     if threading.current_thread() is not threading.main_thread():
         return call()
+    checkpoint()
     done = threading.Event()
     box: list[T] = []
     failure: list[BaseException] = []
 
     def target() -> None:
         try:
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
             box.append(call())
         except BaseException as exc:  # handed to the main thread
             failure.append(exc)
@@ -190,12 +234,18 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
             done.set()
 
     helper = threading.Thread(target=target, name="native-call", daemon=True)
-    helper.start()
+    started = False
     try:
+        with deferred():
+            helper.start()
+            started = True
         done.wait()
     except BaseException:
-        stop()
-        helper.join()
+        if started:
+            while not done.is_set():
+                stop()
+                done.wait(0.02)
+            helper.join()
         raise
     if failure:
         raise failure[0]
@@ -205,6 +255,23 @@ def run_stoppable(call: Callable[[], T], stop: Callable[[], object]) -> T:
 # ---------------------------------------------------------------------------------------------
 # The guard around a command
 # ---------------------------------------------------------------------------------------------
+
+
+#: Environment variable naming a file to which a forced exit appends every thread's stack
+#: (where the main thread was held; docs/cli.md#interrupting-a-command).
+ENV_FORCED_TRACE = "BILEVEL_KIT_FORCED_TRACE"
+
+
+def _trace_stacks() -> None:
+    path = os.environ.get(ENV_FORCED_TRACE)
+    if not path:
+        return
+    import faulthandler
+
+    with contextlib.suppress(Exception), open(path, "a") as fh:
+        fh.write(f"--- pid {os.getpid()}: forced exit\n")
+        fh.flush()
+        faulthandler.dump_traceback(fh, all_threads=True)
 
 
 class _Guard:
@@ -227,7 +294,8 @@ class _Guard:
         self.first = signum
         if not _SIGNAL:
             _SIGNAL.append(signum)
-        raise interrupt_for(signum)
+        if not _DEFERRING:  # else raised at the deferred block's end
+            raise interrupt_for(signum)
 
     def _watch(self) -> None:
         """Read the signal numbers Python's C handler writes to the wake-up socket."""
@@ -252,13 +320,23 @@ class _Guard:
                     self._force(signum)
 
     def _deadline(self, signum: int) -> None:
-        if not self.finished.wait(self.grace):
-            self._force(signum)
+        """End the process if it still runs ``grace`` s after the first signal; meanwhile
+        raise the interrupt again in the main thread whenever it was swallowed
+        (:func:`_quiet_unraisable`)."""
+        end = time.monotonic() + self.grace
+        while not self.finished.wait(min(0.02, max(0.0, end - time.monotonic()))):
+            if _LOST.is_set():
+                _LOST.clear()
+                _raise_in_main(type(interrupt_for(signum)))
+            if time.monotonic() >= end:
+                self._force(signum)
+                return
 
     def _force(self, signum: int) -> None:
         """End the process now: cleanups, one line, the exit code of the signal."""
         if self.finished.is_set():
             return
+        _trace_stacks()
         _run_cleanups()
         term = signum == signal.SIGTERM
         if not _REPORTED.is_set():  # the command's own line is enough once it is out
@@ -283,17 +361,36 @@ class _Guard:
 def _quiet_unraisable(
     previous: Callable[[sys.UnraisableHookArgs], object],
 ) -> Callable[[sys.UnraisableHookArgs], None]:
-    """An unraisable-exception hook that drops our own interrupt: raised inside a weakref
-    callback (importlib's module locks) or a ``__del__``, Python prints it as "Exception
-    ignored ... Traceback" and goes on; the command still stops by the recorded signal
-    (:func:`signalled`), so that text is noise on the interrupt's one line."""
+    """An unraisable-exception hook for our own interrupt: raised inside a weakref callback
+    (importlib's module locks, at every import) or a ``__del__``, Python prints it as
+    "Exception ignored ... Traceback" and goes on, so the command went on computing until the
+    guard ended it 2 s later. The text is dropped and, while the guard is active, the
+    guard's deadline thread raises the interrupt again in the main thread, at its next
+    instruction outside the callback (docs/cli.md#interrupting-a-command). After a signal
+    any other unraisable error is dropped too: the interrupt caused it."""
 
     def hook(args: sys.UnraisableHookArgs) -> None:
-        if isinstance(args.exc_value, KeyboardInterrupt) and signalled() is not None:
+        if signalled() is None:
+            previous(args)
             return
-        previous(args)
+        # after a signal any such error is the interrupt's doing (an object it cut short
+        # mid-construction fails in its __del__: llvmlite's PassBuilder), noise on the line
+        if isinstance(args.exc_value, KeyboardInterrupt) and _ACTIVE:
+            _LOST.set()  # raised again by the guard's deadline thread, not from in here
 
     return hook
+
+
+def _raise_in_main(exc_type: type[BaseException]) -> None:
+    """Have the main thread raise ``exc_type`` at its next Python instruction."""
+    import ctypes
+
+    ident = threading.main_thread().ident
+    if ident is None:
+        return
+    with contextlib.suppress(Exception):  # best effort: another interpreter may lack it
+        set_async = ctypes.pythonapi.PyThreadState_SetAsyncExc
+        set_async(ctypes.c_ulong(ident), ctypes.py_object(exc_type))
 
 
 @contextlib.contextmanager
@@ -315,6 +412,7 @@ def signal_guard(grace: float = GRACE, linger: bool = False) -> Iterator[None]:
         return
     guard = _Guard(grace)
     _SIGNAL.clear()  # a guard's signal is its command's (tests run several in one process)
+    _LOST.clear()
     guard.thread.start()
     old_fd = signal.set_wakeup_fd(guard.writer.fileno(), warn_on_full_buffer=False)
     old_int, old_term = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)

@@ -26,6 +26,7 @@ from typing import Any
 
 from .errors import PluginError, UsageError, one_line
 from .instance import Instance
+from .interrupt import checkpoint
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
 from .progress import Sink, reporting
@@ -307,6 +308,7 @@ def solve(
     fn = spec.load()
     ensure_kit_placeable(instance)  # an empty reach map is a clear error, not "no kit fits"
     prepare_s = spec.run_prepare()  # e.g. a compile: never charged to the time limit
+    checkpoint()  # a signal whose interrupt the prepare step lost: no run (docs/cli.md)
     t0 = time.perf_counter()
     with contextlib.nullcontext() if progress is None else reporting(progress):
         out = fn(instance, options, seed=seed, time_limit=time_limit)

@@ -19,7 +19,13 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from ..interrupt import checkpoint, forget_unhandled_interrupt, report, signal_guard
+from ..interrupt import (
+    checkpoint,
+    exit_now,
+    forget_unhandled_interrupt,
+    report,
+    signal_guard,
+)
 from . import (
     bench,
     check,
@@ -148,6 +154,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = EXIT_INTERRUPTED
     if code == EXIT_INTERRUPTED:
         forget_unhandled_interrupt()
+        if argv is None:  # the process is this command: it ends now (exit_now)
+            exit_now(code)
     return code
 
 

@@ -522,13 +522,14 @@ def run_command(
     interrupt (Ctrl-C, or SIGTERM under :func:`bilevel_kit.interrupt.signal_guard`) is one
     line and exit 130 once every cleanup on the way has run."""
     from ..errors import BilevelKitError, PluginError, one_line
-    from ..interrupt import report
+    from ..interrupt import checkpoint, report
 
     token = _COMMAND.set(name)
     try:
         check_output_options(args)
         return run(args)
     except BilevelKitError as exc:
+        checkpoint()  # after a signal an error is the interrupt's, reported as it (main)
         say(f"error: {one_line(exc)}")
         # a plugin's method failed on good input: not a usage error (docs/extending.md#plugins)
         return EXIT_INVALID if isinstance(exc, PluginError) else EXIT_USAGE

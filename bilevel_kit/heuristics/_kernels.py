@@ -537,6 +537,9 @@ def njit() -> Callable[[Callable[..., Any]], Any] | None:
     try:
         import numba
     except ImportError:
+        from ..interrupt import checkpoint
+
+        checkpoint()  # a signal during the import turns into an ImportError (docs/cli.md)
         return None
     return numba.njit(cache=True, nogil=True)
 

@@ -43,7 +43,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status
 from ...plan import Kit, Plan, evaluate
 from ...stations import makespan_horizon, objective_of
-from .. import packing_oracle
+from .. import packing_oracle, stoppable
 from ..budget import Budget, check_model_memory
 from ..common import Packer, kit_order, scope_claims
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
@@ -282,7 +282,7 @@ def _run(
     solver.parameters.num_workers = max(1, options.workers)
     solver.parameters.random_seed = seed
     solver.parameters.log_search_progress = bool(options.log)
-    status = solver.solve(model)
+    status = stoppable.solve(solver, model)  # Ctrl-C and SIGTERM stop it (docs/cli.md)
     name = solver.status_name(status)
     if status not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return name, None, None

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...instance import Instance
-from .. import packing
+from .. import packing, stoppable
 from ..common import chain_groups_idx, kit_order, relabel_chains
 from ..cpsat.model import add_lex_leq
 from ..cpsat.scaling import Scaled
@@ -184,7 +184,7 @@ def _solve_once(
     p.max_deterministic_time = ctx.dtime
     p.max_time_in_seconds = max(0.01, wall_left)
     t0 = time.perf_counter()
-    st = solver.solve(win.m)
+    st = stoppable.solve(solver, win.m)  # Ctrl-C and SIGTERM stop it (docs/cli.md)
     stopped = (
         st not in (cp_model.OPTIMAL, cp_model.INFEASIBLE)
         and time.perf_counter() - t0 >= wall_left - 1e-3
