@@ -46,15 +46,17 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The counts of the JSON lines ``rows``: instances (seed, stations, tray, regime), runs,
     false claims and statuses per ``objective/trays/method``."""
     counts: Counter[str] = Counter()
-    instances = set()
+    instances: Counter[tuple[Any, ...]] = Counter()
     for row in rows:
-        instances.add((row["seed"], row["stations"], row.get("tray"), row.get("long_overhead")))
+        instances[(row["seed"], row["stations"], row.get("tray"), row.get("long_overhead"))] += 1
         key = f"{row['objective']}/{row['trays']}/{row['method']}"
         counts[f"{key}/runs"] += 1
         counts[f"{key}/false"] += bool(row["false_claims"])
         counts[f"{key}/status/{row['status'].split(' ')[0]}"] += 1
+    per_instance = 3 * len(MODEL_OBJECTIVES) * len({r["method"] for r in rows})
     return {
         "instances": len(instances),
+        "complete_instances": sum(n == per_instance for n in instances.values()),
         "runs": len(rows),
         "false_claims": sum(bool(r["false_claims"]) for r in rows),
         "counts": dict(sorted(counts.items())),
@@ -133,8 +135,9 @@ def write_results(paths: list[str], out: str) -> dict[str, Any]:
         "",
         "Written by `python bench/objectives_brute.py --summarize` (module docstring) from "
         f"{len(paths)} run(s): {total['instances']} instances (seed x stations x tray x regime; "
-        f"seeds {seeds[0]}..{seeds[-1]}, not all finished when a run was cut short), each at "
-        f"trays 1, 2 and unlimited, {total['runs']} runs, {total['false_claims']} false "
+        f"seeds {seeds[0]}..{seeds[-1]}), {total['complete_instances']} of them with every run "
+        f"(trays 1, 2 and unlimited x objective x method), {total['runs']} runs, "
+        f"{total['false_claims']} false "
         "claims. A false claim: a value below the brute force's optimum, a bound above it, or "
         '"optimal" above it (tests/models/test_objectives_brute.py, `false_claims`).',
         "",
