@@ -98,9 +98,9 @@ def _status(row: dict[str, Any]) -> str:
     return str(row["status"]).split(" ")[0]
 
 
-def write_results(paths: list[str], out: str) -> dict[str, Any]:
+def write_results(paths: list[str], out: str, note: str = "") -> dict[str, Any]:
     """The counts of the run rows in the JSON-lines files ``paths`` (summary lines skipped)
-    as ``out.csv`` and ``out.md``; the totals."""
+    as ``out.csv`` and ``out.md`` (``note``: a paragraph after the header); the totals."""
     rows = [
         row
         for path in paths
@@ -141,6 +141,7 @@ def write_results(paths: list[str], out: str) -> dict[str, Any]:
         "claims. A false claim: a value below the brute force's optimum, a bound above it, or "
         '"optimal" above it (tests/models/test_objectives_brute.py, `false_claims`).',
         "",
+        *([note, ""] if note else []),
     ]
     keys = list(table[0])
     lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
@@ -153,6 +154,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--summarize", nargs="+", metavar="JSONL")
     ap.add_argument("--results", default="bench/results/objectives_brute")
+    ap.add_argument("--note", default="", help="a paragraph for the Markdown (--summarize)")
     ap.add_argument("--seeds", type=int, nargs=2, default=(0, 100))
     ap.add_argument("--stations", type=int, nargs="+", default=(2, 3))
     ap.add_argument("--tasks", type=int, default=5)
@@ -162,7 +164,7 @@ def main() -> None:
     ap.add_argument("--time-limit", type=float, default=60.0)
     args = ap.parse_args()
     if args.summarize:
-        print(json.dumps(write_results(args.summarize, args.results)))
+        print(json.dumps(write_results(args.summarize, args.results, args.note)))
         return
     rows = []
     for seed in range(*args.seeds):
