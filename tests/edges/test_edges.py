@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from stations_example import first_tray_doc
 
 from bilevel_kit.cli import main
 
@@ -980,6 +981,13 @@ ISSUE_35_ROWS: dict[str, Row] = {
         "makespan gap",
         "  sum_completion: optimal  25.00 s  bound 25.00 s  gap 0.00%",
         i=ONE_STATION,
+    ),
+    # item 1: a station's first kit waits for no tray (tests/models/test_milp_stations.py)
+    "milp sum of completions with a station's first kit second": row(
+        "solve {i} -m milp -p objective=sum_completion --time-limit 60 -q",
+        0,
+        "sum_completion: optimal  62.00 s  bound 62.00 s  gap 0.00%",
+        i=json.dumps(first_tray_doc()),
     ),
 }
 ROWS.update(ISSUE_35_ROWS)

@@ -87,3 +87,66 @@ def test_milp_stations_through_solve(objective):
         want = sum(m[key] for m in metrics.values())
         assert res.extra["objective_value"] == pytest.approx(want, abs=1e-9)
         assert res.status_text == f"optimal (for {objective})"
+
+
+#: tests/stations_example.py: first_tray_doc's optima (the brute force's).
+FIRST_TRAY = {"makespan": 31.0, "sum_completion": 62.0, "human_idle": 3.0}
+
+
+@pytest.mark.parametrize("objective", list(FIRST_TRAY))
+def test_milp_stations_a_first_kit_waits_for_no_tray(objective):
+    """Issue 35, item 1. [a1] [b1 b2] [a2 a3] of tests/stations_example.py: a1 arrives at 1
+    and A works until 13; B has no tray out, so its robot starts at 1 (docs/timeline.md
+    #several-stations), the kit arrives at 2.5 and B ends at 2.5 + 6 + 22.5 = 31; a1's tray is
+    back at 4, [a2 a3] arrives at 5.5 and A ends at 13 + 3 + 15 = 31: makespan 31 s and 62 s
+    of completions, both optimal. The stations master made the first kit of a one-tray station
+    at a position k >= 1 wait ``o_H`` for a tray (B's robot until 6, B's end 36), and milp
+    proved a plan of 62.5 s of completions and one of makespan 32.5 s optimal."""
+    from stations_example import first_tray_doc
+
+    from bilevel_kit.models.milp import MilpOptions, milp
+
+    inst = from_dict(first_tray_doc())
+    optimum = FIRST_TRAY[objective]
+    assert best_makespan(inst, objective)[0] == optimum
+    out = milp(inst, MilpOptions(objective=objective), seed=0, time_limit=60)
+    assert out.plan is not None and check(inst, out.plan) == []
+    assert objective_of(evaluate(inst, out.plan), objective) == pytest.approx(optimum, abs=1e-6)
+    assert out.status == "optimal"
+    if objective == "makespan":
+        assert_model_optimal(out, optimum, tol=1e-5)
+    else:
+        assert_objective_optimal(out, optimum)
+
+
+@pytest.mark.parametrize("objective", ["sum_completion", "human_idle"])
+@pytest.mark.parametrize(
+    "kits", [[["a1"], ["b1", "b2"], ["a2", "a3"]], [["a1"], ["b1"], ["a2"], ["a3"], ["b2"]]]
+)
+def test_milp_stations_master_prices_a_plan_at_its_timeline(kits, objective):
+    """The stations master with a plan's binaries fixed is the plan's objective
+    (:func:`bilevel_kit.models.milp.model.model_objective`, docs/formulations.md): b1 comes
+    second and its robot starts when a1 has arrived, not ``o_H`` later (the optimal plans of
+    the sum of completions and of the total idle)."""
+    import pyomo.environ as pyo
+    from stations_example import first_tray_doc
+
+    from bilevel_kit.models.budget import Budget
+    from bilevel_kit.models.milp import run_solver
+    from bilevel_kit.models.milp import stations as master_of
+    from bilevel_kit.models.milp.model import model_objective
+    from bilevel_kit.plan import Kit, Plan
+
+    inst = from_dict(first_tray_doc())
+    value = model_objective(
+        inst, evaluate(inst, Plan(tuple(Kit(tuple(k)) for k in kits))), objective
+    )
+    master = master_of.build(inst, inst.n_tasks, 100.0, 0.0, objective)
+    master_of.set_start(master, inst, kits)
+    m = master.model
+    for var in m.component_data_objects(pyo.Var):
+        if var.is_binary():
+            var.fix(round(var.value))
+    info = run_solver(m, None, "highs", budget=Budget(30), objective=m.obj)
+    assert info.optimal
+    assert info.objective == pytest.approx(value, abs=1e-6)

@@ -30,19 +30,64 @@ pytest.importorskip("pyomo")
 TOL = 1e-4
 
 
-def instance_doc(seed: int, n_stations: int, trays: int | None, n: int = 5) -> dict:
+#: The trays of :func:`instance_doc`: ``binding`` (:func:`strategies.random_doc`'s 100 x 60 mm
+#: tray, up to four parts a task) or ``two`` (one part a task, at most two a kit).
+TRAYS = ("binding", "two")
+
+
+def instance_doc(
+    seed: int,
+    n_stations: int,
+    trays: int | None,
+    n: int = 5,
+    tray: str = "binding",
+    long_overhead: bool = False,
+) -> dict:
     """A random ``n``-task instance on ``n_stations`` stations (none declared for one), every
-    station with ``trays`` trays."""
+    station with ``trays`` trays; ``tray="two"``: :func:`two_per_kit`; ``long_overhead``:
+    :func:`fast_robot`."""
     if n_stations == 1:
         doc = strategies.random_doc(seed, n)
         if trays is not None:
             doc["trays"] = trays
-        return doc
-    doc = strategies.stations_doc(seed, n_stations, n=n)
-    for st in doc["stations"]:
-        st.pop("trays", None)
-        if trays is not None:
-            st["trays"] = trays
+    else:
+        doc = strategies.stations_doc(seed, n_stations, n=n)
+        for st in doc["stations"]:
+            st.pop("trays", None)
+            if trays is not None:
+                st["trays"] = trays
+    doc = two_per_kit(doc, seed) if tray == "two" else doc
+    return fast_robot(doc, seed) if long_overhead else doc
+
+
+def fast_robot(doc: dict, seed: int) -> dict:
+    """Every robot time 0.5 s, ``o_R = 0.5``, no delivery time and a human overhead of 2-8 s
+    on every station: a kit arrives long before a tray comes back, the regime in which the
+    first kit of a one-tray station waiting for a tray changed the optimum (issue 35, item 1;
+    tests/stations_example.py's ``first_tray_doc`` is one such instance)."""
+    rng = random.Random(seed * 17 + 3)
+    doc["kit_overhead"] = {"robot": 0.5, "human": float(rng.randint(2, 8))}
+    doc["delivery_time"] = 0.0
+    for task in doc["tasks"]:
+        task["robot_time"] = 0.5
+    for st in doc.get("stations", ()):
+        st["delivery_time"] = 0.0
+        st["kit_overhead_human"] = float(rng.randint(2, 8))
+    return doc
+
+
+def two_per_kit(doc: dict, seed: int) -> dict:
+    """Each task one part of three fixed-orientation types (40 x 40, 45 x 35, 48 x 30 mm) on a
+    100 x 50 mm tray: any two fit side by side, no three (three widths need >= 120 mm, two
+    rows >= 60 mm), so every kit holds one or two tasks (the setting of issue 35, item 1)."""
+    rng = random.Random(seed * 31 + 5)
+    doc["part_types"] = [
+        {"id": k, "width": w, "height": h, "pick_time": p, "rotatable": False}
+        for k, w, h, p in (("a", 40.0, 40.0, 1.0), ("b", 45.0, 35.0, 2.0), ("c", 48.0, 30.0, 1.5))
+    ]
+    doc["tray"] = {"width": 100.0, "height": 50.0}
+    for task in doc["tasks"]:
+        task["parts"] = [{"type": rng.choice("abc"), "count": 1}]
     return doc
 
 

@@ -11,18 +11,25 @@ stations). With continuous robot starts ``S_k`` and human ends ``E_k``::
     S_k >= A_{k-1},  A_k = S_k + R_k + D_k,  E_k >= A_k + H_k,  C >= E_k
 
 Each station's human and trays are followed by two running values per station and position,
-``F[s,k]`` (the end of s's last kit at or before k) and ``G[s,k]`` (its human start)::
+``F[s,k]`` (the end of s's last kit at or before k) and ``G[s,k]`` (the time its tray is
+back, o_H,s after its human start; 0 while s has no kit)::
 
     F[s,k] >= F[s,k-1],  F[s,k] >= E_k - M (1 - z[s,k])
     E_k >= F[s,k-1] + H_k - M (1 - z[s,k])                       (s's human, in order)
-    G[s,k] >= G[s,k-1],  G[s,k] >= E_k - H_k - M (1 - z[s,k])
-    S_k >= G[s,k-1] + o_H,s - M (1 - z[s,k])                     (one tray: T_s = 1)
+    G[s,k] >= G[s,k-1],  G[s,k] >= E_k - H_k + o_H,s - M (1 - z[s,k])
+    S_k >= G[s,k-1] - M (1 - z[s,k])                             (one tray: T_s = 1)
     S_k >= E_j - H_j + o_H,s - M (3 - z[s,j] - z[s,k] - f[s,j,k])   (T_s >= 2, j < k)
     sum_{j<=q<k} z[s,q] <= T_s - 1 + K f[s,j,k]
 
 (with ``T_s >= 2`` the binary ``f[s,j,k]`` must be 1 when at least ``T_s`` kits of s lie in
 positions j..k-1, i.e. j is the ``T_s``-th previous kit of s or earlier; human starts of a
-station are non-decreasing, so the earlier ones add nothing). Every constraint is a lower
+station are non-decreasing, so the earlier ones add nothing). The ``o_H,s`` of the one-tray
+rule is inside ``G``: written as ``S_k >= G[s,k-1] + o_H,s`` with ``G`` the human start, the
+first kit of s at a position k >= 1 waited for a tray that was never out (``G = 0``): the
+robot start was at least ``o_H,s`` though it is ``A_{k-1}`` (docs/timeline.md#several-stations:
+the second term is absent while s has fewer than ``T_s`` kits out), a master that priced
+such plans too high and proved a worse one optimal (issue 35, item 1;
+tests/models/test_milp_stations.py). Every constraint is a lower
 bound, so every solution's C is at least its plan's makespan and the timeline itself is a
 solution: the optimum is the optimal makespan. Every variable is bounded by the incumbent's
 makespan U (``C <= U``), so ``M = U + sum_i h_i + max_s o_H,s`` is valid.
@@ -202,7 +209,7 @@ def _timeline(m: Any, instance: Instance, data: _Data, K: int, hz: float) -> Non
         for s in ids:
             off = big * (1 - m.z[s, k])
             add(m.F[s, k] >= m.E[k] - off)
-            add(m.G[s, k] >= m.E[k] - H[k] - off)
+            add(m.G[s, k] >= m.E[k] - H[k] + prm[s].kit_overhead_human - off)
             if k:
                 add(m.F[s, k] >= m.F[s, k - 1])
                 add(m.G[s, k] >= m.G[s, k - 1])
@@ -212,8 +219,8 @@ def _timeline(m: Any, instance: Instance, data: _Data, K: int, hz: float) -> Non
 
 
 def _trays(m: Any, params: StationParams, s: int, H: list[Any], big: float) -> None:
-    """The tray rule of station ``s`` (its position): through ``G`` with one tray, pairwise
-    with more."""
+    """The tray rule of station ``s`` (its position): through ``G`` (the tray is back, ``o_H``
+    included) with one tray, pairwise with more."""
     import pyomo.environ as pyo
 
     K = len(H)
@@ -223,7 +230,7 @@ def _trays(m: Any, params: StationParams, s: int, H: list[Any], big: float) -> N
     add = m.cons.add
     for k in range(1, K):
         if trays == 1:
-            add(m.S[k] >= m.G[s, k - 1] + o_h - big * (1 - m.z[s, k]))
+            add(m.S[k] >= m.G[s, k - 1] - big * (1 - m.z[s, k]))
             continue
         for j in range(k):
             f = pyo.Var(domain=pyo.Binary)
