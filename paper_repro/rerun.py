@@ -5,7 +5,8 @@ python paper_repro/rerun.py [--only calibration,user_study,...] [--jobs 2] [--fr
 
 Steps, in order: calibration (the one calibration every other step reads: run it first, its
 CSVs are copied before the next step starts), user_study, fig6, fig6_cached (the same command
-again, every cell saved: what a rerun costs), fig6_r100, fig6_cpsat, horizon, adaptive, stations.
+again, every cell saved: what a rerun costs), fig6_r100, fig6_cpsat, horizon, adaptive,
+stations, robust.
 ``--fresh`` deletes a step's output folder first, so its time is a full rerun. Each step runs
 ``python -m bilevel_kit.cli repro ...`` in a subprocess; its wall time, the load average
 before and after and the date are written to results/timing.csv (one row per step, replaced
@@ -101,6 +102,11 @@ STEPS: dict[str, tuple[list[str], str, dict[str, str]]] = {
             "stations_served.csv": "stations_served.csv",
             **{f"stations_{x}.png": f"figures/stations-{x}.png" for x in LINE_FIGURES},
         },
+    ),
+    "robust": (
+        ["robust"],
+        "out/repro/robust",
+        {"robust.csv": "robust.csv", "robust.png": "figures/robust.png"},
     ),
 }
 COLUMNS = (

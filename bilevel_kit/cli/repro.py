@@ -25,8 +25,8 @@ if TYPE_CHECKING:
     from ..paths import Output
 
 HELP = (
-    "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon, adaptive and "
-    "stations studies"
+    "reproduce the paper's user study (Fig. 5) or Figure 6; the horizon, adaptive, "
+    "stations and robust studies"
 )
 DESCRIPTION = (
     "calibrate: fit the robot's speed, the human's pickup time and the participant x condition "
@@ -47,14 +47,16 @@ DESCRIPTION = (
     "(docs/simulation.md). stations: how many assembly stations one robot keeps busy: "
     "throughput, human idle per station and robot utilisation against S = 1..6 stations of "
     "the table, stool, chair and mixed lines, per policy, without and with feeders "
-    "(docs/stations.md). See paper_repro/README.md."
+    "(docs/stations.md). robust: plans for the mean human times against sample-average "
+    "plans for their spread, VSS and EVPI per cv and tray count (docs/robust.md). See "
+    "paper_repro/README.md."
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "experiment",
-        choices=("calibrate", "user-study", "fig6", "horizon", "adaptive", "stations"),
+        choices=("calibrate", "user-study", "fig6", "horizon", "adaptive", "stations", "robust"),
     )
     p.add_argument(
         "--quick",
@@ -218,6 +220,10 @@ def _run(args: argparse.Namespace) -> int:
     if args.experiment == "calibrate":
         res = repro.run_calibration(out, draws=args.draws, **run)
         return _report(res)
+    if args.experiment == "robust":
+        from ..repro.robust import run_robust
+
+        return _report(run_robust(out, **run))
     run["calibration"] = args.calibration
     if args.experiment == "stations":
         from ..repro.stations import run_stations

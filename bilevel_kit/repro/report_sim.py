@@ -13,6 +13,7 @@ from .adaptive import share_text
 from .fig6_stats import BETTER, WORSE
 from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
+from .robust import ROBUST_TABLES
 from .stations_tables import STATION_TABLES
 
 Row = Mapping[str, Any]
@@ -221,6 +222,7 @@ SIM_TABLES: Tables = {
     "adaptive": ("adaptive.csv", adaptive_markdown),
     "adaptive_shares": ("adaptive.csv", adaptive_shares_markdown),
     **STATION_TABLES,
+    **ROBUST_TABLES,
     "timing": ("timing.csv", timing_markdown),
 }
 

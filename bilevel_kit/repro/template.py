@@ -46,6 +46,7 @@ TARGETS = (
     Target("paper_repro/templates/reproduction.md", "docs/reproduction.md"),
     Target("paper_repro/templates/simulation_adaptive.md", "docs/simulation.md", section=True),
     Target("paper_repro/templates/stations_results.md", "docs/stations.md", section=True),
+    Target("paper_repro/templates/robust_results.md", "docs/robust.md", section=True),
 )
 
 

@@ -96,6 +96,27 @@ class LnsOptions:
         default=0.1,
         metadata={"help": "share of the time limit for the kit-count LP bound", "min": 0.0},
     )
+    objective: Literal["makespan", "expected_makespan"] = field(
+        default="makespan",
+        metadata={
+            "help": "makespan (mean times) or expected_makespan (sample average over "
+            "scenarios of the human times, docs/formulations.md)"
+        },
+    )
+    scenarios: int = field(
+        default=20, metadata={"help": "scenarios of expected_makespan", "min": 1}
+    )
+    scenario_seed: int = field(
+        default=0, metadata={"help": "seed of expected_makespan's scenarios", "min": 0}
+    )
+    cv: float | None = field(
+        default=None,
+        metadata={
+            "help": "coefficient of variation of every human time in the scenarios (none: "
+            "each task's sd / mean)",
+            "min": 0.0,
+        },
+    )
 
 
 def lns(
@@ -108,7 +129,12 @@ def lns(
     known_bound: float | None = None,
 ) -> MethodOutput:
     """Registered method ``lns`` (module docstring); ``start_plan`` a valid plan to start from,
-    ``known_bound`` a proven makespan bound (then none is computed)."""
+    ``known_bound`` a proven makespan bound (then none is computed). ``objective=
+    "expected_makespan"``: :func:`.saa.lns_saa`."""
+    if options.objective == "expected_makespan":
+        from .saa import lns_saa
+
+        return lns_saa(instance, options, seed=seed, time_limit=time_limit, start_plan=start_plan)
     budget = Budget(time_limit)
     stop_at = budget.cut(MARGIN_S + MARGIN_SHARE * budget.time_limit)
     sc = scale_times(instance, 0.1, True)
