@@ -401,7 +401,7 @@ register(
 register(
     "bilevel-milp",
     "bilevel_kit.models.bilevel_milp:bilevel_milp",
-    "exact optimum of the paper's own objective F over enumerated kits (<= 16 tasks)",
+    "exact optimum of the paper's objective J over enumerated kits (<= 16 tasks)",
     "bilevel_kit.models.bilevel_milp:BilevelMilpOptions",
     prepare=COMPILE_KERNELS,  # its kit values and warm start run greedy-ce's CE
     # it minimises the paper's J (not the makespan) and needs 100-250 s for a proof on the

@@ -174,6 +174,10 @@ def _report(
     from ..experiments.compare import inconsistencies
 
     print(format_table(records))
+    if any("(for J)" in str(r.get("status")) for r in records):
+        from ..objectives import J_MEANING
+
+        print(f"(for J): the status is about J, not the makespan. {J_MEANING}.")
     for r in records:
         if r["status"] == "error" and not quiet_errors:
             say(f"{r['instance']} / {r['method']}: {r['error']}")

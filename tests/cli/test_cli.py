@@ -304,7 +304,9 @@ def test_methods_lists_every_registered_method(capsys):
 
     code, text, _ = run(capsys, "methods")
     assert code == 0
-    assert [line.split()[0] for line in text.splitlines()] == list(REGISTRY)
+    listing, _, note = text.partition("\n\n")  # then a note on J (issue 40, item 2)
+    assert [line.split()[0] for line in listing.splitlines()] == list(REGISTRY)
+    assert note.startswith("J = the paper's objective")
     assert "single-task      paper baseline: one kit per task" in text
 
 
@@ -547,8 +549,11 @@ def test_a_status_about_j_prints_j_and_its_bound(tiny):
         "plan_objective_J_gap": 0.033,
     }
     res = replace(res, status_objective="J", extra={**res.extra, **extra})
-    line = summary(tiny, res, True).splitlines()[1]
-    assert line.endswith("J 11.38  J bound 11.00  J gap 3.30%")
+    lines = summary(tiny, res, True).splitlines()
+    assert lines[1] == "  J: feasible  J 11.38  J bound 11.00  J gap 3.30%"
+    from bilevel_kit.objectives import J_MEANING
+
+    assert lines[2] == f"  ({J_MEANING})"  # what J is, where solve prints it
 
 
 def test_methods_with_an_unknown_name_lists_methods_and_policies(capsys):
