@@ -294,3 +294,42 @@ def evaluate(
     for kit in plan.kits:
         builder.append(kit)
     return builder.timeline()
+
+
+def kitless(instance: Instance, kit: Kit) -> bool:
+    """A kit of part-less tasks only (no parts, no robot time): the checker's
+    ``kit_without_parts``; :func:`fold_kitless` removes it (docs/timeline.md#part-less-tasks)."""
+    known = instance.task_by_id
+    return bool(kit.tasks) and all(t in known and not instance.needs_kit(t) for t in kit.tasks)
+
+
+def fold_kitless(instance: Instance, plan: Plan) -> Plan:
+    """``plan`` with every kit of part-less tasks merged into a neighbouring kit of its
+    station: the previous one (its tasks done after that kit's), else the next one (before
+    them). A part-less task needs no kit of its own (docs/timeline.md#part-less-tasks); the
+    merge keeps every precedence (stations share no edge) and the layout of the kit it joins.
+    A plan without such kits comes back unchanged (the same object)."""
+    if not any(kitless(instance, k) for k in plan.kits):
+        return plan
+    kits = list(plan.kits)
+    stations = [kit_station(instance, k.tasks) for k in kits]
+    k = 0
+    while k < len(kits):
+        if not kitless(instance, kits[k]):
+            k += 1
+            continue
+        same = [j for j in range(len(kits)) if stations[j] == stations[k] and j != k]
+        earlier = [j for j in same if j < k and not kitless(instance, kits[j])]
+        later = [j for j in same if j > k and not kitless(instance, kits[j])]
+        if not earlier and not later:
+            k += 1  # the station has no kit with parts: left for the checker to report
+            continue
+        moved = kits[k].tasks
+        if earlier:
+            j = earlier[-1]
+            kits[j] = replace(kits[j], tasks=kits[j].tasks + moved)
+        else:
+            j = later[0]
+            kits[j] = replace(kits[j], tasks=moved + kits[j].tasks)
+        del kits[k], stations[k]
+    return Plan(tuple(kits))
