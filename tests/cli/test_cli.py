@@ -262,8 +262,16 @@ def test_compare_table_files_and_resume(capsys, tmp_path, root, monkeypatch):
         "--figures",
         str(figs),
     ]
-    code, text, _ = run(capsys, *argv)
+    code, text, err = run(capsys, *argv)
     assert code == 0
+    # drawing is announced after the table, then each file as it is written (issue 40 item 10)
+    said = [line.split(": ", 1)[1] for line in err.splitlines()]
+    assert said[0] == f"drawing 10 figure(s) into {figs}"
+    assert said[1:] == [f"figure {i}/10: {figs}/{n}" for i, n in enumerate(
+        ["stool_compare.png", "stool_single-task_gantt.png", "stool_single-task_trays.png",
+         "stool_whole-assembly_gantt.png", "stool_whole-assembly_trays.png", "tiny_compare.png",
+         "tiny_single-task_gantt.png", "tiny_single-task_trays.png",
+         "tiny_whole-assembly_gantt.png", "tiny_whole-assembly_trays.png"], 1)]  # fmt: skip
     assert len(list(cells.glob("*.json"))) == 4
     lines = md.read_text().splitlines()
     assert lines[0].startswith("| instance | method | makespan (s)") and len(lines) == 6
