@@ -126,8 +126,8 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
 
 
 def _check_some_task_needs_a_kit(inst: Instance, source: str) -> None:
-    """A part-less task rides in a neighbouring kit of its station (docs/timeline.md#part-less-
-    tasks), so every station with tasks needs one task with parts or robot time."""
+    """A part-less task rides in a neighbouring kit of its station, so every station with
+    tasks needs one task with parts or robot time (docs/timeline.md#part-less-tasks)."""
     for station in inst.station_ids if inst.stations else [""]:
         tasks = [t.id for t in inst.tasks if not station or t.station == station]
         if tasks and not any(inst.needs_kit(t) for t in tasks):
