@@ -74,9 +74,10 @@ def test_checker_refuses_a_kit_of_part_less_tasks_and_the_fold_fixes_it(inst) ->
     assert evaluate(inst, single).makespan == pytest.approx(38.0)
     assert evaluate(inst, folded).makespan == pytest.approx(27.0)
     assert fold_kitless(inst, folded) is folded
-    # no kit before it: the part-less kit joins the next one, its tasks first
-    first = fold_kitless(inst, _plan(inst, ("check",), ("x",), ("glue",)))
-    assert [k.tasks for k in first.kits] == [("check", "x", "glue")]
+    # no kit before them: part-less kits join the next one, first and in the plan's order
+    # (the hypothesis example that found the order reversed: t0 -> t1, both part-less, first)
+    first = fold_kitless(inst, _plan(inst, ("check",), ("glue",), ("x",), ("y",)))
+    assert [k.tasks for k in first.kits] == [("check", "glue", "x"), ("y",)]
     assert not kitless(inst, first.kits[0])
 
 
