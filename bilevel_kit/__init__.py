@@ -16,7 +16,15 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .errors import BilevelKitError, InstanceError, KitDoesNotFit, SolutionError, UsageError
-    from .instance import Instance, PartType, Task, Tray, load, topological_order
+    from .instance import (
+        Instance,
+        InstanceBuilder,
+        PartType,
+        Task,
+        Tray,
+        load,
+        topological_order,
+    )
     from .methods import REGISTRY, MethodOutput, Result, register, solve
     from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate
     from .validate import Violation, check
@@ -30,7 +38,8 @@ _EXPORTS = {
         "errors",
     ),
     **dict.fromkeys(
-        ("Instance", "PartType", "Task", "Tray", "load", "topological_order"), "instance"
+        ("Instance", "InstanceBuilder", "PartType", "Task", "Tray", "load", "topological_order"),
+        "instance",
     ),
     **dict.fromkeys(("REGISTRY", "MethodOutput", "Result", "register", "solve"), "methods"),
     **dict.fromkeys(("Kit", "KitTimes", "Placement", "Plan", "Timeline", "evaluate"), "plan"),
@@ -62,6 +71,7 @@ __all__ = [
     "REGISTRY",
     "BilevelKitError",
     "Instance",
+    "InstanceBuilder",
     "InstanceError",
     "Kit",
     "KitDoesNotFit",

@@ -53,6 +53,8 @@ PRODUCTS = ("table", "mixed", "stool")
 #: Each random family's number in its random stream's seed (fixed: files stay reproducible).
 _STREAM = {"intree": 2, "series-parallel": 3, "wide": 4, "sparse": 5}
 DEFAULT_TIGHTNESS = 0.6
+#: The random families' delivery time (s) when ``--d`` is not given.
+DEFAULT_DELIVERY = 5.0
 _ROOT = Path(__file__).resolve().parent.parent
 _SD_RATIO = 61.14 / 374.78
 
@@ -89,7 +91,7 @@ def command_line(
             words += ["--d", f"{delivery_time:g}"]
     else:
         t = DEFAULT_TIGHTNESS if tightness is None else tightness
-        d = 5.0 if delivery_time is None else delivery_time
+        d = DEFAULT_DELIVERY if delivery_time is None else delivery_time
         if tray is None:
             words += ["--seed", str(seed), "--tightness", f"{t:g}", "--d", f"{d:g}"]
         else:
@@ -352,8 +354,12 @@ def generate(
         doc = stool(size, delivery_time)
     else:
         t = DEFAULT_TIGHTNESS if tightness is None else tightness
-        d = 5.0 if delivery_time is None else delivery_time
+        d = DEFAULT_DELIVERY if delivery_time is None else delivery_time
         doc = random_graph(family, size, seed, t, d)
+    if delivery_time is not None and family in PRODUCTS:
+        # two --d variants of a product are two instances: their names differ (reports,
+        # figures, cells); a random family's name keeps its committed form (its seed)
+        doc["name"] = f"{doc['name']}_d{delivery_time:g}"
     _apply_options(doc, trays, tray, name)
     if stations is not None:
         _apply_stations(doc, stations)

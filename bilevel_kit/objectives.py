@@ -106,6 +106,15 @@ def _sum_completion(timeline: Timeline) -> float:
 
 _EXTRA_KEYS = (("objective_value",), ("objective_bound",), ("objective_gap",))
 
+#: What J is, in one line: printed below a list or table that first shows it (``bilevel-kit
+#: methods``, ``compare``'s status column "feasible (for J)", ``solve``'s status line). The
+#: paper names only the kit score F (Section IV-A, Eqs. 3-7); J is the toolkit's name for F summed
+#: over a plan's kits (docs/guide.md#exact-baselines-bilevel_kitmodels).
+J_MEANING = (
+    "J = the paper's objective: its kit score F (Eqs. 3-7, which greedy-ce minimises one kit "
+    "at a time) summed over the plan's kits; lower is better, and it is not the makespan"
+)
+
 #: The registry, by name.
 OBJECTIVES: dict[str, Objective] = {
     o.name: o

@@ -294,3 +294,46 @@ def evaluate(
     for kit in plan.kits:
         builder.append(kit)
     return builder.timeline()
+
+
+def kitless(instance: Instance, kit: Kit) -> bool:
+    """A kit of part-less tasks only (no parts, no robot time): the checker's
+    ``kit_without_parts``; :func:`fold_kitless` removes it (docs/timeline.md#part-less-tasks)."""
+    known = instance.task_by_id
+    return bool(kit.tasks) and all(t in known and not instance.needs_kit(t) for t in kit.tasks)
+
+
+def fold_kitless(instance: Instance, plan: Plan) -> Plan:
+    """``plan`` with every kit of part-less tasks merged into a neighbouring kit of its
+    station: the previous one (its tasks done after that kit's), else the next one (before
+    them). A part-less task needs no kit of its own (docs/timeline.md#part-less-tasks); the
+    merge keeps the plan's task order within each station, hence every precedence (stations
+    share no edge), and the layout of the kit it joins. A plan without such kits comes back
+    unchanged (the same object)."""
+    if not any(kitless(instance, k) for k in plan.kits):
+        return plan
+    kits: list[Kit | None] = list(plan.kits)
+    stations = [kit_station(instance, k.tasks) for k in plan.kits]
+    last: dict[str, int] = {}  # each station's last kit with parts so far
+    for k, kit in enumerate(plan.kits):
+        if not kitless(instance, kit):
+            last[stations[k]] = k
+        elif stations[k] in last:  # forward: after the previous kit of its station
+            j = last[stations[k]]
+            target = kits[j]
+            assert target is not None
+            kits[j], kits[k] = replace(target, tasks=target.tasks + kit.tasks), None
+    following: dict[str, int] = {}  # backward: the leading ones, before the next kit
+    for k in range(len(kits) - 1, -1, -1):
+        cur = kits[k]
+        if cur is None:
+            continue
+        if not kitless(instance, cur):
+            following[stations[k]] = k
+        elif stations[k] in following:
+            j = following[stations[k]]
+            target = kits[j]
+            assert target is not None
+            kits[j], kits[k] = replace(target, tasks=cur.tasks + target.tasks), None
+    # a station without a kit with parts keeps its part-less kits for the checker to report
+    return Plan(tuple(k for k in kits if k is not None))

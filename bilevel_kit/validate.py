@@ -28,13 +28,14 @@ from typing import Any
 from . import geometry
 from .instance import Instance
 from .objectives import OBJECTIVES
-from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate
+from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate, kitless
 
 #: Absolute tolerance (s) when comparing reported times with the evaluator's.
 TIME_TOL = 1e-6
 
 KINDS = (
     "empty_kit",
+    "kit_without_parts",
     "unknown_task",
     "repeated_task",
     "missing_task",
@@ -331,6 +332,15 @@ def _check_tasks(instance: Instance, plan: Plan) -> list[Violation]:
     for k, kit in enumerate(plan.kits, start=1):
         if not kit.tasks:
             out.append(Violation("empty_kit", f"kit {k} holds no task", k))
+        elif kitless(instance, kit):  # docs/timeline.md#part-less-tasks
+            out.append(
+                Violation(
+                    "kit_without_parts",
+                    f"kit {k} holds only part-less tasks ({', '.join(kit.tasks)}): they need no "
+                    "kit of their own and ride in a neighbouring kit of their station",
+                    k,
+                )
+            )
         for j, t in enumerate(kit.tasks):
             if t not in known:
                 out.append(Violation("unknown_task", f"kit {k} holds unknown task {t!r}", k))

@@ -68,14 +68,19 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
                 yield tuple(kits)
 
 
-def best_makespan(inst, objective: str = "makespan") -> tuple[float, Plan | None]:
+def best_makespan(
+    inst, objective: str = "makespan", kitless: bool = False
+) -> tuple[float, Plan | None]:
     """The least makespan (one evaluator) over the segmentations whose kits all fit; or the
     least of another ``objective`` of the timeline (``sum_completion``, ``human_idle``:
-    :func:`bilevel_kit.stations.objective_of`)."""
+    :func:`bilevel_kit.stations.objective_of`). A kit of part-less tasks only is no valid kit
+    (docs/timeline.md#part-less-tasks); ``kitless=True`` allows it (the rule before)."""
     from bilevel_kit.stations import objective_of
 
     best: tuple[float, Plan | None] = (float("inf"), None)
     for kits in segmentations(inst):
+        if not kitless and any(not any(inst.needs_kit(t) for t in k) for k in kits):
+            continue
         if all(fits(inst, k) for k in kits):
             plan = Plan(tuple(Kit(k) for k in kits))
             ms = objective_of(evaluate(inst, plan), objective)

@@ -174,6 +174,10 @@ def _report(
     from ..experiments.compare import inconsistencies
 
     print(format_table(records))
+    if any("(for J)" in str(r.get("status")) for r in records):
+        from ..objectives import J_MEANING
+
+        print(f"(for J): the status is about J, not the makespan. {J_MEANING}.")
     for r in records:
         if r["status"] == "error" and not quiet_errors:
             say(f"{r['instance']} / {r['method']}: {r['error']}")
@@ -218,21 +222,32 @@ def _figures(records: list[dict[str, Any]], folder: str, overrides: dict[str, An
     for r in records:
         by_instance.setdefault(r["instance_file"], []).append(r)
     names = _figure_names(list(by_instance), overrides)
+    planned = [sum(r.get("makespan") is not None for r in rows) for rows in by_instance.values()]
+    total = sum(1 + 2 * n for n in planned if n)
+    # the table is printed already; drawing takes a while (trays of many kits): say so, and
+    # say each file as it is written, on stderr so the table stays alone on stdout
+    say(f"drawing {total} figure(s) into {out}")
+    done = 0
+
+    def save(fig: Any, path: Path) -> None:
+        nonlocal done
+        plots.save_figure(fig, path)
+        done += 1
+        say(f"figure {done}/{total}: {path}")
+
     for path, rows in by_instance.items():
         inst = load(path).with_overrides(**overrides)
         name = names[path]
         ok = [r for r in rows if r.get("makespan") is not None]
         if not ok:
             continue
-        ax = plots.plot_comparison(rows)
-        plots.save_figure(ax.figure, out / f"{name}_compare.png")
+        save(plots.plot_comparison(rows).figure, out / f"{name}_compare.png")
         for r in ok:
             sol = solution.from_dict(r["solution"], f"{path} ({r['method']})")
-            stem = out / f"{name}_{safe_name(r['method'])}"
-            ax = plots.plot_gantt(inst, sol.plan, method=str(r["method"]))
-            plots.save_figure(ax.figure, f"{stem}_gantt.png")
-            fig = plots.plot_trays(inst, sol.plan, method=str(r["method"]))
-            plots.save_figure(fig, f"{stem}_trays.png")
+            method = str(r["method"])
+            stem = f"{name}_{safe_name(method)}"
+            save(plots.plot_gantt(inst, sol.plan, method=method).figure, out / f"{stem}_gantt.png")
+            save(plots.plot_trays(inst, sol.plan, method=method), out / f"{stem}_trays.png")
 
 
 def _figure_names(paths: list[str], overrides: dict[str, Any]) -> dict[str, str]:

@@ -10,7 +10,8 @@ from .common import EXIT_OK
 
 HELP = "list the registered methods"
 DESCRIPTION = (
-    "Without NAME: one line per registered method. With NAME: that method's options "
+    "Without NAME: one line per registered method, then a line on what J (bilevel-milp's "
+    "objective) is. With NAME: that method's options "
     "(solve --param KEY=VALUE) with type, default and meaning; NAME may also be a simulation "
     "policy that is not a method (optimized, cpsat-rolling: simulate --param KEY=VALUE)."
 )
@@ -29,9 +30,13 @@ def run(args: argparse.Namespace) -> int:
     from ..methods import REGISTRY
 
     if args.name is None:
+        from ..objectives import J_MEANING
+
         for s in REGISTRY.values():
             note = "" if s.in_default else " [not in compare's default set: name it]"
             print(f"{s.name:<16} {s.summary}{note}")
+        if any(" J " in s.summary for s in REGISTRY.values()):
+            print(f"\n{J_MEANING}.")
     else:
         print(describe_method(find(args.name)))
     return EXIT_OK

@@ -135,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
                 "instance": instance.name,
                 "policy": args.policy,
                 **{k: r[k] for k in CSV_COLUMNS},
+                **station_columns(r),
             }
             for r in records
         ]
@@ -154,19 +155,50 @@ SIM_LEGEND = {
 }
 
 
+#: Each station's metrics (docs/timeline.md#several-stations), as ``STATION_METRIC`` columns.
+STATION_METRICS = ("completion", "human_idle", "n_kits")
+
+
+def station_columns(record: dict[str, Any]) -> dict[str, Any]:
+    """A replication's per-station metrics as ``STATION_METRIC`` columns (none for one
+    station), in the file's station order."""
+    return {
+        f"{s}_{m}": values[m]
+        for s, values in record.get("stations", {}).items()
+        for m in STATION_METRICS
+    }
+
+
 def _print_summary(name: str, args: argparse.Namespace, records: list[dict[str, Any]]) -> None:
     import statistics
 
     units = records[0]["units"]
+    stations = list(records[0].get("stations", {}))
     print(f"{name}: policy {args.policy}, {units} unit(s), {args.reps} replication(s)")
-    for col in SIM_COLUMNS:
-        vals = [float(r[col]) for r in records]
+    per_station = [f"{s}_{m}" for s in stations for m in STATION_METRICS]
+    rows = [{**r, **station_columns(r)} for r in records]
+    for col in (*SIM_COLUMNS, *per_station):
+        vals = [float(r[col]) for r in rows]
         sd = statistics.stdev(vals) if len(vals) > 1 else 0.0
-        label = f"{col} ({SIM_LEGEND[col][0]})" if SIM_LEGEND[col][0] else col
+        unit = SIM_LEGEND[col][0] if col in SIM_LEGEND else "" if col.endswith("n_kits") else "s"
+        label = f"{col} ({unit})" if unit else col
         print(
             f"  {label:<18} mean {statistics.fmean(vals):10.2f}   sd {sd:9.2f}   "
             f"min {min(vals):10.2f}   max {max(vals):10.2f}"
         )
     print("where:")
     for col in SIM_COLUMNS:
-        print(f"  {col:<14} {SIM_LEGEND[col][1]}")
+        meaning = SIM_LEGEND[col][1]
+        if stations and col == "human_idle":
+            meaning = (
+                f"the {len(stations)} humans waiting for a kit, summed over the stations "
+                "(each up to its own completion), so it can exceed the makespan"
+            )
+        elif stations and col == "makespan":
+            meaning = "until the last station's human finishes (the largest completion)"
+        print(f"  {col:<14} {meaning}")
+    if stations:
+        print(
+            f"  {'S_completion':<14} when station S's human finishes its last task; "
+            "S_human_idle: that human waiting for a kit; S_n_kits: kits delivered to S"
+        )

@@ -192,7 +192,10 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
 
 
 def _status_line(result: Result) -> str:
-    """``  OBJECTIVE: STATUS`` and that objective's value, bound and gap (when known)."""
+    """``  OBJECTIVE: STATUS`` and that objective's value, bound and gap (when known); J's
+    meaning on a line of its own."""
+    from ..objectives import J_MEANING
+
     x = result.extra
     if result.status_objective == "J":
         numbers = ""
@@ -202,7 +205,7 @@ def _status_line(result: Result) -> str:
                 f"  J {_fmt(x['plan_objective_J'])}  J bound {_fmt(j_bound)}"
                 f"  J gap {_pct(x.get('plan_objective_J_gap'))}"
             )
-        return f"  J (the paper's F summed over the kits): {result.status}{numbers}"
+        return f"  J: {result.status}{numbers}\n  ({J_MEANING})"
     numbers = ""
     if x.get("objective_value") is not None:
         numbers = (

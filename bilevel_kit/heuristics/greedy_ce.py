@@ -69,7 +69,7 @@ import numpy as np
 from ..errors import KitDoesNotFit, UsageError
 from ..instance import Instance
 from ..methods import MethodOutput, Status
-from ..plan import Kit, Plan, TimelineBuilder, next_robot_start
+from ..plan import Kit, Plan, TimelineBuilder, fold_kitless, next_robot_start
 from . import upper_level
 from .ce.sampling import deadline as ce_deadline
 from .cross_entropy import Arrangement, arrange
@@ -488,7 +488,9 @@ def plan(
         kits.append(kit)
         timeline.append(kit)
         done.update(kit.tasks)
-    return Plan(tuple(kits))
+    # a kit of part-less tasks alone rides in its neighbour (docs/timeline.md#part-less-tasks):
+    # solve() folds every method's plan; this entry point is called directly too
+    return fold_kitless(instance, Plan(tuple(kits)))
 
 
 #: Seconds per task greedy-ce needs besides its decisions (measured 50-180 us at 60,000 tasks)

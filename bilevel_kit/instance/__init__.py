@@ -17,6 +17,7 @@ schema) and :mod:`.parser` (documents in); every name is imported from here.
 
 from __future__ import annotations
 
+from .builder import InstanceBuilder
 from .json_schema import schema
 from .model import (
     DEFAULT_HORIZON,
@@ -62,6 +63,7 @@ __all__ = [
     "MIN_LENGTH",
     "AssemblyStation",
     "Instance",
+    "InstanceBuilder",
     "PartType",
     "StationParams",
     "Supply",

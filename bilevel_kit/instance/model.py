@@ -335,6 +335,12 @@ class Instance:
             return t.robot_time
         return sum(self.part_types[p].pick_time * n for p, n in t.parts)
 
+    def needs_kit(self, task_id: str) -> bool:
+        """Whether a task gives the robot work: parts, or a robot time above 0. A task
+        without either (*part-less*) needs no kit of its own: it rides in a neighbouring kit
+        of its station (docs/timeline.md#part-less-tasks)."""
+        return bool(self.task_by_id[task_id].parts) or self.robot_time(task_id) > 0
+
     def human_time(self, task_id: str) -> float:
         """Expected human assembly time of a task."""
         return self.task_by_id[task_id].human_mean

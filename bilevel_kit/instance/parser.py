@@ -121,7 +121,23 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     )
     if stations:
         _check_station_tasks(inst, source)
+    _check_some_task_needs_a_kit(inst, source)
     return inst
+
+
+def _check_some_task_needs_a_kit(inst: Instance, source: str) -> None:
+    """A part-less task rides in a neighbouring kit of its station, so every station with
+    tasks needs one task with parts or robot time (docs/timeline.md#part-less-tasks)."""
+    for station in inst.station_ids if inst.stations else [""]:
+        tasks = [t.id for t in inst.tasks if not station or t.station == station]
+        if tasks and not any(inst.needs_kit(t) for t in tasks):
+            on = f" of station {station!r}" if station else ""
+            raise InstanceError(
+                source,
+                "$.tasks",
+                f"every task{on} has no parts and no robot_time: a part-less task rides in a "
+                "neighbouring kit, so at least one task needs parts (docs/timeline.md)",
+            )
 
 
 def _check_structure(doc: Any, source: str) -> None:

@@ -14,7 +14,9 @@ package:
   *optional*: a target the site does not render (a private helper, another library) shows as
   code instead of a broken link;
 * ``:math:`tex``` into inline maths and a ``.. math::`` block into display maths, both in the
-  syntax of ``pymdownx.arithmatex`` (generic mode), which KaTeX renders in the browser.
+  syntax of ``pymdownx.arithmatex`` (generic mode), which KaTeX renders in the browser;
+* a doctest block (a paragraph opening with ``>>>``) into a fenced ``pycon`` code block: to
+  Markdown its ``>>>`` would be three nested blockquotes around one run-on line.
 
 ``mkdocs.yml`` loads it as a mkdocstrings-python extension; ``docs/hooks/check_rendered.py``
 fails the build on any role left in the HTML.
@@ -35,6 +37,8 @@ ROLE = re.compile(
 )
 MATH_ROLE = re.compile(r":math:`(?P<tex>[^`]+)`")
 MATH_BLOCK = re.compile(r"^(?P<indent>[ ]*)\.\. math::(?P<first>.*)$")
+#: The prompt that opens a doctest block, at any indentation.
+DOCTEST = re.compile(r"^(?P<indent>[ ]*)>>>(?: |$)")
 EXPLICIT_TITLE = re.compile(r"^(?P<title>.+?)\s*<(?P<target>[^<>]+)>$", re.DOTALL)
 
 
@@ -144,9 +148,29 @@ def math_blocks(text: str) -> str:
     return "\n".join(out)
 
 
+def doctest_blocks(text: str) -> str:
+    """Doctest blocks (``>>>`` up to the next blank line) as fenced ``pycon`` code blocks."""
+    lines = text.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        prompt = DOCTEST.match(lines[i])
+        if not prompt or (out and out[-1].strip()):
+            out.append(lines[i])  # a ">>>" inside a paragraph is not a doctest block
+            i += 1
+            continue
+        pad = prompt["indent"]
+        out.append(f"{pad}```pycon")
+        while i < len(lines) and lines[i].strip():
+            out.append(lines[i])
+            i += 1
+        out.append(f"{pad}```")
+    return "\n".join(out)
+
+
 def rewrite(text: str, obj: griffe.Object, loader: griffe.GriffeLoader) -> str:
-    """One docstring rewritten: display maths, inline maths, then cross-references."""
-    text = math_blocks(text)
+    """One docstring rewritten: doctests, display maths, inline maths, then cross-references."""
+    text = math_blocks(doctest_blocks(text))
     text = MATH_ROLE.sub(lambda m: rf"\({m['tex'].strip()}\)", text)
     return ROLE.sub(lambda m: cross_reference(obj, loader, m["body"]), text)
 

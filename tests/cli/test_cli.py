@@ -262,8 +262,16 @@ def test_compare_table_files_and_resume(capsys, tmp_path, root, monkeypatch):
         "--figures",
         str(figs),
     ]
-    code, text, _ = run(capsys, *argv)
+    code, text, err = run(capsys, *argv)
     assert code == 0
+    # drawing is announced after the table, then each file as it is written (issue 40 item 10)
+    said = [line.split(": ", 1)[1] for line in err.splitlines() if "figure" in line]
+    assert said[0] == f"drawing 10 figure(s) into {figs}"
+    assert said[1:] == [f"figure {i}/10: {figs}/{n}" for i, n in enumerate(
+        ["stool_compare.png", "stool_single-task_gantt.png", "stool_single-task_trays.png",
+         "stool_whole-assembly_gantt.png", "stool_whole-assembly_trays.png", "tiny_compare.png",
+         "tiny_single-task_gantt.png", "tiny_single-task_trays.png",
+         "tiny_whole-assembly_gantt.png", "tiny_whole-assembly_trays.png"], 1)]  # fmt: skip
     assert len(list(cells.glob("*.json"))) == 4
     lines = md.read_text().splitlines()
     assert lines[0].startswith("| instance | method | makespan (s)") and len(lines) == 6
@@ -304,7 +312,9 @@ def test_methods_lists_every_registered_method(capsys):
 
     code, text, _ = run(capsys, "methods")
     assert code == 0
-    assert [line.split()[0] for line in text.splitlines()] == list(REGISTRY)
+    listing, _, note = text.partition("\n\n")  # then a note on J (issue 40, item 2)
+    assert [line.split()[0] for line in listing.splitlines()] == list(REGISTRY)
+    assert note.startswith("J = the paper's objective")
     assert "single-task      paper baseline: one kit per task" in text
 
 
@@ -547,8 +557,11 @@ def test_a_status_about_j_prints_j_and_its_bound(tiny):
         "plan_objective_J_gap": 0.033,
     }
     res = replace(res, status_objective="J", extra={**res.extra, **extra})
-    line = summary(tiny, res, True).splitlines()[1]
-    assert line.endswith("J 11.38  J bound 11.00  J gap 3.30%")
+    lines = summary(tiny, res, True).splitlines()
+    assert lines[1] == "  J: feasible  J 11.38  J bound 11.00  J gap 3.30%"
+    from bilevel_kit.objectives import J_MEANING
+
+    assert lines[2] == f"  ({J_MEANING})"  # what J is, where solve prints it
 
 
 def test_methods_with_an_unknown_name_lists_methods_and_policies(capsys):

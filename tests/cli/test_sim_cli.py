@@ -93,3 +93,26 @@ def test_simulate_trays_override(capsys, tmp_path, root):
     assert all(float(r["robot_blocked"]) > 0 for r in rows["1"])
     assert any(int(r["max_queue"]) > 1 for r in rows["unlimited"])
     assert all(float(r["robot_blocked"]) == 0 for r in rows["unlimited"])
+
+
+def test_simulate_with_stations_shows_and_writes_each_station(capsys, tmp_path, root):
+    """The summed idle of several humans is said to be a sum (it may exceed the makespan),
+    and the summary and the CSV show each station's completion, idle and kits (issue 40)."""
+    out = tmp_path / "sim.csv"
+    inst = str(root / "instances/stations/table_u1_s2.json")
+    argv = ["simulate", inst, "--policy", "single-task", "--reps", "2", "--csv", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "the 2 humans waiting for a kit, summed over the stations" in text
+    assert "S1_completion (s)" in text and "S2_n_kits  " in text and "n_waits (s)" not in text
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 2 and list(rows[0])[-6:] == [
+        "S1_completion", "S1_human_idle", "S1_n_kits", "S2_completion", "S2_human_idle",
+        "S2_n_kits",
+    ]  # fmt: skip
+    for r in rows:
+        idle = float(r["S1_human_idle"]) + float(r["S2_human_idle"])
+        assert abs(idle - float(r["human_idle"])) < 1e-6  # the sum the summary names
+        ends = max(float(r["S1_completion"]), float(r["S2_completion"]))
+        assert abs(ends - float(r["makespan"])) < 1e-6
+        assert int(r["S1_n_kits"]) + int(r["S2_n_kits"]) == int(r["n_kits"]) == 24

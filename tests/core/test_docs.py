@@ -103,3 +103,14 @@ def test_formats_page_lists_every_schema_field(schema: Any) -> None:
     text = (DOCS / "formats.md").read_text(encoding="utf-8")
     missing = [p for p in _field_paths(schema()) if f"`{p}`" not in text]
     assert not missing, f"docs/formats.md does not describe: {missing}"
+
+
+def test_tutorial_shows_its_instance_file_verbatim() -> None:
+    """The tutorial's instance is inline (a snippet include shows nothing on the repository
+    page, issue 40 item 5) and is the file ``instances/tutorial_shelf.json``, byte for byte."""
+    text = (DOCS / "tutorial.md").read_text(encoding="utf-8")
+    shown = re.search(r"identical\):\n\n```json\n(?P<body>.*?\n)```\n", text, re.DOTALL)
+    assert shown is not None and "--8<--" not in text
+    inst = (ROOT / "instances" / "tutorial_shelf.json").read_text(encoding="utf-8")
+    assert shown["body"] == inst
+    assert len(instance.loads(shown["body"], "docs/tutorial.md").tasks) == 8

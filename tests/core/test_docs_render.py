@@ -2,24 +2,30 @@
 
 The docstrings use reST roles and ``.. math::``; ``docs/hooks/rest_docstrings.py`` (a griffe
 extension) rewrites them for mkdocstrings, and ``docs/hooks/check_rendered.py`` (an MkDocs
-hook) fails the build on any role left in a page. These tests hold the rewriting to its rules,
-show that the hook catches a raw role, build the site once, and (with Chromium) check that
-every formula renders with the KaTeX served from the site, fetching nothing from the network.
+hook) fails the build on any role, raw ``$$`` or doctest-as-blockquotes left in a page. These
+tests hold the rewriting to its rules, show that the hook catches each kind on a deliberately
+broken page rendered with the project's Markdown settings, render every page and the doctests
+the same way, build the site once, and (with Chromium) check that every formula renders with
+the KaTeX served from the site, fetching nothing from the network.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import re
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
 
 import griffe
+import markdown
 import pytest
 from chromium import Chromium, console_errors, find_chromium, requested_urls
+from mkdocs.config import load_config
 from mkdocs.exceptions import PluginError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -109,8 +115,63 @@ def test_hook_fails_on_a_raw_role_and_ignores_code() -> None:
     assert not check.raw_markup("<p><code>:func:`solve`</code></p><pre>.. math::</pre>")
 
     page = SimpleNamespace(file=SimpleNamespace(src_uri="api.md"))
-    with pytest.raises(PluginError, match=r"api.md: 1 raw reST role"):
+    with pytest.raises(PluginError, match=r"api.md: 1 unrendered markup"):
         check.on_post_page("<p>:class:<code>Result</code></p>", page=page, config={})
+
+
+def test_hook_fails_on_raw_display_maths_and_quoted_doctests() -> None:
+    assert len(check.raw_markup("<p>$$\n x = 1\n$$</p>")) == 2
+    assert not check.raw_markup('<div class="arithmatex">\\[x\\]</div><code>$$</code>')
+    assert check.raw_markup("<blockquote>\n<blockquote>\n<p>from x import y</p>")
+    assert check.raw_markup("<blockquote><p>a &gt;&gt;&gt; b</p></blockquote>")
+    assert not check.raw_markup("<blockquote><p>a quote</p></blockquote><code>&gt;&gt;&gt;</code>")
+
+
+def test_doctest_blocks_become_code() -> None:
+    text = "Intro.\n\n>>> x = 1\n... + 2\n>>> x\n3\n\nAfter; a >>> in prose stays.\n  >>> y"
+    out = rest.doctest_blocks(text)
+    assert "\n\n```pycon\n>>> x = 1\n... + 2\n>>> x\n3\n```\n\nAfter" in out
+    assert out.endswith("After; a >>> in prose stays.\n  >>> y")
+
+
+@pytest.fixture(scope="module")
+def render() -> Callable[[str], str]:
+    """Markdown to HTML with the extensions and settings of the project's ``mkdocs.yml``."""
+    config = load_config(str(ROOT / "mkdocs.yml"))
+    extensions, settings = config["markdown_extensions"], config["mdx_configs"]
+
+    def _render(text: str) -> str:
+        with contextlib.chdir(ROOT):  # pymdownx.snippets' base_path is the repository
+            return markdown.Markdown(extensions=extensions, extension_configs=settings).convert(
+                text
+            )
+
+    return _render
+
+
+#: The two kinds of page that once passed the strict build unrendered (issue 40, item 4): a
+#: ``$$`` block indented by two spaces under a list item, and a doctest outside a code fence.
+BROKEN = [
+    "- a list item, then its cut:\n\n  $$\n  x \\le 1\n  $$\n",
+    "An example:\n\n>>> from bilevel_kit import load\n>>> load('x.json')\n",
+]
+
+
+@pytest.mark.parametrize("page", BROKEN)
+def test_the_check_fails_on_a_broken_page(render: Callable[[str], str], page: str) -> None:
+    assert check.raw_markup(render(page))
+
+
+def test_every_page_and_the_package_docstrings_render(
+    render: Callable[[str], str], package: griffe.Module
+) -> None:
+    pages = sorted((ROOT / "docs").glob("*.md"))
+    assert len(pages) > 15
+    bad = {p.name: found for p in pages if (found := check.raw_markup(render(p.read_text())))}
+    assert not bad, bad
+    for path in ("bilevel_kit", "bilevel_kit.sim"):
+        html = render(_doc(package, path))
+        assert '<span class="gp">&gt;&gt;&gt; </span>' in html and not check.raw_markup(html)
 
 
 @pytest.fixture(scope="module")

@@ -71,7 +71,10 @@ def enumerate_kits(instance: Instance, max_columns: int = MAX_COLUMNS) -> list[f
                         "instances (raise max_columns at your own risk)"
                     )
         frontier = nxt
-    return [frozenset(ids[i] for i in range(n) if mask >> i & 1) for mask in seen]
+    kits = [frozenset(ids[i] for i in range(n) if mask >> i & 1) for mask in seen]
+    # a kit of part-less tasks only is no kit (docs/timeline.md#part-less-tasks): they ride
+    # in a kit with parts, so J is minimised over the plans the checker accepts
+    return [s for s in kits if any(instance.needs_kit(t) for t in s)]
 
 
 @dataclass(frozen=True)
