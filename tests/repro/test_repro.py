@@ -118,7 +118,7 @@ def test_user_study_quick_summary_and_files(study):
         lo, hi = r["cal_low"], r["cal_high"]
         assert r["inside"] == (lo - 0.01 <= r["paper"] + h and r["paper"] - h <= hi + 0.01)
         assert r["studies"] == res["n_studies"] and r["cal_studies"] == res["cal_studies"]
-    assert res["inside"]["predicted"] == 7 and res["inside"]["independent"] == 4
+    assert res["inside"]["predicted"] == 7 and res["inside"]["independent"] == 2
     assert res["cal_studies"] >= res["n_studies"]
     assert res["delivery_time"] == 0.0 and res["trays"] == 1
     for name in ("runs_csv", "table", "parameters", "summary", "within", "markdown", "json"):
