@@ -40,7 +40,8 @@ DESCRIPTION = (
     "times, as ROS 1 and/or ROS 2 bags with standard message types; and a standalone HTML page "
     "animating the arm, the trays and the parts. Prints per kit the trajectory's duration "
     "against the modelled time. Exit 2, writing nothing, when the solution does not fit the "
-    "instance or a bin or slot is out of the arm's reach. See docs/execution.md."
+    "instance, a bin or slot is out of the arm's reach, or a part fails the gripper's "
+    "feasibility pass (--grasp-check). See docs/execution.md."
 )
 
 
