@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
 
 #: How the chart defines the figure it shows: ``compare``'s "above best bound (%)" column.
-ABOVE_TEXT = "above bound = (makespan - best lower bound) / best lower bound"
+ABOVE_TEXT = "+x %: above bound = (makespan - best lower bound) / best lower bound"
 #: Makespan of a method, or None when it found no plan.
 _Value = float | None
 
@@ -39,10 +39,11 @@ def record_above(record: dict[str, Any]) -> float | None:
 
 
 def above_label(makespan: float, above: float | None) -> str:
-    """A method's label on the chart: its makespan and how far above the best bound it is."""
+    """A method's label on the chart: its makespan and how far above the best bound it is, in
+    % (the title says so, :data:`ABOVE_TEXT`; a longer label overlaps its neighbour's)."""
     if above is None:
         return f"{makespan:.1f} s"
-    return f"{makespan:.1f} s\n+{100 * above:.1f} % above bound"
+    return f"{makespan:.1f} s\n+{100 * above:.1f} %"
 
 
 @styled

@@ -43,6 +43,6 @@ def test_table_chart_and_readme_show_the_same_lead_figure():
     ax = plots.plot_comparison(records)
     labels = [t.get_text() for t in ax.texts]
     plt.close("all")
-    chart = re.search(r"463\.8 s\n\+(\d+\.\d) % above bound", "\n".join(labels))
+    chart = re.search(r"463\.8 s\n\+(\d+\.\d) %", "\n".join(labels))
     assert chart, labels
     assert f"{table:.1f}" == chart.group(1) == _readme_figure() == "6.6"
