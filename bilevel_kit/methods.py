@@ -278,6 +278,16 @@ def gap(objective: float | None, bound: float | None) -> float | None:
     return max(0.0, (objective - bound) / objective)
 
 
+def above_bound(objective: float | None, bound: float | None) -> float | None:
+    """How far ``objective`` lies above ``bound``, (objective - bound) / bound: the distance
+    above the optimum when ``bound`` is the proven optimum, and an upper bound on it otherwise
+    (the optimum lies between the two). The lead figure of ``compare``'s table and chart
+    (docs/timeline.md#terms)."""
+    if objective is None or bound is None or bound <= 0:
+        return None
+    return max(0.0, (objective - bound) / bound)
+
+
 def fold_kitless_output(instance: Instance, out: MethodOutput) -> MethodOutput:
     """``out`` with its kits of part-less tasks merged into neighbouring kits
     (:func:`bilevel_kit.plan.fold_kitless`, docs/timeline.md#part-less-tasks), for every

@@ -160,6 +160,10 @@ def run_step(name: str, jobs: int, fresh: bool) -> dict[str, object]:
     for src, dst in copies.items():
         target = FIGURES / dst.split("/", 1)[1] if dst.startswith("figures/") else RESULTS / dst
         shutil.copyfile(folder / src, target)
+    drawn = [dst.split("/", 1)[1] for dst in copies.values() if dst.startswith("figures/")]
+    if drawn:  # record the redrawn figures' digests (docs/figures.md, committed figures)
+        stamp = [sys.executable, str(FIGURES / "regenerate.py"), "--stamp", *drawn]
+        subprocess.run(stamp, cwd=ROOT, check=True)
     info = _detail(folder)
     return {
         "run": name,

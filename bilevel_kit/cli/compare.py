@@ -28,8 +28,10 @@ if TYPE_CHECKING:
 
 HELP = "solve instances with several methods and tabulate"
 DESCRIPTION = (
-    "One row per instance x method: makespan, human idle, kits, status, best lower bound, gap to "
-    "it, checker verdict, wall time. Each cell is saved on its own under --cells, so an "
+    "One row per instance x method: makespan, human idle, kits, status, the best lower bound of "
+    "the compared methods and the percentage above it ((makespan - best bound) / best bound, "
+    "the optimum's when a method proved it), the method's own bound and own gap, checker "
+    "verdict, wall time. Each cell is saved on its own under --cells, so an "
     "interrupted run resumes where it stopped; --jobs/--scheduler run the cells in parallel "
     "(docs/cluster.md). Exit 5 when a cell failed (its row says why), 1 when a plan is invalid."
 )

@@ -189,10 +189,12 @@ def _file_of(record: dict[str, Any]) -> str:
 
 
 def add_best_bound_gap(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Add ``best_bound`` (max bound over the rows of the same instance file) and ``gap`` to
-    it (fraction). A best bound above the makespan of a valid plan of the same file is no
-    bound: its rows get ``inconsistent`` (the message :func:`inconsistencies` lists) and no
-    best bound or gap."""
+    """Add ``best_bound`` (max bound over the rows of the same instance file), ``above_best`` (the
+    lead figure, (makespan - best bound) / best bound, docs/timeline.md#terms) and ``gap`` to it
+    ((makespan - best bound) / makespan), as fractions. A best bound above the makespan of a valid
+    plan of the same file is no bound: its rows get ``inconsistent`` (the message
+    :func:`inconsistencies` lists) and no best bound or gap."""
+    from ..methods import above_bound, gap
     from ..validate import TIME_TOL
 
     rows = list(records)
@@ -211,7 +213,8 @@ def add_best_bound_gap(records: Iterable[dict[str, Any]]) -> list[dict[str, Any]
             r["inconsistent"] = _inconsistency(rows, f, b, low[f])
             b = None
         r["best_bound"] = b
-        r["gap"] = None if b is None or not ms else max(0.0, (ms - b) / ms)
+        r["above_best"] = above_bound(ms, b)
+        r["gap"] = gap(ms, b)
     return rows
 
 

@@ -1,7 +1,9 @@
 """Methods compared: on one instance, each method's makespan against the best lower bound and
 its human idle (:func:`plot_comparison`); over instances, the gap of each method to the best
-lower bound (:func:`plot_gaps`). Both show the ``gap`` of ``compare``'s table,
-(makespan - best bound) / makespan (docs/figures.md)."""
+lower bound (:func:`plot_gaps`). :func:`plot_comparison` labels each method with the lead
+figure of ``compare``'s table, "above best bound", (makespan - best bound) / best bound
+(docs/timeline.md#terms, docs/figures.md); :func:`plot_gaps` shows the table's ``gap``
+field, (makespan - best bound) / makespan."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import style
+from ..methods import above_bound
 from ..style import styled
 from .common import pyplot
 
@@ -19,35 +22,41 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 
-#: How the charts define the gap they show: ``compare``'s "gap to best" column.
-GAP_TEXT = "gap = (makespan - best lower bound) / makespan"
+#: How the chart defines the figure it shows: ``compare``'s "above best bound (%)" column.
+ABOVE_TEXT = "+x %: above bound = (makespan - best lower bound) / best lower bound"
 #: Makespan of a method, or None when it found no plan.
 _Value = float | None
 
 
-def record_gap(record: dict[str, Any]) -> float | None:
-    """The record's ``gap`` to the best lower bound as ``compare`` defines it,
-    (makespan - best bound) / makespan, computed from ``best_bound`` when the record has no
-    ``gap`` field; None without a plan or a bound."""
-    if record.get("gap") is not None:
-        return float(record["gap"])
+def record_above(record: dict[str, Any]) -> float | None:
+    """The record's distance above the best lower bound as ``compare``'s table shows it,
+    (makespan - best bound) / best bound, computed from ``best_bound`` when the record has no
+    ``above_best`` field; None without a plan or a bound."""
+    if record.get("above_best") is not None:
+        return float(record["above_best"])
     ms, bound = record.get("makespan"), record.get("best_bound")
-    if ms is None or bound is None or not float(ms):
-        return None
-    return max(0.0, (float(ms) - float(bound)) / float(ms))
+    return None if ms is None or bound is None else above_bound(float(ms), float(bound))
+
+
+def above_label(makespan: float, above: float | None) -> str:
+    """A method's label on the chart: its makespan and how far above the best bound it is, in
+    % (the title says so, :data:`ABOVE_TEXT`; a longer label overlaps its neighbour's)."""
+    if above is None:
+        return f"{makespan:.1f} s"
+    return f"{makespan:.1f} s\n+{100 * above:.1f} %"
 
 
 @styled
 def plot_comparison(
     records: Sequence[dict[str, Any]], ax: Axes | None = None, idle_ax: Axes | None = None
 ) -> Axes:
-    """Methods compared on one instance (records of ``compare``): each method's makespan as a
-    dot on a stem that rises from the best lower bound (a dashed line), so the stem *is* the
-    method's distance to the bound, labelled with the makespan and the ``gap`` of the table,
-    (makespan - best bound) / makespan; the y axis spans the makespans, not 0..max, and a
-    method without a plan says "no plan". Beside it (a new figure, or ``idle_ax``), the human
-    idle per method as bars from 0. Each method's status (optimal / feasible / unknown) is
-    under its name. Returns the makespan Axes."""
+    """Methods compared on one instance (records of ``compare``): each method's makespan as a dot on
+    a stem that rises from the best lower bound (a dashed line), so the stem *is* the method's
+    distance to the bound, labelled with the makespan and the table's lead figure, "above best
+    bound", (makespan - best bound) / best bound; the y axis spans the makespans, not 0..max, and a
+    method without a plan says "no plan". Beside it (a new figure, or ``idle_ax``), the human idle
+    per method as bars from 0. Each method's status (optimal / feasible / unknown) is under its
+    name. Returns the makespan Axes."""
     if ax is None:
         n = len(records)
         _, (ax, idle_ax) = pyplot().subplots(
@@ -74,7 +83,7 @@ def plot_comparison(
         "method (status)" if any(r.get("status") is not None for r in records) else "method"
     )
     name = records[0].get("instance", "") if records else ""
-    ax.set_title(f"{name}: makespan per method\n{GAP_TEXT}")
+    ax.set_title(f"{name}: makespan per method\n{ABOVE_TEXT}")
     if idle_ax is not None:
         _idle_panel(idle_ax, names, records)
     return ax
@@ -84,7 +93,7 @@ def _makespan_panel(
     ax: Axes, records: Sequence[dict[str, Any]], makespans: list[_Value], bound: float | None
 ) -> None:
     """Dots on stems from the best lower bound (or the best makespan without one), labelled
-    "value s / gap x %"; the axis spans the values with room for the labels."""
+    with :func:`above_label`; the axis spans the values with room for the labels."""
 
     values = [v for v in makespans if v is not None]
     base = bound if bound is not None else (min(values) if values else 0.0)
@@ -99,9 +108,7 @@ def _makespan_panel(
             continue
         ax.plot([x, x], [base, v], color=color, linewidth=2.5, solid_capstyle="butt")
         ax.plot([x], [v], marker="o", color=color, markersize=7, gid=f"makespan:{r['method']}")
-        gap = record_gap(r)
-        text = f"{v:.1f} s" + (f"\ngap {100 * gap:.1f} %" if gap is not None else "")
-        _note_above(ax, text, (x, v), 6)
+        _note_above(ax, above_label(v, record_above(r)), (x, v), 6)
     ax.set_xlim(-0.6, len(records) - 0.4)
     ax.set_ylabel("makespan (s)")
     ax.grid(axis="y", alpha=0.3)
