@@ -25,11 +25,8 @@ from .common import EXIT_OK, add_derived_outputs, add_output, positive, positive
 TOOL_SPEED = 0.6
 
 if TYPE_CHECKING:
-    from ..instance import Instance
     from ..paths import Output
-    from ..plan import Plan
     from ..sawyer.bags import BagInfo
-    from ..sawyer.gripper import GraspCheck
     from ..sawyer.trajectory import Execution
 
 HELP = "write a plan's Sawyer trajectories as ROS bags and an animated 3-D view"
@@ -40,8 +37,7 @@ DESCRIPTION = (
     "times, as ROS 1 and/or ROS 2 bags with standard message types; and a standalone HTML page "
     "animating the arm, the trays and the parts. Prints per kit the trajectory's duration "
     "against the modelled time. Exit 2, writing nothing, when the solution does not fit the "
-    "instance, a bin or slot is out of the arm's reach, or a part fails the gripper's "
-    "feasibility pass (--grasp-check). See docs/execution.md."
+    "instance or a bin or slot is out of the arm's reach. See docs/execution.md."
 )
 
 
@@ -80,14 +76,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="robot",
         help="joint-limit profile: the real arm's (default) or the Gazebo simulator's, whose "
         "right_j6 stays within +-3.14 rad",
-    )
-    p.add_argument(
-        "--grasp-check",
-        choices=("strict", "warn"),
-        default="strict",
-        help="the gripper's feasibility pass (docs/execution.md#the-gripper): strict (default) "
-        "exits 2 when the open fingers leave the tray or overlap a placed part; warn reports "
-        "it and goes on (a grasp width outside the stroke always exits 2)",
     )
     p.add_argument(
         "--tool-speed",
@@ -198,9 +186,8 @@ def _staging() -> Iterator[_Staging]:
         raise
 
 
-def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
-    """The execution of the solution (or of its kit ``--kit``), after checking it fits, and
-    the gripper's feasibility pass."""
+def _load(args: argparse.Namespace) -> Execution:
+    """The execution of the solution (or of its kit ``--kit``), after checking it fits."""
     from .. import solution
     from ..errors import UsageError
     from ..instance import load
@@ -222,46 +209,7 @@ def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
     params = MotionParams(
         speed_scale=args.speed_scale, tool_speed=args.tool_speed, limits=args.limits
     )
-    execution = plan_execution(instance, sol.plan, kits=kits, params=params)
-    return execution, _check_grasps(args, instance, sol.plan, kits)
-
-
-def _check_grasps(
-    args: argparse.Namespace, instance: Instance, plan: Plan, kits: list[int] | None
-) -> tuple[GraspCheck, ...]:
-    """The gripper's feasibility pass: exit 2 on the first part no grasp fits (and, unless
-    ``--grasp-check warn``, on fingers leaving the tray or overlapping a placed part)."""
-    from ..errors import UsageError
-    from ..sawyer.gripper import check_grasps
-
-    checks = check_grasps(instance, plan, kits)
-    bad = [c for c in checks if c.problem]
-    stroke = [c for c in bad if c.fault == "stroke"]
-    fatal = stroke or (bad if args.grasp_check == "strict" else [])
-    if fatal:
-        raise UsageError(
-            f"{args.solution}: {fatal[0].problem} ({len(bad)} of {len(checks)} part(s) fail "
-            "the gripper check; nothing written)"
-        )
-    if bad:
-        print(
-            f"warning: {bad[0].problem} ({len(bad)} of {len(checks)} part(s) fail the "
-            "gripper check)"
-        )
-    return checks
-
-
-def _grip_line(checks: tuple[GraspCheck, ...]) -> str:
-    """One line: the fingers' smallest clearances to the tray and to placed parts."""
-    tray = min(checks, key=lambda c: c.tray_clearance)
-    near = min(checks, key=lambda c: c.part_clearance)
-    line = (
-        f"gripper: every part within the stroke; smallest finger clearance to the tray "
-        f"{tray.tray_clearance:.2f} mm (kit {tray.kit}, {tray.part})"
-    )
-    if near.nearest:
-        line += f", to a placed part {near.part_clearance:.2f} mm (kit {near.kit}, {near.part})"
-    return line
+    return plan_execution(instance, sol.plan, kits=kits, params=params)
 
 
 def _report(ex: Execution, cap: float) -> None:
@@ -349,7 +297,7 @@ def _write(
 
 
 def run(args: argparse.Namespace) -> int:
-    ex, checks = _load(args)
+    ex = _load(args)
     targets = _bag_targets(args, _stem(args))  # as checked up front (:func:`_outputs`)
     page = None
     if args.html:
@@ -358,8 +306,6 @@ def run(args: argparse.Namespace) -> int:
         page = html_page(ex)
     infos = _write(ex, targets, args.html, page)
     _report(ex, args.tool_speed)
-    if checks:
-        print(_grip_line(checks))
     for info in infos:
         print(_describe(info))
     if page is not None:

@@ -27,9 +27,6 @@ ROOT = Path(__file__).resolve().parents[2]
 TABLE = ROOT / "instances" / "hrc_table.json"
 REFERENCE = ROOT.parent / "shared" / "reference" / "sawyer"
 ST = S.DEFAULT_STATION
-#: The table's packed layouts put parts flush with the tray's edge and with each other, where
-#: the open fingers do not fit (docs/execution.md#the-gripper): these runs only warn.
-WARN = ("--grasp-check", "warn")
 
 
 def run(capsys, *argv):
@@ -71,7 +68,6 @@ def written(solution_file, tmp_path_factory):
             str(out / "bags"),
             "--html",
             str(out / "view.html"),
-            *WARN,
         ]
     )
     assert code == 0
@@ -193,7 +189,7 @@ def test_events_carry_the_plan_times(written, instance, plan):
 
 
 def test_the_report_shows_durations_against_the_model(capsys, solution_file, tmp_path):
-    code, out, err = run(capsys, "execute", TABLE, solution_file, "--bag", tmp_path / "b", *WARN)
+    code, out, err = run(capsys, "execute", TABLE, solution_file, "--bag", tmp_path / "b")
     assert code == 0 and err == ""
     rows = [line.split() for line in out.splitlines() if line[:3].strip().isdigit()]
     assert len(rows) == 12
@@ -209,17 +205,7 @@ def test_the_report_shows_durations_against_the_model(capsys, solution_file, tmp
 
 def test_one_kit_and_one_format(capsys, solution_file, tmp_path, instance, plan):
     code, _out, _ = run(
-        capsys,
-        "execute",
-        TABLE,
-        solution_file,
-        "--bag",
-        tmp_path,
-        "--kit",
-        3,
-        "--format",
-        "ros1",
-        *WARN,
+        capsys, "execute", TABLE, solution_file, "--bag", tmp_path, "--kit", 3, "--format", "ros1"
     )
     assert code == 0
     assert [p.name for p in tmp_path.iterdir()] == ["hrc_table_kit3.bag"]
@@ -228,17 +214,7 @@ def test_one_kit_and_one_format(capsys, solution_file, tmp_path, instance, plan)
     assert {kit for _, kit, _ in bags.event_names(topics[bags.EVENTS_TOPIC])} == {3}
     # run again: the bag is replaced, not refused
     code, _, _ = run(
-        capsys,
-        "execute",
-        TABLE,
-        solution_file,
-        "--bag",
-        tmp_path,
-        "--kit",
-        3,
-        "--format",
-        "ros1",
-        *WARN,
+        capsys, "execute", TABLE, solution_file, "--bag", tmp_path, "--kit", 3, "--format", "ros1"
     )
     assert code == 0 and [p.name for p in tmp_path.iterdir()] == ["hrc_table_kit3.bag"]
 
@@ -318,7 +294,6 @@ def test_a_failed_write_leaves_nothing(capsys, tmp_path, solution_file, monkeypa
         old,
         "--html",
         tmp_path / "v.html",
-        *WARN,
     )
     assert code == 2 and "No space left on device" in err
     assert [p.name for p in old.iterdir()] == ["hrc_table_kit1.bag"]  # no temporary left
@@ -425,18 +400,7 @@ def test_a_controllers_quintic_holds_the_tool_still_while_the_gripper_works(
 def test_speed_scale_and_tool_speed_options(capsys, tmp_path, solution_file, plan):
     """``--speed-scale`` slows the arm (the motion model with the same parameters times it),
     ``--tool-speed`` caps the tool tip's speed; a late arm's warning names the fix."""
-    argv = (
-        "execute",
-        TABLE,
-        solution_file,
-        "--kit",
-        1,
-        "--format",
-        "ros2",
-        "--bag",
-        tmp_path,
-        *WARN,
-    )
+    argv = ("execute", TABLE, solution_file, "--kit", 1, "--format", "ros2", "--bag", tmp_path)
     code, out, err = run(capsys, *argv, "--speed-scale", 0.5, "--tool-speed", 0.3)
     assert code == 0 and err == ""
     assert '"robot_times": "motion"' in out  # the slowed arm ends after the plan's push
@@ -484,7 +448,7 @@ def test_gazebo_limits_keep_j6_within_the_simulators_range(capsys, tmp_path, sol
     low, high = S.LIMIT_PROFILES["gazebo"]
     assert high[6] == 3.14 and low[6] == -3.14
     np.testing.assert_array_equal(high[:6], S.Q_UPPER[:6])
-    argv = ("execute", TABLE, solution_file, "--format", "ros1", *WARN)
+    argv = ("execute", TABLE, solution_file, "--format", "ros1")
     code, _, _ = run(capsys, *argv, "--bag", tmp_path / "g", "--limits", "gazebo")
     assert code == 0
     code, _, _ = run(capsys, *argv, "--bag", tmp_path / "r")

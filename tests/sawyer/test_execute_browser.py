@@ -27,8 +27,6 @@ pytestmark = pytest.mark.skipif(
     BROWSER is None, reason="no Chromium on this machine (Debian package 'chromium')"
 )
 TABLE = Path(__file__).resolve().parents[2] / "instances" / "hrc_table.json"
-#: The table's layouts leave no finger room at the tray's edge (docs/execution.md#the-gripper).
-WARN = ("--grasp-check", "warn")
 
 
 @pytest.fixture(scope="module")
@@ -44,11 +42,8 @@ def pages(plan, tmp_path_factory) -> dict[str, Path]:
     sol = folder / "single.json"
     solution_io.write(sol, plan)
     out = {"all": folder / "all.html", "kit3": folder / "kit3.html"}
-    assert main(["execute", str(TABLE), str(sol), "--html", str(out["all"]), *WARN]) == 0
-    assert (
-        main(["execute", str(TABLE), str(sol), "--html", str(out["kit3"]), "--kit", "3", *WARN])
-        == 0
-    )
+    assert main(["execute", str(TABLE), str(sol), "--html", str(out["all"])]) == 0
+    assert main(["execute", str(TABLE), str(sol), "--html", str(out["kit3"]), "--kit", "3"]) == 0
     return out
 
 

@@ -128,7 +128,6 @@ def test_reach_cli_draws_a_kit(root, tmp_path, capsys, monkeypatch):
 
 def test_reachability_needs_no_station_section(root):
     doc = json.loads((root / "instances/hrc_table.json").read_text())
-    doc.pop("station")  # the table declares its gripper only
     doc["reachability"] = True
     inst = from_dict(doc)
     assert inst.station is None and reach_grid(inst).reachable.all()
