@@ -27,6 +27,7 @@ CORE = (
     "plan",
     "validate",
     "objectives",
+    "stochastic",
     "bounds",
     "stations",
     "geometry",

@@ -134,7 +134,14 @@ def lns(
     if options.objective == "expected_makespan":
         from .saa import lns_saa
 
-        return lns_saa(instance, options, seed=seed, time_limit=time_limit, start_plan=start_plan)
+        return lns_saa(
+            instance,
+            options,
+            seed=seed,
+            time_limit=time_limit,
+            start_plan=start_plan,
+            mean_time=lns,
+        )
     budget = Budget(time_limit)
     stop_at = budget.cut(MARGIN_S + MARGIN_SHARE * budget.time_limit)
     sc = scale_times(instance, 0.1, True)

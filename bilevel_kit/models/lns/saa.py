@@ -22,6 +22,7 @@ loop's counters (``saa_*``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -42,10 +43,13 @@ def lns_saa(
     seed: int = 0,
     time_limit: float | None = None,
     start_plan: Plan | None = None,
+    mean_time: Callable[..., MethodOutput],
 ) -> MethodOutput:
-    """The module docstring's two steps."""
+    """The module docstring's two steps; ``mean_time`` is the mean-time ``lns`` (passed in by
+    :func:`.method.lns`, so this module does not import it back)."""
     from ..cpsat.saa import solve_saa
-    from .method import lns
+
+    lns = mean_time
 
     budget = Budget(time_limit)
     mean = lns(
