@@ -72,6 +72,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from .instance import Instance
+from .instance.model import station_instance
+from .objectives import get as get_objective
+from .objectives import human_times
 
 if TYPE_CHECKING:
     from .plan import Plan
@@ -131,21 +134,15 @@ def stations_bound(instance: Instance) -> float:
     kit holds one station's tasks, so station s needs at least ``m_s`` (its area bound) kits,
     the robot is busy ``sum_i r_i + sum_s m_s (o_R + d_s)`` before the last kit arrives, and
     that kit's human then needs at least ``o_H,s`` plus a task without successors at s."""
-    from .stations import station_instance
-
-    subs = [
-        station_instance(instance, s)
-        for s in instance.station_ids
-        if any(t.station == s for t in instance.tasks)
-    ]
+    subs = station_bounds(instance)
     robot = sum(instance.robot_time(t.id) for t in instance.tasks)
     last = math.inf
-    for sub in subs:
+    for sub, _ in subs:
         robot += min_kits(sub) * (instance.kit_overhead_robot + sub.delivery_time)
         has_succ = {a for a, _ in sub.precedence}
         sink = min(sub.human_time(t.id) for t in sub.tasks if t.id not in has_succ)
         last = min(last, sub.kit_overhead_human + sink)
-    return max(robot + last, *(best_bound(sub) for sub in subs))
+    return max(robot + last, *(lb for _, lb in subs))
 
 
 def flow_bound(instance: Instance, m: int | None = None) -> float:
@@ -225,29 +222,19 @@ def johnson_makespan(a: Sequence[float], b: Sequence[float]) -> float:
     return flow_shop_makespan(johnson_order(a, b), a, b)
 
 
-def objective_bound(instance: Instance, objective: str) -> float:
-    """A closed-form lower bound on ``objective`` over every plan (s): the makespan's
-    (:func:`bilevel_kit.bounds.best_bound`); for ``sum_completion`` the sum over the stations
-    of each one's own bound (:func:`station_instance`); for ``human_idle`` the sum over the
-    stations of ``max(o_R + d_s, LB_s - W_s)``: a station's human idles at least until its
-    first kit arrives, and its idle is ``C_s`` less its work, at most ``W_s = sum h_i + o_H,s
-    n_s`` (one task per kit)."""
-    from .stations import station_instance
+def station_bounds(instance: Instance) -> list[tuple[Instance, float]]:
+    """Each station with tasks as an instance of its own
+    (:func:`bilevel_kit.stations.station_instance`) and its makespan bound
+    (:func:`best_bound`), which holds for that station's completion: what the objectives'
+    closed-form bounds over the stations add up (:meth:`bilevel_kit.objectives.Objective.bound`)."""
+    subs = (station_instance(instance, s) for s in instance.station_ids)
+    return [(one, best_bound(one)) for one in subs if one.tasks]
 
-    if objective == "makespan":
-        return best_bound(instance)
-    total = 0.0
-    for s in instance.station_ids:
-        one = station_instance(instance, s)
-        if not one.tasks:
-            continue
-        lb = best_bound(one)
-        if objective == "human_idle":
-            work = sum(one.human_time(t.id) for t in one.tasks)
-            work += one.kit_overhead_human * one.n_tasks
-            lb = max(instance.kit_overhead_robot + one.delivery_time, lb - work)
-        total += lb
-    return total
+
+def objective_bound(instance: Instance, objective: str) -> float:
+    """A closed-form lower bound on ``objective`` over every plan (s): the registry's
+    (:meth:`bilevel_kit.objectives.Objective.bound`)."""
+    return get_objective(objective).bound(instance, best_bound, station_bounds)
 
 
 def objective_extra(
@@ -256,28 +243,34 @@ def objective_extra(
     objective: str,
     lower: tuple[float | None, float | None],
     optimal: tuple[bool, bool],
+    *,
+    model_scale: bool = False,
 ) -> dict[str, Any]:
     """An exact model's ``extra`` for ``objective`` besides the makespan: ``objective_value``,
-    ``objective_bound``, ``objective_gap`` (s; the gap as :func:`bilevel_kit.methods.gap`;
-    ``idle_bound`` too for the human idle) and ``objective_bound_axis_aligned``. Each bound is
-    :func:`objective_bound` or the model's ``lower`` (s), valid for every plan and for
-    0/90-degree plans (None: none); the value when ``optimal`` in the same two scopes
-    (docs/formulations.md#what-optimal-means)."""
+    ``objective_bound``, ``objective_gap`` (s; the objective's gap; ``idle_bound`` too for the
+    human idle, among its bound keys) and ``objective_bound_axis_aligned``. Each bound is
+    :func:`objective_bound` or the model's ``lower``, valid for every plan and for
+    0/90-degree plans (None: none), in s or (``model_scale``) on the model's scale, with the
+    constant :meth:`~bilevel_kit.objectives.Objective.dropped`; the value when ``optimal`` in
+    the same two scopes (docs/formulations.md#what-optimal-means)."""
     from .plan import evaluate
-    from .stations import objective_of
 
-    value = objective_of(evaluate(instance, plan), objective)
-    closed = objective_bound(instance, objective)
+    obj = get_objective(objective)
+    value = obj.value(evaluate(instance, plan))
+    if value is None:
+        raise ValueError(f"{objective!r} is not a function of the timeline")
+    closed = obj.bound(instance, best_bound, station_bounds)
     bounds = []
     for low, opt in zip(lower, optimal, strict=True):
+        if low is not None and model_scale:
+            low -= obj.dropped(human_times(instance))
         bound = closed if low is None else max(closed, low)
         bounds.append(value if opt else min(bound, value))
     out: dict[str, Any] = {
         "objective_value": value,
         "objective_bound": bounds[0],
-        "objective_gap": max(0.0, (value - bounds[0]) / value) if value > 0 else None,
+        "objective_gap": obj.gap(value, bounds[0]),
         "objective_bound_axis_aligned": bounds[1],
     }
-    if objective == "human_idle":
-        out["idle_bound"] = bounds[0]
+    out.update((key, bounds[0]) for key in obj.bound_keys if key != "objective_bound")
     return out

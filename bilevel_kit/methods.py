@@ -20,13 +20,14 @@ import contextlib
 import enum
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from .errors import PluginError, UsageError, one_line
 from .instance import Instance
 from .interrupt import checkpoint
+from .objectives import MODEL_OBJECTIVES, OBJECTIVES, is_top_level, relative_gap
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
 from .progress import Sink, reporting
@@ -98,7 +99,7 @@ class Result:
     @property
     def status_text(self) -> str:
         """``status``, with the objective it refers to when that is not the makespan."""
-        if self.status_objective == "makespan":
+        if is_top_level(self.status_objective):
             return str(self.status)
         return f"{self.status} (for {self.status_objective})"
 
@@ -115,11 +116,29 @@ class MethodSpec(Registered):
     (:func:`solve`), e.g. a compile that must not be charged to the time limit; it takes an
     optional ``notify`` callable and returns the seconds it spent (None: nothing to do).
     ``in_default``: whether ``compare``'s default set of methods (``--methods default``, the
-    README's main job) includes it; ``--methods all`` runs every method."""
+    README's main job) includes it; ``--methods all`` runs every method.
+    ``supports_stations``: it plans for several assembly stations (docs/timeline.md#several-
+    stations); :func:`solve` refuses an instance with stations otherwise.
+    ``objectives``: the objectives of :mod:`bilevel_kit.objectives` it minimises, its default
+    first; an ``objective`` option is held to them (docs/extending.md#adding-a-method)."""
 
     options: str  # every method declares its options class
     prepare: str | None = None
     in_default: bool = True
+    supports_stations: bool = False
+    objectives: tuple[str, ...] = ("makespan",)
+
+    def parse(self, params: Mapping[str, Any]) -> Any:
+        """The options, validated (:meth:`~bilevel_kit.options.Registered.parse`), with an
+        ``objective`` option among the declared :attr:`objectives`."""
+        options = super().parse(params)
+        chosen = getattr(options, "objective", None)
+        if isinstance(chosen, str) and chosen not in self.objectives:
+            raise UsageError(
+                f"method {self.name!r}: option 'objective': must be one of "
+                f"{', '.join(repr(o) for o in self.objectives)}, got {chosen!r}"
+            )
+        return options
 
     def load(self) -> Callable[..., MethodOutput]:
         """The method's function; a plugin's is guarded (:func:`_plugin_call`)."""
@@ -209,11 +228,40 @@ def register(
     *,
     prepare: str | None = None,
     in_default: bool = True,
+    supports_stations: bool = False,
+    objectives: tuple[str, ...] = ("makespan",),
 ) -> None:
     """Add a method by import paths (``"module:function"``, ``"module:OptionsClass"``), so
-    registering imports nothing; a name already registered is a :class:`UsageError`.
-    ``prepare`` and ``in_default``: see :class:`MethodSpec`."""
-    REGISTRY.add(MethodSpec(name, target, summary, options, prepare, in_default))
+    registering imports nothing; a name already registered, or an objective the registry
+    (:mod:`bilevel_kit.objectives`) does not know, is a :class:`UsageError`. ``prepare``,
+    ``in_default``, ``supports_stations`` and ``objectives``: see :class:`MethodSpec`."""
+    from .objectives import OBJECTIVES
+
+    unknown = [o for o in objectives if o not in OBJECTIVES]
+    if unknown or not objectives:
+        raise UsageError(
+            f"method {name!r}: objectives must name registered ones "
+            f"({', '.join(OBJECTIVES)}), got {', '.join(objectives) or 'none'}"
+        )
+    spec = MethodSpec(
+        name, target, summary, options, prepare, in_default, supports_stations, tuple(objectives)
+    )
+    REGISTRY.add(spec)
+
+
+def station_methods() -> frozenset[str]:
+    """The registered methods (plugins' too) whose spec declares ``supports_stations``."""
+    return frozenset(n for n, spec in REGISTRY.items() if spec.supports_stations)
+
+
+def require_stations_support(instance: Instance, method: str) -> None:
+    """Refuse (exit 2) a method whose spec does not declare ``supports_stations`` on an
+    instance that has stations (its times would use the instance's ``d``, ``o_H``, trays)."""
+    if instance.stations and not get_method(method).supports_stations:
+        raise UsageError(
+            f"{instance.source}: method {method!r} does not model several assembly stations "
+            f"yet; use one of {', '.join(sorted(station_methods()))} (docs/timeline.md)"
+        )
 
 
 def method_names() -> list[str]:
@@ -272,10 +320,9 @@ def check_time_limit(time_limit: Any) -> float | None:
 
 
 def gap(objective: float | None, bound: float | None) -> float | None:
-    """Relative optimality gap (objective - bound) / objective, 0 when proven optimal."""
-    if objective is None or bound is None or objective <= 0:
-        return None
-    return max(0.0, (objective - bound) / objective)
+    """Relative optimality gap (objective - bound) / objective, 0 when proven optimal: the
+    one formula, :func:`bilevel_kit.objectives.relative_gap`."""
+    return relative_gap(objective, bound)
 
 
 def above_bound(objective: float | None, bound: float | None) -> float | None:
@@ -295,7 +342,6 @@ def fold_kitless_output(instance: Instance, out: MethodOutput) -> MethodOutput:
     the status objective's value and gap in ``extra`` are recomputed on the folded plan, and
     "optimal" stays only when the folded plan is no worse (on one station it never is).
     ``extra["kitless_folded"]``: the number of kits merged away."""
-    from .objectives import OBJECTIVES
     from .plan import fold_kitless
 
     if out.plan is None or (folded := fold_kitless(instance, out.plan)) is out.plan:
@@ -338,7 +384,6 @@ def solve(
     """
     from .bounds import best_bound
     from .reachability import ensure_kit_placeable
-    from .stations import require_stations_support
 
     spec = get_method(method)
     require_stations_support(instance, method)
@@ -360,7 +405,7 @@ def solve(
     bound = max(bounds) if bounds else None
     if (
         out.status == Status.OPTIMAL
-        and out.status_objective == "makespan"
+        and is_top_level(out.status_objective)
         and out.bound is None
         and objective is not None
     ):
@@ -413,12 +458,14 @@ register(
     "bilevel_kit.heuristics.baselines:single_task",
     "paper baseline: one kit per task, deterministic topological order",
     "bilevel_kit.options:NoOptions",
+    supports_stations=True,
 )
 register(
     "whole-assembly",
     "bilevel_kit.heuristics.baselines:whole_assembly",
     "paper baseline: one kit per product unit",
     "bilevel_kit.options:NoOptions",
+    supports_stations=True,
 )
 register(
     "greedy-ce",
@@ -426,6 +473,7 @@ register(
     "the paper's bilevel heuristic: greedy rolling horizon + cross-entropy tray layout",
     "bilevel_kit.heuristics.greedy_ce:GreedyCEOptions",
     prepare=COMPILE_KERNELS,
+    supports_stations=True,
 )
 register(
     "cpsat",
@@ -433,6 +481,8 @@ register(
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
     "bilevel_kit.models.cpsat.method:CpsatOptions",
     prepare=COMPILE_KERNELS,  # its warm start runs greedy-ce
+    supports_stations=True,
+    objectives=MODEL_OBJECTIVES,
 )
 register(
     "milp",
@@ -440,6 +490,8 @@ register(
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
     "bilevel_kit.models.milp.method:MilpOptions",
     prepare=COMPILE_KERNELS,  # its hint and its lns fallback may run greedy-ce
+    supports_stations=True,
+    objectives=MODEL_OBJECTIVES,
 )
 register(
     "bilevel-milp",
@@ -451,6 +503,7 @@ register(
     # table: at a time limit its plan depends on the machine's speed, so the main job leaves
     # it out unless named (README)
     in_default=False,
+    objectives=("J",),
 )
 register(
     "lns",
@@ -458,4 +511,5 @@ register(
     "matheuristic: large-neighbourhood search, windows of kits re-optimised exactly by CP-SAT",
     "bilevel_kit.models.lns.method:LnsOptions",
     prepare=COMPILE_KERNELS,  # its start plan is greedy-ce's
+    objectives=("makespan", "expected_makespan"),
 )

@@ -31,17 +31,24 @@ makespan optimum bounds the true expectation of every plan from below (Jensen), 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from .instance import Instance
     from .plan import Timeline
 
 
-def _relative_gap(value: float, bound: float) -> float | None:
-    """``(value - bound) / value`` clipped at 0 (docs/timeline.md#terms); None for value <= 0."""
-    if value <= 0:
+#: A closed-form makespan bound of an instance; each station's own, with its instance.
+Bound = Callable[["Instance"], float]
+StationBounds = Callable[["Instance"], "list[tuple[Instance, float]]"]
+
+
+def relative_gap(value: float | None, bound: float | None) -> float | None:
+    """The one gap formula, ``(value - bound) / value`` clipped at 0 (docs/timeline.md#terms):
+    0 when proven optimal; None when either is unknown or the value is not positive."""
+    if value is None or bound is None or value <= 0:
         return None
     return max(0.0, (value - bound) / value)
 
@@ -52,9 +59,29 @@ def _signed_gap(value: float, bound: float) -> float | None:
 
 
 @dataclass(frozen=True)
+class ModelTerms:
+    """What an objective is made of in an exact model (docs/formulations.md), as CP-SAT or
+    Pyomo expressions or as plain numbers (a plan's value on the model's own scale), so that
+    one :meth:`Objective.expression` serves both back-ends and the incumbents' values:
+    ``makespan`` C; ``completions`` the sum of the stations' completions (C with one
+    station), built on first use because with several stations it adds variables;
+    ``overhead`` the human's kit overheads ``sum_s o_H,s m_s``."""
+
+    makespan: Any
+    completions: Callable[[], Any]
+    overhead: Callable[[], Any]
+
+    @classmethod
+    def one_station(cls, makespan: Any, overhead: Callable[[], Any]) -> ModelTerms:
+        """One station: the completions are the makespan."""
+        return cls(makespan, lambda: makespan, overhead)
+
+
+@dataclass(frozen=True)
 class Objective:
     """One objective: its ``name`` (``status_objective``, ``-p objective=``), how it is
-    evaluated and stated, and what a bound on it promises."""
+    evaluated and stated, what a bound on it promises, and (the modelled ones, subclasses
+    below) its closed-form bound, its exact models' expression and horizon."""
 
     name: str
     #: Words for messages ("the sum of the stations' completions").
@@ -68,7 +95,7 @@ class Objective:
     bound_keys: tuple[str, ...]
     gap_keys: tuple[str, ...]
     #: The gap from its value and its bound.
-    gap: Callable[[float, float], float | None] = _relative_gap
+    gap: Callable[[float, float], float | None] = relative_gap
     #: A stated bound is a lower bound on its value over every valid plan (any method's).
     bound_holds_for_every_plan: bool = True
     #: ``cpsat`` and ``milp`` minimise it (``-p objective=``).
@@ -77,7 +104,13 @@ class Objective:
     #: :data:`bilevel_kit.validate.TIME_TOL`, relative to ``max(1, |value|)``: 0 where the
     #: methods copy the value into the bound, the MILP's relative tolerance (1e-6) for J.
     rel_tol: float = 0.0
+    #: The result's own ``objective``, ``bound`` and ``gap`` are about it (the makespan):
+    #: a method's ``bound`` and the models' proven bounds speak of it.
     top_level: bool = False
+    #: A function of the plan and scenarios of the human times (the SAA of ``lns``).
+    scenarios: bool = False
+    #: What it is, in one line, where a list or a status line first shows it (J).
+    meaning: str | None = None
 
     def value(self, timeline: Timeline) -> float | None:
         """The objective on ``timeline``; None when it is not a function of it."""
@@ -95,6 +128,95 @@ class Objective:
 
         has_gap = any(k in source for k in self.gap_keys)
         return first(self.value_keys), first(self.bound_keys), first(self.gap_keys), has_gap
+
+    def _not_modelled(self, what: str) -> ValueError:
+        return ValueError(f"{self.name!r} has no {what}: no exact model minimises it")
+
+    def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
+        """A closed-form lower bound on it over every plan (s), made of the makespan bounds of
+        :mod:`bilevel_kit.bounds` (which passes them in, :func:`~bilevel_kit.bounds.
+        objective_bound`): ``makespan`` of an instance, ``stations`` each station's own."""
+        raise self._not_modelled("closed-form bound")
+
+    def horizon(self, instance: Instance, timeline: Timeline) -> float:
+        """A bound on the makespan of every plan at least as good as ``timeline``'s for it: the
+        exact models' ``C <= U``."""
+        raise self._not_modelled("horizon")
+
+    def expression(self, terms: ModelTerms) -> Any:
+        """What the exact models minimise: it, less :meth:`dropped` (docs/formulations.md)."""
+        raise self._not_modelled("model expression")
+
+    def dropped(self, human: Sequence[Any]) -> Any:
+        """The constant the models' :meth:`expression` leaves out, from the tasks' human times
+        ``human`` (s, or the model's integer grid): value = model value less it."""
+        return 0
+
+    def model_value(self, instance: Instance, timeline: Timeline) -> float:
+        """A plan's value on the models' scale (:meth:`expression`), from its timeline."""
+        value = self.value(timeline)
+        if value is None:
+            raise ValueError(f"{self.name!r} is not a function of the timeline")
+        return value + self.dropped(human_times(instance))
+
+
+class Makespan(Objective):
+    """``max_s C_s``: the models' C; its bound is :func:`bilevel_kit.bounds.best_bound`."""
+
+    def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
+        return makespan(instance)
+
+    def horizon(self, instance: Instance, timeline: Timeline) -> float:
+        return timeline.makespan
+
+    def expression(self, terms: ModelTerms) -> Any:
+        return terms.makespan
+
+
+class SumCompletion(Objective):
+    """``sum_s C_s``: each completion is at most the sum, so the sum bounds the makespan; its
+    bound sums each station's own (:func:`bilevel_kit.bounds.station_bounds`)."""
+
+    def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
+        return sum(lb for _, lb in stations(instance))
+
+    def horizon(self, instance: Instance, timeline: Timeline) -> float:
+        return _sum_completion(timeline)
+
+    def expression(self, terms: ModelTerms) -> Any:
+        return terms.completions()
+
+
+class HumanIdle(Objective):
+    """``sum_s (C_s - sum_{k at s} H_k)``; the models drop the constant ``sum_i h_i``."""
+
+    def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
+        """The sum over the stations of ``max(o_R + d_s, LB_s - W_s)``: a station's human idles
+        at least until its first kit arrives, and its idle is ``C_s`` less its work, at most
+        ``W_s = sum h_i + o_H,s n_s`` (one task per kit)."""
+        total = 0.0
+        for one, lb in stations(instance):
+            work = sum(one.human_time(t.id) for t in one.tasks)
+            work += one.kit_overhead_human * one.n_tasks
+            total += max(instance.kit_overhead_robot + one.delivery_time, lb - work)
+        return total
+
+    def horizon(self, instance: Instance, timeline: Timeline) -> float:
+        """``idle + sum_i h_i + n max_s o_H,s``: a station's completion is its idle plus its
+        work."""
+        o_h = max(p.kit_overhead_human for p in instance.station_params.values())
+        return timeline.human_idle + sum(human_times(instance)) + o_h * instance.n_tasks
+
+    def expression(self, terms: ModelTerms) -> Any:
+        return terms.completions() - terms.overhead()
+
+    def dropped(self, human: Sequence[Any]) -> Any:
+        return sum(human)
+
+
+def human_times(instance: Instance) -> list[float]:
+    """Every task's human time (s), in task order: what :meth:`Objective.dropped` takes."""
+    return [instance.human_time(t.id) for t in instance.tasks]
 
 
 def _sum_completion(timeline: Timeline) -> float:
@@ -119,7 +241,7 @@ J_MEANING = (
 OBJECTIVES: dict[str, Objective] = {
     o.name: o
     for o in (
-        Objective(
+        Makespan(
             "makespan",
             "the makespan",
             lambda tl: tl.makespan,
@@ -128,10 +250,10 @@ OBJECTIVES: dict[str, Objective] = {
             ("gap",),
             top_level=True,
         ),
-        Objective(
+        SumCompletion(
             "sum_completion", "the sum of the stations' completions", _sum_completion, *_EXTRA_KEYS
         ),
-        Objective(
+        HumanIdle(
             "human_idle",
             "the total human idle",
             lambda tl: tl.human_idle,
@@ -151,6 +273,7 @@ OBJECTIVES: dict[str, Objective] = {
             bound_holds_for_every_plan=False,
             modelled=False,
             rel_tol=1e-4,  # scenario times rounded down on a 1 ms grid (docs/formulations.md)
+            scenarios=True,
         ),
         Objective(
             "J",
@@ -162,6 +285,7 @@ OBJECTIVES: dict[str, Objective] = {
             gap=_signed_gap,
             modelled=False,
             rel_tol=1e-6,
+            meaning=J_MEANING,
         ),
     )
 }
@@ -184,6 +308,13 @@ def extra_claims(
         float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None for v in stated
     )
     return value, bound, gap, has_gap
+
+
+def is_top_level(name: str) -> bool:
+    """Whether a result's own ``objective``, ``bound`` and ``gap`` are about objective ``name``
+    (:attr:`Objective.top_level`: the makespan; an unknown name is not)."""
+    obj = OBJECTIVES.get(name)
+    return obj is not None and obj.top_level
 
 
 def get(name: str) -> Objective:

@@ -7,6 +7,7 @@ import sys
 from collections.abc import Iterable
 from typing import IO, TYPE_CHECKING
 
+from ..objectives import is_top_level
 from .common import (
     EXIT_INVALID,
     EXIT_OK,
@@ -161,7 +162,7 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
     follows on a line of its own with that objective's numbers (docs/cli.md#shared-options),
     so "optimal" never stands beside a gap it is not about."""
     m = result.metrics or {}
-    own = result.status_objective == "makespan"
+    own = is_top_level(result.status_objective)
     head = f"{result.method} {result.status}" if own else f"{result.method}"
     which = "" if own else "makespan "
     lines = [
@@ -194,18 +195,19 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
 def _status_line(result: Result) -> str:
     """``  OBJECTIVE: STATUS`` and that objective's value, bound and gap (when known); J's
     meaning on a line of its own."""
-    from ..objectives import J_MEANING
+    from ..objectives import OBJECTIVES
 
     x = result.extra
-    if result.status_objective == "J":
+    obj = OBJECTIVES.get(result.status_objective)
+    if obj is not None and obj.meaning is not None:  # J: no unit, its meaning below
+        value, bound, gap, _ = obj.stated({}, x)
         numbers = ""
-        if x.get("plan_objective_J") is not None:
-            j_bound = x.get("plan_objective_J_bound")
+        if value is not None:
             numbers = (
-                f"  J {_fmt(x['plan_objective_J'])}  J bound {_fmt(j_bound)}"
-                f"  J gap {_pct(x.get('plan_objective_J_gap'))}"
+                f"  {obj.name} {_fmt(value)}  {obj.name} bound {_fmt(bound)}"
+                f"  {obj.name} gap {_pct(gap)}"
             )
-        return f"  J: {result.status}{numbers}\n  ({J_MEANING})"
+        return f"  {obj.name}: {result.status}{numbers}\n  ({obj.meaning})"
     numbers = ""
     if x.get("objective_value") is not None:
         numbers = (

@@ -491,6 +491,32 @@ class Instance:
         return doc
 
 
+def station_instance(instance: Instance, station: str) -> Instance:
+    """The tasks of ``station`` as an instance of one station, with its ``d_s``, ``o_H`` and
+    trays: the robot serving this station alone. Its plans' makespans are at most the
+    station's completion in any plan of ``instance`` (dropping the other stations' kits only
+    frees the robot earlier, and times are non-decreasing in start times), so its bounds hold
+    for that completion and their max over the stations for the makespan (here, below the
+    bounds and the station models that use it; :mod:`bilevel_kit.stations` exports it)."""
+    if not instance.stations:
+        return instance
+    tasks = tuple(replace(t, station="") for t in instance.tasks if t.station == station)
+    ids = {t.id for t in tasks}
+    spec = next(s for s in instance.stations if s.id == station)
+    params = instance.station_params[station]
+    return replace(
+        instance,
+        name=f"{instance.name}:{station}",
+        base_tasks=tasks,
+        base_precedence=tuple((a, b) for a, b in instance.precedence if a in ids),
+        units=1,
+        delivery_time=params.delivery_time,
+        kit_overhead_human=params.kit_overhead_human,
+        trays=spec.trays if spec.trays is not None else instance.trays,
+        stations=(),
+    )
+
+
 def topological_order(instance: Instance, rank: Mapping[str, int] | None = None) -> list[str]:
     """Kahn's algorithm with ties broken by ``rank`` (default: file order, the deterministic
     default order): among the ready tasks, the one of smallest rank comes first."""

@@ -58,6 +58,8 @@ from typing import Any
 
 from ...bounds import johnson_lines, min_kits
 from ...instance import Instance
+from ...objectives import ModelTerms
+from ...objectives import get as get_objective
 from .. import packing
 from ..common import kit_positions, reduced_edges, relabel_chains
 from .context import Model
@@ -105,11 +107,9 @@ def build(
         ]
         if terms:
             m.add(sum(terms) <= C)
-    if objective == "makespan":
-        m.minimize(C)
-    else:
-        m.minimize(C - sc.o_h * sum(used))
-        out.obj_const = -sum(sc.h)
+    obj = get_objective(objective)  # what it minimises, less a constant (docs/formulations.md)
+    m.minimize(obj.expression(ModelTerms.one_station(C, lambda: sc.o_h * sum(used))))
+    out.obj_const = -obj.dropped(sc.h)
     _tray(instance, out, embedded, pack_res)
     return out
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...bounds import best_bound
+from ...objectives import is_top_level
 from ..common import reduced_edges
 from .context import Context
 from .model import tray_wait
@@ -17,7 +18,7 @@ from .model import tray_wait
 def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> None:
     """The proven bound into ``ctx.proven`` (makespan objective without release times only;
     ``upper_s``: the incumbent's makespan in s, which ends the kit-count scan early)."""
-    if ctx.objective != "makespan" or any(ctx.sc.rel):
+    if not is_top_level(ctx.objective) or any(ctx.sc.rel):  # a bound on the makespan
         return
     from ..relax import for_model
 

@@ -26,6 +26,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ...instance import Instance
+from ...objectives import ModelTerms
+from ...objectives import get as get_objective
 from ...plan import Plan, evaluate
 from .. import packing
 
@@ -150,9 +152,12 @@ def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
 
 
 def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) -> int:
-    """Scaled objective of a plan: makespan, or human idle without its constant -sum h."""
+    """Scaled objective of a plan, as the model minimises it (the registry's
+    :meth:`~bilevel_kit.objectives.Objective.expression`: the human idle without its
+    constant -sum h)."""
     c = scaled_makespan(sc, kits)
-    return c if objective == "makespan" else c - sc.o_h * len(kits)
+    terms = ModelTerms.one_station(c, lambda: sc.o_h * len(kits))
+    return get_objective(objective).expression(terms)
 
 
 def released_makespan(

@@ -26,7 +26,7 @@ station). The hint and the upper bound ``C <= U`` come from the better of the ba
 found.
 The objective is the makespan C, the sum of the stations' completions ``C_s >= E_k`` (kits k
 of s), or that sum less ``sum_s o_H,s m_s`` (the total human idle less the constant
-``sum_i h_i``), with ``U`` from :func:`bilevel_kit.stations.makespan_horizon`
+``sum_i h_i``: the registry's expression), with ``U`` the objective's horizon
 (docs/formulations.md); without stations ``sum_completion`` is the one-station makespan.
 ``tray`` mode is always the Benders loop here.
 """
@@ -41,8 +41,10 @@ from typing import Any
 from ...bounds import best_bound, objective_extra
 from ...instance import Instance
 from ...methods import MethodOutput, Status
+from ...objectives import ModelTerms, is_top_level
+from ...objectives import get as get_objective
 from ...plan import Kit, Plan, evaluate
-from ...stations import makespan_horizon, objective_of
+from ...stations import objective_of
 from .. import packing_oracle, stoppable
 from ..budget import Budget, check_model_memory
 from ..common import Packer, kit_order, scope_claims
@@ -86,7 +88,7 @@ def solve_stations(
     check_model_memory("cpsat", n * n * (S + 1), BYTES_PER_CELL, "task x kit x station cells")
     packer = Packer(instance, max(0.2, 0.05 * budget.time_limit), budget)
     hint = _warm_start(instance, single_task(instance).plan, whole_assembly, objective)
-    upper = makespan_horizon(instance, evaluate(instance, hint), objective)
+    upper = get_objective(objective).horizon(instance, evaluate(instance, hint))
     closed = best_bound(instance)
     extra: dict[str, Any] = {"tray_mode": "benders", "objective": objective, "max_kits": n}
     cuts: list[tuple[frozenset[int], str | None]] = []
@@ -207,21 +209,23 @@ def _build(
 
 
 def _objective(m: Any, instance: Instance, zec: Any, q: Any, objective: str) -> Any:
-    """C (``zec``: the variables z, E, C and the horizon); the sum of the completions
-    ``C_s >= E_k`` (kits k of s); or that less ``sum_s o_H,s m_s`` (the total human idle less
-    the constant ``sum_i h_i``)."""
+    """The registry's expression of ``objective`` (``zec``: the variables z, E, C and the
+    horizon) on C, the completions ``C_s >= E_k`` (kits k of s; variables made only when it
+    needs them) and the overheads ``sum_s o_H,s m_s``."""
     z, E, C, hz = zec
-    if objective == "makespan":
-        return C
-    done = {s: m.new_int_var(0, hz, f"C_{s}") for s in z}
-    for s, zs in z.items():
-        for k, e in enumerate(E):
-            m.add(done[s] >= e).only_enforce_if(zs[k])
-    total = sum(done.values())
-    if objective == "sum_completion":
-        return total
     prm = instance.station_params
-    return total - sum(q(prm[s].kit_overhead_human) * v for s, zs in z.items() for v in zs)
+
+    def completions() -> Any:
+        done = {s: m.new_int_var(0, hz, f"C_{s}") for s in z}
+        for s, zs in z.items():
+            for k, e in enumerate(E):
+                m.add(done[s] >= e).only_enforce_if(zs[k])
+        return sum(done.values())
+
+    def overhead() -> Any:
+        return sum(q(prm[s].kit_overhead_human) * v for s, zs in z.items() for v in zs)
+
+    return get_objective(objective).expression(ModelTerms(C, completions, overhead))
 
 
 def _hint(m: Any, instance: Instance, plan: Plan, x: Any, u: Any, z: Any) -> None:
@@ -331,11 +335,13 @@ def _conclude(
     bound_axis = max(closed, model_s) if model_s is not None and exact and scope else closed
     bound = makespan if optimal else (bound_axis if scope == ANY_ANGLE else closed)
     objective = extra["objective"]
-    if objective != "makespan":  # the model's bound is on that objective, not the makespan
+    if not is_top_level(objective):  # the model's bound is on that objective, not the makespan
         bound = bound_axis = closed
-        extra.update(
-            _objective_extra(instance, plan, model_s, scope, (optimal, optimal_axis), extra)
-        )
+        # a proof only on exact times and for the plans of the cuts' scope
+        low = model_s if model_s is not None and exact and scope is not None else None
+        lows = (low if scope == ANY_ANGLE else None, low)
+        proofs = (optimal, optimal_axis)
+        extra.update(objective_extra(instance, plan, objective, lows, proofs, model_scale=True))
     extra.update(
         cuts=len(cuts),
         makespan=makespan,
@@ -346,24 +352,3 @@ def _conclude(
     )
     status = Status.OPTIMAL if optimal else Status.FEASIBLE
     return MethodOutput(plan, status, min(bound, makespan), extra, status_objective=objective)
-
-
-def _objective_extra(
-    instance: Instance,
-    plan: Plan,
-    model_s: float | None,
-    scope: str | None,
-    optimal: tuple[bool, bool],
-    extra: dict[str, Any],
-) -> dict[str, Any]:
-    """:func:`bilevel_kit.bounds.objective_extra` from the model's bound ``model_s`` (s, the
-    constant ``sum_i h_i`` dropped for the human idle), a proof only on exact times and for
-    the plans of the cuts' ``scope``."""
-    objective = extra["objective"]
-    low = None
-    if model_s is not None and extra.get("times_exact") and scope is not None:
-        low = model_s
-        if objective == "human_idle":
-            low -= sum(instance.human_time(t.id) for t in instance.tasks)
-    lows = (low if scope == ANY_ANGLE else None, low)
-    return objective_extra(instance, plan, objective, lows, optimal)

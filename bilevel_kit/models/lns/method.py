@@ -50,6 +50,7 @@ import numpy as np
 
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
+from ...objectives import get as get_objective
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, pack_time_limit
@@ -131,7 +132,7 @@ def lns(
     """Registered method ``lns`` (module docstring); ``start_plan`` a valid plan to start from,
     ``known_bound`` a proven makespan bound (then none is computed). ``objective=
     "expected_makespan"``: :func:`.saa.lns_saa`."""
-    if options.objective == "expected_makespan":
+    if get_objective(options.objective).scenarios:  # the sample average (docs/formulations.md)
         from .saa import lns_saa
 
         return lns_saa(

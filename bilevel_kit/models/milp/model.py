@@ -54,8 +54,9 @@ descendant of i), ``u[k]`` = kit k is used, ``E[k]`` = the human's end of kit k 
   from the total count :math:`N_t` of type t) and :math:`\sum_{t \in M} \lambda_{t k M_t}
   \ge 1`. Every super-multiset of M fails too, so no feasible plan is cut off.
 
-**Objective.** ``makespan``: minimise C. ``human_idle``: minimise
-:math:`C - o_H \sum_k u_k` (= human idle + the constant :math:`\sum_i h_i`).
+**Objective.** The registry's expression (:mod:`bilevel_kit.objectives`): ``makespan``:
+minimise C. ``human_idle``: minimise :math:`C - o_H \sum_k u_k` (= human idle + the constant
+:math:`\sum_i h_i`).
 
 The incumbent is passed to the solver as a MIP start (:func:`set_start`), after relabelling
 its chains into the lexicographic order the model requires (:func:`canonical_kits`).
@@ -71,8 +72,9 @@ from typing import Any
 
 from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
+from ...objectives import ModelTerms, is_top_level
+from ...objectives import get as get_objective
 from ...plan import Kit, Plan, Timeline, evaluate
-from ...stations import objective_of
 from .. import packing
 from ..common import chain_groups, kit_order, kit_positions, reduced_edges, relabel_chains
 from .solver import TOL
@@ -81,22 +83,21 @@ human_order = kit_order  # the human's order inside a kit (one definition: commo
 
 
 def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective: str) -> float:
-    """The model's objective of a plan: makespan, or makespan - o_H * kits; with several
-    stations the stations master's (:func:`model_objective`)."""
+    """The model's objective of a plan (the registry's expression on its makespan and its
+    ``o_H`` times its kit count); with several stations the stations master's
+    (:func:`model_objective`)."""
     tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
     if instance.stations:
         return model_objective(instance, tl, objective)
-    c = tl.makespan
-    return c if objective == "makespan" else c - instance.kit_overhead_human * len(kits)
+    terms = ModelTerms.one_station(tl.makespan, lambda: instance.kit_overhead_human * len(kits))
+    return get_objective(objective).expression(terms)
 
 
 def model_objective(instance: Instance, tl: Timeline, objective: str) -> float:
-    """The stations master's objective of a plan's timeline (:mod:`.stations`): the objective
-    itself, or for ``human_idle`` the total idle plus the constant ``sum_i h_i`` it drops."""
-    value = objective_of(tl, objective)
-    if objective == "human_idle":
-        value += sum(instance.human_time(t.id) for t in instance.tasks)
-    return value
+    """The stations master's objective of a plan's timeline (:mod:`.stations`): the
+    registry's :meth:`~bilevel_kit.objectives.Objective.model_value` (for ``human_idle`` the
+    total idle plus the constant ``sum_i h_i`` it drops)."""
+    return get_objective(objective).model_value(instance, tl)
 
 
 @dataclass
@@ -177,7 +178,7 @@ def build(
     _assignment(m, instance, data, K)
     _precedence(m, instance, data, K)
     _timeline(m, instance, data, K, upper, objective)
-    if lower is not None and objective == "makespan" and math.isfinite(lower) and lower > 0:
+    if lower is not None and is_top_level(objective) and math.isfinite(lower) and lower > 0:
         m.cons.add(m.E[K - 1] >= lower)
     master = Master(m, K, data.ids, {key: m.x[key] for key in data.keys})
     _tray(master, instance, data)
@@ -280,10 +281,8 @@ def _timeline(
         add(cmax >= c + slope * n_used)
     if upper is not None:
         add(cmax <= upper)
-    if objective == "makespan":
-        m.obj = pyo.Objective(expr=cmax, sense=pyo.minimize)
-    else:
-        m.obj = pyo.Objective(expr=cmax - o_h * sum(m.u[k] for k in range(K)), sense=pyo.minimize)
+    terms = ModelTerms.one_station(cmax, lambda: o_h * sum(m.u[k] for k in range(K)))
+    m.obj = pyo.Objective(expr=get_objective(objective).expression(terms), sense=pyo.minimize)
 
 
 def _tray(master: Master, instance: Instance, data: _Data) -> None:

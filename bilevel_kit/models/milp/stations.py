@@ -41,7 +41,7 @@ and ``U`` are the better of the baselines' plans (which interleave stations by e
 The objective is the makespan ``C``, the sum of the completions ``sum_s F[s,K-1]``, or the
 total human idle less the constant ``sum_i h_i``, ``sum_s F[s,K-1] - sum_s o_H,s sum_k
 z[s,k]`` (exactly: the human's work depends on the kit counts), with ``U`` from
-:func:`bilevel_kit.stations.makespan_horizon` (docs/formulations.md); ``hint`` is refused,
+:meth:`bilevel_kit.objectives.Objective.horizon` (docs/formulations.md); ``hint`` is refused,
 and ``tray`` is always the Benders loop from the area relaxation, as in cpsat's stations
 model (seeding the cuts of every pair of tasks that does not fit, ``tray=auto`` for one
 station, adds cuts proven for 0/90-degree layouts only, so 14 of the 24 random instances of
@@ -51,16 +51,23 @@ without them).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
+from ... import bounds
 from ...bounds import min_kits
-from ...bounds import objective_extra as stations_extra
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance, StationParams
+from ...objectives import ModelTerms
+from ...objectives import get as get_objective
 from ...plan import Plan, evaluate
-from ...stations import makespan_horizon, objective_of
+from ...stations import objective_of
 from .model import Master, _Data, _tray, model_objective
+
+#: :func:`bilevel_kit.bounds.objective_extra` with the master's bounds (for every plan, for
+#: 0/90-degree plans) on its own scale, the constant ``sum_i h_i`` dropped for the human idle.
+objective_extra = functools.partial(bounds.objective_extra, model_scale=True)
 
 
 def incumbent(
@@ -68,7 +75,7 @@ def incumbent(
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
     """The better of the baselines' plans for ``objective`` as kits, its master objective
     (:func:`.model.model_objective`), the horizon ``U``
-    (:func:`bilevel_kit.stations.makespan_horizon`) and the kit cap K = n; a
+    (:meth:`bilevel_kit.objectives.Objective.horizon`) and the kit cap K = n; a
     UsageError for a hint."""
     from ...heuristics.baselines import single_task, whole_assembly
 
@@ -89,24 +96,8 @@ def incumbent(
     best = min(plans, key=lambda p: objective_of(evaluate(instance, p), objective))
     tl = evaluate(instance, best)
     kits = [list(k.tasks) for k in best.kits]
-    upper = makespan_horizon(instance, tl, objective)
+    upper = get_objective(objective).horizon(instance, tl)
     return kits, model_objective(instance, tl, objective), upper, instance.n_tasks
-
-
-def objective_extra(
-    instance: Instance,
-    plan: Plan,
-    objective: str,
-    lower: tuple[float | None, float | None],
-    optimal: tuple[bool, bool],
-) -> dict[str, Any]:
-    """:func:`bilevel_kit.bounds.objective_extra` with the master's bounds ``lower`` (for
-    every plan, for 0/90-degree plans) in its own units (the constant ``sum_i h_i`` dropped
-    for the human idle)."""
-    offset = model_objective(instance, evaluate(instance, plan), objective)
-    offset -= objective_of(evaluate(instance, plan), objective)
-    seconds = tuple(None if v is None else v - offset for v in lower)
-    return stations_extra(instance, plan, objective, (seconds[0], seconds[1]), optimal)
 
 
 def model_cells(instance: Instance, K: int) -> int:
@@ -146,16 +137,16 @@ def build(
 
 
 def _objective(m: Any, instance: Instance, K: int, objective: str) -> Any:
-    """C; the sum of the completions ``F[s,K-1]``; or that less ``sum_s o_H,s m_s`` (the total
-    human idle less the constant ``sum_i h_i``)."""
+    """The registry's expression of ``objective`` on C, the completions ``F[s,K-1]`` and the
+    overheads ``sum_s o_H,s m_s``."""
     ids = range(len(instance.station_ids))
-    if objective == "makespan":
-        return m.C
-    total = sum(m.F[s, K - 1] for s in ids)
-    if objective == "sum_completion":
-        return total
     prm = [instance.station_params[s] for s in instance.station_ids]
-    return total - sum(prm[s].kit_overhead_human * m.z[s, k] for s in ids for k in range(K))
+    terms = ModelTerms(
+        m.C,
+        lambda: sum(m.F[s, K - 1] for s in ids),
+        lambda: sum(prm[s].kit_overhead_human * m.z[s, k] for s in ids for k in range(K)),
+    )
+    return get_objective(objective).expression(terms)
 
 
 def _assignment(m: Any, instance: Instance, data: _Data, K: int) -> None:
