@@ -117,8 +117,9 @@ class MethodSpec(Registered):
     optional ``notify`` callable and returns the seconds it spent (None: nothing to do).
     ``in_default``: whether ``compare``'s default set of methods (``--methods default``, the
     README's main job) includes it; ``--methods all`` runs every method.
-    ``supports_stations``: it plans for several assembly stations (docs/timeline.md#several-
-    stations); :func:`solve` refuses an instance with stations otherwise.
+    ``supports_stations``: it plans for several assembly stations
+    (docs/timeline.md#several-stations); :func:`solve` refuses an instance with stations
+    otherwise.
     ``objectives``: the objectives of :mod:`bilevel_kit.objectives` it minimises, its default
     first; an ``objective`` option is held to them (docs/extending.md#adding-a-method)."""
 

@@ -10,13 +10,16 @@ from .common import EXIT_OK
 
 HELP = "list the registered methods"
 DESCRIPTION = (
-    "Without NAME: one line per registered method, then a line on what J (bilevel-milp's "
+    "Without NAME: one line per registered method (in brackets: left out of compare's "
+    "default set, [stations] when it plans for several assembly stations, the objectives it "
+    "minimises besides the makespan), then a line on what J (bilevel-milp's "
     "objective) is. With NAME: that method's options "
     "(solve --param KEY=VALUE) with type, default and meaning; NAME may also be a simulation "
     "policy that is not a method (optimized, cpsat-rolling: simulate --param KEY=VALUE)."
 )
 
 if TYPE_CHECKING:
+    from ..methods import MethodSpec
     from ..options import Registered
 
 
@@ -33,13 +36,23 @@ def run(args: argparse.Namespace) -> int:
         from ..objectives import J_MEANING
 
         for s in REGISTRY.values():
-            note = "" if s.in_default else " [not in compare's default set: name it]"
-            print(f"{s.name:<16} {s.summary}{note}")
+            print(f"{s.name:<16} {s.summary}{_notes(s)}")
         if any(" J " in s.summary for s in REGISTRY.values()):
             print(f"\n{J_MEANING}.")
     else:
         print(describe_method(find(args.name)))
     return EXIT_OK
+
+
+def _notes(spec: MethodSpec) -> str:
+    """What a method's spec declares beyond its summary, in brackets: left out of
+    ``compare``'s default set, plans for several stations, objectives besides the makespan."""
+    notes = [] if spec.in_default else ["not in compare's default set: name it"]
+    if spec.supports_stations:
+        notes.append("stations")
+    if spec.objectives != ("makespan",):
+        notes.append(f"objectives: {', '.join(spec.objectives)}")
+    return f" [{'; '.join(notes)}]" if notes else ""
 
 
 def find(name: str) -> Registered:

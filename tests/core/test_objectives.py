@@ -39,6 +39,23 @@ def test_every_list_of_objective_names_is_the_registry():
         assert typing.get_args(hints[field.name]) == MODEL_OBJECTIVES
 
 
+def test_each_method_declares_the_objectives_of_its_option():
+    """The method spec's ``objectives`` (docs/extending.md) are its ``objective`` option's
+    choices, default first, and registered objectives; the exact models declare
+    :data:`MODEL_OBJECTIVES`."""
+    from bilevel_kit.methods import REGISTRY, get_method
+
+    for name, spec in REGISTRY.items():
+        assert spec.objectives and set(spec.objectives) <= set(OBJECTIVES), name
+        options = spec.options_class()
+        field = next((f for f in dataclasses.fields(options) if f.name == "objective"), None)
+        if field is not None:
+            hints = typing.get_type_hints(options)
+            assert typing.get_args(hints["objective"]) == spec.objectives, name
+            assert field.default == spec.objectives[0], name
+    assert get_method("cpsat").objectives == get_method("milp").objectives == MODEL_OBJECTIVES
+
+
 def test_the_worked_example_values():
     """docs/timeline.md#several-stations: [a1] [a2] [b1] ends A at 19 s, B at 23.5 s, with
     4 + 17.5 = 21.5 s of idle."""

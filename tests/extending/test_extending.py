@@ -75,6 +75,64 @@ def test_it_appears_in_methods_solve_and_compare(pairs, root, tmp_path, capsys):
     assert rows["pairs"]["valid"] == "True"
 
 
+def test_it_declares_stations_and_its_objective(pairs, root, capsys):
+    """docs/extending.md: the spec's ``supports_stations`` lets ``solve`` take an instance
+    with stations (the example's kits never mix two, so the checker accepts them), and
+    ``bilevel-kit methods`` shows the declaration; without it ``solve`` refuses (exit 2)."""
+    from dataclasses import replace
+
+    from bilevel_kit.methods import station_methods
+
+    spec = REGISTRY[pairs]
+    assert spec.supports_stations and spec.objectives == ("makespan",)
+    assert pairs in station_methods()
+    stations = load(root / "instances/stations/table_stool_s2.json")
+    res = solve(stations, pairs, check=True)
+    assert res.extra["violations"] == [] and len(res.extra["station_metrics"]) == 2
+    assert main(["methods"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("pairs "))
+    assert line.endswith("[stations]")
+    REGISTRY[pairs] = replace(spec, supports_stations=False)
+    with pytest.raises(UsageError, match="'pairs' does not model several assembly stations"):
+        solve(stations, pairs)
+    assert pairs not in station_methods()
+
+
+def test_an_objective_option_is_held_to_the_declared_objectives(pairs, tiny):
+    """A method's ``objective`` option must name one of the objectives its spec declares,
+    and a spec may declare only registered objectives."""
+    import sys
+    import types
+    from dataclasses import dataclass
+
+    from bilevel_kit.methods import register
+
+    @dataclass(frozen=True)
+    class ObjectiveOptions:
+        objective: str = "makespan"
+
+    module = types.ModuleType("bk_objective_options")
+    module.ObjectiveOptions = ObjectiveOptions
+    sys.modules[module.__name__] = module
+    try:
+        register(
+            "pairs-idle",
+            "bilevel_kit.heuristics.baselines:single_task",
+            "a test's method with an objective option",
+            "bk_objective_options:ObjectiveOptions",
+            objectives=("makespan", "human_idle"),
+        )
+        assert solve(tiny, "pairs-idle", objective="human_idle").plan is not None
+        with pytest.raises(UsageError, match="option 'objective': must be one of 'makespan', "):
+            solve(tiny, "pairs-idle", objective="J")
+        with pytest.raises(UsageError, match="objectives must name registered ones"):
+            register("pairs-bad", "x:y", "unknown objective", "x:Y", objectives=("speed",))
+        assert "pairs-bad" not in REGISTRY
+    finally:
+        REGISTRY.remove("pairs-idle")
+        del sys.modules[module.__name__]
+
+
 def _install(tmp_path: Path) -> Path:
     """pip-install the example package into a folder of its own (as a user would, but not into
     the test environment), from a copy so the source tree stays clean."""

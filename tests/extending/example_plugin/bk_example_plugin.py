@@ -35,12 +35,13 @@ def pairs(
     seed: int = 0,
     time_limit: float | None = None,
 ) -> MethodOutput:
-    """Consecutive groups of the topological order; a group that does not fit is shortened."""
+    """Consecutive groups of the topological order; a group that does not fit, or that would
+    mix assembly stations (a kit serves one), is shortened."""
     order = topological_order(instance)
     kits = []
     start = 0
     while start < len(order):
-        size = min(options.size, len(order) - start)
+        size = min(options.size, _same_station(instance, order, start))
         while True:
             tasks = order[start : start + size]
             try:
@@ -53,6 +54,16 @@ def pairs(
         start += size
     # a plan, not a proof: FEASIBLE, and no bound of its own (solve() adds the closed forms)
     return MethodOutput(Plan(tuple(kits)), Status.FEASIBLE)
+
+
+def _same_station(instance: Instance, order: list[str], start: int) -> int:
+    """How many tasks from ``order[start]`` on are for its station (all of them on an
+    instance without stations: every task's station is "")."""
+    station = instance.station_of(order[start])
+    run = 1
+    while start + run < len(order) and instance.station_of(order[start + run]) == station:
+        run += 1
+    return run
 
 
 class PairsPolicy:
@@ -98,6 +109,12 @@ def register_plugin() -> None:
         "bk_example_plugin:pairs",
         "worked example: consecutive tasks of the topological order, `size` per kit",
         "bk_example_plugin:PairsOptions",
+        # it plans for several assembly stations (its kits never mix two), so `solve` takes
+        # instances with stations; without this `solve` refuses them (exit 2)
+        supports_stations=True,
+        # the objectives it minimises, its default first (the registry's names, bilevel_kit/
+        # objectives.py); an `objective` option of PairsOptions would be held to them
+        objectives=("makespan",),
     )
     POLICIES.register(
         "pairs",
