@@ -24,8 +24,8 @@ if TYPE_CHECKING:
 
 def __getattr__(name: str) -> frozenset[str]:
     """``STATION_METHODS``: the registered methods whose spec declares ``supports_stations``
-    (:func:`bilevel_kit.methods.station_methods`, read on each use); every other one refuses an instance that
-    declares ``stations`` (its times would use the instance's ``d``, ``o_H`` and ``trays``)."""
+    (:func:`bilevel_kit.methods.station_methods`, read on each use; kept for the simulation's
+    ``optimized`` policy, :mod:`bilevel_kit.sim.stations`)."""
     if name == "STATION_METHODS":
         from .methods import station_methods
 
