@@ -69,7 +69,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from .instance import Instance
 from .instance.model import station_instance
@@ -96,25 +96,60 @@ def tray_wait(instance: Instance) -> float:
     return instance.kit_overhead_human if instance.tray_limit == 1 else 0.0
 
 
+def end_tasks(instance: Instance) -> tuple[list[int], list[int]]:
+    """The task indices (task order) of the sources and the sinks of the precedence graph:
+    the first kit holds a source, the last a sink (bounds (a) and (b))."""
+    idx = instance.index
+    has_pred = {idx[b] for _, b in instance.precedence}
+    has_succ = {idx[a] for a, _ in instance.precedence}
+    every = range(instance.n_tasks)
+    return [i for i in every if i not in has_pred], [i for i in every if i not in has_succ]
+
+
+#: Seconds (float) or the exact models' integer time grid (int).
+Num = TypeVar("Num", int, float)
+
+
+def human_robot(
+    times: tuple[Sequence[Num], Sequence[Num]],
+    kit: tuple[Num, Num, Num, Num],
+    ends: tuple[list[int], list[int]],
+    m: int,
+) -> tuple[Num, Num]:
+    """(a) human and (b) robot bounds of the module docstring with ``m`` kits, from the
+    tasks' ``times`` (r, h), the ``kit`` overheads and wait ``(o_R, d, o_H, w)`` (w:
+    :func:`tray_wait`) and the :func:`end_tasks`; in seconds or on a model's integer grid
+    (the one derivation :func:`lower_bounds` and the CP-SAT model share)."""
+    (r, h), (o_r, d, o_h, w), (sources, sinks) = times, kit, ends
+    human = min(r[i] for i in sources) + o_r + d + sum(h) + m * o_h
+    robot = sum(r) + m * (o_r + d) + (m - 1) * w + o_h + min(h[i] for i in sinks)
+    return human, robot
+
+
+def kit_slacks(
+    upper: Num,
+    times: tuple[Sequence[Num], Sequence[Num]],
+    kit: tuple[Num, Num, Num, Num],
+    ends: tuple[list[int], list[int]],
+) -> list[tuple[Num, Num]]:
+    """(b) and (a) with the plan's own kit count m solved for m: every plan of makespan at
+    most ``upper`` has ``m * per_kit <= slack`` for each ``(slack, per_kit)`` (no limit where
+    ``per_kit`` is 0); arguments as :func:`human_robot`. The exact models' kit caps."""
+    (r, h), (o_r, d, o_h, w), (sources, sinks) = times, kit, ends
+    return [
+        (upper - sum(r) - o_h + w - min(h[i] for i in sinks), o_r + d + w),
+        (upper - min(r[i] for i in sources) - o_r - d - sum(h), o_h),
+    ]
+
+
 def lower_bounds(instance: Instance) -> dict[str, float]:
     """All closed-form bounds (seconds), keyed ``human``, ``robot``, ``min_kits`` (a count)."""
     ids = [t.id for t in instance.tasks]
-    has_pred = {b for _, b in instance.precedence}
-    has_succ = {a for a, _ in instance.precedence}
-    sources = [i for i in ids if i not in has_pred]
-    sinks = [i for i in ids if i not in has_succ]
     m = min_kits(instance)
     o_r, o_h, d = instance.kit_overhead_robot, instance.kit_overhead_human, instance.delivery_time
-    total_r = sum(instance.robot_time(i) for i in ids)
-    total_h = sum(instance.human_time(i) for i in ids)
-    human = min(instance.robot_time(i) for i in sources) + o_r + d + total_h + m * o_h
-    robot = (
-        total_r
-        + m * (o_r + d)
-        + (m - 1) * tray_wait(instance)
-        + o_h
-        + min(instance.human_time(i) for i in sinks)
-    )
+    times = ([instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids])
+    kit = (o_r, d, o_h, tray_wait(instance))
+    human, robot = human_robot(times, kit, end_tasks(instance), m)
     return {"human": human, "robot": robot, "flow": flow_bound(instance, m), "min_kits": float(m)}
 
 

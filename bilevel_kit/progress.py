@@ -26,6 +26,8 @@ from dataclasses import dataclass, replace
 from types import TracebackType
 from typing import IO
 
+from .objectives import relative_gap
+
 
 @dataclass(frozen=True)
 class Update:
@@ -45,10 +47,8 @@ class Update:
 
     @property
     def gap(self) -> float | None:
-        """(incumbent - bound) / incumbent, as :func:`bilevel_kit.methods.gap`."""
-        if self.incumbent is None or self.bound is None or self.incumbent <= 0:
-            return None
-        return max(0.0, (self.incumbent - self.bound) / self.incumbent)
+        """(incumbent - bound) / incumbent: the one gap, :func:`~.objectives.relative_gap`."""
+        return relative_gap(self.incumbent, self.bound)
 
 
 #: A progress sink: called with every change of a solve's incumbent, bound or stage.

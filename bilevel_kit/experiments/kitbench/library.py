@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import UsageError
+from ...objectives import relative_gap
 
 INDEX = "index.csv"
 SOLUTIONS = "solutions"
@@ -93,10 +94,9 @@ class Record:
 
     @property
     def gap(self) -> float | None:
-        """The certified gap (best_known - best_bound) / best_known, clipped at 0."""
-        if self.best_known is None or self.best_bound is None or self.best_known <= 0:
-            return None
-        return max(0.0, (self.best_known - self.best_bound) / self.best_known)
+        """The certified gap (best_known - best_bound) / best_known, clipped at 0 (the one
+        gap, :func:`bilevel_kit.objectives.relative_gap`)."""
+        return relative_gap(self.best_known, self.best_bound)
 
     def row(self) -> dict[str, str]:
         """The record as index cells (floats in full precision, so they read back exactly)."""

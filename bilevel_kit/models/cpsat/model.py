@@ -56,7 +56,7 @@ import itertools
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
-from ...bounds import johnson_lines, min_kits
+from ...bounds import end_tasks, human_robot, johnson_lines, min_kits
 from ...instance import Instance
 from ...objectives import ModelTerms
 from ...objectives import get as get_objective
@@ -219,27 +219,9 @@ def _arrival(
 
 def _closed_form_bound(instance: Instance, sc: Scaled, K: int) -> int:
     """The human and robot bounds of :mod:`bilevel_kit.bounds` on scaled times."""
-    idx = instance.index
-    n = len(sc.r)
-    edges = [(idx[a], idx[b]) for a, b in reduced_edges(instance)]
-    has_pred = {b for _, b in edges}
-    has_succ = {a for a, _ in edges}
     mk = min(K, min_kits(instance))
-    lb_human = (
-        min(sc.r[i] for i in range(n) if i not in has_pred)
-        + sc.o_r
-        + sc.d
-        + sum(sc.h)
-        + mk * sc.o_h
-    )
-    lb_robot = (
-        sum(sc.r)
-        + mk * (sc.o_r + sc.d)
-        + (mk - 1) * tray_wait(sc)
-        + sc.o_h
-        + min(sc.h[i] for i in range(n) if i not in has_succ)
-    )
-    return max(lb_human, lb_robot)
+    kit = (sc.o_r, sc.d, sc.o_h, tray_wait(sc))
+    return max(human_robot((sc.r, sc.h), kit, end_tasks(instance), mk))
 
 
 #: The release bound enumerates the segmentations of at most this many late tasks.
@@ -307,9 +289,7 @@ def _one_tray_bound(instance: Instance, sc: Scaled, mdl: Model) -> None:
     w = tray_wait(sc)
     if not w:
         return
-    idx = instance.index
-    has_succ = {idx[a] for a, _ in reduced_edges(instance)}
-    last = min(sc.h[i] for i in range(len(sc.h)) if i not in has_succ)
+    last = min(sc.h[i] for i in end_tasks(instance)[1])
     n_used = sum(mdl.used)
     mdl.model.add(sum(sc.r) + (sc.o_r + sc.d + w) * n_used - w + sc.o_h + last <= mdl.C)
 

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ...bounds import best_bound
+from ...bounds import best_bound, end_tasks, kit_slacks
 from ...objectives import is_top_level
-from ..common import reduced_edges
 from .context import Context
 from .model import tray_wait
 
@@ -81,17 +80,8 @@ def kit_cap(ctx: Context, upper: int | None) -> int:
     if upper is None:
         return K
     K = proven_kit_cap(ctx, upper, K)
-    idx = ctx.instance.index
-    edges = [(idx[a], idx[b]) for a, b in reduced_edges(ctx.instance)]
-    has_pred = {b for _, b in edges}
-    has_succ = {a for a, _ in edges}
-    w = tray_wait(sc)  # one tray: the robot waits o_H per kit after the first
-    if sc.o_r + sc.d + w > 0:
-        slack = upper - sum(sc.r) - sc.o_h + w - min(sc.h[i] for i in range(n) if i not in has_succ)
-        K = min(K, max(1, slack // (sc.o_r + sc.d + w)))
-    if sc.o_h > 0:
-        slack = (
-            upper - min(sc.r[i] for i in range(n) if i not in has_pred) - sc.o_r - sc.d - sum(sc.h)
-        )
-        K = min(K, max(1, slack // sc.o_h))
+    kit = (sc.o_r, sc.d, sc.o_h, tray_wait(sc))  # one tray: the robot waits o_H per kit
+    for slack, per_kit in kit_slacks(upper, (sc.r, sc.h), kit, end_tasks(ctx.instance)):
+        if per_kit > 0:
+            K = min(K, max(1, slack // per_kit))
     return K

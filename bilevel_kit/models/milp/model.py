@@ -70,7 +70,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...bounds import johnson_lines, lower_bounds, min_kits, tray_wait
+from ...bounds import end_tasks, johnson_lines, kit_slacks, lower_bounds, min_kits, tray_wait
 from ...instance import Instance, topological_order
 from ...objectives import ModelTerms, is_top_level
 from ...objectives import get as get_objective
@@ -259,23 +259,11 @@ def _timeline(
     add(cmax >= max(lb["human"], lb["robot"], lb["flow"]))
     # the same bounds with the model's own kit count m = sum_k u_k (valid for integer plans:
     # the last kit holds a sink, the first a source; see :mod:`bilevel_kit.bounds`)
-    ids, n = data.ids, len(data.ids)
-    has_pred = {b for _, b in instance.precedence}
-    has_succ = {a for a, _ in instance.precedence}
+    sources, sinks = end_tasks(instance)
     n_used = sum(m.u[k] for k in range(K))
     w = tray_wait(instance)  # one tray: the robot waits o_H per kit after the first
-    add(
-        cmax
-        >= sum(r)
-        + (o_r + d + w) * n_used
-        - w
-        + o_h
-        + min(h[i] for i in range(n) if ids[i] not in has_succ)
-    )
-    add(
-        cmax
-        >= min(r[i] for i in range(n) if ids[i] not in has_pred) + o_r + d + sum(h) + o_h * n_used
-    )
+    add(cmax >= sum(r) + (o_r + d + w) * n_used - w + o_h + min(h[i] for i in sinks))
+    add(cmax >= min(r[i] for i in sources) + o_r + d + sum(h) + o_h * n_used)
     # the flow-shop bound (d) of :mod:`bilevel_kit.bounds` with the model's own kit count
     for c, slope in johnson_lines(r, h, o_r + d, o_h):
         add(cmax >= c + slope * n_used)
@@ -392,7 +380,8 @@ def extract(master: Master) -> list[list[str]]:
 
 
 def kit_cap(instance: Instance, upper: float) -> int:
-    """Largest kit count m of a plan with makespan <= U, from the closed-form bounds with m:
+    """Largest kit count m of a plan with makespan <= U, from the closed-form bounds with m
+    (:func:`bilevel_kit.bounds.kit_slacks`):
 
     .. math:: m (o_R + d + w) \\le U - \\sum r - o_H + w - \\min_{snk} h,\\qquad
               m\\, o_H \\le U - \\min_{src} r - o_R - d - \\sum h
@@ -400,19 +389,16 @@ def kit_cap(instance: Instance, upper: float) -> int:
     (w = o_H with one tray, else 0: :func:`bilevel_kit.bounds.tray_wait`).
     """
     ids = [t.id for t in instance.tasks]
-    n = len(ids)
-    has_pred = {b for _, b in instance.precedence}
-    has_succ = {a for a, _ in instance.precedence}
-    r = {t: instance.robot_time(t) for t in ids}
-    h = {t: instance.human_time(t) for t in ids}
-    d, o_r, o_h = instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human
-    cap = n
+    times = ([instance.robot_time(t) for t in ids], [instance.human_time(t) for t in ids])
+    kit = (
+        instance.kit_overhead_robot,
+        instance.delivery_time,
+        instance.kit_overhead_human,
+        tray_wait(instance),
+    )
+    cap = len(ids)
     eps = TOL * max(1.0, upper)
-    w = tray_wait(instance)
-    if o_r + d + w > 0:
-        slack = upper - sum(r.values()) - o_h + w - min(h[t] for t in ids if t not in has_succ)
-        cap = min(cap, max(1, math.floor((slack + eps) / (o_r + d + w))))
-    if o_h > 0:
-        slack = upper - min(r[t] for t in ids if t not in has_pred) - o_r - d - sum(h.values())
-        cap = min(cap, max(1, math.floor((slack + eps) / o_h)))
+    for slack, per_kit in kit_slacks(upper, times, kit, end_tasks(instance)):
+        if per_kit > 0:
+            cap = min(cap, max(1, math.floor((slack + eps) / per_kit)))
     return cap
