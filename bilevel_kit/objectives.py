@@ -3,10 +3,15 @@ r"""Every objective a result's ``status`` may refer to, in one registry.
 Each :class:`Objective` declares how it is evaluated from a plan's
 :class:`~bilevel_kit.plan.Timeline` (the one evaluator, docs/timeline.md), where a result states
 its value, bound and gap, how the gap is formed, and whether a stated bound is a claim about
-every valid plan (so that any other valid plan's value may refute it). The checker
-(:mod:`bilevel_kit.validate`), ``compare``'s cross-method consistency test
-(:mod:`bilevel_kit.experiments.compare`) and the brute-force tests iterate over
-:data:`OBJECTIVES`: an objective added here is checked everywhere without a special case.
+every valid plan (so that any other valid plan's value may refute it). The ones the exact
+models minimise are subclasses that also own their closed-form bound (made of the makespan
+bounds of :mod:`bilevel_kit.bounds`), the models' horizon ``C <= U``, and their expression in
+the models, written once on :class:`ModelTerms` for CP-SAT, Pyomo and plain numbers alike,
+so that no module compares objective names. The checker (:mod:`bilevel_kit.validate`),
+``compare``'s cross-method consistency test (:mod:`bilevel_kit.experiments.compare`) and the
+brute-force tests iterate over :data:`OBJECTIVES`: an objective added here is checked
+everywhere without a special case; a method declares the ones it minimises on its spec
+(:class:`bilevel_kit.methods.MethodSpec`, docs/extending.md#adding-an-objective).
 
 The objectives (docs/timeline.md#metrics, docs/timeline.md#several-stations,
 docs/formulations.md):
