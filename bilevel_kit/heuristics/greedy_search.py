@@ -487,11 +487,9 @@ class PrefixSearch:
                 dc.ep.window,
                 lv.seqs[k],
                 length - i,
-                f,
-                lower,
+                self._pair_terms(dc, li, k, fit),
                 None,
                 incumbent + TIE_TOL,
-                self._pair_terms(dc, li, k, fit),
             )
         self.stats.rest_capped += capped
         return (score, li, k, rest, fit) if rest else None
@@ -602,9 +600,8 @@ class PrefixSearch:
                         dc.ep.window,
                         levels[li].seqs[k],
                         length - i,
-                        *self._pair_score(dc, li, k, fit),
+                        self._pair_terms(dc, li, k, fit),
                         fmin + TIE_TOL,
-                        terms=self._pair_terms(dc, li, k, fit),
                     )
                     if first:
                         rest, score = first, f2

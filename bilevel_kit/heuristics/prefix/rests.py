@@ -11,7 +11,6 @@ lexicographic order otherwise, and for the tie rule (the first rest under a thre
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
 from collections.abc import Callable
@@ -96,15 +95,15 @@ class RestSearch:
     ) -> None:
         self.graph = graph
         self.r = robot
-        self._r_list: list[float] = robot.tolist()
         self.sums = SumTable.build(robot, horizon - 1)
         self.prune = prune
         self.max_nodes = max_nodes
         #: the decomposition's packed sum tables by available tasks per value (capped at the
         #: largest k), shared by the epochs
         self.packed: dict[bytes, PackedTables] = {}
-        #: the compiled depth-first search (:mod:`.._dfs_kernel`) and the graph as its arrays
-        self._dfs = _dfs_kernel.kernel()
+        #: the depth-first search (:mod:`.._dfs_kernel`, compiled when numba runs) and the
+        #: graph as its arrays
+        self._dfs = _dfs_kernel.search()
         self._dfs_graph = (
             np.append(graph.succ_start, len(graph.succ_flat)).astype(np.int64),
             graph.succ_flat,
@@ -117,83 +116,32 @@ class RestSearch:
         window: Window,
         prefix: tuple[int, ...],
         m: int,
-        score: Callable[[Any], Any],
-        bound: Callable[[float, float], float],
+        terms: np.ndarray,
         threshold: float | None,
         cutoff: float = math.inf,
-        terms: np.ndarray | None = None,
     ) -> RestResult:
         """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
-        topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
-        bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
-        largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
-        rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
-        are not looked for (the result is then ``(inf, ())``). ``terms``: ``score`` and
-        ``bound`` as :data:`.._dfs_kernel.TERMS`, for the compiled search (the same result)."""
+        topological order, capped), F given by ``terms`` as a function of R(Q) (task times
+        only; :data:`.._dfs_kernel.TERMS`). With ``threshold``, the first rest (lexicographic)
+        whose F is at most the threshold. Rests whose F exceeds ``cutoff`` are not looked for
+        (the result is then ``(inf, ())``). The search is :func:`.._dfs_kernel.depth_first`,
+        compiled or, without numba, the same source run as Python."""
         ordered, rel = self._after(window, prefix)
-        if terms is not None and self._dfs is not None:
-            f, rest, capped = self._dfs(
-                np.array(ordered, dtype=np.int64),
-                np.array(rel, dtype=np.int64),
-                self._dfs_graph,
-                self.r,
-                m,
-                self.max_nodes,
-                self.prune,
-                window.r_range,
-                terms,
-                threshold is not None,
-                math.inf if threshold is None else threshold,
-                cutoff,
-            )
-            return float(f), tuple(rest.tolist()), bool(capped)
-        rl = self._r_list
-        rmin, rmax = window.r_range  # over the tasks not done (a superset of those left)
-        best_f = math.inf
-        best_q: tuple[int, ...] = ()
-        nodes = 0
-        cap = self.max_nodes
-        capped = False
-        seq: list[int] = []
-
-        def rec(total: float, top: int, unlocked: tuple[int, ...]) -> bool:
-            """Depth-first in lexicographic order of canonical sequences; True stops.
-            ``top``: the largest task of ``seq``; ``unlocked``: its children outside
-            ``ordered`` (:meth:`Precedence.unlocked_after`, given done and the prefix)."""
-            nonlocal best_f, best_q, nodes, capped
-            k = len(seq)
-            nodes += 1
-            if nodes > cap:
-                capped = True
-                return True
-            if self.prune and k:
-                lower = bound(total + (m - k) * rmin, total + (m - k) * rmax)
-                if (lower > threshold) if threshold is not None else (lower >= best_f):
-                    return False
-                if lower > cutoff:
-                    return False
-            kids = ordered[bisect.bisect_right(ordered, top) :]
-            if unlocked:
-                kids = sorted([*kids, *unlocked])
-            if not kids:
-                return False
-            if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
-                vals = score(total + self.r[kids])
-                a = _leaf(vals, threshold, best_f, cutoff)
-                if a >= 0:
-                    best_f, best_q = float(vals[a]), (*seq, kids[a])
-                return threshold is not None and a >= 0
-            for y in kids:
-                seq.append(y)
-                grown = self.graph.unlocked_after(unlocked, tuple(seq), y, rel)
-                stop = rec(total + rl[y], max(top, y), grown)
-                seq.pop()
-                if stop:
-                    return True
-            return False
-
-        rec(0.0, -1, ())
-        return best_f, best_q, capped
+        f, rest, capped = self._dfs(
+            np.array(ordered, dtype=np.int64),
+            np.array(rel, dtype=np.int64),
+            self._dfs_graph,
+            self.r,
+            m,
+            self.max_nodes,
+            self.prune,
+            window.r_range,
+            terms,
+            threshold is not None,
+            math.inf if threshold is None else threshold,
+            cutoff,
+        )
+        return float(f), tuple(rest.tolist()), bool(capped)
 
     def _after(self, window: Window, prefix: tuple[int, ...]) -> tuple[list[int], list[int]]:
         """Given done and ``prefix``: the available tasks (sorted) and the undone predecessors
@@ -209,17 +157,6 @@ class RestSearch:
                 if rel[y] == 0:
                     base_avail.add(y)
         return sorted(base_avail), rel
-
-
-def _leaf(vals: np.ndarray, threshold: float | None, best_f: float, cutoff: float) -> int:
-    """The leaf the depth-first search keeps among the scores ``vals`` of one node's leaves:
-    with ``threshold``, the first at most it; else the first of least F if below ``best_f``
-    and at most ``cutoff``; -1 if none."""
-    if threshold is not None:
-        hit = np.flatnonzero(vals <= threshold)
-        return int(hit[0]) if hit.size else -1
-    a = int(np.argmin(vals))
-    return a if vals[a] < best_f and vals[a] <= cutoff else -1
 
 
 class RestDecomposition:
