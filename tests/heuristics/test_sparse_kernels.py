@@ -137,9 +137,9 @@ def test_compiled_beam_on_generated_graphs(family, size, max_sets):
 
 
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
-    """Plan with every pair's best rest found twice, with F compiled and with the numpy
-    ``score`` closure (the decomposition told it cannot score compiled): the same (F, rest);
-    returns the pairs compared."""
+    """Plan with every pair's best rest found twice, compiled and by the decomposition's
+    Python loop with the numpy ``score`` closure (the decomposition told it cannot score
+    compiled): the same (F, rest); returns the pairs compared."""
     from bilevel_kit.heuristics import _rest_kernel, greedy_search
 
     if _rest_kernel.rest_kernel() is None:

@@ -337,8 +337,6 @@ class RestDecomposition:
         still enumerated, so the cap counts as without the floor."""
         if terms is not None and self.scores_compiled(m):
             return self._best_scored(prefix, m, terms, cutoff, target)
-        if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
-            return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         sets = self._need_sets(prefix, pset, m)
         sizes = [len(c) for c in sets]
@@ -413,8 +411,9 @@ class RestDecomposition:
     def _best_scored(
         self, prefix: tuple[int, ...], m: int, terms: np.ndarray, cutoff: float, target: float
     ) -> RestResult:
-        """:meth:`_best_compiled` with F computed compiled too (:func:`_rest_kernel.best_rest`,
-        ``terms`` as :data:`.._dfs_kernel.TERMS`: the same floats and the same core)."""
+        """:meth:`best` compiled (:func:`_rest_kernel.best_rest`: the same cores in the same
+        order, the same sums, F from ``terms`` as :data:`.._dfs_kernel.TERMS`, the first core
+        of least F at most ``cutoff``: the same floats and the same core)."""
         assert self._rest_kernel is not None
         tables = self._packed_tables()
         prefix_arr = np.array(prefix, dtype=np.int64)
@@ -427,32 +426,6 @@ class RestDecomposition:
         k = m - len(tasks)
         free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
         return float(f), self._order(set(prefix), frozenset(tasks), free), bool(capped)
-
-    def _best_compiled(
-        self,
-        prefix: tuple[int, ...],
-        m: int,
-        score: Callable[[Any], Any],
-        cutoff: float,
-        target: float,
-    ) -> RestResult:
-        """:meth:`best` by :func:`_rest_kernel.best_cores` (the same cores in the same order,
-        the same sums): every core's F at once, the first of least F at most ``cutoff``."""
-        assert self._kernel is not None
-        tables = self._packed_tables()
-        prefix_arr = np.array(prefix, dtype=np.int64)
-        _, capped, sums, rows, members = self._kernel(
-            prefix_arr, m, self.max_cores, float(target), self._epoch, tables
-        )
-        val = np.asarray(score(sums), dtype=np.float64)
-        ok = np.flatnonzero(val <= cutoff)  # NaN (no free multiset) never is
-        if not ok.size:
-            return math.inf, (), bool(capped)
-        best = int(ok[np.argmin(val[ok])])  # the first of least F, as the loop keeps it
-        tasks = [t for t in members[best].tolist() if t >= 0]
-        k = m - len(tasks)
-        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
-        return float(val[best]), self._order(set(prefix), frozenset(tasks), free), bool(capped)
 
     def _core_sum(self, core: frozenset[int]) -> float:
         """R(core): memoised per epoch when sums are exact in any order, else summed as
