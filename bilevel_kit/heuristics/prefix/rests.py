@@ -13,10 +13,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -324,18 +322,18 @@ class RestDecomposition:
         self,
         prefix: tuple[int, ...],
         m: int,
-        score: Callable[[Any], Any],
+        terms: np.ndarray,
         cutoff: float,
         target: float,
         floor: float = -math.inf,
-        terms: np.ndarray | None = None,
     ) -> RestResult:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
-        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
-        ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
-        still enumerated, so the cap counts as without the floor."""
-        if terms is not None and self.scores_compiled(m):
+        F by rest sum: ``terms`` (:data:`.._dfs_kernel.TERMS`); ``target``: the rest sum R(Q)
+        that makes term (6) zero (-inf in the signed form); ``floor``: F with term (6) zero,
+        below every rest's F (-inf: unknown). Every core is still enumerated, so the cap
+        counts as without the floor."""
+        if self.scores_compiled(m):
             return self._best_scored(prefix, m, terms, cutoff, target)
         pset = set(prefix)
         sets = self._need_sets(prefix, pset, m)
@@ -362,7 +360,7 @@ class RestDecomposition:
                 r_core = self._core_sum(core) if core else 0.0
                 free = self._free(m - len(core), target - r_core, removed)
                 if free is not None:
-                    val = float(score(r_core + free[0]))
+                    val = float(_dfs_kernel._leaf_score(terms, r_core + free[0]))
                     if val < best_f and val <= cutoff:
                         best_f, best_set, best_free = val, core, free[1]
             room = m - len(core)
@@ -400,8 +398,8 @@ class RestDecomposition:
         return out
 
     def scores_compiled(self, m: int) -> bool:
-        """Whether :meth:`best` with ``terms`` scores the rests of ``m`` tasks compiled (then
-        it does not call ``score``)."""
+        """Whether :meth:`best` scores the rests of ``m`` tasks compiled (else its Python
+        loop runs, with the same F)."""
         return (
             self._kernel is not None
             and self._rest_kernel is not None
