@@ -31,7 +31,8 @@ TERMS = ("c0", "a3", "w4", "w5f", "has_u", "w7u", "d", "o_r", "human", "signed")
 
 
 def _score(terms: np.ndarray, diff6: float) -> float:
-    """F given term (6)'s difference, in the order of ``PrefixSearch._score``."""
+    """F given term (6)'s difference, in the order of :func:`.upper_level.objective` (the
+    one F of a pair: greedy-ce's Python rest loop calls it too)."""
     f = terms[0]
     f = f + terms[1] + terms[2] * diff6 - terms[3]
     if terms[4] != 0.0:

@@ -138,8 +138,8 @@ def test_compiled_beam_on_generated_graphs(family, size, max_sets):
 
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
     """Plan with every pair's best rest found twice, compiled and by the decomposition's
-    Python loop with the numpy ``score`` closure (the decomposition told it cannot score
-    compiled): the same (F, rest); returns the pairs compared."""
+    Python loop (told it cannot score compiled; F from the same source, called from
+    Python): the same (F, rest); returns the pairs compared."""
     from bilevel_kit.heuristics import _rest_kernel, greedy_search
 
     if _rest_kernel.rest_kernel() is None:
