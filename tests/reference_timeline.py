@@ -26,7 +26,7 @@ and ``o_H``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 
@@ -94,7 +94,8 @@ class RefTimeline:
         return self.makespan - self.robot_work
 
     def objective(self, name: str) -> float:
-        """``makespan``, ``sum_completion`` or ``human_idle`` (docs/timeline.md#several-stations)."""
+        """``makespan``, ``sum_completion`` or ``human_idle``
+        (docs/timeline.md#several-stations)."""
         return float(getattr(self, name))
 
 
@@ -163,6 +164,27 @@ def pick_end(times: Times, start: float, kit: Sequence[str]) -> float:
     return clock
 
 
+def step(
+    st: Station,
+    free: float,
+    starts: Sequence[float],
+    end: float,
+    robot: float | Callable[[float], float],
+    human: float,
+) -> tuple[float, float, float, float, float]:
+    """One kit of station ``st``: its robot start, robot end, arrival, human start and human
+    end, given when the robot is free (``arrive_{k-1}``), the human starts of the station's
+    kits so far, when its human is free, the kit's ``R_k`` (or its pick end as a function of
+    the robot start, with releases) and ``H_k``."""
+    robot_start = free
+    if st.trays is not None and len(starts) >= st.trays:
+        robot_start = max(robot_start, starts[-st.trays] + st.overhead_human)  # tray back
+    robot_end = robot(robot_start) if callable(robot) else robot_start + robot
+    arrive = robot_end + st.delivery
+    human_start = max(arrive, end)
+    return robot_start, robot_end, arrive, human_start, human_start + human
+
+
 def timeline(times: Times, kits: Sequence[Sequence[str]]) -> RefTimeline:
     """The timeline of ``kits`` (each a non-empty sequence of one station's tasks, in the
     human's order), delivered in the given order (the module docstring)."""
@@ -176,22 +198,21 @@ def timeline(times: Times, kits: Sequence[Sequence[str]]) -> RefTimeline:
     for kit in kits:
         s = times.station_of[kit[0]]
         st = times.stations[s]
-        robot_start = arrive
-        if st.trays is not None and len(starts[s]) >= st.trays:
-            robot_start = max(robot_start, starts[s][-st.trays] + st.overhead_human)
-        robot_end = pick_end(times, robot_start, kit)
-        arrive = robot_end + st.delivery
-        human_start = max(arrive, completion[s])
-        clock = human_start + st.overhead_human
+        robot = times.o_r + sum(times.r[t] for t in kit)
+        human = st.overhead_human + sum(times.h[t] for t in kit)
+        pick = (lambda t0, kit=kit: pick_end(times, t0, kit)) if times.release else robot
+        kt = KitTimes(s, *step(st, arrive, starts[s], completion[s], pick, human))
+        clock = kt.human_start + st.overhead_human
         for t in kit:
             task_start[t] = clock
             clock += times.h[t]
             task_end[t] = clock
-        work[s] += clock - human_start
-        robot_work += times.o_r + sum(times.r[t] for t in kit) + st.delivery
-        completion[s] = clock
-        starts[s].append(human_start)
-        out.append(KitTimes(s, robot_start, robot_end, arrive, human_start, clock))
+        arrive = kt.arrive
+        work[s] += human
+        robot_work += robot + st.delivery
+        completion[s] = kt.human_end
+        starts[s].append(kt.human_start)
+        out.append(kt)
     return RefTimeline(tuple(out), task_start, task_end, completion, work, robot_work)
 
 

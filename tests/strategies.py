@@ -3,6 +3,7 @@ strategies) and seeded instance documents with a binding tray (the exact solvers
 
 from __future__ import annotations
 
+import itertools
 import random
 from typing import Any
 
@@ -205,7 +206,7 @@ def timeline_cases(draw: st.DrawFn, max_tasks: int = 8) -> tuple[dict[str, Any],
     order = draw(st.permutations([t["id"] for t in tasks]))
     where = {t["id"]: t.get("station", "") for t in tasks}
     kits: list[list[str]] = [[order[0]]]
-    for prev, t in zip(order, order[1:]):
+    for prev, t in itertools.pairwise(order):
         if where[prev] != where[t] or draw(st.booleans()):
             kits.append([])
         kits[-1].append(t)

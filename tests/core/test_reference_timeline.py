@@ -43,7 +43,11 @@ def test_worked_example_of_several_stations():
     """docs/timeline.md#several-stations: [a1] [a2] [b1]."""
     inst = from_dict(worked_example_doc())
     ref = reference(inst, [["a1"], ["a2"], ["b1"]])
-    assert _rows(ref) == [(0, 3, 4, 4, 14.5), (4.5, 10.5, 11.5, 14.5, 19), (11.5, 15.5, 17.5, 17.5, 23.5)]
+    assert _rows(ref) == [
+        (0, 3, 4, 4, 14.5),
+        (4.5, 10.5, 11.5, 14.5, 19),
+        (11.5, 15.5, 17.5, 17.5, 23.5),
+    ]
     assert ref.completion == {"A": 19, "B": 23.5}
     assert ref.completion["A"] - ref.human_work_at["A"] == 4
     assert ref.completion["B"] - ref.human_work_at["B"] == 17.5
