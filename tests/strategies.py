@@ -154,16 +154,21 @@ def one_task_doc(
 
 
 @st.composite
-def timeline_cases(draw: st.DrawFn, max_tasks: int = 8) -> tuple[dict[str, Any], list[list[str]]]:
-    """An instance document on 1-3 stations (none declared, or declared, for one) with
-    fractional times, trays 1, 2 or unlimited on the instance and on each station, and a plan
-    on it: a random order of its tasks cut into kits of one station each (the evaluator does
-    not check plans, so any such cut is a plan to time; docs/timeline.md)."""
+def timeline_cases(
+    draw: st.DrawFn, max_tasks: int = 8, max_stations: int = 3, grid: bool = False
+) -> tuple[dict[str, Any], list[list[str]]]:
+    """An instance document on 1-``max_stations`` stations (none declared, or declared, for
+    one; ``max_stations=0``: none declared) with fractional times (``grid``: multiples of
+    1/8 s only), trays 1, 2 or unlimited on the instance and on each station, and a plan on
+    it: a random order of its tasks cut into kits of one station each (the evaluator does not
+    check plans, so any such cut is a plan to time; docs/timeline.md)."""
     n = draw(st.integers(1, max_tasks))
-    n_stations = draw(st.integers(1, 3))
-    declared = n_stations > 1 or draw(st.booleans())
+    n_stations = draw(st.integers(1, max(1, max_stations)))
+    declared = max_stations > 0 and (n_stations > 1 or draw(st.booleans()))
     sids = [f"S{k}" for k in range(n_stations)]
-    time = st.integers(0, 400).map(lambda v: v / 8) | st.floats(0, 60, allow_nan=False)
+    time = st.integers(0, 400).map(lambda v: v / 8)
+    if not grid:
+        time = time | st.floats(0, 60, allow_nan=False)
     tasks: list[dict[str, Any]] = []
     for j in range(n):
         task: dict[str, Any] = {
