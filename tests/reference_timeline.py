@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 
 @dataclass(frozen=True)
@@ -185,9 +186,19 @@ def step(
     return robot_start, robot_end, arrive, human_start, human_start + human
 
 
-def timeline(times: Times, kits: Sequence[Sequence[str]]) -> RefTimeline:
+def _end(pick: Callable[[float, Sequence[str]], float], kit: Sequence[str], start: float) -> float:
+    return pick(start, kit)
+
+
+def timeline(
+    times: Times,
+    kits: Sequence[Sequence[str]],
+    pick: Callable[[float, Sequence[str]], float] | None = None,
+) -> RefTimeline:
     """The timeline of ``kits`` (each a non-empty sequence of one station's tasks, in the
-    human's order), delivered in the given order (the module docstring)."""
+    human's order), delivered in the given order (the module docstring); ``pick(start, kit)``,
+    when given, is the robot's end on a kit it starts at ``start`` (a test's own picking)."""
+    picked = partial(pick_end, times)
     out: list[KitTimes] = []
     starts: dict[str, list[float]] = {s: [] for s in times.stations}  # human starts per station
     completion = dict.fromkeys(times.stations, 0.0)
@@ -200,8 +211,9 @@ def timeline(times: Times, kits: Sequence[Sequence[str]]) -> RefTimeline:
         st = times.stations[s]
         robot = times.o_r + sum(times.r[t] for t in kit)
         human = st.overhead_human + sum(times.h[t] for t in kit)
-        pick = (lambda t0, kit=kit: pick_end(times, t0, kit)) if times.release else robot
-        kt = KitTimes(s, *step(st, arrive, starts[s], completion[s], pick, human))
+        picker = pick if pick is not None else picked if times.release else None
+        robot_end = robot if picker is None else partial(_end, picker, kit)
+        kt = KitTimes(s, *step(st, arrive, starts[s], completion[s], robot_end, human))
         clock = kt.human_start + st.overhead_human
         for t in kit:
             task_start[t] = clock
