@@ -8,7 +8,9 @@ CP-SAT packer (area first; memoised per part multiset) for 0/90-degree layouts o
 model's own verdict speaks of (``model_verdict``, docs/formulations.md#what-optimal-means).
 With several assembly stations (docs/timeline.md#several-stations) a kit holds tasks of one
 station only, so the segmentations keep the kits that do: every plan is an order cut into
-kits, so this still enumerates every valid plan.
+kits, so this still enumerates every valid plan. The brute forces time plans with the
+reference timeline (tests/reference_timeline.py, written from docs/timeline.md without the
+package's evaluator) and hold the evaluator to it on every plan they enumerate.
 """
 
 from __future__ import annotations
@@ -18,18 +20,30 @@ import math
 from collections.abc import Iterator
 
 import numpy as np
+from reference_timeline import close, step, timeline, times_of
 
 from bilevel_kit.models import packing as pk
+from bilevel_kit.objectives import OBJECTIVES
 from bilevel_kit.plan import Kit, Plan, evaluate
 
 _FITS: dict = {}
+#: id(instance) -> (instance, its tray and part types as a key, its kits' answers): a brute
+#: force asks about the same kits again and again
+_SEEN: dict = {}
 
 
 def fits(inst, kit) -> bool:
     """Does the kit fit the tray (area, then exact CP-SAT packing)?"""
+    held = _SEEN.get(id(inst))
+    if held is None or held[0] is not inst:
+        kinds = inst.part_types.values()
+        types = tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in kinds))
+        held = _SEEN[id(inst)] = (inst, (inst.tray, types), {})
+    tasks = frozenset(kit)
+    if tasks in held[2]:
+        return held[2][tasks]
     counts = inst.kit_parts(kit)
-    types = tuple(sorted((p.id, p.width, p.height, p.rotatable) for p in inst.part_types.values()))
-    key = (inst.tray, types, frozenset(counts.items()))
+    key = (*held[1], frozenset(counts.items()))
     if key not in _FITS:
         if sum(inst.part_types[p].area * c for p, c in counts.items()) > inst.tray.area:
             _FITS[key] = False
@@ -38,6 +52,7 @@ def fits(inst, kit) -> bool:
             res = pk.pack(inst.tray, items, time_limit=10.0)
             assert res.status in ("feasible", "infeasible")
             _FITS[key] = res.status == "feasible"
+    held[2][tasks] = _FITS[key]
     return _FITS[key]
 
 
@@ -52,7 +67,11 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
         pos = {t: k for k, t in enumerate(perm)}
         if any(pos[a] > pos[b] for a, b in inst.precedence):
             continue
+        # a kit holds one station's tasks: cut wherever the station changes
+        need = sum(1 << (k - 1) for k in range(1, n) if station[perm[k]] != station[perm[k - 1]])
         for mask in range(2 ** (n - 1)):
+            if mask & need != need:
+                continue
             kits, cur = [], [perm[0]]
             for k in range(1, n):
                 if mask >> (k - 1) & 1:
@@ -60,8 +79,6 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
                     cur = []
                 cur.append(perm[k])
             kits.append(tuple(cur))
-            if any(len({station[t] for t in k}) > 1 for k in kits):
-                continue
             key = tuple(frozenset(k) for k in kits)
             if key not in seen:
                 seen.add(key)
@@ -71,22 +88,34 @@ def segmentations(inst) -> Iterator[tuple[tuple[str, ...], ...]]:
 def best_makespan(
     inst, objective: str = "makespan", kitless: bool = False
 ) -> tuple[float, Plan | None]:
-    """The least makespan (one evaluator) over the segmentations whose kits all fit; or the
-    least of another ``objective`` of the timeline (``sum_completion``, ``human_idle``:
-    :func:`bilevel_kit.stations.objective_of`). A kit of part-less tasks only is no valid kit
-    (docs/timeline.md#part-less-tasks); ``kitless=True`` allows it (the rule before)."""
-    from bilevel_kit.stations import objective_of
-
+    """The least makespan over the segmentations whose kits all fit; or the least of another
+    ``objective`` (``sum_completion``, ``human_idle``). The values come from the reference
+    timeline (tests/reference_timeline.py, written from docs/timeline.md), and the package's
+    evaluator is held to it on every plan (:func:`agrees`). A kit of part-less tasks only is
+    no valid kit (docs/timeline.md#part-less-tasks); ``kitless=True`` allows it (the rule
+    before)."""
+    times = times_of(inst)
+    needs = {t.id for t in inst.tasks if inst.needs_kit(t.id)}
     best: tuple[float, Plan | None] = (float("inf"), None)
     for kits in segmentations(inst):
-        if not kitless and any(not any(inst.needs_kit(t) for t in k) for k in kits):
+        if not kitless and any(needs.isdisjoint(k) for k in kits):
             continue
         if all(fits(inst, k) for k in kits):
             plan = Plan(tuple(Kit(k) for k in kits))
-            ms = objective_of(evaluate(inst, plan), objective)
+            ref = timeline(times, kits)
+            agrees(ref, evaluate(inst, plan), kits)
+            ms = ref.objective(objective)
             if ms < best[0]:
                 best = (ms, plan)
     return best
+
+
+def agrees(ref, tl, kits) -> None:
+    """The evaluator's timeline ``tl`` has the reference's makespan, sum of completions and
+    human idle (to 1e-9 relative: the two add the same numbers in other orders)."""
+    for name in ("makespan", "sum_completion", "human_idle"):
+        value = OBJECTIVES[name].value(tl)
+        assert close(ref.objective(name), value), (name, kits, ref.objective(name), value)
 
 
 def model_verdict(out) -> tuple[bool, float | None]:
@@ -156,28 +185,28 @@ def fits_on_grid(sizes: list[tuple[int, int, bool]], W: int, H: int) -> bool:
     return rec(0)
 
 
-def station_optima(inst, plans: dict | None = None) -> dict[str, float]:
+def station_optima(inst, plans: dict | None = None, check: bool = True) -> dict[str, float]:
     """The least makespan, sum of the stations' completions and total human idle over every
     valid plan (kits of one station, every kit fitting: :func:`fits`), by a depth-first search
-    over the kit sequences with a timeline of its own, written from docs/timeline.md (the
-    several-stations rule; one station without ``stations``) without the package's evaluator.
+    over the kit sequences, timed kit by kit with the reference timeline's rule
+    (tests/reference_timeline.py, written from docs/timeline.md without the package's
+    evaluator: :func:`reference_timeline.step` on its numbers).
 
     A plan is a sequence of kits; the search appends, for any station with tasks left, any
     non-empty set of its remaining tasks whose predecessors are done or in the set (a kit's
     internal order does not change the timeline), so it meets every plan exactly once. Fast
-    enough for 8 tasks on two or three stations (every valid plan, no pruning). ``plans``, when
-    given, receives an optimal plan of each objective (its kits as task tuples)."""
+    enough for 8 tasks on two or three stations (every valid plan, no pruning). ``check``:
+    the package's evaluator is held to the three values on every plan (:func:`agrees`; about
+    three times the search's time). ``plans``, when given, receives an optimal plan of each
+    objective (its kits as task tuples)."""
+    times = times_of(inst)
     ids = [t.id for t in inst.tasks]
     n = len(ids)
-    sids = list(inst.station_ids) if inst.stations else [""]
-    where = [sids.index(t.station) if inst.stations else 0 for t in inst.tasks]
-    prm = [inst.station_params[s] for s in sids]
-    d = [p.delivery_time for p in prm]
-    o_h = [p.kit_overhead_human for p in prm]
-    trays = [p.tray_limit for p in prm]
-    o_r = inst.kit_overhead_robot
-    r = [inst.robot_time(t) for t in ids]
-    h = [inst.human_time(t) for t in ids]
+    sids = list(times.stations)
+    where = [sids.index(times.station_of[t]) for t in ids]
+    prm = [times.stations[s] for s in sids]
+    r = [times.r[t] for t in ids]
+    h = [times.h[t] for t in ids]
     pred = [0] * n
     for a, b in inst.precedence:
         pred[ids.index(b)] |= 1 << ids.index(a)
@@ -197,41 +226,46 @@ def station_optima(inst, plans: dict | None = None) -> dict[str, float]:
                     if any(pred[i] & left & ~mask for i in combo):
                         continue  # a predecessor is neither done nor in the kit
                     if fits(inst, [ids[i] for i in combo]):
-                        out.append((mask, o_r + sum(r[i] for i in combo), sum(h[i] for i in combo)))
+                        robot = times.o_r + sum(r[i] for i in combo)
+                        human = prm[s].overhead_human + sum(h[i] for i in combo)
+                        out.append((mask, robot, human))
             kits_of[(s, left)] = out
         return kits_of[(s, left)]
 
     path: list[int] = []
 
+    def leaf(end: tuple, work: tuple) -> None:
+        values = {
+            "makespan": max(end),
+            "sum_completion": sum(end),
+            "human_idle": sum(end) - sum(work),
+        }
+        named = [tuple(ids[i] for i in range(n) if m >> i & 1) for m in path]
+        if check:
+            tl = evaluate(inst, Plan(tuple(Kit(k) for k in named)))
+            for name, v in values.items():
+                assert close(v, OBJECTIVES[name].value(tl)), (name, named, v)
+        for name, v in values.items():
+            if v < best[name]:
+                best[name] = v
+                if plans is not None:
+                    plans[name] = named
+
     def dfs(left: int, free: float, end: tuple, starts: tuple, work: tuple) -> None:
         if not left:
-            values = {
-                "makespan": max(end),
-                "sum_completion": sum(end),
-                "human_idle": sum(end) - sum(work),
-            }
-            for name, v in values.items():
-                if v < best[name]:
-                    best[name] = v
-                    if plans is not None:
-                        plans[name] = [tuple(ids[i] for i in range(n) if m >> i & 1) for m in path]
+            leaf(end, work)
             return
         for s in range(S):
             rest = left & mine[s]
             if not rest:
                 continue
-            for mask, R, hsum in kits(s, rest):
-                start = free  # the robot has pushed the previous kit to its station
-                if trays[s] is not None and len(starts[s]) >= trays[s]:
-                    start = max(start, starts[s][-trays[s]] + o_h[s])  # the tray is back
-                arrive = start + R + d[s]
-                human = max(arrive, end[s])
-                H = o_h[s] + hsum
+            for mask, R, H in kits(s, rest):
+                _, _, arrive, human, done = step(prm[s], free, starts[s], end[s], R, H)
                 path.append(mask)
                 dfs(
                     left & ~mask,
                     arrive,
-                    (*end[:s], human + H, *end[s + 1 :]),
+                    (*end[:s], done, *end[s + 1 :]),
                     (*starts[:s], starts[s] + (human,), *starts[s + 1 :]),
                     (*work[:s], work[s] + H, *work[s + 1 :]),
                 )

@@ -3,6 +3,7 @@ strategies) and seeded instance documents with a binding tray (the exact solvers
 
 from __future__ import annotations
 
+import itertools
 import random
 from typing import Any
 
@@ -150,3 +151,68 @@ def one_task_doc(
             }
         ],
     }
+
+
+@st.composite
+def timeline_cases(
+    draw: st.DrawFn, max_tasks: int = 8, max_stations: int = 3, grid: bool = False
+) -> tuple[dict[str, Any], list[list[str]]]:
+    """An instance document on 1-``max_stations`` stations (none declared, or declared, for
+    one; ``max_stations=0``: none declared) with fractional times (``grid``: multiples of
+    1/8 s only), trays 1, 2 or unlimited on the instance and on each station, and a plan on
+    it: a random order of its tasks cut into kits of one station each (the evaluator does not
+    check plans, so any such cut is a plan to time; docs/timeline.md)."""
+    n = draw(st.integers(1, max_tasks))
+    n_stations = draw(st.integers(1, max(1, max_stations)))
+    declared = max_stations > 0 and (n_stations > 1 or draw(st.booleans()))
+    sids = [f"S{k}" for k in range(n_stations)]
+    time = st.integers(0, 400).map(lambda v: v / 8)
+    if not grid:
+        time = time | st.floats(0, 60, allow_nan=False)
+    tasks: list[dict[str, Any]] = []
+    for j in range(n):
+        task: dict[str, Any] = {
+            "id": f"t{j}",
+            "parts": [{"type": "p", "count": draw(st.integers(1, 3))}],
+            "human_time": {"mean": draw(time)},
+        }
+        if draw(st.booleans()):
+            task["robot_time"] = draw(time)
+        if declared:
+            task["station"] = sids[j] if j < n_stations else draw(st.sampled_from(sids))
+        tasks.append(task)
+    trays = st.sampled_from([1, 2, None])
+    doc: dict[str, Any] = {
+        "format": "bilevel-kit/1",
+        "name": "timeline-case",
+        "tray": {"width": 100.0, "height": 100.0},
+        "delivery_time": draw(time),
+        "kit_overhead": {"robot": draw(time), "human": draw(time)},
+        "part_types": [
+            {"id": "p", "width": 5.0, "height": 5.0, "pick_time": draw(time), "rotatable": True}
+        ],
+        "tasks": tasks,
+        "precedence": [],
+    }
+    if (limit := draw(trays)) is not None:
+        doc["trays"] = limit
+    if declared:
+        doc["stations"] = []
+        for s in sids[: min(n_stations, n)]:
+            entry: dict[str, Any] = {"id": s}
+            for key, values in (
+                ("delivery_time", time),
+                ("kit_overhead_human", time),
+                ("trays", trays),
+            ):
+                if draw(st.booleans()) and (v := draw(values)) is not None:
+                    entry[key] = v
+            doc["stations"].append(entry)
+    order = draw(st.permutations([t["id"] for t in tasks]))
+    where = {t["id"]: t.get("station", "") for t in tasks}
+    kits: list[list[str]] = [[order[0]]]
+    for prev, t in itertools.pairwise(order):
+        if where[prev] != where[t] or draw(st.booleans()):
+            kits.append([])
+        kits[-1].append(t)
+    return doc, kits

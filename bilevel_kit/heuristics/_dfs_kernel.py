@@ -1,20 +1,20 @@
-"""greedy-ce's depth-first search of a window rest, compiled (numba).
+"""greedy-ce's depth-first search of a window rest, written once: compiled (numba), or run
+as plain Python when numba is disabled or missing.
 
 :meth:`bilevel_kit.heuristics.prefix.rests.RestSearch.depth_first` looks for the rest of ``m``
 tasks after a prefix in lexicographic order of canonical sequences (the tie rule of
 docs/scaling.md#greedy-ce-without-a-time-limit, and the best rest when the robot times take
 many values). On sparse wide graphs (hundreds of available tasks) it visits its whole node
-cap at almost every decision, and each node's Python work grows with the window: 40 % of
-greedy-ce's time on 1,000 sparse tasks (docs/scaling.md#sparse-wide-graphs).
-:func:`depth_first` is that search, operation by operation: the same nodes
-in the same order (so the same cap), the same children (:func:`_unlocked`, the rule of
-:meth:`..prefix.levels.Precedence.unlocked_after`), the same pruning bound and the same
-floating-point operations of F (Eqs. 4-7 with term (6) a function of the rest's robot sum,
-:func:`_score`), so it returns what the Python search returns.
+cap at almost every decision, and each node's work grows with the window: 40 % of greedy-ce's
+time on 1,000 sparse tasks (docs/scaling.md#sparse-wide-graphs), hence compiled.
+:func:`depth_first` visits the nodes in that order (so the cap counts the same nodes), with
+the children of :func:`_unlocked` (the rule of :meth:`..prefix.levels.Precedence.unlocked_after`),
+a pruning bound (:func:`_lower`) and F of Eqs. 4-7 with term (6) a function of the rest's
+robot sum (:func:`_score`).
 
 numba is imported on first use; without it (or with ``BILEVEL_KIT_NO_NUMBA=1``,
-:mod:`bilevel_kit.heuristics._kernels`) :func:`kernel` returns None and the caller runs its
-Python search.
+:mod:`bilevel_kit.heuristics._kernels`) :func:`kernel` returns None and :func:`search` the
+same source as Python (tests/heuristics/test_sparse_kernels.py compares both).
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ TERMS = ("c0", "a3", "w4", "w5f", "has_u", "w7u", "d", "o_r", "human", "signed")
 
 
 def _score(terms: np.ndarray, diff6: float) -> float:
-    """F given term (6)'s difference, in the order of ``PrefixSearch._score``."""
+    """F given term (6)'s difference, in the order of :func:`.upper_level.objective` (the
+    one F of a pair: greedy-ce's Python rest loop calls it too)."""
     f = terms[0]
     f = f + terms[1] + terms[2] * diff6 - terms[3]
     if terms[4] != 0.0:
@@ -240,3 +241,9 @@ def kernel() -> Callable[..., tuple[float, np.ndarray, bool]] | None:
     if _JITTED is None:
         _JITTED = _kernels.compile_in(globals(), _HELPERS, "depth_first")
     return _JITTED
+
+
+def search() -> Callable[..., tuple[float, np.ndarray, bool]]:
+    """The compiled :func:`depth_first`, or its source run as Python when numba is disabled
+    or missing (the same nodes, floats and result, slower)."""
+    return kernel() or depth_first

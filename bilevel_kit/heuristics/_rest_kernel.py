@@ -9,8 +9,9 @@ they are popped, at most ``max_cores`` of them: :func:`_enumerate`), the same ta
 (binary search, then a scan up and down past multisets that use more tasks of a value than are
 left: :func:`_score`) and the same floating-point sums, which are exact here (the caller uses
 it only when every sum of robot times is exact, so a core's sum does not depend on the order of
-its tasks). It returns each core's rest sum R(Q); the caller scores them all with F at once and
-takes the first of least F, the result of the loop that keeps the first strict improvement.
+its tasks). It returns each core's rest sum R(Q); :func:`best_rest` scores them all with F
+(:func:`._dfs_kernel._leaf_score`) and takes the first of least F, the result of the loop that
+keeps the first strict improvement.
 
 The search does not depend on the scores, so the cores are enumerated first and scored in a
 second pass: the same work as one loop, with no call per core (a core's work is small, and a
@@ -18,7 +19,7 @@ compiled helper called per core with its arrays made the kernel 5-20 % slower).
 
 numba is imported on first use; without it (or with ``BILEVEL_KIT_NO_NUMBA=1``,
 :mod:`bilevel_kit.heuristics._kernels`) :func:`kernel` returns None and the caller runs its own
-Python loop.
+Python loop, the one it also runs when sums of robot times are inexact.
 """
 
 from __future__ import annotations

@@ -60,18 +60,15 @@ import math
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, TypeVar
 
 import numpy as np
 
 from ..instance import Instance
-from . import _beam_kernel
+from . import _beam_kernel, _dfs_kernel
 from .prefix.bounds import BoundParts, DecisionContext, OptimisticScore
 from .prefix.frontier import Frontier
 from .prefix.levels import Children, Level, Precedence, Window, build_levels, unique_rows
 from .prefix.rests import RestDecomposition, RestSearch
-
-FloatOrArray = TypeVar("FloatOrArray", float, np.ndarray)
 
 #: Score tolerance of the tie rule (the enumeration's).
 TIE_TOL = 1e-9
@@ -465,86 +462,37 @@ class PrefixSearch:
 
     def _best_pair(self, dc: _Decision, li: int, k: int, incumbent: float) -> _Found | None:
         """Stage 1 of prefix (level ``li``, row ``k``): the pair with its best rest, if that
-        rest's F is within the tie tolerance of ``incumbent`` (else None)."""
+        rest's F is within the tie tolerance of ``incumbent`` (else None). F is the rest
+        searches' own (:data:`._dfs_kernel.TERMS`, compiled or run as Python)."""
         lv, i, length = dc.levels[li], li + 1, dc.length
         fit = float(dc.fits_of[li][k])
+        terms = self._pair_terms(dc, li, k, fit)
+        signed = dc.ctx.signed
+        if i == length:  # no rest: term (6) is d - (o_H + H(P))
+            diff6 = terms[6] + 0.0 - terms[8]
+            return float(_dfs_kernel._score(terms, diff6 if signed else abs(diff6))), li, k, (), fit
         rests = dc.ep.rests
-        if rests is not None and i < length and rests.scores_compiled(length - i):
-            return self._best_pair_compiled(dc, li, k, fit, incumbent)
-        f, lower = self._pair_score(dc, li, k, fit)
-        if i == length:
-            return float(f(0.0)), li, k, (), fit
         if rests is not None:
-            inst, signed = self.instance, dc.ctx.signed
+            inst = self.instance
             d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
             target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
-            floor = lower(-math.inf, math.inf) if self._prune and not signed else -math.inf
+            floor = -math.inf
+            if self._prune and not signed:  # F with term (6) zero
+                floor = float(_dfs_kernel._lower(terms, -math.inf, math.inf))
             score, rest, capped = rests.best(
-                lv.seqs[k], length - i, f, incumbent + TIE_TOL, target, floor
+                lv.seqs[k], length - i, terms, incumbent + TIE_TOL, target, floor
             )
         else:
             score, rest, capped = self._rests.depth_first(
-                dc.ep.window,
-                lv.seqs[k],
-                length - i,
-                f,
-                lower,
-                None,
-                incumbent + TIE_TOL,
-                self._pair_terms(dc, li, k, fit),
+                dc.ep.window, lv.seqs[k], length - i, terms, None, incumbent + TIE_TOL
             )
         self.stats.rest_capped += capped
         return (score, li, k, rest, fit) if rest else None
 
-    def _best_pair_compiled(
-        self, dc: _Decision, li: int, k: int, fit: float, incumbent: float
-    ) -> _Found | None:
-        """:meth:`_best_pair` when the decomposition scores its rests compiled (no
-        ``score`` closure: :meth:`_pair_terms`; the same target, so the same rest)."""
-        lv, i = dc.levels[li], li + 1
-        rests = dc.ep.rests
-        assert rests is not None
-        inst, signed = self.instance, dc.ctx.signed
-        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
-        terms = self._pair_terms(dc, li, k, fit)
-        score, rest, capped = rests.best(
-            lv.seqs[k], dc.length - i, _unused_score, incumbent + TIE_TOL, target, terms=terms
-        )
-        self.stats.rest_capped += capped
-        return (score, li, k, rest, fit) if rest else None
-
-    def _pair_score(
-        self, dc: _Decision, li: int, k: int, fit: float
-    ) -> tuple[Callable[[Any], Any], Callable[[float, float], float]]:
-        """F of prefix (level ``li``, row ``k``) as a function of the rest's robot sums
-        (vectorised), and a lower bound of F given a lower bound of the sum (term 6 is |x| or
-        x, x growing with the sum)."""
-        inst, ctx, length = self.instance, dc.ctx, dc.length
-        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
-        signed = ctx.signed
-        lv, i = dc.levels[li], li + 1
-        diff5 = d + o_r + float(lv.robot[k]) - ctx.human_remaining
-        diff5 = diff5 if signed else abs(diff5)
-        unav = ctx.unavailable(lv.counts[k][None, :])
-        u = None if unav is None else float(unav[0])
-        human = o_h + float(lv.human[k])
-
-        def f(rest: Any) -> Any:  # R(Q): a float or an array of candidate sums
-            diff6 = d + (o_r + rest) - human if i < length else d + 0.0 - human
-            return self._score(i, diff5, diff6 if signed else np.abs(diff6), fit, u)
-
-        def lower(lo: float, hi: float = math.inf) -> float:
-            diff6 = d + (o_r + lo) - human
-            if not signed:
-                diff6 = max(diff6, -(d + (o_r + hi) - human), 0.0)
-            return float(self._score(i, diff5, diff6, fit, u))
-
-        return f, lower
-
     def _pair_terms(self, dc: _Decision, li: int, k: int, fit: float) -> np.ndarray:
-        """:meth:`_pair_score` as the numbers the compiled rest search reads
-        (:data:`._dfs_kernel.TERMS`), each product formed as :meth:`_score` forms it."""
+        """F of prefix (level ``li``, row ``k``) as a function of the rest's robot sum: the
+        numbers the rest searches read (:data:`._dfs_kernel.TERMS`), each product formed as
+        :func:`.upper_level.objective` forms it."""
         inst, ctx, w = self.instance, dc.ctx, self.instance.weights
         lv, i = dc.levels[li], li + 1
         diff5 = inst.delivery_time + inst.kit_overhead_robot + float(lv.robot[k])
@@ -569,17 +517,6 @@ class PrefixSearch:
             dtype=np.float64,
         )
 
-    def _score(
-        self, i: int, diff5: float, diff6: FloatOrArray, fit: float, unav: float | None
-    ) -> FloatOrArray:
-        """F of one pair in the same floating-point order as :func:`upper_level.objective`."""
-        w = self.instance.weights
-        f: Any = -w["W2"] * float(i)
-        f = f + w["W3"] * diff5 + w["W4"] * diff6 - w["W5"] * fit
-        if unav is not None:
-            f = f + w["W7"] * unav
-        return f
-
     def _tie_break(self, dc: _Decision, found: list[_Found]) -> Choice:
         """The enumeration's tie rule (module docstring): among the pairs found within the
         tolerance of the least F, the smallest (prefix + rest, i), each rest the smallest
@@ -602,9 +539,8 @@ class PrefixSearch:
                         dc.ep.window,
                         levels[li].seqs[k],
                         length - i,
-                        *self._pair_score(dc, li, k, fit),
+                        self._pair_terms(dc, li, k, fit),
                         fmin + TIE_TOL,
-                        terms=self._pair_terms(dc, li, k, fit),
                     )
                     if first:
                         rest, score = first, f2
@@ -648,11 +584,6 @@ class PrefixSearch:
         while self._epoch_rows > EPOCH_CACHE_ROWS and len(self._epochs) > 1:
             _, old = self._epochs.popitem(last=False)
             self._epoch_rows -= old.rows
-
-
-def _unused_score(rest: Any) -> Any:
-    """The ``score`` of a rest search that scores compiled (never called)."""
-    raise AssertionError("the compiled rest search does not call score")
 
 
 def available_vector(

@@ -1,5 +1,6 @@
 """The compiled parts of greedy-ce's decision on sparse wide graphs (issue 27, item 3,
-docs/scaling.md) against the Python code they replace: every call gives the same result, on
+docs/scaling.md) against the Python code they replace, or for the depth-first search against
+its own source run as Python (the fallback without numba): every call gives the same result, on
 random small instances (with non-integer robot times: the depth-first rest search decides)
 and on generated graphs, also with the searches capped."""
 
@@ -22,17 +23,23 @@ from bilevel_kit.instance import Instance, from_dict
 
 
 def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> int:
-    """Plan with every depth-first rest search run twice, compiled and in Python, asserting
-    the same (F, rest, capped); returns the searches compared."""
-    if _dfs_kernel.kernel() is None:
+    """Plan with every depth-first rest search run twice, compiled and as Python (the
+    kernel's ``py_func``, its helpers' too), asserting the same (F, rest, capped); returns the
+    searches compared."""
+    compiled = _dfs_kernel.kernel()
+    if compiled is None:
         pytest.skip("numba is not available")
     original = rests.RestSearch.depth_first
     calls = []
 
-    def both(self, window, prefix, m, score, bound, threshold, cutoff=math.inf, terms=None):
-        assert terms is not None  # greedy-ce always offers the compiled search
-        fast = original(self, window, prefix, m, score, bound, threshold, cutoff, terms)
-        slow = original(self, window, prefix, m, score, bound, threshold, cutoff, None)
+    def both(self, window, prefix, m, terms, threshold, cutoff=math.inf):
+        fast = original(self, window, prefix, m, terms, threshold, cutoff)
+        assert self._dfs is compiled  # greedy-ce runs the compiled search
+        with pytest.MonkeyPatch.context() as inner:
+            for name in _dfs_kernel._HELPERS:  # the compiled kernel keeps its compiled helpers
+                inner.setattr(_dfs_kernel, name, getattr(_dfs_kernel, name).py_func)
+            inner.setattr(self, "_dfs", compiled.py_func)
+            slow = original(self, window, prefix, m, terms, threshold, cutoff)
         assert fast[1:] == slow[1:]
         assert fast[0] == slow[0] or (math.isinf(fast[0]) and math.isinf(slow[0]))
         calls.append(fast[2])
@@ -130,9 +137,9 @@ def test_compiled_beam_on_generated_graphs(family, size, max_sets):
 
 
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
-    """Plan with every pair's best rest found twice, with F compiled and with the numpy
-    ``score`` closure (the decomposition told it cannot score compiled): the same (F, rest);
-    returns the pairs compared."""
+    """Plan with every pair's best rest found twice, compiled and by the decomposition's
+    Python loop (told it cannot score compiled; F from the same source, called from
+    Python): the same (F, rest); returns the pairs compared."""
     from bilevel_kit.heuristics import _rest_kernel, greedy_search
 
     if _rest_kernel.rest_kernel() is None:

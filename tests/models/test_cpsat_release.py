@@ -7,6 +7,7 @@ import random
 
 import pytest
 from brute import fits, model_verdict, segmentations
+from reference_timeline import reference, timeline, times_of
 from strategies import random_doc
 
 from bilevel_kit.instance import from_dict
@@ -20,31 +21,25 @@ FAST = {"workers": 2, "time_limit": 20.0}
 
 
 def released_makespan(inst, kits, rel) -> float:
-    """The timeline of docs/timeline.md where task i cannot be picked before ``rel[i]`` and
-    the robot picks each kit in its best topological order (written independently of the
-    model: every order is tried, waits simulated one task after the other)."""
+    """The reference timeline (tests/reference_timeline.py) where task i cannot be picked
+    before ``rel[i]`` and the robot picks each kit in its best topological order (written
+    independently of the model: every order is tried, waits simulated one task after the
+    other)."""
     anc = inst.ancestors
-    o_r, o_h, d = inst.kit_overhead_robot, inst.kit_overhead_human, inst.delivery_time
-    trays = inst.tray_limit
-    arrive = end = 0.0
-    starts: list[float] = []
-    for k, kit in enumerate(kits):
-        start = arrive
-        if trays is not None and k >= trays:
-            start = max(start, starts[k - trays] + o_h)
+
+    def pick(start: float, kit) -> float:
         best = float("inf")
         for perm in itertools.permutations(kit):
             pos = {t: j for j, t in enumerate(perm)}
             if any(pos.get(a, -1) > pos[t] for t in perm for a in anc[t]):
                 continue
-            t = start + o_r
+            t = start + inst.kit_overhead_robot
             for task in perm:
                 t = max(t, rel.get(task, 0.0)) + inst.robot_time(task)
             best = min(best, t)
-        arrive = best + d
-        starts.append(max(arrive, end))
-        end = starts[-1] + o_h + sum(inst.human_time(t) for t in kit)
-    return end
+        return best
+
+    return timeline(times_of(inst), kits, pick).makespan
 
 
 def brute_force(inst, rel) -> float:
@@ -85,9 +80,10 @@ def test_scaled_timeline_with_releases_matches_the_independent_one(seed):
     rel = _releases(seed, inst)
     for kits in itertools.islice(segmentations(inst), 60):
         plan = Plan(tuple(Kit(k) for k in kits))
-        assert cs.released_makespan(inst, plan, rel) == pytest.approx(
-            released_makespan(inst, kits, rel), abs=1e-9
-        )
+        best = released_makespan(inst, kits, rel)
+        assert cs.released_makespan(inst, plan, rel) == pytest.approx(best, abs=1e-9)
+        # picking in order of release is the best order (docs/formulations.md)
+        assert reference(inst, kits, releases=rel).makespan == pytest.approx(best, abs=1e-9)
 
 
 @pytest.mark.parametrize("seed", range(8))

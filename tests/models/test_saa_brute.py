@@ -4,7 +4,8 @@ docs/formulations.md#stochastic-human-times-sample-average-approximation holds p
 
 The brute force is tests/brute.py's: every precedence-feasible segmentation whose kits all
 fit (exact 0/90-degree packing on the 1 mm grid), each scored by the sample average of its
-makespan under the scenarios (the one evaluator with the scenario's human times)."""
+makespan under the scenarios (the reference timeline of tests/reference_timeline.py with the
+scenario's human times, the package's evaluator held to it on every plan)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 import strategies
 from brute import fits, segmentations
+from reference_timeline import close, timeline, times_of
 
 from bilevel_kit import stochastic as st
 from bilevel_kit.instance import from_dict
@@ -27,13 +29,19 @@ def saa_brute(inst, scenarios) -> tuple[float, float]:
     """(the least sample average over every valid plan, the least mean-time makespan with the
     scenarios' average times); asserts Jensen for every plan on the way."""
     means = st.mean_times(scenarios, inst)
+    ids = [t.id for t in inst.tasks]
+    each = [times_of(inst, human_times=dict(zip(ids, row, strict=True))) for row in scenarios]
+    at_means = times_of(inst, human_times=means)
     best, best_mean = np.inf, np.inf
     for kits in segmentations(inst):
         if not all(fits(inst, k) for k in kits):
             continue
         plan = Plan(tuple(Kit(k) for k in kits))
-        value = st.expected_makespan(inst, plan, scenarios)
-        at_mean = evaluate(inst, plan, human_times=means).makespan
+        # the reference timeline's values (tests/reference_timeline.py); the package's agree
+        value = float(np.mean([timeline(times, kits).makespan for times in each]))
+        assert close(value, st.expected_makespan(inst, plan, scenarios))
+        at_mean = timeline(at_means, kits).makespan
+        assert close(at_mean, evaluate(inst, plan, human_times=means).makespan)
         assert at_mean <= value + 1e-9  # Jensen: the makespan is convex in the human times
         best, best_mean = min(best, value), min(best_mean, at_mean)
     return best, best_mean

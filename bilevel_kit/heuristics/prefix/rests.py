@@ -11,13 +11,10 @@ lexicographic order otherwise, and for the tie rule (the first rest under a thre
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
-from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -96,15 +93,15 @@ class RestSearch:
     ) -> None:
         self.graph = graph
         self.r = robot
-        self._r_list: list[float] = robot.tolist()
         self.sums = SumTable.build(robot, horizon - 1)
         self.prune = prune
         self.max_nodes = max_nodes
         #: the decomposition's packed sum tables by available tasks per value (capped at the
         #: largest k), shared by the epochs
         self.packed: dict[bytes, PackedTables] = {}
-        #: the compiled depth-first search (:mod:`.._dfs_kernel`) and the graph as its arrays
-        self._dfs = _dfs_kernel.kernel()
+        #: the depth-first search (:mod:`.._dfs_kernel`, compiled when numba runs) and the
+        #: graph as its arrays
+        self._dfs = _dfs_kernel.search()
         self._dfs_graph = (
             np.append(graph.succ_start, len(graph.succ_flat)).astype(np.int64),
             graph.succ_flat,
@@ -117,83 +114,32 @@ class RestSearch:
         window: Window,
         prefix: tuple[int, ...],
         m: int,
-        score: Callable[[Any], Any],
-        bound: Callable[[float, float], float],
+        terms: np.ndarray,
         threshold: float | None,
         cutoff: float = math.inf,
-        terms: np.ndarray | None = None,
     ) -> RestResult:
         """The rest of ``m`` tasks after ``prefix`` of least F: (F, rest in its smallest
-        topological order, capped). ``score`` maps R(Q) (task times only) to F, ``bound`` maps
-        bounds (lo, hi) of R(Q) to a lower bound of F (a partial sum plus the smallest, or the
-        largest, times left bounds R(Q) from below, or above). With ``threshold``, the first
-        rest (lexicographic) whose F is at most the threshold. Rests whose F exceeds ``cutoff``
-        are not looked for (the result is then ``(inf, ())``). ``terms``: ``score`` and
-        ``bound`` as :data:`.._dfs_kernel.TERMS`, for the compiled search (the same result)."""
+        topological order, capped), F given by ``terms`` as a function of R(Q) (task times
+        only; :data:`.._dfs_kernel.TERMS`). With ``threshold``, the first rest (lexicographic)
+        whose F is at most the threshold. Rests whose F exceeds ``cutoff`` are not looked for
+        (the result is then ``(inf, ())``). The search is :func:`.._dfs_kernel.depth_first`,
+        compiled or, without numba, the same source run as Python."""
         ordered, rel = self._after(window, prefix)
-        if terms is not None and self._dfs is not None:
-            f, rest, capped = self._dfs(
-                np.array(ordered, dtype=np.int64),
-                np.array(rel, dtype=np.int64),
-                self._dfs_graph,
-                self.r,
-                m,
-                self.max_nodes,
-                self.prune,
-                window.r_range,
-                terms,
-                threshold is not None,
-                math.inf if threshold is None else threshold,
-                cutoff,
-            )
-            return float(f), tuple(rest.tolist()), bool(capped)
-        rl = self._r_list
-        rmin, rmax = window.r_range  # over the tasks not done (a superset of those left)
-        best_f = math.inf
-        best_q: tuple[int, ...] = ()
-        nodes = 0
-        cap = self.max_nodes
-        capped = False
-        seq: list[int] = []
-
-        def rec(total: float, top: int, unlocked: tuple[int, ...]) -> bool:
-            """Depth-first in lexicographic order of canonical sequences; True stops.
-            ``top``: the largest task of ``seq``; ``unlocked``: its children outside
-            ``ordered`` (:meth:`Precedence.unlocked_after`, given done and the prefix)."""
-            nonlocal best_f, best_q, nodes, capped
-            k = len(seq)
-            nodes += 1
-            if nodes > cap:
-                capped = True
-                return True
-            if self.prune and k:
-                lower = bound(total + (m - k) * rmin, total + (m - k) * rmax)
-                if (lower > threshold) if threshold is not None else (lower >= best_f):
-                    return False
-                if lower > cutoff:
-                    return False
-            kids = ordered[bisect.bisect_right(ordered, top) :]
-            if unlocked:
-                kids = sorted([*kids, *unlocked])
-            if not kids:
-                return False
-            if k == m - 1:  # the leaves at once (numpy gives the same floats, in index order)
-                vals = score(total + self.r[kids])
-                a = _leaf(vals, threshold, best_f, cutoff)
-                if a >= 0:
-                    best_f, best_q = float(vals[a]), (*seq, kids[a])
-                return threshold is not None and a >= 0
-            for y in kids:
-                seq.append(y)
-                grown = self.graph.unlocked_after(unlocked, tuple(seq), y, rel)
-                stop = rec(total + rl[y], max(top, y), grown)
-                seq.pop()
-                if stop:
-                    return True
-            return False
-
-        rec(0.0, -1, ())
-        return best_f, best_q, capped
+        f, rest, capped = self._dfs(
+            np.array(ordered, dtype=np.int64),
+            np.array(rel, dtype=np.int64),
+            self._dfs_graph,
+            self.r,
+            m,
+            self.max_nodes,
+            self.prune,
+            window.r_range,
+            terms,
+            threshold is not None,
+            math.inf if threshold is None else threshold,
+            cutoff,
+        )
+        return float(f), tuple(rest.tolist()), bool(capped)
 
     def _after(self, window: Window, prefix: tuple[int, ...]) -> tuple[list[int], list[int]]:
         """Given done and ``prefix``: the available tasks (sorted) and the undone predecessors
@@ -209,17 +155,6 @@ class RestSearch:
                 if rel[y] == 0:
                     base_avail.add(y)
         return sorted(base_avail), rel
-
-
-def _leaf(vals: np.ndarray, threshold: float | None, best_f: float, cutoff: float) -> int:
-    """The leaf the depth-first search keeps among the scores ``vals`` of one node's leaves:
-    with ``threshold``, the first at most it; else the first of least F if below ``best_f``
-    and at most ``cutoff``; -1 if none."""
-    if threshold is not None:
-        hit = np.flatnonzero(vals <= threshold)
-        return int(hit[0]) if hit.size else -1
-    a = int(np.argmin(vals))
-    return a if vals[a] < best_f and vals[a] <= cutoff else -1
 
 
 class RestDecomposition:
@@ -387,21 +322,19 @@ class RestDecomposition:
         self,
         prefix: tuple[int, ...],
         m: int,
-        score: Callable[[Any], Any],
+        terms: np.ndarray,
         cutoff: float,
         target: float,
         floor: float = -math.inf,
-        terms: np.ndarray | None = None,
     ) -> RestResult:
         """(F, a rest of least F in its smallest topological order, capped) over the rests of
         ``m`` tasks after ``prefix`` with F at most ``cutoff`` ((inf, (), capped) if none).
-        ``target``: the rest sum R(Q) that makes term (6) zero (-inf in the signed form);
-        ``floor``: F with term (6) zero, below every rest's F (-inf: unknown). Every core is
-        still enumerated, so the cap counts as without the floor."""
-        if terms is not None and self.scores_compiled(m):
+        F by rest sum: ``terms`` (:data:`.._dfs_kernel.TERMS`); ``target``: the rest sum R(Q)
+        that makes term (6) zero (-inf in the signed form); ``floor``: F with term (6) zero,
+        below every rest's F (-inf: unknown). Every core is still enumerated, so the cap
+        counts as without the floor."""
+        if self.scores_compiled(m):
             return self._best_scored(prefix, m, terms, cutoff, target)
-        if self._kernel is not None and (self._window_size + 1) ** m < 2**62:
-            return self._best_compiled(prefix, m, score, cutoff, target)
         pset = set(prefix)
         sets = self._need_sets(prefix, pset, m)
         sizes = [len(c) for c in sets]
@@ -427,7 +360,7 @@ class RestDecomposition:
                 r_core = self._core_sum(core) if core else 0.0
                 free = self._free(m - len(core), target - r_core, removed)
                 if free is not None:
-                    val = float(score(r_core + free[0]))
+                    val = float(_dfs_kernel._leaf_score(terms, r_core + free[0]))
                     if val < best_f and val <= cutoff:
                         best_f, best_set, best_free = val, core, free[1]
             room = m - len(core)
@@ -465,8 +398,8 @@ class RestDecomposition:
         return out
 
     def scores_compiled(self, m: int) -> bool:
-        """Whether :meth:`best` with ``terms`` scores the rests of ``m`` tasks compiled (then
-        it does not call ``score``)."""
+        """Whether :meth:`best` scores the rests of ``m`` tasks compiled (else its Python
+        loop runs, with the same F)."""
         return (
             self._kernel is not None
             and self._rest_kernel is not None
@@ -476,8 +409,9 @@ class RestDecomposition:
     def _best_scored(
         self, prefix: tuple[int, ...], m: int, terms: np.ndarray, cutoff: float, target: float
     ) -> RestResult:
-        """:meth:`_best_compiled` with F computed compiled too (:func:`_rest_kernel.best_rest`,
-        ``terms`` as :data:`.._dfs_kernel.TERMS`: the same floats and the same core)."""
+        """:meth:`best` compiled (:func:`_rest_kernel.best_rest`: the same cores in the same
+        order, the same sums, F from ``terms`` as :data:`.._dfs_kernel.TERMS`, the first core
+        of least F at most ``cutoff``: the same floats and the same core)."""
         assert self._rest_kernel is not None
         tables = self._packed_tables()
         prefix_arr = np.array(prefix, dtype=np.int64)
@@ -490,32 +424,6 @@ class RestDecomposition:
         k = m - len(tasks)
         free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
         return float(f), self._order(set(prefix), frozenset(tasks), free), bool(capped)
-
-    def _best_compiled(
-        self,
-        prefix: tuple[int, ...],
-        m: int,
-        score: Callable[[Any], Any],
-        cutoff: float,
-        target: float,
-    ) -> RestResult:
-        """:meth:`best` by :func:`_rest_kernel.best_cores` (the same cores in the same order,
-        the same sums): every core's F at once, the first of least F at most ``cutoff``."""
-        assert self._kernel is not None
-        tables = self._packed_tables()
-        prefix_arr = np.array(prefix, dtype=np.int64)
-        _, capped, sums, rows, members = self._kernel(
-            prefix_arr, m, self.max_cores, float(target), self._epoch, tables
-        )
-        val = np.asarray(score(sums), dtype=np.float64)
-        ok = np.flatnonzero(val <= cutoff)  # NaN (no free multiset) never is
-        if not ok.size:
-            return math.inf, (), bool(capped)
-        best = int(ok[np.argmin(val[ok])])  # the first of least F, as the loop keeps it
-        tasks = [t for t in members[best].tolist() if t >= 0]
-        k = m - len(tasks)
-        free = tuple(tables[1][rows[best], :k].tolist()) if k else ()
-        return float(val[best]), self._order(set(prefix), frozenset(tasks), free), bool(capped)
 
     def _core_sum(self, core: frozenset[int]) -> float:
         """R(core): memoised per epoch when sums are exact in any order, else summed as

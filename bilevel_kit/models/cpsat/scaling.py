@@ -17,6 +17,9 @@ the robot picks in the order of release (a topological order, releases being mon
 precedence), so the kit's pick end is ``max(S + o_R + sum r, max_i (rel_i + sum_{j: rel_j >=
 rel_i} r_j))`` (the optimum of one machine with release dates); all zero: the timeline
 without releases.
+
+This timeline stays apart from :func:`bilevel_kit.plan.evaluate` for speed (integer times,
+unused kit positions, releases) and is held to it by property tests (docs/timeline.md).
 """
 
 from __future__ import annotations

@@ -11,7 +11,9 @@ docs/timeline.md is max-plus linear in its start: every time of a suffix kit is 
 (a variable of the window's end state + a constant). The end state is the window's last arrival
 ``A``, its human end ``E`` and, with T trays, the human starts ``HS_1 .. HS_T`` of its last T
 kits (``HS_1`` the last). Propagating the suffix's kits symbolically (max and + on those
-forms) gives the makespan as :math:`C = \max_v (v + c_v)`, exact, in O(suffix x T).
+forms) gives the makespan as :math:`C = \max_v (v + c_v)`, exact, in O(suffix x T). It and
+:func:`window_edge` are held to :func:`bilevel_kit.plan.evaluate` by property tests
+(docs/timeline.md).
 """
 
 from __future__ import annotations
