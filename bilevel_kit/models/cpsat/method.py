@@ -55,45 +55,15 @@ the time limit is a safety net only, and ``extra["safety_net"]`` says whether a 
 exceeds the memory limit is not built: the incumbent is returned as feasible with the proven
 bound (``cpsat_status`` ``TOO_LARGE``), or the run is refused when there is none
 (:mod:`..budget`). Without a model (``TOO_LARGE``, ``NOT_BUILT``) option ``fallback="lns"``
-(default) hands the time left to the LNS from the incumbent (:mod:`.nomodel`,
+(default) hands the time left to the LNS from the incumbent (:mod:`..exact.nomodel`,
 :mod:`..lns.fallback`; makespan objective without release times): a better plan replaces the
 incumbent, the bound stays the proven bound.
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
-order with a non-overlapping layout. ``extra`` keys:
-
-* ``time_resolution``, ``times_exact``: the time grid (s) and whether it is exact;
-* ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
-  of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
-  chains), ``hint_used`` (the given plan was a valid start);
-* ``benders_iterations``, ``unproven_cuts``, ``axis_aligned_cuts`` (Benders only: cuts without
-  a proof, and with one for 0/90-degree layouts only), ``cuts``, ``cpsat_status``,
-  ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
-* ``proof_scope`` (``any angle``, ``0/90 degrees`` or None), ``status_reason`` (why the status
-  is weaker than the model's verdict), ``optimal_axis_aligned`` and ``bound_axis_aligned`` (the
-  model's verdict and bound among 0/90-degree plans), ``infeasible_axis_aligned`` (no such
-  plan; status unknown);
-* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
-  ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
-  scaled times); ``idle_bound`` for ``objective="human_idle"``;
-* ``reason`` when the run ends without a plan, or without a model, for a known reason;
-* ``model_cells``: the model's task x kit variables (its size; a model whose estimated memory
-  exceeds :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built: ``cpsat_status``
-  ``TOO_LARGE``, the incumbent is returned, a ``UsageError`` without one; one that cannot be
-  built within half the time left is not built: ``cpsat_status`` ``NOT_BUILT``, the
-  incumbent is returned);
-* ``improved_by`` (``lns`` or None) and ``fallback`` (the time given, the makespan before and
-  after, the windows solved: :func:`..lns.fallback.improve`) when no model was built;
-* ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
-  bound of :mod:`bilevel_kit.bounds`, ``PROVEN_BOUND`` when it attains the proven bound of
-  :mod:`bilevel_kit.models.relax` (then no model is built: it is optimal);
-* ``bound_source``: which bound ``bound`` is (``model``, a closed form, ``head_tail_*`` or
-  ``kit_lp`` of :mod:`bilevel_kit.models.relax`), ``bound_sources`` every bound computed before
-  the model (s), ``bound_lp_kits`` the kit-count LP bound per kit count, ``bound_time_s`` their
-  time (makespan objective without release times);
-* ``hint_method``: the heuristic whose plan was the hint, ``hint_time_s`` the warm start's
-  time (registered method only; ``wall_time_s`` then includes it).
+order with a non-overlapping layout. The run's steps are those of :mod:`..exact.driver`; the
+``extra`` keys, and where they differ from ``milp``'s, are listed in docs/formulations.md, "One
+driver for cpsat and milp".
 """
 
 from __future__ import annotations
@@ -113,6 +83,7 @@ from .. import packing, packing_oracle
 from ..budget import Budget
 from ..common import (
     Packer,
+    assignment_cells,
     chain_groups_idx,
     closed_form_plan,
     kit_order,
@@ -122,10 +93,12 @@ from ..common import (
     reduced_edges,
     scope_claims,
 )
+from ..exact.driver import drive
+from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
+from ..exact.nomodel import improve
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound
-from .nomodel import buildable, handoff
 from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .tray import embed_scope, tray_mode
@@ -371,38 +344,99 @@ def run(
             "hint_used": False,
         },
     )
-    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
-    if unfit is not None:
-        return _no_plan(instance, unfit, report)
-    ctx = _context(instance, sc, options, packer, budget, report.extra)
-    incumbent = _incumbent(ctx, hint, pack_tl, report.extra)
-    live = _start_live(ctx, incumbent)
-    upper = None
-    if incumbent is not None and options.objective == "makespan":
-        upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
-    start = None if incumbent is None else _plan_of(ctx, incumbent, None)
-    strong_bound(ctx, None if start is None else evaluate(instance, start).makespan, report.extra)
-    K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
-    mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
-    report.extra.update(
-        tray_mode=mode,
-        max_kits=K,
-        upper_start=None
-        if incumbent is None
-        else evaluate(instance, _plan_of(ctx, incumbent, None)).makespan,
-    )
-    proven = _proven_without_model(ctx, incumbent, upper, report)
-    if proven is not None:
-        return proven
-    if not buildable(instance, K, budget, report.extra, incumbent is not None):
-        if incumbent is None:
-            return report.finish(None, Status.UNKNOWN, known_bound(ctx))
-        state = State(incumbent, upper)
-        if options.fallback == "lns":  # the time left to the LNS from the incumbent
-            start_plan = _plan_of(ctx, incumbent, None, ctx.packer)
-            state = handoff(ctx, state, start_plan, seed, report.extra)
-        return _conclude(ctx, None, state, report)
-    return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
+    backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
+    return drive(backend, options.fallback)
+
+
+class _Cpsat:
+    """The CP-SAT backend of the exact driver (:mod:`..exact.driver`): the incumbent is a
+    :class:`.context.State` of kits of task indices on the scaled grid."""
+
+    spec = CPSAT_NO_MODEL
+    margin = MARGIN
+
+    def __init__(
+        self,
+        instance: Instance,
+        options: ScheduleOptions,
+        sc: Scaled,
+        packer: Packer,
+        report: _Report,
+        hint: Plan | None,
+        seed: int,
+        cpsat_params: dict[str, Any] | None,
+    ) -> None:
+        self.instance, self.options, self.sc, self.packer = instance, options, sc, packer
+        self.report, self.hint, self.seed, self.cpsat_params = report, hint, seed, cpsat_params
+        self.budget = report.budget
+        self.extra = report.extra
+        self.K = 1
+        self.mode = "benders"
+        self.live: LiveProgress | None = None
+        self.ctx: Context
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        return self.report.finish(plan, status, bound)
+
+    def known_bound(self) -> float:
+        return known_bound(self.ctx)
+
+    def start(self) -> State | None:
+        """The incumbent (:func:`_incumbent`), the proven bound, the kit cap and tray mode."""
+        instance, options, extra = self.instance, self.options, self.extra
+        ctx = self.ctx = _context(instance, self.sc, options, self.packer, self.budget, extra)
+        incumbent = _incumbent(ctx, self.hint, pack_time_limit(self.budget), extra)
+        self.live = _start_live(ctx, incumbent)
+        upper = None
+        if incumbent is not None and options.objective == "makespan":
+            upper = scaled_makespan(self.sc, incumbent)  # C <= U and the kit cap need makespan
+        start = None if incumbent is None else evaluate(instance, _plan_of(ctx, incumbent, None))
+        strong_bound(ctx, None if start is None else start.makespan, extra)
+        self.K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
+        self.mode = tray_mode(instance, options.tray, self.K, ctx.embed_scope)
+        extra.update(
+            tray_mode=self.mode,
+            max_kits=self.K,
+            upper_start=None if start is None else start.makespan,
+        )
+        return None if incumbent is None else State(incumbent, upper)
+
+    def shortcut(self, state: State | None) -> MethodOutput | None:
+        return None if state is None else _proven_without_model(self.ctx, state, self.report)
+
+    def cells(self) -> int:
+        return assignment_cells(self.instance, self.K)
+
+    def hand_off(self, state: State) -> State:
+        """``state``, or the better plan the LNS finds from it in the time left (makespan
+        objective without release times, which the LNS does not model; not in a reproducible
+        run, ``deterministic``, whose result must not depend on the clock)."""
+        ctx = self.ctx
+        assert state.kits is not None
+        plan = _plan_of(ctx, state.kits, None, ctx.packer)
+        self.extra["improved_by"] = None
+        if ctx.objective != "makespan" or any(ctx.sc.rel) or ctx.instance.stations:
+            return state
+        if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
+            return state
+        bound, left = known_bound(ctx), ctx.left()
+        better = improve(
+            ctx.instance, plan, bound=bound, seed=self.seed, time_limit=left, extra=self.extra
+        )
+        if better is None:
+            return state
+        idx = ctx.instance.index
+        kits = [[idx[t] for t in k.tasks] for k in better.kits if k.tasks]
+        layouts = [k.layout for k in better.kits if k.tasks]
+        return State(kits, scaled_makespan(ctx.sc, kits), layouts=layouts)
+
+    def conclude(self, state: State) -> MethodOutput:
+        return _conclude(self.ctx, None, state, self.report)
+
+    def solve(self, state: State | None) -> MethodOutput:
+        incumbent = None if state is None else state.kits
+        upper = None if state is None else state.obj
+        return _solve_model(self, upper, incumbent)
 
 
 def _context(
@@ -423,23 +457,6 @@ def _context(
     return ctx
 
 
-def _no_plan(instance: Instance, unfit: tuple[str, str], report: _Report) -> MethodOutput:
-    """A task whose parts alone do not fit: no plan at all (infeasible) when that is proven
-    at any angle, else none with 0/90-degree layouts (unknown: one at other angles may
-    exist)."""
-    task, scope = unfit
-    if scope == ANY_ANGLE:
-        report.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
-        return report.finish(None, Status.INFEASIBLE, None)
-    report.extra.update(
-        reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
-        "(a layout at other angles may exist)",
-        infeasible_axis_aligned=True,
-        proof_scope=AXIS_ALIGNED,
-    )
-    return report.finish(None, Status.UNKNOWN, best_bound(instance))
-
-
 def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
     """The live progress when somebody listens (then also ``ctx.live``), with the closed-form
     bound and the incumbent reported."""
@@ -455,22 +472,19 @@ def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress
     return live
 
 
-def _proven_without_model(
-    ctx: Context, incumbent: list[list[int]] | None, upper: int | None, report: _Report
-) -> MethodOutput | None:
-    """The result when the incumbent attains a closed-form bound or the release bound (then
-    it is optimal and no model is built); None otherwise."""
+def _proven_without_model(ctx: Context, start: State, report: _Report) -> MethodOutput | None:
+    """The result when the incumbent ``start`` attains a closed-form bound or the release bound
+    (then it is optimal and no model is built); None otherwise."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
+    incumbent, upper = start.kits, start.obj
     start_ms = extra["upper_start"]
-    closed_done = (
-        start_ms is not None and start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
-    )
+    closed_done = start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
     if ctx.objective == "makespan" and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
-    if ctx.proven is not None and start_ms is not None and start_ms <= ctx.proven.value + 1e-9:
+    if ctx.proven is not None and start_ms <= ctx.proven.value + 1e-9:
         # the incumbent attains the proven bound of models.relax: optimal without a model
         extra.update(build_time_s=0.0, cpsat_status="PROVEN_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
@@ -482,27 +496,17 @@ def _proven_without_model(
     return None
 
 
-def _solve_model(
-    ctx: Context,
-    options: ScheduleOptions,
-    K: int,
-    upper: int | None,
-    mode: str,
-    incumbent: list[list[int]] | None,
-    live: LiveProgress | None,
-    seed: int,
-    cpsat_params: dict[str, Any] | None,
-    report: _Report,
-) -> MethodOutput:
+def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | None) -> MethodOutput:
     """Build the model with K kits (C <= ``upper``), configure CP-SAT and search (embedded or
     Benders) from the incumbent; the result."""
     from ortools.sat.python import cp_model
 
+    ctx, options, mode, live, report = run.ctx, run.options, run.mode, run.live, run.report
     instance, extra, budget = ctx.instance, report.extra, ctx.budget
     mdl = build(
         instance,
         ctx.sc,
-        K=K,
+        K=run.K,
         upper=upper,
         embedded=mode == "embedded",
         objective=options.objective,
@@ -514,9 +518,9 @@ def _solve_model(
     ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = max(1, options.workers)
-    solver.parameters.random_seed = seed
+    solver.parameters.random_seed = run.seed
     solver.parameters.log_search_progress = options.log
-    for key, value in (cpsat_params or {}).items():
+    for key, value in (run.cpsat_params or {}).items():
         setattr(solver.parameters, key, value)
     if live is not None:
         live.mdl = mdl
