@@ -77,7 +77,6 @@ from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import REGISTRY, MethodOutput, Status, gap
-from ...options import parse_options
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -93,10 +92,10 @@ from ..common import (
     reduced_edges,
     scope_claims,
 )
-from ..exact.driver import drive
+from ..exact.driver import HINT_SHARE, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import improve
-from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound
 from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
@@ -113,8 +112,6 @@ Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
-#: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
-HINT_SHARE = 0.3
 #: CP-SAT overruns its own limit on large models (presolve): 5.5 s at 247,000 variables.
 OVERRUN_S_PER_CELL = 25e-6
 
@@ -263,17 +260,7 @@ def solve(
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters,
     ``releases`` the release times and ``deterministic`` (module docstring, "Time")."""
-    params = {
-        "workers": workers,
-        "tray": tray,
-        "objective": objective,
-        "time_resolution": time_resolution,
-        "refine_times": refine_times,
-        "pack_resolution": pack_resolution,
-        "log": log,
-        "fallback": fallback,
-    }
-    options = parse_options(ScheduleOptions, params, "cpsat")
+    options = keyword_options(ScheduleOptions, locals(), "cpsat")
     return run(
         instance,
         options,
@@ -531,11 +518,7 @@ def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | No
     extra["cpsat_status"] = state.status_name
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
-        if state.infeasible and state.scope == ANY_ANGLE:
-            return report.finish(None, Status.INFEASIBLE, None)
-        if state.infeasible and state.scope == AXIS_ALIGNED:
-            extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
-        return report.finish(None, Status.UNKNOWN, known_bound(ctx))
+        return without_plan(run, state.infeasible, state.scope)
     return _conclude(ctx, mdl, state, report)
 
 

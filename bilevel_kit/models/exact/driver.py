@@ -16,13 +16,16 @@ backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 from ...bounds import best_bound
 from ...instance import Instance
 from ...methods import MethodOutput, Status
+from ...options import field_names, parse_options
 from ..budget import Budget
-from ..common import unfit_outcome
+from ..common import scope_claims, unfit_outcome
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .nomodel import NoModelSpec, buildable
 
 if TYPE_CHECKING:
@@ -31,6 +34,9 @@ if TYPE_CHECKING:
     from ..relax import ProvenBound
 
 Inc = TypeVar("Inc")
+T = TypeVar("T")
+#: The share of the time limit the warm start (option ``hint``) may use.
+HINT_SHARE = 0.3
 
 
 class Backend(Protocol[Inc]):
@@ -107,6 +113,24 @@ def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:
     if fallback == "lns":  # the time left to the LNS from the incumbent
         inc = backend.hand_off(inc)
     return backend.conclude(inc)
+
+
+def without_plan(backend: Backend[Inc], infeasible: bool, scope: str | None) -> MethodOutput:
+    """The model ended without a plan: ``infeasible`` (no plan among those of ``scope``) is a
+    proof for every plan, or for the 0/90-degree plans only (unknown: one at other angles may
+    exist; docs/formulations.md#what-optimal-means); else unknown with the bound known before
+    the model."""
+    if infeasible and scope == ANY_ANGLE:
+        return backend.finish(None, Status.INFEASIBLE, None)
+    if infeasible and scope == AXIS_ALIGNED:
+        backend.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
+    return backend.finish(None, Status.UNKNOWN, backend.known_bound())
+
+
+def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
+    """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
+    ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
+    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
 
 
 def proven_bound(

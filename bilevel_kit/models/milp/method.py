@@ -52,7 +52,6 @@ from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
-from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
 from ...stations import objective_of
 from ..budget import Budget
@@ -66,7 +65,15 @@ from ..common import (
     quick_plan,
     scope_claims,
 )
-from ..exact.driver import bound_source, drive, known_bound, proven_bound
+from ..exact.driver import (
+    HINT_SHARE,
+    bound_source,
+    drive,
+    keyword_options,
+    known_bound,
+    proven_bound,
+    without_plan,
+)
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import NoModelSpec, improve
 from ..packing import ANY_ANGLE
@@ -87,8 +94,6 @@ from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver,
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
-#: The share of the time limit the ``hint`` method may use.
-HINT_SHARE = 0.3
 
 
 @dataclass(frozen=True)
@@ -149,9 +154,7 @@ def solve(
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
-    params = {"solver": solver, "objective": objective, "tray": tray, "log": log, "hint": hint}
-    params["fallback"] = fallback
-    options = parse_options(MilpOptions, params, "milp")
+    options = keyword_options(MilpOptions, locals(), "milp")
     return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
 
 
@@ -381,12 +384,8 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
         termination=None if info is None else info.termination,
         master_time_s=None if info is None else info.wall_time_s,
     )
-    if loop.inc is None:
-        if loop.infeasible and scope == ANY_ANGLE:
-            return r.finish(None, Status.INFEASIBLE, None)
-        if loop.infeasible:  # no plan with 0/90-degree layouts; one at other angles may exist
-            r.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
-        return r.finish(None, Status.UNKNOWN, r.best)
+    if loop.inc is None:  # (an infeasible master has every cut proven: scope not None)
+        return without_plan(r, loop.infeasible, scope)
     return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
