@@ -19,23 +19,14 @@ docs/formulations.md#what-optimal-means). The closed-form bounds of :mod:`bileve
 which the bound never undercuts, hold for every plan. Times are scaled to integers
 (:mod:`.scaling`).
 
-**Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
-checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
-\min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
-:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U too.
+**Kit count** (docs/formulations.md, "Kit count"): with a feasible upper bound U (the hint or
+a quick plan whose kits are checked to fit) the robot's and the human's work cap K; C <= U too.
 
-**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none): a
-task cannot be picked before its release (raised to its ancestors'); the model, its scaled
-timeline, the hint and U take them into account (:mod:`.scaling`, :mod:`.model`), each kit of
-the plan lists its tasks in release order (the robot's pick order the model assumes). The
-kit-count cap above stays valid (releases only delay: a plan of released makespan <= U has
-makespan <= U without them; U itself is evaluated with releases), the closed-form bounds too;
-the closed-form shortcuts (a plan attaining them is optimal) are off, the release bound of
-:func:`.model.release_bound` is added (an incumbent attaining it is optimal: no model is
-built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` and ``upper_start`` are
-makespans without releases (:func:`bilevel_kit.plan.evaluate`), ``extra['release_makespan']``
-the model's (on the time grid), on which ``gap``, ``bound`` and ``optimal`` are (all zero
-releases: the run without them, unchanged).
+**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none; docs/
+formulations.md, "Release times"): the model, its scaled timeline, the hint and U take them
+into account, each kit lists its tasks in release order, the closed-form shortcuts are off and
+the release bound of :func:`.model.release_bound` is added; ``extra['release_makespan']`` is
+the model's makespan (on the grid), on which ``gap``, ``bound`` and ``optimal`` are.
 
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
@@ -51,13 +42,8 @@ calls are limited by deterministic time too (:class:`..common.Packer`), the othe
 work (quick plans, seed cuts, cut shrinking: their number of packing calls; the kit-count LP:
 its variables), every sub-step's share is the whole budget (:class:`..budget.Budget`), so
 the time limit is a safety net only, and ``extra["safety_net"]`` says whether a net fired
-(then the result is not reproducible). A model whose size
-exceeds the memory limit is not built: the incumbent is returned as feasible with the proven
-bound (``cpsat_status`` ``TOO_LARGE``), or the run is refused when there is none
-(:mod:`..budget`). Without a model (``TOO_LARGE``, ``NOT_BUILT``) option ``fallback="lns"``
-(default) hands the time left to the LNS from the incumbent (:mod:`..exact.nomodel`,
-:mod:`..lns.fallback`; makespan objective without release times): a better plan replaces the
-incumbent, the bound stays the proven bound.
+(then the result is not reproducible). A model over the memory limit or too slow to build
+is not built (:mod:`..exact.nomodel`; docs/formulations.md, "Model too large").
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible

@@ -20,14 +20,9 @@ checker accepts, the master's own verdict and bound of the plans its cuts were p
 packable plan) is the MIP start.
 
 **Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
-master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
-half the time left is not built (the quick plan is returned), nor is one over the memory
-limit (the quick plan is returned as feasible with the proven bound, ``termination``
-``too_large``; the run is refused without one: :mod:`..budget`). Without a model, option
-``fallback="lns"`` (default) hands the time left to the LNS from the quick plan
-(:mod:`..exact.nomodel`, :mod:`..lns.fallback`; makespan objective, one station): a better plan
-replaces it, the bound stays the proven bound. The proven bound of
-:mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
+master solves), up to a small margin (0.2 s kept back); a model over the memory limit or too
+slow to build is not built (:mod:`..exact.nomodel`; docs/formulations.md, "Model too large").
+The proven bound of :mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
 (:func:`~bilevel_kit.models.relax.for_model`), the ``hint`` method at most 30 %.
 
 **Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
