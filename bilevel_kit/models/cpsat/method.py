@@ -62,7 +62,7 @@ from ... import progress
 from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
-from ...methods import REGISTRY, MethodOutput, Status, gap
+from ...methods import MethodOutput, Status, gap
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -78,7 +78,7 @@ from ..common import (
     reduced_edges,
     scope_claims,
 )
-from ..exact.driver import HINT_SHARE, drive, keyword_options, without_plan
+from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import improve
 from ..packing import ANY_ANGLE
@@ -164,11 +164,7 @@ class CpsatOptions(ScheduleOptions):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.hint not in ("auto", "none") and self.hint not in REGISTRY:
-            raise ValueError(
-                f"option 'hint': unknown method {self.hint!r}; choose auto, none or one of "
-                f"{', '.join(REGISTRY)}"
-            )
+        check_hint(self.hint, ("auto", "none"))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 from ...bounds import best_bound
 from ...instance import Instance
-from ...methods import MethodOutput, Status
+from ...methods import REGISTRY, MethodOutput, Status
 from ...options import field_names, parse_options
 from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
@@ -131,6 +131,16 @@ def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
     """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
     ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
     return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
+
+
+def check_hint(hint: str, words: tuple[str, ...]) -> None:
+    """Option ``hint``: one of ``words`` or a registered method (the backends' words and
+    defaults differ: docs/formulations.md, "One driver for cpsat and milp")."""
+    if hint not in words and hint not in REGISTRY:
+        raise ValueError(
+            f"option 'hint': unknown method {hint!r}; choose {', '.join(words)} or one of "
+            f"{', '.join(REGISTRY)}"
+        )
 
 
 def proven_bound(

@@ -63,6 +63,7 @@ from ..common import (
 from ..exact.driver import (
     HINT_SHARE,
     bound_source,
+    check_hint,
     drive,
     keyword_options,
     known_bound,
@@ -125,13 +126,7 @@ class MilpOptions:
     )
 
     def __post_init__(self) -> None:
-        from ...methods import REGISTRY
-
-        if self.hint != "none" and self.hint not in REGISTRY:
-            raise ValueError(
-                f"option 'hint': unknown method {self.hint!r}; choose none or one of "
-                f"{', '.join(REGISTRY)}"
-            )
+        check_hint(self.hint, ("none",))
 
 
 def solve(
