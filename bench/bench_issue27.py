@@ -33,6 +33,14 @@ FILTERS = {"small": "tasks<=130", "large": "tasks>=988"}
 MEMORY_INSTANCE = "intree_n1000_s1_t1_loose_d30"
 #: The size classes of the report (tasks).
 CLASSES = ((0, 15), (16, 35), (36, 75), (76, 130), (131, 10_000))
+#: The report's (method, run) columns, in the order of its table headers.
+COLUMNS = (
+    ("cpsat", "before"),
+    ("cpsat", "after"),
+    ("milp", "before"),
+    ("milp", "after"),
+    ("lns", "after"),
+)
 
 
 def cli() -> str:
@@ -155,13 +163,7 @@ def report(rows: list[dict[str, Any]], memory: list[str]) -> str:
         groups[(fam[n], _cls(tasks[n]))].append(n)
     for (f, c), names in groups.items():
         vals = []
-        for m, code in (
-            ("cpsat", "before"),
-            ("cpsat", "after"),
-            ("milp", "before"),
-            ("milp", "after"),
-            ("lns", "after"),
-        ):
+        for m, code in COLUMNS:
             gaps = [cell[(n, m, code)]["own_gap"] for n in names if (n, m, code) in cell]
             gaps = [g for g in gaps if g is not None]
             opt = sum(
@@ -185,13 +187,7 @@ def report(rows: list[dict[str, Any]], memory: list[str]) -> str:
     ]
     for n in sorted(after_names, key=lambda n: (fam[n], tasks[n], n)):
         vals = []
-        for m, code in (
-            ("cpsat", "before"),
-            ("cpsat", "after"),
-            ("milp", "before"),
-            ("milp", "after"),
-            ("lns", "after"),
-        ):
+        for m, code in COLUMNS:
             r = cell.get((n, m, code))
             if r is None:
                 vals.append("-")

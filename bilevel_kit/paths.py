@@ -93,15 +93,16 @@ def _parent_problem(path: Path) -> str | None:
     return _takes_new_files(base)
 
 
-def _stat(path: Path) -> os.stat_result | None:
-    """``os.stat`` of ``path``; None when nothing is there (a missing folder or a file where
-    a folder would be on the way: :func:`_parent_problem` says which)."""
+def _existing(path: Path) -> tuple[os.stat_result | None, str | None]:
+    """``os.stat`` of ``path`` and None, or None and why nothing can be written there: it
+    cannot be reached, or nothing is there yet (a missing folder or a file where a folder
+    would be on the way) and :func:`_parent_problem` says whether it can be created."""
     try:
-        return os.stat(path)
+        return os.stat(path), None
     except OSError as exc:
         if exc.errno in (errno.ENOENT, errno.ENOTDIR):
-            return None
-        raise
+            return None, _parent_problem(path)
+        return None, f"cannot be reached ({exc.strerror or exc})"
 
 
 def _opens_for_writing(path: Path) -> bool:
@@ -122,12 +123,9 @@ def file_problem(path: PathLike, figure: bool = False) -> str | None:
         return "not a file name"
     if figure and p.suffix and p.suffix.lower() not in FIGURE_SUFFIXES:
         return f"unknown figure format {p.suffix!r} (use {', '.join(FIGURE_SUFFIXES)})"
-    try:
-        st = _stat(p)
-    except OSError as exc:
-        return f"cannot be reached ({exc.strerror or exc})"
+    st, problem = _existing(p)
     if st is None:
-        return _parent_problem(p)
+        return problem
     if stat.S_ISDIR(st.st_mode):
         return "is a folder, not a file"
     if not (stat.S_ISREG(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISFIFO(st.st_mode)):
@@ -144,12 +142,9 @@ def folder_problem(path: PathLike) -> str | None:
     p = Path(path)
     if not str(path):
         return "not a folder name"
-    try:
-        st = _stat(p)
-    except OSError as exc:
-        return f"cannot be reached ({exc.strerror or exc})"
+    st, problem = _existing(p)
     if st is None:
-        return _parent_problem(p)
+        return problem
     if not stat.S_ISDIR(st.st_mode):
         return "exists and is not a folder"
     return None if _takes_new_files(p) is None else "is not writable"

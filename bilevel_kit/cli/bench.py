@@ -12,10 +12,12 @@ from .common import (
     EXIT_INVALID,
     EXIT_OK,
     Parser,
+    add_method_param_option,
     add_output,
     add_seed,
     add_sweep_options,
     add_time_limit,
+    method_params,
     say,
     sweep_exit,
     sweep_session,
@@ -63,14 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_time_limit(run, "time limit per solve (s); default: each method's own")
     add_seed(run, "random seed of every cell (default 0)")
-    run.add_argument(
-        "--param",
-        "-p",
-        action="append",
-        default=[],
-        metavar="METHOD:KEY=VALUE",
-        help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
-    )
+    add_method_param_option(run)
     run.add_argument("--filter", metavar="EXPR", help=FILTER_HELP)
     add_output(run, "--out", folder=True, required=True, metavar="DIR", help="output folder")
     add_sweep_options(run, "solves")
@@ -91,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from ..experiments.kitbench import Library, parse_filter, run_bench, select
-    from .compare import method_params, parse_methods
+    from .compare import parse_methods
 
     library = Library.at(args.library)
     terms = parse_filter(args.filter)  # a bad filter costs nothing

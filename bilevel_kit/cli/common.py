@@ -337,6 +337,39 @@ def add_param_option(p: argparse.ArgumentParser, text: str) -> None:
     )
 
 
+def add_method_param_option(p: argparse.ArgumentParser) -> None:
+    """The repeatable ``--param/-p METHOD:KEY=VALUE`` option of the commands that run several
+    methods (read back by :func:`method_params`)."""
+    p.add_argument(
+        "--param",
+        "-p",
+        action="append",
+        default=[],
+        metavar="METHOD:KEY=VALUE",
+        help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
+    )
+
+
+def method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, Any]]:
+    """``--param METHOD:KEY=VALUE`` items as one option dict per method."""
+    from ..errors import UsageError
+
+    out: dict[str, dict[str, Any]] = {m: {} for m in methods}
+    for item in items:
+        method, sep, kv = item.partition(":")
+        if not sep or method not in out:
+            raise UsageError(
+                f"--param {item!r}: expected METHOD:KEY=VALUE with METHOD one of "
+                f"{', '.join(methods)}"
+            )
+        try:
+            key, value = param(kv)
+        except argparse.ArgumentTypeError as exc:
+            raise UsageError(f"--param {item!r}: {exc}") from None
+        out[method][key] = value
+    return out
+
+
 def add_delivery_time(p: argparse.ArgumentParser | argparse._ArgumentGroup, text: str) -> None:
     """``--d/--delivery-time S``."""
     p.add_argument(

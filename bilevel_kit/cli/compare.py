@@ -11,12 +11,13 @@ from .common import (
     EXIT_UNKNOWN,
     add_derived_outputs,
     add_instance_overrides,
+    add_method_param_option,
     add_output,
     add_seed,
     add_sweep_options,
     add_time_limit,
     instance_overrides,
-    param,
+    method_params,
     say,
     sweep_exit,
     sweep_session,
@@ -53,14 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_seed(p, "random seed of every cell (default 0)")
     add_time_limit(p, "time limit per solve for methods that take one")
-    p.add_argument(
-        "--param",
-        "-p",
-        action="append",
-        default=[],
-        metavar="METHOD:KEY=VALUE",
-        help="option for one method, e.g. greedy-ce:polish=true (repeatable)",
-    )
+    add_method_param_option(p)
     add_output(p, "--csv", metavar="FILE", help="write all record fields as CSV")
     add_output(p, "--md", metavar="FILE", help="write the table as Markdown")
     add_output(
@@ -75,26 +69,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_derived_outputs(p, _outputs)
     add_instance_overrides(p)
     add_sweep_options(p, "solves")
-
-
-def method_params(items: list[str], methods: list[str]) -> dict[str, dict[str, Any]]:
-    """``--param METHOD:KEY=VALUE`` items as one option dict per method."""
-    from ..errors import UsageError
-
-    out: dict[str, dict[str, Any]] = {m: {} for m in methods}
-    for item in items:
-        method, sep, kv = item.partition(":")
-        if not sep or method not in out:
-            raise UsageError(
-                f"--param {item!r}: expected METHOD:KEY=VALUE with METHOD one of "
-                f"{', '.join(methods)}"
-            )
-        try:
-            key, value = param(kv)
-        except argparse.ArgumentTypeError as exc:
-            raise UsageError(f"--param {item!r}: {exc}") from None
-        out[method][key] = value
-    return out
 
 
 def parse_methods(text: str) -> list[str]:

@@ -97,6 +97,12 @@ def is_failed(record: Record) -> bool:
     return record.get("status") == "error"
 
 
+def split_failed(records: Sequence[Record]) -> tuple[list[Record], list[Record]]:
+    """The records of the cells that ran, and the key and error of each one that raised."""
+    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
+    return [r for r in records if not is_failed(r)], failed
+
+
 def all_failed_line(desc: str, records: Sequence[Record]) -> str | None:
     """One line for a sweep whose every cell failed (``None`` otherwise, or without cells):
     there is nothing to tabulate or draw, and one error repeated N times is no news."""

@@ -15,6 +15,7 @@ from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from typing import Any, TypeVar
 
 from ..instance import Instance, topological_order
+from ..methods import Status
 from ..plan import Kit, Placement, Plan, Timeline, evaluate
 from . import packing_oracle
 from .budget import Budget
@@ -154,6 +155,24 @@ def plan_extra(
 def pack_time_limit(budget: Budget) -> float:
     """Seconds one packing call may take: 5 % of the time limit, within [0.2, 2] s."""
     return max(0.2, min(2.0, 0.05 * budget.time_limit))
+
+
+def unfit_outcome(unfit: tuple[str, str], extra: dict[str, Any]) -> Status:
+    """A task whose parts alone do not fit (``(task, scope)`` of
+    :meth:`Packer.task_not_fitting`): no plan at all (infeasible) when that is proven
+    at any angle, else none with 0/90-degree layouts (unknown: one at other angles may exist;
+    docs/formulations.md#what-optimal-means). ``extra`` gets the ``reason``."""
+    task, scope = unfit
+    if scope == ANY_ANGLE:
+        extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
+        return Status.INFEASIBLE
+    extra.update(
+        reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
+        "(a layout at other angles may exist)",
+        infeasible_axis_aligned=True,
+        proof_scope=AXIS_ALIGNED,
+    )
+    return Status.UNKNOWN
 
 
 class Packer:

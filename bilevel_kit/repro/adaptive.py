@@ -39,7 +39,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import is_failed, run_cells_counted, write_json
+from ..experiments.cells import run_cells_counted, split_failed, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import load
 from ..sim import SimParams, TimingModel, effective_instance, make_policy, simulate
@@ -308,8 +308,8 @@ def run_adaptive(
         cells, adaptive_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
         desc="adaptive cells",
     )  # fmt: skip
-    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
-    rows = [row for r in records if not is_failed(r) for row in summarize(r)]
+    ok, failed = split_failed(records)
+    rows = [row for r in ok for row in summarize(r)]
     files = {"csv": write_csv(out / "adaptive.csv", rows, exclude=(), line_end="\n")}
     head = (
         f"Adaptive pace{' (QUICK: a reduced run)' if quick else ''}: {units} tables per run, "
@@ -331,9 +331,7 @@ def run_adaptive(
         "computed": computed,
         "cells": len(cells),
         "failed": failed,
-        "simulation_wall_s": {
-            p: sum(r["wall_s"].get(p, 0.0) for r in records if not is_failed(r)) for p in POLICIES
-        },
+        "simulation_wall_s": {p: sum(r["wall_s"].get(p, 0.0) for r in ok) for p in POLICIES},
         "rows": rows,
         "wall_s": time.perf_counter() - t0,
     }

@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import is_failed, run_cells_counted, write_json
+from ..experiments.cells import run_cells_counted, split_failed, write_json
 from ..experiments.tables import write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
@@ -431,8 +431,7 @@ def run_fig6(
     records, computed = run_cells_counted(
         cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress, desc="fig6 cells"
     )
-    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
-    records = [r for r in records if not is_failed(r)]
+    records, failed = split_failed(records)
     rows = [{"quick": quick, **summarize_cell(r)} for r in records]
     result = {
         "instance": inst.name,

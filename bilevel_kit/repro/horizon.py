@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import Record, is_failed, run_cells_counted, write_json
+from ..experiments.cells import Record, is_failed, run_cells_counted, split_failed, write_json
 from ..experiments.compare import CompareCell, compare_cell
 from ..experiments.tables import write_csv
 from ..sim import POLICIES, TimingModel
@@ -545,8 +545,8 @@ def _run_simulation(
         sim_cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
         desc="horizon sim",
     )  # fmt: skip
-    failed = [{"key": r["key"], "error": r["error"]} for r in sim_recs if is_failed(r)]
-    rows = window_rows([r for r in sim_recs if not is_failed(r)], quick)
+    ok, failed = split_failed(sim_recs)
+    rows = window_rows(ok, quick)
     return _Part(rows, len(sim_cells), computed, failed), timing, cal
 
 

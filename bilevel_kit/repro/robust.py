@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import atomic, style
 from ..errors import UsageError
-from ..experiments.cells import is_failed, run_cells_counted, write_json
+from ..experiments.cells import run_cells_counted, split_failed, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance, from_dict
 from ..plan import Kit, Plan
@@ -310,8 +310,8 @@ def run_robust(
         cells, robust_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
         desc="robust cells",
     )  # fmt: skip
-    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
-    rows = rows_of([r for r in records if not is_failed(r)])
+    ok, failed = split_failed(records)
+    rows = rows_of(ok)
     files = _write_outputs(out, rows, quick)
     result = {
         "quick": quick,
@@ -320,7 +320,7 @@ def run_robust(
         "computed": computed,
         "failed": failed,
         "rows": rows,
-        "cpu_s": sum(float(r.get("cpu_s", 0.0)) for r in records if not is_failed(r)),
+        "cpu_s": sum(float(r.get("cpu_s", 0.0)) for r in ok),
         "wall_s": time.perf_counter() - t0,
     }
     result["files"] = {k: str(v) for k, v in {**files, "json": out / "robust.json"}.items()}

@@ -19,23 +19,14 @@ docs/formulations.md#what-optimal-means). The closed-form bounds of :mod:`bileve
 which the bound never undercuts, hold for every plan. Times are scaled to integers
 (:mod:`.scaling`).
 
-**Kit count.** With a feasible upper bound U (the hint or a quick greedy plan whose kits are
-checked to fit), every plan at least as good has :math:`m (o_R + d + w) \le U - \sum r_i - o_H + w -
-\min_{snk} h_i` (w = o_H with one tray, else 0: :mod:`bilevel_kit.bounds`) and
-:math:`m\, o_H \le U - \min_{src} r_i - o_R - d - \sum h_i`, which caps K; C <= U too.
+**Kit count** (docs/formulations.md, "Kit count"): with a feasible upper bound U (the hint or
+a quick plan whose kits are checked to fit) the robot's and the human's work cap K; C <= U too.
 
-**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none): a
-task cannot be picked before its release (raised to its ancestors'); the model, its scaled
-timeline, the hint and U take them into account (:mod:`.scaling`, :mod:`.model`), each kit of
-the plan lists its tasks in release order (the robot's pick order the model assumes). The
-kit-count cap above stays valid (releases only delay: a plan of released makespan <= U has
-makespan <= U without them; U itself is evaluated with releases), the closed-form bounds too;
-the closed-form shortcuts (a plan attaining them is optimal) are off, the release bound of
-:func:`.model.release_bound` is added (an incumbent attaining it is optimal: no model is
-built, ``cpsat_status`` ``RELEASE_BOUND``). ``extra['makespan']`` and ``upper_start`` are
-makespans without releases (:func:`bilevel_kit.plan.evaluate`), ``extra['release_makespan']``
-the model's (on the time grid), on which ``gap``, ``bound`` and ``optimal`` are (all zero
-releases: the run without them, unchanged).
+**Release times** (``solve``/``run`` argument ``releases``: task id -> s, default none; docs/
+formulations.md, "Release times"): the model, its scaled timeline, the hint and U take them
+into account, each kit lists its tasks in release order, the closed-form shortcuts are off and
+the release bound of :func:`.model.release_bound` is added; ``extra['release_makespan']`` is
+the model's makespan (on the grid), on which ``gap``, ``bound`` and ``optimal`` are.
 
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
@@ -51,49 +42,14 @@ calls are limited by deterministic time too (:class:`..common.Packer`), the othe
 work (quick plans, seed cuts, cut shrinking: their number of packing calls; the kit-count LP:
 its variables), every sub-step's share is the whole budget (:class:`..budget.Budget`), so
 the time limit is a safety net only, and ``extra["safety_net"]`` says whether a net fired
-(then the result is not reproducible). A model whose size
-exceeds the memory limit is not built: the incumbent is returned as feasible with the proven
-bound (``cpsat_status`` ``TOO_LARGE``), or the run is refused when there is none
-(:mod:`..budget`). Without a model (``TOO_LARGE``, ``NOT_BUILT``) option ``fallback="lns"``
-(default) hands the time left to the LNS from the incumbent (:mod:`.nomodel`,
-:mod:`..lns.fallback`; makespan objective without release times): a better plan replaces the
-incumbent, the bound stays the proven bound.
+(then the result is not reproducible). A model over the memory limit or too slow to build
+is not built (:mod:`..exact.nomodel`; docs/formulations.md, "Model too large").
 
 **Result.** ``bound`` is a proven lower bound on the makespan in seconds (the model's bound,
 never below the closed-form bounds); the plan lists each kit's tasks in a precedence-feasible
-order with a non-overlapping layout. ``extra`` keys:
-
-* ``time_resolution``, ``times_exact``: the time grid (s) and whether it is exact;
-* ``objective``, ``tray_mode`` (the mode used), ``max_kits`` (K), ``upper_start`` (makespan
-  of the incumbent before solving, or None), ``symmetric_chains`` (tasks in interchangeable
-  chains), ``hint_used`` (the given plan was a valid start);
-* ``benders_iterations``, ``unproven_cuts``, ``axis_aligned_cuts`` (Benders only: cuts without
-  a proof, and with one for 0/90-degree layouts only), ``cuts``, ``cpsat_status``,
-  ``build_time_s``, ``pack_solves`` (packing-oracle solves), ``wall_time_s``;
-* ``proof_scope`` (``any angle``, ``0/90 degrees`` or None), ``status_reason`` (why the status
-  is weaker than the model's verdict), ``optimal_axis_aligned`` and ``bound_axis_aligned`` (the
-  model's verdict and bound among 0/90-degree plans), ``infeasible_axis_aligned`` (no such
-  plan; status unknown);
-* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
-  ``bound_model`` (the model's bound in s, or None), ``scaled_optimal`` (optimal on the
-  scaled times); ``idle_bound`` for ``objective="human_idle"``;
-* ``reason`` when the run ends without a plan, or without a model, for a known reason;
-* ``model_cells``: the model's task x kit variables (its size; a model whose estimated memory
-  exceeds :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built: ``cpsat_status``
-  ``TOO_LARGE``, the incumbent is returned, a ``UsageError`` without one; one that cannot be
-  built within half the time left is not built: ``cpsat_status`` ``NOT_BUILT``, the
-  incumbent is returned);
-* ``improved_by`` (``lns`` or None) and ``fallback`` (the time given, the makespan before and
-  after, the windows solved: :func:`..lns.fallback.improve`) when no model was built;
-* ``cpsat_status`` is ``CLOSED_FORM_BOUND`` when the incumbent already attains the closed-form
-  bound of :mod:`bilevel_kit.bounds`, ``PROVEN_BOUND`` when it attains the proven bound of
-  :mod:`bilevel_kit.models.relax` (then no model is built: it is optimal);
-* ``bound_source``: which bound ``bound`` is (``model``, a closed form, ``head_tail_*`` or
-  ``kit_lp`` of :mod:`bilevel_kit.models.relax`), ``bound_sources`` every bound computed before
-  the model (s), ``bound_lp_kits`` the kit-count LP bound per kit count, ``bound_time_s`` their
-  time (makespan objective without release times);
-* ``hint_method``: the heuristic whose plan was the hint, ``hint_time_s`` the warm start's
-  time (registered method only; ``wall_time_s`` then includes it).
+order with a non-overlapping layout. The run's steps are those of :mod:`..exact.driver`; the
+``extra`` keys, and where they differ from ``milp``'s, are listed in docs/formulations.md, "One
+driver for cpsat and milp".
 """
 
 from __future__ import annotations
@@ -106,13 +62,13 @@ from ... import progress
 from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
-from ...methods import REGISTRY, MethodOutput, Status, gap
-from ...options import parse_options
+from ...methods import MethodOutput, Status, gap
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
 from ..common import (
     Packer,
+    assignment_cells,
     chain_groups_idx,
     closed_form_plan,
     kit_order,
@@ -122,10 +78,12 @@ from ..common import (
     reduced_edges,
     scope_claims,
 )
-from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
+from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
+from ..exact.nomodel import improve
+from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound
-from .nomodel import buildable, handoff
 from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .tray import embed_scope, tray_mode
@@ -140,8 +98,6 @@ Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
-#: The share of the time limit the warm start (``hint``) may use; the model gets the rest.
-HINT_SHARE = 0.3
 #: CP-SAT overruns its own limit on large models (presolve): 5.5 s at 247,000 variables.
 OVERRUN_S_PER_CELL = 25e-6
 
@@ -208,11 +164,7 @@ class CpsatOptions(ScheduleOptions):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.hint not in ("auto", "none") and self.hint not in REGISTRY:
-            raise ValueError(
-                f"option 'hint': unknown method {self.hint!r}; choose auto, none or one of "
-                f"{', '.join(REGISTRY)}"
-            )
+        check_hint(self.hint, ("auto", "none"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -290,17 +242,7 @@ def solve(
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters,
     ``releases`` the release times and ``deterministic`` (module docstring, "Time")."""
-    params = {
-        "workers": workers,
-        "tray": tray,
-        "objective": objective,
-        "time_resolution": time_resolution,
-        "refine_times": refine_times,
-        "pack_resolution": pack_resolution,
-        "log": log,
-        "fallback": fallback,
-    }
-    options = parse_options(ScheduleOptions, params, "cpsat")
+    options = keyword_options(ScheduleOptions, locals(), "cpsat")
     return run(
         instance,
         options,
@@ -371,38 +313,99 @@ def run(
             "hint_used": False,
         },
     )
-    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
-    if unfit is not None:
-        return _no_plan(instance, unfit, report)
-    ctx = _context(instance, sc, options, packer, budget, report.extra)
-    incumbent = _incumbent(ctx, hint, pack_tl, report.extra)
-    live = _start_live(ctx, incumbent)
-    upper = None
-    if incumbent is not None and options.objective == "makespan":
-        upper = scaled_makespan(sc, incumbent)  # C <= U and the kit cap need makespan
-    start = None if incumbent is None else _plan_of(ctx, incumbent, None)
-    strong_bound(ctx, None if start is None else evaluate(instance, start).makespan, report.extra)
-    K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
-    mode = tray_mode(instance, options.tray, K, ctx.embed_scope)
-    report.extra.update(
-        tray_mode=mode,
-        max_kits=K,
-        upper_start=None
-        if incumbent is None
-        else evaluate(instance, _plan_of(ctx, incumbent, None)).makespan,
-    )
-    proven = _proven_without_model(ctx, incumbent, upper, report)
-    if proven is not None:
-        return proven
-    if not buildable(instance, K, budget, report.extra, incumbent is not None):
-        if incumbent is None:
-            return report.finish(None, Status.UNKNOWN, known_bound(ctx))
-        state = State(incumbent, upper)
-        if options.fallback == "lns":  # the time left to the LNS from the incumbent
-            start_plan = _plan_of(ctx, incumbent, None, ctx.packer)
-            state = handoff(ctx, state, start_plan, seed, report.extra)
-        return _conclude(ctx, None, state, report)
-    return _solve_model(ctx, options, K, upper, mode, incumbent, live, seed, cpsat_params, report)
+    backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
+    return drive(backend, options.fallback)
+
+
+class _Cpsat:
+    """The CP-SAT backend of the exact driver (:mod:`..exact.driver`): the incumbent is a
+    :class:`.context.State` of kits of task indices on the scaled grid."""
+
+    spec = CPSAT_NO_MODEL
+    margin = MARGIN
+
+    def __init__(
+        self,
+        instance: Instance,
+        options: ScheduleOptions,
+        sc: Scaled,
+        packer: Packer,
+        report: _Report,
+        hint: Plan | None,
+        seed: int,
+        cpsat_params: dict[str, Any] | None,
+    ) -> None:
+        self.instance, self.options, self.sc, self.packer = instance, options, sc, packer
+        self.report, self.hint, self.seed, self.cpsat_params = report, hint, seed, cpsat_params
+        self.budget = report.budget
+        self.extra = report.extra
+        self.K = 1
+        self.mode = "benders"
+        self.live: LiveProgress | None = None
+        self.ctx: Context
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        return self.report.finish(plan, status, bound)
+
+    def known_bound(self) -> float:
+        return known_bound(self.ctx)
+
+    def start(self) -> State | None:
+        """The incumbent (:func:`_incumbent`), the proven bound, the kit cap and tray mode."""
+        instance, options, extra = self.instance, self.options, self.extra
+        ctx = self.ctx = _context(instance, self.sc, options, self.packer, self.budget, extra)
+        incumbent = _incumbent(ctx, self.hint, pack_time_limit(self.budget), extra)
+        self.live = _start_live(ctx, incumbent)
+        upper = None
+        if incumbent is not None and options.objective == "makespan":
+            upper = scaled_makespan(self.sc, incumbent)  # C <= U and the kit cap need makespan
+        start = None if incumbent is None else evaluate(instance, _plan_of(ctx, incumbent, None))
+        strong_bound(ctx, None if start is None else start.makespan, extra)
+        self.K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
+        self.mode = tray_mode(instance, options.tray, self.K, ctx.embed_scope)
+        extra.update(
+            tray_mode=self.mode,
+            max_kits=self.K,
+            upper_start=None if start is None else start.makespan,
+        )
+        return None if incumbent is None else State(incumbent, upper)
+
+    def shortcut(self, state: State | None) -> MethodOutput | None:
+        return None if state is None else _proven_without_model(self.ctx, state, self.report)
+
+    def cells(self) -> int:
+        return assignment_cells(self.instance, self.K)
+
+    def hand_off(self, state: State) -> State:
+        """``state``, or the better plan the LNS finds from it in the time left (makespan
+        objective without release times, which the LNS does not model; not in a reproducible
+        run, ``deterministic``, whose result must not depend on the clock)."""
+        ctx = self.ctx
+        assert state.kits is not None
+        plan = _plan_of(ctx, state.kits, None, ctx.packer)
+        self.extra["improved_by"] = None
+        if ctx.objective != "makespan" or any(ctx.sc.rel) or ctx.instance.stations:
+            return state
+        if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
+            return state
+        bound, left = known_bound(ctx), ctx.left()
+        better = improve(
+            ctx.instance, plan, bound=bound, seed=self.seed, time_limit=left, extra=self.extra
+        )
+        if better is None:
+            return state
+        idx = ctx.instance.index
+        kits = [[idx[t] for t in k.tasks] for k in better.kits if k.tasks]
+        layouts = [k.layout for k in better.kits if k.tasks]
+        return State(kits, scaled_makespan(ctx.sc, kits), layouts=layouts)
+
+    def conclude(self, state: State) -> MethodOutput:
+        return _conclude(self.ctx, None, state, self.report)
+
+    def solve(self, state: State | None) -> MethodOutput:
+        incumbent = None if state is None else state.kits
+        upper = None if state is None else state.obj
+        return _solve_model(self, upper, incumbent)
 
 
 def _context(
@@ -423,23 +426,6 @@ def _context(
     return ctx
 
 
-def _no_plan(instance: Instance, unfit: tuple[str, str], report: _Report) -> MethodOutput:
-    """A task whose parts alone do not fit: no plan at all (infeasible) when that is proven
-    at any angle, else none with 0/90-degree layouts (unknown: one at other angles may
-    exist)."""
-    task, scope = unfit
-    if scope == ANY_ANGLE:
-        report.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
-        return report.finish(None, Status.INFEASIBLE, None)
-    report.extra.update(
-        reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
-        "(a layout at other angles may exist)",
-        infeasible_axis_aligned=True,
-        proof_scope=AXIS_ALIGNED,
-    )
-    return report.finish(None, Status.UNKNOWN, best_bound(instance))
-
-
 def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress | None:
     """The live progress when somebody listens (then also ``ctx.live``), with the closed-form
     bound and the incumbent reported."""
@@ -455,22 +441,19 @@ def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress
     return live
 
 
-def _proven_without_model(
-    ctx: Context, incumbent: list[list[int]] | None, upper: int | None, report: _Report
-) -> MethodOutput | None:
-    """The result when the incumbent attains a closed-form bound or the release bound (then
-    it is optimal and no model is built); None otherwise."""
+def _proven_without_model(ctx: Context, start: State, report: _Report) -> MethodOutput | None:
+    """The result when the incumbent ``start`` attains a closed-form bound or the release bound
+    (then it is optimal and no model is built); None otherwise."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
+    incumbent, upper = start.kits, start.obj
     start_ms = extra["upper_start"]
-    closed_done = (
-        start_ms is not None and start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
-    )
+    closed_done = start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
     if ctx.objective == "makespan" and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
-    if ctx.proven is not None and start_ms is not None and start_ms <= ctx.proven.value + 1e-9:
+    if ctx.proven is not None and start_ms <= ctx.proven.value + 1e-9:
         # the incumbent attains the proven bound of models.relax: optimal without a model
         extra.update(build_time_s=0.0, cpsat_status="PROVEN_BOUND", cuts=0)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
@@ -482,27 +465,17 @@ def _proven_without_model(
     return None
 
 
-def _solve_model(
-    ctx: Context,
-    options: ScheduleOptions,
-    K: int,
-    upper: int | None,
-    mode: str,
-    incumbent: list[list[int]] | None,
-    live: LiveProgress | None,
-    seed: int,
-    cpsat_params: dict[str, Any] | None,
-    report: _Report,
-) -> MethodOutput:
+def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | None) -> MethodOutput:
     """Build the model with K kits (C <= ``upper``), configure CP-SAT and search (embedded or
     Benders) from the incumbent; the result."""
     from ortools.sat.python import cp_model
 
+    ctx, options, mode, live, report = run.ctx, run.options, run.mode, run.live, run.report
     instance, extra, budget = ctx.instance, report.extra, ctx.budget
     mdl = build(
         instance,
         ctx.sc,
-        K=K,
+        K=run.K,
         upper=upper,
         embedded=mode == "embedded",
         objective=options.objective,
@@ -514,9 +487,9 @@ def _solve_model(
     ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = max(1, options.workers)
-    solver.parameters.random_seed = seed
+    solver.parameters.random_seed = run.seed
     solver.parameters.log_search_progress = options.log
-    for key, value in (cpsat_params or {}).items():
+    for key, value in (run.cpsat_params or {}).items():
         setattr(solver.parameters, key, value)
     if live is not None:
         live.mdl = mdl
@@ -527,11 +500,7 @@ def _solve_model(
     extra["cpsat_status"] = state.status_name
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
-        if state.infeasible and state.scope == ANY_ANGLE:
-            return report.finish(None, Status.INFEASIBLE, None)
-        if state.infeasible and state.scope == AXIS_ALIGNED:
-            extra.update(infeasible_axis_aligned=True, **scope_claims(state.scope))
-        return report.finish(None, Status.UNKNOWN, known_bound(ctx))
+        return without_plan(run, state.infeasible, state.scope)
     return _conclude(ctx, mdl, state, report)
 
 

@@ -10,45 +10,30 @@ from typing import Any
 
 from ...bounds import best_bound, end_tasks, kit_slacks
 from ...objectives import is_top_level
+from ..exact.driver import bound_source as exact_source
+from ..exact.driver import known_bound as exact_known
+from ..exact.driver import proven_bound
 from .context import Context
 from .model import tray_wait
 
 
 def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> None:
     """The proven bound into ``ctx.proven`` (makespan objective without release times only;
-    ``upper_s``: the incumbent's makespan in s, which ends the kit-count scan early)."""
+    ``upper_s``: the incumbent's makespan in s, :func:`..exact.driver.proven_bound`)."""
     if not is_top_level(ctx.objective) or any(ctx.sc.rel):  # a bound on the makespan
         return
-    from ..relax import for_model
-
-    t0 = ctx.budget.elapsed()
-    budget = ctx.budget  # a reproducible run: the scan is limited by work (relax/__init__.py)
-    ctx.proven = for_model(
-        ctx.instance, budget.time_limit, budget.remaining(), upper_s, budget.deterministic
-    )
-    if ctx.proven.safety_net:
-        budget.net_fired()
-    extra.update(
-        bound_sources=ctx.proven.sources,
-        bound_lp_kits=dict(ctx.proven.per_kits),
-        bound_time_s=ctx.budget.elapsed() - t0,
-    )
+    ctx.proven = proven_bound(ctx.instance, ctx.budget, upper_s, extra)
 
 
 def known_bound(ctx: Context) -> float:
     """The best makespan bound known before the model (s), for every plan."""
-    closed = best_bound(ctx.instance)
-    return closed if ctx.proven is None else max(closed, ctx.proven.value)
+    return exact_known(best_bound(ctx.instance), ctx.proven)
 
 
 def bound_source(ctx: Context, any_s: float | None) -> str:
-    """Which bound is the best: ``model`` (the model's bound for every plan, ``any_s``), the
-    source of the proven bound, or ``closed_form``."""
-    if any_s is not None and any_s > known_bound(ctx) + 1e-9:
-        return "model"
-    if ctx.proven is not None and ctx.proven.value >= best_bound(ctx.instance) - 1e-9:
-        return str(ctx.proven.source)
-    return "closed_form"
+    """Which bound is the best (:func:`..exact.driver.bound_source`; ``any_s``: the model's
+    bound for every plan)."""
+    return exact_source(best_bound(ctx.instance), ctx.proven, any_s, 1e-9)
 
 
 def scaled_kit_bounds(ctx: Context) -> dict[int, int] | None:

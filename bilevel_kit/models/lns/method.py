@@ -53,9 +53,8 @@ from ...methods import MethodOutput, Status, gap
 from ...objectives import get as get_objective
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
-from ..common import Packer, pack_time_limit
+from ..common import Packer, pack_time_limit, unfit_outcome
 from ..cpsat.scaling import scale_times, scaled_makespan
-from ..packing import ANY_ANGLE
 from .fit import FastFit
 from .window import Context, solve_window
 
@@ -150,12 +149,7 @@ def lns(
     extra: dict[str, Any] = {}
     unfit = None if start_plan is not None else packer.task_not_fitting()  # a plan: all fit
     if unfit is not None:
-        task, scope = unfit
-        if scope == ANY_ANGLE:
-            extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
-            return MethodOutput(None, Status.INFEASIBLE, None, extra)
-        extra["reason"] = f"the parts of task {task!r} alone have no 0/90-degree layout"
-        return MethodOutput(None, Status.UNKNOWN, None, extra)
+        return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     run = _Run(instance, options, budget, stop_at, sc, packer, seed, extra)
     run.start(start_plan)
     if run.kits is None:

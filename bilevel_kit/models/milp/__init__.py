@@ -2,8 +2,9 @@
 
 :mod:`.model` (the Pyomo model and its Benders cuts), :mod:`.solver` (running HiGHS in a child
 process, :mod:`.highs_child`, or any Pyomo solver; shared with ``bilevel-milp``),
-:mod:`.method` (the registered entry, its options, the Python :func:`solve` and the Benders
-loop; the result and its ``extra`` keys are listed there), :mod:`.stations` (the master with
+:mod:`.method` (the registered entry, its options, the Python :func:`solve`, the Benders
+loop; the steps of a run are :mod:`..exact.driver`'s, the ``extra`` keys are listed in
+docs/formulations.md, "One driver for cpsat and milp"), :mod:`.stations` (the master with
 several assembly stations, docs/timeline.md#several-stations). The formulation is in
 docs/formulations.md. Importing this package loads neither Pyomo nor a solver.
 """

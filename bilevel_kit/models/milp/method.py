@@ -20,43 +20,17 @@ checker accepts, the master's own verdict and bound of the plans its cuts were p
 packable plan) is the MIP start.
 
 **Time.** ``time_limit`` (default 60 s) covers everything (packing, model building and all
-master solves), up to a small margin (0.2 s kept back); a model that cannot be built within
-half the time left is not built (the quick plan is returned), nor is one over the memory
-limit (the quick plan is returned as feasible with the proven bound, ``termination``
-``too_large``; the run is refused without one: :mod:`..budget`). Without a model, option
-``fallback="lns"`` (default) hands the time left to the LNS from the quick plan
-(:mod:`.nomodel`, :mod:`..lns.fallback`; makespan objective, one station): a better plan
-replaces it, the bound stays the proven bound. The proven bound of
-:mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
+master solves), up to a small margin (0.2 s kept back); a model over the memory limit or too
+slow to build is not built (:mod:`..exact.nomodel`; docs/formulations.md, "Model too large").
+The proven bound of :mod:`bilevel_kit.models.relax` takes at most 5 % of the time limit
 (:func:`~bilevel_kit.models.relax.for_model`), the ``hint`` method at most 30 %.
 
 **Result.** ``status`` optimal / feasible / infeasible / unknown; ``bound`` a proven lower
 bound on the makespan in seconds (the master's best bound when every cut is proven, never below
-the closed-form bounds). ``extra`` keys:
-
-* ``solver``, ``objective``, ``tray_mode``, ``time_limit_enforced`` (the solver's time limit is
-  known to us), ``max_kits`` (K), ``upper_start`` (objective of the quick plan, or None),
-  ``build_time_s``, ``wall_time_s``;
-* ``termination`` is ``closed_form_bound`` when the quick plan already attains the closed-form
-  bound of :mod:`bilevel_kit.bounds`, ``proven_bound`` when it attains the proven bound of
-  :mod:`bilevel_kit.models.relax` (no model is built: it is optimal);
-* ``bound_source``, ``bound_sources``, ``bound_lp_kits``, ``bound_time_s``: as for ``cpsat``;
-  ``hint_method`` the method whose plan became the incumbent (None: the quick plan);
-* ``iterations`` (master solves), ``cuts``, ``unproven_cuts``, ``axis_aligned_cuts``,
-  ``termination`` (the last master solve's), ``master_time_s`` (its wall time);
-* ``proof_scope``, ``status_reason``, ``optimal_axis_aligned``, ``bound_axis_aligned``,
-  ``infeasible_axis_aligned``: as for ``cpsat`` (what the cuts' proofs cover);
-* with a plan: ``makespan``, ``human_idle``, ``n_kits``, ``gap``, ``bound_closed_form``,
-  ``bound_model`` (the master's bound, or None); ``idle_bound`` for
-  ``objective="human_idle"``; with stations, ``objective_value``, ``objective_bound``,
-  ``objective_gap`` of another objective (:func:`.stations.objective_extra`);
-* ``reason`` when the run ends without a plan, or without a model, for a known reason;
-* ``model_cells``: the model's task x kit variables (a model whose estimated memory exceeds
-  :data:`~bilevel_kit.models.budget.MEMORY_LIMIT` is not built, ``termination`` ``too_large``,
-  or refused with a ``UsageError`` without a plan; one that
-  cannot be built within half the time left is not built: ``termination`` ``not_built``,
-  the quick plan is returned); then ``improved_by`` (``lns`` or None) and ``fallback`` (the
-  time given, the makespan before and after, the windows: :func:`..lns.fallback.improve`).
+the closed-form bounds). The run's steps are those of :mod:`..exact.driver`; the ``extra`` keys,
+and where they differ from ``cpsat``'s, are listed in docs/formulations.md, "One driver for
+cpsat and milp" (with stations also ``objective_value``, ``objective_bound``,
+``objective_gap``: :func:`.stations.objective_extra`).
 
 On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
 needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
@@ -67,26 +41,38 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
-from ...options import parse_options
 from ...plan import Kit, Plan, evaluate
 from ...stations import objective_of
 from ..budget import Budget
 from ..common import (
     NoGoodCuts,
     Packer,
+    assignment_cells,
     closed_form_plan,
     pack_time_limit,
     plan_extra,
     quick_plan,
     scope_claims,
 )
-from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from ..exact.driver import (
+    HINT_SHARE,
+    bound_source,
+    check_hint,
+    drive,
+    keyword_options,
+    known_bound,
+    proven_bound,
+    without_plan,
+)
+from ..exact.nomodel import MILP as MILP_NO_MODEL
+from ..exact.nomodel import NoModelSpec, improve
+from ..packing import ANY_ANGLE
 from ..packing_oracle import WHY_TIME, Fit
 from . import stations
 from .model import (
@@ -99,14 +85,11 @@ from .model import (
     objective_value,
     set_start,
 )
-from .nomodel import buildable, handoff
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
 #: Seconds kept back from the time limit for extraction and the final layouts.
 MARGIN = 0.2
-#: The share of the time limit the ``hint`` method may use.
-HINT_SHARE = 0.3
 
 
 @dataclass(frozen=True)
@@ -143,13 +126,7 @@ class MilpOptions:
     )
 
     def __post_init__(self) -> None:
-        from ...methods import REGISTRY
-
-        if self.hint != "none" and self.hint not in REGISTRY:
-            raise ValueError(
-                f"option 'hint': unknown method {self.hint!r}; choose none or one of "
-                f"{', '.join(REGISTRY)}"
-            )
+        check_hint(self.hint, ("none",))
 
 
 def solve(
@@ -167,9 +144,7 @@ def solve(
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
-    params = {"solver": solver, "objective": objective, "tray": tray, "log": log, "hint": hint}
-    params["fallback"] = fallback
-    options = parse_options(MilpOptions, params, "milp")
+    options = keyword_options(MilpOptions, locals(), "milp")
     return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
 
 
@@ -197,7 +172,7 @@ def run(
     pack_tl = pack_time_limit(budget)
     packer = Packer(instance, pack_tl, budget.cut(MARGIN))
     live = _Live(progress.tracker(options.objective), instance, options.objective)
-    r = _Run(instance, options, budget, packer, closed, live)
+    r = _Run(instance, options, budget, packer, closed, live, seed, opt, solver_options)
     r.extra.update(
         solver=options.solver,
         objective=options.objective,
@@ -207,36 +182,7 @@ def run(
         unproven_cuts=0,
         time_limit_enforced=options.solver == "highs" or options.solver in SOLVER_OPTIONS,
     )
-    unfit = packer.task_not_fitting()  # then no plan exists (or none with 0/90-degree layouts)
-    if unfit is not None:
-        task, scope = unfit
-        if scope == ANY_ANGLE:
-            r.extra["reason"] = f"the parts of task {task!r} alone do not fit the tray"
-            return r.finish(None, Status.INFEASIBLE, None)
-        r.extra.update(
-            reason=f"the parts of task {task!r} alone have no 0/90-degree layout on the tray "
-            "(a layout at other angles may exist)",
-            infeasible_axis_aligned=True,
-            proof_scope=AXIS_ALIGNED,
-        )
-        return r.finish(None, Status.UNKNOWN, closed)
-    if instance.stations:  # docs/timeline.md#several-stations: a master of its own
-        inc, inc_obj, upper, K = stations.incumbent(instance, options.objective, options.hint)
-        r.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
-    else:
-        inc, inc_obj, upper, K = _incumbent(r, pack_tl, seed)
-        K = max(_strong_bound(r, upper, K), len(inc) if inc is not None else 1)
-    if upper is not None and upper <= r.best + TOL and options.objective == "makespan":
-        # the quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
-        # bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))
-        done = "closed_form_bound" if upper <= closed + TOL else "proven_bound"
-        r.extra.update(build_time_s=0.0, termination=done)
-        return _conclude(r, inc, None, None, ANY_ANGLE, proven=True)
-    if not buildable(instance, K, budget, MARGIN, r.extra, inc is not None):
-        if inc is not None and options.fallback == "lns" and not instance.stations:
-            inc = _handoff(r, inc, seed)  # the time left to the LNS from the quick plan
-        return _conclude(r, inc, None, None, ANY_ANGLE, proven=False)
-    return _solve_master(r, K, upper, inc, inc_obj, opt, seed, solver_options)
+    return drive(r, options.fallback)
 
 
 #: The registered method ``milp`` (module docstring) is :func:`run`.
@@ -245,7 +191,9 @@ milp = run
 
 @dataclass
 class _Run:
-    """What the steps of one run share, and how it ends (wall time, the last live report)."""
+    """The MILP backend of the exact driver (:mod:`..exact.driver`; the incumbent is a list of
+    kits of task ids): what the steps of one run share, and how it ends (wall time, the last
+    live report)."""
 
     instance: Instance
     options: MilpOptions
@@ -253,13 +201,24 @@ class _Run:
     packer: Packer
     closed: float  # the closed-form makespan bound
     live: _Live
+    seed: int
+    opt: Any  # the solver
+    solver_options: Mapping[str, Any] | None
     extra: dict[str, Any] = field(default_factory=dict)
     proven: Any = None  # the proven bound of models.relax (None: not computed)
+    K: int = 1
+    upper: float | None = None  # the incumbent's makespan (makespan objective)
+    inc_obj: float | None = None  # the incumbent's objective
+    spec: ClassVar[NoModelSpec] = MILP_NO_MODEL
+    margin: ClassVar[float] = MARGIN
 
     @property
     def best(self) -> float:
         """The best makespan bound known before the model (s)."""
-        return self.closed if self.proven is None else max(self.closed, self.proven.value)
+        return known_bound(self.closed, self.proven)
+
+    def known_bound(self) -> float:
+        return self.best
 
     def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
         self.extra["wall_time_s"] = self.budget.elapsed()
@@ -267,6 +226,59 @@ class _Run:
             self.live.final(plan, bound, self.extra)
         objective = self.options.objective
         return MethodOutput(plan, status, bound, self.extra, status_objective=objective)
+
+    def start(self) -> list[list[str]] | None:
+        """The incumbent, its objective, the upper bound U and the kit cap K."""
+        instance, options = self.instance, self.options
+        if instance.stations:  # docs/timeline.md#several-stations: a master of its own
+            inc, inc_obj, upper, K = stations.incumbent(instance, options.objective, options.hint)
+            self.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
+        else:
+            inc, inc_obj, upper, K = _incumbent(self, pack_time_limit(self.budget), self.seed)
+            K = max(_strong_bound(self, upper, K), len(inc) if inc is not None else 1)
+        self.inc_obj, self.upper, self.K = inc_obj, upper, K
+        return inc
+
+    def shortcut(self, inc: list[list[str]] | None) -> MethodOutput | None:
+        """The quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
+        bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))."""
+        upper = self.upper
+        if upper is None or upper > self.best + TOL or self.options.objective != "makespan":
+            return None
+        done = "closed_form_bound" if upper <= self.closed + TOL else "proven_bound"
+        self.extra.update(build_time_s=0.0, termination=done)
+        return _conclude(self, inc, None, None, ANY_ANGLE, proven=True)
+
+    def cells(self) -> int:
+        if self.instance.stations:  # with the station and tray-pair binaries
+            return stations.model_cells(self.instance, self.K)
+        return assignment_cells(self.instance, self.K)
+
+    def hand_off(self, inc: list[list[str]]) -> list[list[str]]:
+        """The incumbent, or the LNS's better plan from it (makespan objective, one station,
+        as the LNS's); its layouts taught to the packer, which lays the result out."""
+        if self.instance.stations:
+            return inc
+        self.extra["improved_by"] = None
+        plan = _with_layouts(self.instance, inc, self.packer, {})
+        if plan is None or self.options.objective != "makespan":
+            return inc
+        left = self.budget.remaining(MARGIN)
+        better = improve(
+            self.instance, plan, bound=self.best, seed=self.seed, time_limit=left, extra=self.extra
+        )
+        if better is None:
+            return inc
+        for kit in better.kits:
+            if kit.layout:
+                self.packer.learn(self.instance.kit_parts(kit.tasks), kit.layout)
+        return [list(k.tasks) for k in better.kits if k.tasks]
+
+    def conclude(self, inc: list[list[str]]) -> MethodOutput:
+        return _conclude(self, inc, None, None, ANY_ANGLE, proven=False)
+
+    def solve(self, inc: list[list[str]] | None) -> MethodOutput:
+        return _solve_master(self, inc)
 
 
 def _incumbent(
@@ -321,19 +333,13 @@ def _hinted(
 
 def _strong_bound(r: _Run, upper: float | None, K: int) -> int:
     """The proven makespan bound of :mod:`bilevel_kit.models.relax` into ``r.proven``
-    (makespan objective only, within its share of the time limit); the kit cap K lowered by
+    (makespan objective only, :func:`..exact.driver.proven_bound`); the kit cap K lowered by
     it."""
     if r.options.objective != "makespan":
         return K
-    from ..relax import closed_at, for_model
+    from ..relax import closed_at
 
-    t0 = r.budget.elapsed()
-    r.proven = for_model(r.instance, r.budget.time_limit, r.budget.remaining(MARGIN), upper)
-    r.extra.update(
-        bound_sources=r.proven.sources,
-        bound_lp_kits=dict(r.proven.per_kits),
-        bound_time_s=r.budget.elapsed() - t0,
-    )
+    r.proven = proven_bound(r.instance, r.budget, upper, r.extra, MARGIN)
     if upper is not None:
         cap = r.proven.kit_cap(upper + TOL * max(1.0, upper), closed_at(r.instance))
         if cap is not None:
@@ -342,31 +348,9 @@ def _strong_bound(r: _Run, upper: float | None, K: int) -> int:
     return K
 
 
-def _handoff(r: _Run, inc: list[list[str]], seed: int) -> list[list[str]]:
-    """The incumbent, or the LNS's better plan from it (:func:`.nomodel.handoff`; makespan
-    objective only, as the LNS's)."""
-    r.extra["improved_by"] = None
-    plan = _with_layouts(r.instance, inc, r.packer, {})
-    if plan is None or r.options.objective != "makespan":
-        return inc
-    left = r.budget.remaining(MARGIN)
-    return handoff(
-        r.instance, inc, plan, r.packer, bound=r.best, seed=seed, time_limit=left, extra=r.extra
-    )
-
-
-def _solve_master(
-    r: _Run,
-    K: int,
-    upper: float | None,
-    inc: list[list[str]] | None,
-    inc_obj: float | None,
-    opt: Any,
-    seed: int,
-    solver_options: Mapping[str, Any] | None,
-) -> MethodOutput:
+def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
     """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
-    options = r.options
+    options, K, upper = r.options, r.K, r.upper
     lower = None if r.proven is None else r.proven.value
     start = set_start
     if r.instance.stations:
@@ -376,11 +360,11 @@ def _solve_master(
     else:
         master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
-    loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, inc_obj, r.live)
+    loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)
     loop.start = start
     if options.tray == "auto" and not r.instance.stations:  # stations: Benders, as cpsat's
         loop.cuts.seed_pairs()
-    info = loop.run(opt, seed, solver_options)
+    info = loop.run(r.opt, r.seed, r.solver_options)
     scope = loop.cuts.scope
     r.extra.update(
         iterations=loop.iterations,
@@ -390,12 +374,8 @@ def _solve_master(
         termination=None if info is None else info.termination,
         master_time_s=None if info is None else info.wall_time_s,
     )
-    if loop.inc is None:
-        if loop.infeasible and scope == ANY_ANGLE:
-            return r.finish(None, Status.INFEASIBLE, None)
-        if loop.infeasible:  # no plan with 0/90-degree layouts; one at other angles may exist
-            r.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
-        return r.finish(None, Status.UNKNOWN, r.best)
+    if loop.inc is None:  # (an infeasible master has every cut proven: scope not None)
+        return without_plan(r, loop.infeasible, scope)
     return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
@@ -419,7 +399,7 @@ def _conclude(
     bound = _makespan_bound(r.instance, plan, r.closed, lower_any, objective, r.extra)
     real = evaluate(r.instance, plan).makespan
     if objective == "makespan":  # the proven bound of models.relax holds for every plan
-        r.extra["bound_source"] = _source(r, lower_any)
+        r.extra["bound_source"] = bound_source(r.closed, r.proven, lower_any, TOL)
         bound = min(max(bound, r.best), real)
         r.extra["gap"] = gap(real, bound) or 0.0
     optimal = (proven and scope == ANY_ANGLE) or (
@@ -435,16 +415,6 @@ def _conclude(
         lows = (lower_any, lower)
         r.extra.update(stations.objective_extra(r.instance, plan, objective, lows, proofs))
     return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
-
-
-def _source(r: _Run, lower_any: float | None) -> str:
-    """Which bound is the best: ``model`` (the master's, for every plan), the source of
-    :mod:`..relax`'s proven bound, or ``closed_form``."""
-    if lower_any is not None and lower_any > r.best + TOL:
-        return "model"
-    if r.proven is not None and r.proven.value >= r.closed - TOL:
-        return str(r.proven.source)
-    return "closed_form"
 
 
 def _with_layouts(

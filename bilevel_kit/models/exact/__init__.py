@@ -1,0 +1,5 @@
+"""What the exact whole-horizon methods ``cpsat`` and ``milp`` share: one driver
+(:mod:`.driver`: the steps of a run over a small backend protocol, the "task does not fit
+alone" outcome, the proven bound and its source) and one no-model rule (:mod:`.nomodel`: when
+no model is built, and the LNS hand-off then; docs/formulations.md, "Model too large").
+"""

@@ -1,0 +1,186 @@
+"""One driver for the exact whole-horizon methods ``cpsat`` and ``milp`` (docs/formulations.md,
+"CP-SAT schedule", "MILP schedule"): the steps every run takes, in one order, over a small
+backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
+
+1. A task whose parts alone do not fit ends the run (:func:`..common.unfit_outcome`).
+2. The backend's incumbent, kit cap K and proven bound (:meth:`Backend.start`;
+   :func:`proven_bound`).
+3. An incumbent that attains a bound known before the model is optimal: no model
+   (:meth:`Backend.shortcut`).
+4. The no-model rule (:func:`.nomodel.buildable`): a model over the memory limit or too slow to
+   build is not built; the time left goes to the LNS from the incumbent (option ``fallback``,
+   :meth:`Backend.hand_off`) and the incumbent is concluded with the bound known before the
+   model.
+5. Otherwise the backend builds its model and searches (:meth:`Backend.solve`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
+
+from ...bounds import best_bound
+from ...instance import Instance
+from ...methods import REGISTRY, MethodOutput, Status
+from ...options import field_names, parse_options
+from ..budget import Budget
+from ..common import scope_claims, unfit_outcome
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from .nomodel import NoModelSpec, buildable
+
+if TYPE_CHECKING:
+    from ...plan import Plan
+    from ..common import Packer
+    from ..relax import ProvenBound
+
+Inc = TypeVar("Inc")
+T = TypeVar("T")
+#: The share of the time limit the warm start (option ``hint``) may use.
+HINT_SHARE = 0.3
+
+
+class Backend(Protocol[Inc]):
+    """One exact model as the driver sees it (its run's seed and options are its own);
+    ``Inc`` is its incumbent (kits, or a state)."""
+
+    instance: Instance
+    budget: Budget
+    packer: Packer
+    extra: dict[str, Any]
+    K: int  # the kit cap, set by :meth:`start`
+
+    @property
+    def spec(self) -> NoModelSpec:
+        """Its no-model costs and ``extra`` keys."""
+        ...
+
+    @property
+    def margin(self) -> float:
+        """Seconds kept back from the time limit."""
+        ...
+
+    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
+        """The result (wall time and the backend's own counters added)."""
+        ...
+
+    def known_bound(self) -> float:
+        """The best makespan bound known before the model (s), for every plan."""
+        ...
+
+    def start(self) -> Inc | None:
+        """The incumbent (None: none), with K and the proven bound computed."""
+        ...
+
+    def shortcut(self, inc: Inc | None) -> MethodOutput | None:
+        """The result when ``inc`` attains a bound known before the model, else None."""
+        ...
+
+    def cells(self) -> int:
+        """The model's task x kit variables with K kits (its size)."""
+        ...
+
+    def hand_off(self, inc: Inc) -> Inc:
+        """``inc`` or the better incumbent the LNS finds from it in the time left."""
+        ...
+
+    def conclude(self, inc: Inc) -> MethodOutput:
+        """The result of ``inc`` without a model (the bound known before the model)."""
+        ...
+
+    def solve(self, inc: Inc | None) -> MethodOutput:
+        """Build the model with K kits, search from ``inc`` (cutting kits that do not fit)."""
+        ...
+
+
+def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:
+    """One run of an exact method: the steps of the module docstring."""
+    unfit = backend.packer.task_not_fitting()  # then no plan exists (or none at 0/90 degrees)
+    if unfit is not None:
+        status = unfit_outcome(unfit, backend.extra)
+        bound = None if status == Status.INFEASIBLE else best_bound(backend.instance)
+        return backend.finish(None, status, bound)
+    inc = backend.start()
+    proven = backend.shortcut(inc)
+    if proven is not None:
+        return proven
+    extra, has_plan = backend.extra, inc is not None
+    cells = backend.cells()
+    spec, budget, margin = backend.spec, backend.budget, backend.margin
+    if buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, has_plan):
+        return backend.solve(inc)
+    if inc is None:
+        return backend.finish(None, Status.UNKNOWN, backend.known_bound())
+    if fallback == "lns":  # the time left to the LNS from the incumbent
+        inc = backend.hand_off(inc)
+    return backend.conclude(inc)
+
+
+def without_plan(backend: Backend[Inc], infeasible: bool, scope: str | None) -> MethodOutput:
+    """The model ended without a plan: ``infeasible`` (no plan among those of ``scope``) is a
+    proof for every plan, or for the 0/90-degree plans only (unknown: one at other angles may
+    exist; docs/formulations.md#what-optimal-means); else unknown with the bound known before
+    the model."""
+    if infeasible and scope == ANY_ANGLE:
+        return backend.finish(None, Status.INFEASIBLE, None)
+    if infeasible and scope == AXIS_ALIGNED:
+        backend.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
+    return backend.finish(None, Status.UNKNOWN, backend.known_bound())
+
+
+def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
+    """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
+    ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
+    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
+
+
+def check_hint(hint: str, words: tuple[str, ...]) -> None:
+    """Option ``hint``: one of ``words`` or a registered method (the backends' words and
+    defaults differ: docs/formulations.md, "One driver for cpsat and milp")."""
+    if hint not in words and hint not in REGISTRY:
+        raise ValueError(
+            f"option 'hint': unknown method {hint!r}; choose {', '.join(words)} or one of "
+            f"{', '.join(REGISTRY)}"
+        )
+
+
+def proven_bound(
+    instance: Instance,
+    budget: Budget,
+    upper: float | None,
+    extra: dict[str, Any],
+    margin: float = 0.0,
+) -> ProvenBound:
+    """The proven makespan bound of :mod:`bilevel_kit.models.relax` within its share of the
+    time limit (``upper``: the incumbent's makespan in s, which ends the kit-count scan early;
+    a reproducible run's scan is limited by work); ``extra`` gets ``bound_sources``,
+    ``bound_lp_kits`` and ``bound_time_s`` (docs/formulations.md, "Stronger lower bounds")."""
+    from ..relax import for_model
+
+    t0 = budget.elapsed()
+    left = budget.remaining(margin)
+    out = for_model(instance, budget.time_limit, left, upper, budget.deterministic)
+    if out.safety_net:
+        budget.net_fired()
+    extra.update(
+        bound_sources=out.sources,
+        bound_lp_kits=dict(out.per_kits),
+        bound_time_s=budget.elapsed() - t0,
+    )
+    return out
+
+
+def known_bound(closed: float, proven: ProvenBound | None) -> float:
+    """The best makespan bound known before the model (s): the closed form and the proven."""
+    return closed if proven is None else max(closed, proven.value)
+
+
+def bound_source(
+    closed: float, proven: ProvenBound | None, model_any: float | None, tol: float
+) -> str:
+    """Which bound is the best: ``model`` (the model's bound for every plan, ``model_any``),
+    the source of the proven bound, or ``closed_form`` (ties within ``tol``)."""
+    if model_any is not None and model_any > known_bound(closed, proven) + tol:
+        return "model"
+    if proven is not None and proven.value >= closed - tol:
+        return str(proven.source)
+    return "closed_form"

@@ -1,0 +1,90 @@
+"""When an exact method builds no model: too large or too slow to build (:func:`buildable`),
+and what it does with the time left then (:func:`improve`: the LNS from the incumbent,
+docs/formulations.md, "Model too large"). ``cpsat`` and ``milp`` differ only in their measured
+costs and in the ``extra`` keys that name the outcome (:class:`NoModelSpec`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ...instance import Instance
+from ...plan import Plan
+from ..budget import Budget, no_model_reason
+
+
+@dataclass(frozen=True)
+class NoModelSpec:
+    """A backend's costs and how its ``extra`` names a model that was not built."""
+
+    owner: str  # the method's name, in the refusal's message
+    bytes_per_cell: float  # peak memory per task x kit variable
+    build_s_per_cell: float  # build time per task x kit variable
+    kept: str  # what is returned instead ("the incumbent", "the quick plan")
+    status_key: str  # the extra key naming the outcome
+    too_large: str  # its value over the memory limit
+    not_built: str  # its value when too slow to build
+    zero_cuts: bool  # whether ``cuts`` is reset to 0 (cpsat's extra)
+
+
+#: ``cpsat``: peak memory 4.5-4.7 kB per variable above a 216 MB run of 14,000 variables,
+#: 1.27 GB at 247,000 on a 500-task in-tree (model and a 2-worker solve); build time 90-120 us
+#: per variable on in-trees of 60-500 tasks.
+CPSAT = NoModelSpec(
+    "cpsat", 6_000, 150e-6, "the incumbent", "cpsat_status", "TOO_LARGE", "NOT_BUILT", True
+)
+#: ``milp``: 5-9 kB per variable of the Pyomo model on in-trees of 60-120 tasks (HiGHS runs in
+#: a child process; bench/results/scale.md); 0.7-0.8 ms to build it and about 1.3 ms more to
+#: write it for the HiGHS child (7 s for 5,263 variables on a loaded machine).
+MILP = NoModelSpec(
+    "milp", 12_000, 2.5e-3, "the quick plan", "termination", "too_large", "not_built", False
+)
+
+
+def buildable(
+    spec: NoModelSpec,
+    instance: Instance,
+    K: int,
+    cells: int,
+    budget: Budget,
+    margin: float,
+    extra: dict[str, Any],
+    has_plan: bool,
+) -> bool:
+    """Whether to build the model of ``cells`` variables with K kits: False (with a
+    ``reason``) when it would exceed the memory limit (a UsageError when there is no plan to
+    return instead) or would not be built and solved within the time left (less ``margin``)."""
+    extra["model_cells"] = cells
+    what = f"task x kit variables ({instance.n_tasks} tasks, K = {K})"
+    costs = (spec.bytes_per_cell, spec.build_s_per_cell)
+    why = no_model_reason(spec.owner, cells, costs, what, budget, margin, has_plan)
+    if why is None:
+        return True
+    kind, reason = why
+    keep = f"{spec.kept} is returned" + (" with the proven bound" if kind == "too_large" else "")
+    extra.update(reason=f"{reason}; {keep}", build_time_s=0.0)
+    extra[spec.status_key] = spec.too_large if kind == "too_large" else spec.not_built
+    if spec.zero_cuts:
+        extra["cuts"] = 0
+    return False
+
+
+def improve(
+    instance: Instance,
+    plan: Plan,
+    *,
+    bound: float,
+    seed: int,
+    time_limit: float,
+    extra: dict[str, Any],
+) -> Plan | None:
+    """The better plan the LNS finds from ``plan`` (the incumbent) within ``time_limit`` s
+    (:func:`..lns.fallback.improve`), or None. ``extra`` gets ``improved_by`` (``lns`` or
+    None) and ``fallback`` (what happened)."""
+    from ..lns.fallback import improve as lns_improve
+
+    better, info = lns_improve(instance, plan, bound=bound, seed=seed, time_limit=time_limit)
+    extra.update(improved_by=None, fallback=info)
+    if better is not None:
+        extra["improved_by"] = "lns"
+    return better
