@@ -325,7 +325,13 @@ def run(
     deterministic: bool = False,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
-    docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
+    docstring); ``time_limit`` (None: 60 s) covers everything, packing included. One station
+    only: several are the registered method's (:func:`cpsat`, :mod:`.stations`)."""
+    if instance.stations:  # this model would ignore them (and claim a false optimum)
+        raise UsageError(
+            f"{instance.source}: cpsat's solve/run entry models one assembly station; run the "
+            "method cpsat (bilevel_kit.solve) for several (docs/timeline.md#several-stations)"
+        )
     stretch = packing_oracle.SAFETY_NET if deterministic else 1.0
     budget = Budget(time_limit, keep_back=KEEP_BACK, stretch=stretch)
     try:
