@@ -81,6 +81,7 @@ from ..common import (
 from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import improve
+from ..exact.station_options import HONOURED, Refused, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound
@@ -116,7 +117,10 @@ class ScheduleOptions:
     workers: int = field(default=2, metadata={"help": "CP-SAT worker threads", "min": 1})
     tray: TrayMode = field(
         default="auto",
-        metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
+        metadata={
+            "help": "tray packing: embedded in the model, by Benders cuts, or auto "
+            "(several stations: Benders)"
+        },
     )
     objective: Objective = field(
         default="makespan", metadata={"help": "makespan, (stations) sum_completion or human_idle"}
@@ -143,7 +147,10 @@ class ScheduleOptions:
     log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
     fallback: Fallback = field(
         default="lns",
-        metadata={"help": "no model built (too large, too slow): lns from the plan, or none"},
+        metadata={
+            "help": "no model built (too large, too slow): lns from the plan, or none "
+            "(several stations: a model over the memory limit is refused)"
+        },
     )
 
     def __post_init__(self) -> None:
@@ -157,14 +164,39 @@ class CpsatOptions(ScheduleOptions):
     hint: str = field(
         default="auto",
         metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), "
-            "a method name, or none"
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce; "
+            "several stations: of single-task, whole-assembly), a method name, or none"
         },
     )
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_hint(self.hint, ("auto", "none"))
+
+
+#: What the station model (:mod:`.stations`) does with each option (docs/formulations.md,
+#: "Options with several stations"); every option is declared (:func:`declare`).
+STATION_OPTIONS = declare(
+    CpsatOptions,
+    {
+        "workers": HONOURED,
+        "objective": HONOURED,
+        "log": HONOURED,
+        "tray": Refused("its station model checks the kits by Benders cuts", also=("benders",)),
+        "time_resolution": Refused(
+            "its station model works on the coarsest exact grid of 1, 0.5, 0.25, 0.2, 0.1, "
+            "0.05, 0.01 or 0.001 s"
+        ),
+        "refine_times": Refused("its station model always looks for an exact time scale"),
+        "pack_resolution": Refused("its station model packs on the 1 mm grid"),
+        "fallback": Refused(
+            "its station model has no LNS hand-off: a model over the memory limit is refused"
+        ),
+        "hint": Refused(
+            "its station model starts from the better of single-task and whole-assembly"
+        ),
+    },
+)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -180,7 +212,9 @@ def cpsat(
     time_limit: float | None = None,
 ) -> MethodOutput:
     """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
-    (module docstring). Several assembly stations: :mod:`.stations`."""
+    (module docstring). Several assembly stations: :mod:`.stations`, with the options of
+    :data:`STATION_OPTIONS`."""
+    check_station_options(instance, "cpsat", options, STATION_OPTIONS)
     if instance.stations or options.objective == "sum_completion":
         from .stations import solve_stations
 
@@ -291,7 +325,13 @@ def run(
     deterministic: bool = False,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
-    docstring); ``time_limit`` (None: 60 s) covers everything, packing included."""
+    docstring); ``time_limit`` (None: 60 s) covers everything, packing included. One station
+    only: several are the registered method's (:func:`cpsat`, :mod:`.stations`)."""
+    if instance.stations:  # this model would ignore them (and claim a false optimum)
+        raise UsageError(
+            f"{instance.source}: cpsat's solve/run entry models one assembly station; run the "
+            "method cpsat (bilevel_kit.solve) for several (docs/timeline.md#several-stations)"
+        )
     stretch = packing_oracle.SAFETY_NET if deterministic else 1.0
     budget = Budget(time_limit, keep_back=KEEP_BACK, stretch=stretch)
     try:

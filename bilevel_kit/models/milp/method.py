@@ -72,6 +72,7 @@ from ..exact.driver import (
 )
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import NoModelSpec, improve
+from ..exact.station_options import HONOURED, Refused, check_station_options, declare
 from ..packing import ANY_ANGLE
 from ..packing_oracle import WHY_TIME, Fit
 from . import stations
@@ -109,7 +110,10 @@ class MilpOptions:
     )
     tray: Literal["auto", "benders"] = field(
         default="auto",
-        metadata={"help": "auto: seed cuts for task pairs that do not fit; benders: area only"},
+        metadata={
+            "help": "auto: seed cuts for task pairs that do not fit; benders: area only "
+            "(several stations: area only)"
+        },
     )
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
     hint: str = field(
@@ -122,11 +126,32 @@ class MilpOptions:
 
     fallback: Literal["lns", "none"] = field(
         default="lns",
-        metadata={"help": "no model built (too large, too slow): lns from the plan, or none"},
+        metadata={
+            "help": "no model built (too large, too slow): lns from the plan, or none "
+            "(several stations: none, the LNS does not model them)"
+        },
     )
 
     def __post_init__(self) -> None:
         check_hint(self.hint, ("none",))
+
+
+#: What the station master (:mod:`.stations`) does with each option (docs/formulations.md,
+#: "Options with several stations"); every option is declared (:func:`declare`). ``tray=auto``
+#: and ``fallback=lns`` are accepted and act as ``benders`` and ``none`` there.
+STATION_OPTIONS = declare(
+    MilpOptions,
+    {
+        "solver": HONOURED,
+        "objective": HONOURED,
+        "tray": HONOURED,
+        "log": HONOURED,
+        "fallback": HONOURED,
+        "hint": Refused(
+            "its station master starts from the better of single-task and whole-assembly"
+        ),
+    },
+)
 
 
 def solve(
@@ -161,8 +186,10 @@ def run(
 
     Returns the result of the module docstring: ``bound`` is a proven lower bound on the
     makespan in seconds, every kit has a topological human order and a non-overlapping layout
-    from the packing oracle.
+    from the packing oracle. Several assembly stations: :mod:`.stations`, with the options of
+    :data:`STATION_OPTIONS`.
     """
+    check_station_options(instance, "milp", options, STATION_OPTIONS)
     if not instance.stations and options.objective == "sum_completion":  # = the makespan
         options = replace(options, objective="makespan")
     budget = Budget(time_limit)
