@@ -117,6 +117,21 @@ class Objective:
     #: What it is, in one line, where a list or a status line first shows it (J).
     meaning: str | None = None
 
+    @property
+    def is_makespan(self) -> bool:
+        """It is the makespan: the makespan's closed-form and proven bounds
+        (:mod:`bilevel_kit.bounds`, :mod:`bilevel_kit.models.relax`) are bounds on it, an
+        incumbent's value is the exact models' horizon ``C <= U`` and kit cap, and the LNS
+        minimises it (docs/formulations.md). The exact drivers' closed-form shortcut and LNS
+        hand-off apply only then."""
+        return False
+
+    @property
+    def makespan_with_one_station(self) -> bool:
+        """With one station it equals the makespan (docs/timeline.md#several-stations), so a
+        one-station run of ``cpsat`` or ``milp`` minimises the makespan instead."""
+        return self.is_makespan
+
     def value(self, timeline: Timeline) -> float | None:
         """The objective on ``timeline``; None when it is not a function of it."""
         return None if self.evaluate is None else self.evaluate(timeline)
@@ -168,6 +183,10 @@ class Objective:
 class Makespan(Objective):
     """``max_s C_s``: the models' C; its bound is :func:`bilevel_kit.bounds.best_bound`."""
 
+    @property
+    def is_makespan(self) -> bool:
+        return True
+
     def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
         return makespan(instance)
 
@@ -181,6 +200,10 @@ class Makespan(Objective):
 class SumCompletion(Objective):
     """``sum_s C_s``: each completion is at most the sum, so the sum bounds the makespan; its
     bound sums each station's own (:func:`bilevel_kit.bounds.station_bounds`)."""
+
+    @property
+    def makespan_with_one_station(self) -> bool:
+        return True
 
     def bound(self, instance: Instance, makespan: Bound, stations: StationBounds) -> float:
         return sum(lb for _, lb in stations(instance))

@@ -71,6 +71,19 @@ def test_the_worked_example_values():
         get("idle")
 
 
+def test_what_the_exact_drivers_ask_of_an_objective(tiny):
+    """The exact drivers (models/cpsat, models/milp) branch on what an objective says, not on
+    its name: only the makespan is the makespan (the result's own numbers); with one station
+    it and sum_completion equal the makespan, which a one-station run minimises instead."""
+    assert [o.name for o in OBJECTIVES.values() if o.is_makespan] == ["makespan"]
+    assert all(o.top_level == o.is_makespan for o in OBJECTIVES.values())
+    same = [o.name for o in OBJECTIVES.values() if o.makespan_with_one_station]
+    assert same == ["makespan", "sum_completion"]
+    tl = evaluate(tiny, Plan(tuple(Kit((t.id,)) for t in tiny.tasks)))
+    assert all(get(name).value(tl) == tl.makespan for name in same)
+    assert get("human_idle").value(tl) != tl.makespan
+
+
 def _doc(inst, plan, name, status, extra):
     """A solution file of ``plan`` whose status refers to objective ``name``."""
     tl = evaluate(inst, plan)
