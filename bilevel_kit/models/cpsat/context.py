@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from ...instance import Instance
+from ...objectives import Objective
+from ...objectives import get as get_objective
 from ...plan import Placement
 from ...progress import Tracker
 from ..budget import Budget
@@ -59,9 +61,9 @@ class Context:
     the embedded and Benders loops.
 
     ``groups``: interchangeable precedence chains as task indices (symmetry breaking);
-    ``objective``: ``makespan`` or ``human_idle``; ``budget``: the whole run's time budget
-    (the loops keep :data:`MARGIN` of it back); ``packer``: the packing oracle on the grid
-    of ``pack_res`` mm.
+    ``objective``: a registered objective's name (:attr:`minimised`); ``budget``: the whole
+    run's time budget (the loops keep :data:`MARGIN` of it back); ``packer``: the packing
+    oracle on the grid of ``pack_res`` mm.
     """
 
     instance: Instance
@@ -80,6 +82,11 @@ class Context:
     callback: Any = None  # a CpSolverSolutionCallback (OR-Tools is imported lazily)
     #: The proven makespan bound of :mod:`bilevel_kit.models.relax` (None: not computed).
     proven: Any = None
+
+    @property
+    def minimised(self) -> Objective:
+        """The registry's ``objective`` (:mod:`bilevel_kit.objectives`)."""
+        return get_objective(self.objective)
 
     @property
     def ids(self) -> list[str]:

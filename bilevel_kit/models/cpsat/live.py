@@ -41,7 +41,7 @@ class Live:
         sc = self.ctx.sc
         if not sc.exact:
             return None
-        const = -sum(sc.h) if self.ctx.objective == "human_idle" else 0  # the model's obj_const
+        const = -self.ctx.minimised.dropped(sc.h)  # the model's obj_const
         return round((scaled + const) * sc.res, 9)
 
     def real(self, kits: Sequence[Sequence[int]]) -> float:
@@ -49,7 +49,9 @@ class Live:
         instance, ids = self.ctx.instance, self.ctx.ids
         plan = Plan(tuple(Kit(kit_order(instance, [ids[i] for i in kit])) for kit in kits))
         tl = evaluate(instance, plan)
-        return tl.makespan if self.ctx.objective == "makespan" else tl.human_idle
+        value = self.ctx.minimised.value(tl)
+        assert value is not None  # the modelled objectives are functions of the timeline
+        return value
 
     def kits(self, kits: Sequence[Sequence[int]] | None, scaled: int | None) -> None:
         """A valid plan's kits with their scaled objective."""
@@ -63,7 +65,7 @@ class Live:
         if scaled is None or not self.bound_valid:
             return
         lower = math.ceil(scaled - 1e-6)
-        if self.ctx.objective == "makespan":
+        if self.ctx.minimised.is_makespan:  # valid on a rounded-down grid too (module doc)
             self.tracker.report(bound=round(lower * self.ctx.sc.res, 9))
         else:
             self.tracker.report(bound=self.seconds(lower))

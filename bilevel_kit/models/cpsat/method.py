@@ -55,7 +55,7 @@ driver for cpsat and milp".
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
@@ -63,6 +63,8 @@ from ...bounds import best_bound, min_kits
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, gap
+from ...objectives import Objective as ObjectiveSpec
+from ...objectives import get as get_objective
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -215,17 +217,20 @@ def cpsat(
     (module docstring). Several assembly stations: :mod:`.stations`, with the options of
     :data:`STATION_OPTIONS`."""
     check_station_options(instance, "cpsat", options, STATION_OPTIONS)
-    if instance.stations or options.objective == "sum_completion":
+    if instance.stations:
         from .stations import solve_stations
 
         return solve_stations(instance, options, seed=seed, time_limit=time_limit, one=cpsat)
+    if get_objective(options.objective).makespan_with_one_station:  # e.g. sum_completion
+        options = replace(options, objective="makespan")
+    objective = get_objective(options.objective)
     budget = Budget(time_limit)
     plan: Plan | None = None
     source = None
     hint_tl = HINT_SHARE * budget.time_limit
     live = progress.tracker(options.objective)
-    live.report(bound=_closed_bound(instance, options.objective), stage="warm start")
-    if options.objective == "makespan" and _closed_form_optimal(instance, budget):
+    live.report(bound=_closed_bound(instance, objective), stage="warm start")
+    if objective.is_makespan and _closed_form_optimal(instance, budget):
         pass  # the run proves a quick plan optimal at once: no warm start needed
     elif options.hint == "auto":
         plan, source = best_heuristic_plan(instance, seed=seed, time_limit=hint_tl)
@@ -234,8 +239,7 @@ def cpsat(
         if source is None:
             raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
     if plan is not None and live.active:
-        tl = evaluate(instance, plan)
-        live.report(incumbent=tl.makespan if options.objective == "makespan" else tl.human_idle)
+        live.report(incumbent=objective.value(evaluate(instance, plan)))
     rest = max(MIN_RUN, budget.remaining())
     out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
     out.extra["hint_method"] = source
@@ -244,9 +248,10 @@ def cpsat(
     return out
 
 
-def _closed_bound(instance: Instance, objective: str) -> float | None:
-    """The closed-form bound on ``objective`` (:mod:`bilevel_kit.bounds`; none for idle)."""
-    return best_bound(instance) if objective == "makespan" else None
+def _closed_bound(instance: Instance, objective: ObjectiveSpec) -> float | None:
+    """The closed-form makespan bound (:mod:`bilevel_kit.bounds`) when ``objective`` is the
+    makespan; None for the others (live progress reports no closed-form bound on them)."""
+    return best_bound(instance) if objective.is_makespan else None
 
 
 def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
@@ -397,7 +402,7 @@ class _Cpsat:
         incumbent = _incumbent(ctx, self.hint, pack_time_limit(self.budget), extra)
         self.live = _start_live(ctx, incumbent)
         upper = None
-        if incumbent is not None and options.objective == "makespan":
+        if incumbent is not None and ctx.minimised.is_makespan:
             upper = scaled_makespan(self.sc, incumbent)  # C <= U and the kit cap need makespan
         start = None if incumbent is None else evaluate(instance, _plan_of(ctx, incumbent, None))
         strong_bound(ctx, None if start is None else start.makespan, extra)
@@ -424,7 +429,7 @@ class _Cpsat:
         assert state.kits is not None
         plan = _plan_of(ctx, state.kits, None, ctx.packer)
         self.extra["improved_by"] = None
-        if ctx.objective != "makespan" or any(ctx.sc.rel) or ctx.instance.stations:
+        if not ctx.minimised.is_makespan or any(ctx.sc.rel) or ctx.instance.stations:
             return state
         if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
             return state
@@ -475,7 +480,7 @@ def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress
     from .live import Live
 
     ctx.live = live = Live(ctx, tracker)
-    tracker.report(bound=_closed_bound(ctx.instance, ctx.objective), stage="CP-SAT")
+    tracker.report(bound=_closed_bound(ctx.instance, ctx.minimised), stage="CP-SAT")
     if incumbent is not None:
         tracker.report(incumbent=live.real(incumbent))
     return live
@@ -488,7 +493,7 @@ def _proven_without_model(ctx: Context, start: State, report: _Report) -> Method
     incumbent, upper = start.kits, start.obj
     start_ms = extra["upper_start"]
     closed_done = start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
-    if ctx.objective == "makespan" and closed_done:
+    if ctx.minimised.is_makespan and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
@@ -582,7 +587,7 @@ def _incumbent(
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
             extra["hint_used"] = True
-    if ctx.objective == "makespan" and not any(ctx.sc.rel):  # (releases: not a bound of them)
+    if ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
         qp = closed_form_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
             return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
@@ -606,7 +611,7 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     lower_s = None if state.lower is None else round(state.lower * sc.res, 9)  # >= 1e-4
     any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
     idle_bound = None
-    if ctx.objective == "makespan":
+    if ctx.minimised.is_makespan:
         strong = known_bound(ctx)  # the closed forms and models.relax: every plan
         bound_s = strong if any_s is None else max(strong, any_s)  # every plan (module doc)
         bound_axis = strong if lower_s is None else max(strong, lower_s)
@@ -642,9 +647,9 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
         extra["reason"] = "no layout for some kit within the time limit"
         return report.finish(None, Status.UNKNOWN, bound_s)
     if ctx.live is not None:  # the final numbers, as the result reports them
-        final = real.makespan if ctx.objective == "makespan" else real.human_idle
+        makespan = ctx.minimised.is_makespan
         ctx.live.tracker.report(
-            incumbent=final, bound=bound_s if ctx.objective == "makespan" else idle_bound
+            incumbent=ctx.minimised.value(real), bound=bound_s if makespan else idle_bound
         )
     extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
     if sc.rel:  # the model's makespan is the released one (module docstring)
