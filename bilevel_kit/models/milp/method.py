@@ -47,6 +47,8 @@ from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
+from ...objectives import Objective, human_times
+from ...objectives import get as get_objective
 from ...plan import Kit, Plan, evaluate
 from ...stations import objective_of
 from ..budget import Budget
@@ -190,15 +192,15 @@ def run(
     :data:`STATION_OPTIONS`.
     """
     check_station_options(instance, "milp", options, STATION_OPTIONS)
-    if not instance.stations and options.objective == "sum_completion":  # = the makespan
-        options = replace(options, objective="makespan")
+    if not instance.stations and get_objective(options.objective).makespan_with_one_station:
+        options = replace(options, objective="makespan")  # e.g. sum_completion
     budget = Budget(time_limit)
     ensure_ortools(options.solver)
     opt = make_solver(options.solver)
     closed = best_bound(instance)
     pack_tl = pack_time_limit(budget)
     packer = Packer(instance, pack_tl, budget.cut(MARGIN))
-    live = _Live(progress.tracker(options.objective), instance, options.objective)
+    live = _Live(progress.tracker(options.objective), instance, get_objective(options.objective))
     r = _Run(instance, options, budget, packer, closed, live, seed, opt, solver_options)
     r.extra.update(
         solver=options.solver,
@@ -240,6 +242,11 @@ class _Run:
     margin: ClassVar[float] = MARGIN
 
     @property
+    def minimised(self) -> Objective:
+        """The registry's objective the run minimises (:mod:`bilevel_kit.objectives`)."""
+        return get_objective(self.options.objective)
+
+    @property
     def best(self) -> float:
         """The best makespan bound known before the model (s)."""
         return known_bound(self.closed, self.proven)
@@ -270,7 +277,7 @@ class _Run:
         """The quick plan attains a closed-form bound (e.g. Johnson's makespan) or the proven
         bound of models.relax: optimal without a model (bilevel_kit/bounds.py, (d))."""
         upper = self.upper
-        if upper is None or upper > self.best + TOL or self.options.objective != "makespan":
+        if upper is None or upper > self.best + TOL or not self.minimised.is_makespan:
             return None
         done = "closed_form_bound" if upper <= self.closed + TOL else "proven_bound"
         self.extra.update(build_time_s=0.0, termination=done)
@@ -288,7 +295,7 @@ class _Run:
             return inc
         self.extra["improved_by"] = None
         plan = _with_layouts(self.instance, inc, self.packer, {})
-        if plan is None or self.options.objective != "makespan":
+        if plan is None or not self.minimised.is_makespan:
             return inc
         left = self.budget.remaining(MARGIN)
         better = improve(
@@ -315,8 +322,9 @@ def _incumbent(
     plan if better, its objective, the upper bound U and the kit cap K (valid only for plans
     at least as good)."""
     instance, budget, objective = r.instance, r.budget, r.options.objective
+    makespan = r.minimised.is_makespan
     inc = None
-    if objective == "makespan":  # optimal at once if it attains the closed-form bound
+    if makespan:  # optimal at once if it attains the closed-form bound
         inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
     inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, objective)
@@ -324,7 +332,7 @@ def _incumbent(
         inc, inc_obj = _hinted(r, inc, inc_obj, seed)
     upper = None
     K = instance.n_tasks
-    if inc is not None and inc_obj is not None and objective == "makespan":
+    if inc is not None and inc_obj is not None and makespan:
         upper = inc_obj
         K = min(K, kit_cap(instance, upper))
         K = max(K, len(inc))
@@ -332,7 +340,7 @@ def _incumbent(
     r.extra["upper_start"] = inc_obj
     r.live.tracker.report(
         r.live.seconds(inc_obj),
-        r.closed if objective == "makespan" else None,
+        r.closed if makespan else None,
         stage=f"MILP ({r.options.solver})",
     )
     return inc, inc_obj, upper, K
@@ -362,7 +370,7 @@ def _strong_bound(r: _Run, upper: float | None, K: int) -> int:
     """The proven makespan bound of :mod:`bilevel_kit.models.relax` into ``r.proven``
     (makespan objective only, :func:`..exact.driver.proven_bound`); the kit cap K lowered by
     it."""
-    if r.options.objective != "makespan":
+    if not r.minimised.is_makespan:
         return K
     from ..relax import closed_at
 
@@ -422,25 +430,26 @@ def _conclude(
     plan = None if kits is None else _with_layouts(r.instance, kits, r.packer, r.extra)
     if plan is None:
         return r.finish(None, Status.UNKNOWN, r.best)
-    objective = r.options.objective
+    objective = r.minimised
     bound = _makespan_bound(r.instance, plan, r.closed, lower_any, objective, r.extra)
     real = evaluate(r.instance, plan).makespan
-    if objective == "makespan":  # the proven bound of models.relax holds for every plan
+    if objective.is_makespan:  # the proven bound of models.relax holds for every plan
         r.extra["bound_source"] = bound_source(r.closed, r.proven, lower_any, TOL)
         bound = min(max(bound, r.best), real)
         r.extra["gap"] = gap(real, bound) or 0.0
     optimal = (proven and scope == ANY_ANGLE) or (
-        objective == "makespan" and real <= bound + TOL * max(1.0, real)
+        objective.is_makespan and real <= bound + TOL * max(1.0, real)
     )
     r.extra["optimal_axis_aligned"] = proven and scope is not None
-    if objective == "makespan":
+    if objective.is_makespan:
         axis = r.best if lower is None else max(r.best, lower)
         r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
     r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
-    if r.instance.stations and objective != "makespan":  # docs/timeline.md#several-stations
+    # docs/timeline.md#several-stations: its value, bound and gap not the result's own
+    if r.instance.stations and not objective.top_level:
         proofs = (optimal, bool(r.extra["optimal_axis_aligned"]))
         lows = (lower_any, lower)
-        r.extra.update(stations.objective_extra(r.instance, plan, objective, lows, proofs))
+        r.extra.update(stations.objective_extra(r.instance, plan, objective.name, lows, proofs))
     return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
 
 
@@ -465,19 +474,18 @@ def _makespan_bound(
     plan: Plan,
     closed: float,
     lower: float | None,
-    objective: str,
+    objective: Objective,
     extra: dict[str, Any],
 ) -> float:
     """The proven makespan bound in seconds from the closed-form bound and the master's bound
     ``lower`` on its own objective; fills the plan's entries of ``extra``."""
     real = evaluate(instance, plan)
-    if objective == "makespan":
+    if objective.is_makespan:
         bound = closed if lower is None else max(closed, lower)
     elif instance.stations:  # the master's bound is on another objective: objective_extra
         bound = closed
     else:
-        w_min = sum(instance.human_time(t.id) for t in instance.tasks)
-        idle_lb = None if lower is None else lower - w_min
+        idle_lb = None if lower is None else lower - objective.dropped(human_times(instance))
         extra["idle_bound"] = idle_lb
         bound = closed
         if lower is not None:  # C = idle + sum h + o_H m >= idle_lb + sum h + o_H m_min
@@ -492,13 +500,11 @@ class _Live:
     """The run's live progress (:mod:`bilevel_kit.progress`) in seconds of its objective: the
     master's objective is the makespan, or ``C - o_H m`` = human idle + ``sum h``."""
 
-    def __init__(self, tracker: progress.Tracker, instance: Instance, objective: str) -> None:
+    def __init__(self, tracker: progress.Tracker, instance: Instance, objective: Objective) -> None:
         self.tracker = tracker
         self.instance = instance
         self.objective = objective
-        self.offset = 0.0
-        if objective == "human_idle":
-            self.offset = sum(instance.human_time(t.id) for t in instance.tasks)
+        self.offset = float(objective.dropped(human_times(instance)))
 
     def seconds(self, value: float | None) -> float | None:
         return None if value is None else value - self.offset
@@ -523,11 +529,9 @@ class _Live:
         if not self.tracker.active:
             return
         tl = evaluate(self.instance, plan)
-        if self.objective == "makespan":
-            self.tracker.report(tl.makespan, bound)
-        else:  # with stations, sum_completion too (objective_of)
-            lower = extra.get("objective_bound", extra.get("idle_bound"))
-            self.tracker.report(objective_of(tl, self.objective), lower)
+        # the result's own bound (the makespan) or the one in extra (objectives.py)
+        _, lower, _, _ = self.objective.stated({"bound": bound}, extra)
+        self.tracker.report(objective_of(tl, self.objective.name), lower)
 
 
 class _Benders:
