@@ -66,13 +66,8 @@ def rotated_extent(w: float, h: float, theta_deg: float) -> tuple[float, float]:
     return (w * c + h * s) / 2.0, (w * s + h * c) / 2.0
 
 
-def penetration(a: np.ndarray, b: np.ndarray) -> float:
-    """Separating-axis penetration depth of two convex quadrilaterals (corner arrays).
-
-    Returns the smallest overlap of the projections over the 4 edge normals; a value <= 0
-    means a separating axis exists (the shapes are disjoint or touch).
-    """
-    depth = math.inf
+def _axis_overlaps(a: np.ndarray, b: np.ndarray) -> Iterator[float]:
+    """The overlap of the two shapes' projections on each of their 8 edge normals, in order."""
     for poly in (a, b):
         for i in range(4):
             edge = poly[(i + 1) % 4] - poly[i]
@@ -80,13 +75,36 @@ def penetration(a: np.ndarray, b: np.ndarray) -> float:
             n /= np.linalg.norm(n)
             pa = a @ n
             pb = b @ n
-            depth = min(depth, min(pa.max(), pb.max()) - max(pa.min(), pb.min()))
+            yield min(pa.max(), pb.max()) - max(pa.min(), pb.min())
+
+
+def penetration(a: np.ndarray, b: np.ndarray) -> float:
+    """Separating-axis penetration depth of two convex quadrilaterals (corner arrays).
+
+    Returns the smallest overlap of the projections over the 4 edge normals; a value <= 0
+    means a separating axis exists (the shapes are disjoint or touch).
+    """
+    depth = math.inf
+    for overlap in _axis_overlaps(a, b):
+        depth = min(depth, overlap)
     return depth
+
+
+def _penetration_over(a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
+    """:func:`penetration` when it exceeds ``tol``, else None. The depth only decreases from
+    axis to axis, so the first axis with an overlap <= ``tol`` settles "no": the remaining
+    axes (most of the work for the many pairs that merely come near) are skipped."""
+    depth = math.inf
+    for overlap in _axis_overlaps(a, b):
+        depth = min(depth, overlap)
+        if depth <= tol:
+            return None
+    return depth if depth > tol else None
 
 
 def rects_overlap(a: np.ndarray, b: np.ndarray, tol: float = TOL) -> bool:
     """True when the interiors of two rectangles intersect by more than ``tol`` mm."""
-    return penetration(a, b) > tol
+    return _penetration_over(a, b, tol) is not None
 
 
 def inside_tray(c: np.ndarray, width: float, height: float, tol: float = TOL) -> bool:
@@ -251,8 +269,8 @@ def _exact_pairs(
             pa, pb = parts[a], parts[b]
             ca = corners(pa.x, pa.y, pa.w, pa.h, pa.theta)
             cb = corners(pb.x, pb.y, pb.w, pb.h, pb.theta)
-        depth = penetration(ca, cb)
-        if depth > tol:
+        depth = _penetration_over(ca, cb, tol)
+        if depth is not None:
             found.append(LayoutViolation("overlap", a, b, depth, intersection_area(ca, cb)))
             if stop is not None and len(found) >= stop:
                 return
