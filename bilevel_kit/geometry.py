@@ -84,10 +84,7 @@ def penetration(a: np.ndarray, b: np.ndarray) -> float:
     Returns the smallest overlap of the projections over the 4 edge normals; a value <= 0
     means a separating axis exists (the shapes are disjoint or touch).
     """
-    depth = math.inf
-    for overlap in _axis_overlaps(a, b):
-        depth = min(depth, overlap)
-    return depth
+    return min(_axis_overlaps(a, b))
 
 
 def _penetration_over(a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
@@ -99,7 +96,7 @@ def _penetration_over(a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
         depth = min(depth, overlap)
         if depth <= tol:
             return None
-    return depth if depth > tol else None
+    return depth
 
 
 def rects_overlap(a: np.ndarray, b: np.ndarray, tol: float = TOL) -> bool:

@@ -236,8 +236,6 @@ def register(
     registering imports nothing; a name already registered, or an objective the registry
     (:mod:`bilevel_kit.objectives`) does not know, is a :class:`UsageError`. ``prepare``,
     ``in_default``, ``supports_stations`` and ``objectives``: see :class:`MethodSpec`."""
-    from .objectives import OBJECTIVES
-
     unknown = [o for o in objectives if o not in OBJECTIVES]
     if unknown or not objectives:
         raise UsageError(

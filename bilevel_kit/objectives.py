@@ -224,8 +224,7 @@ class HumanIdle(Objective):
         ``W_s = sum h_i + o_H,s n_s`` (one task per kit)."""
         total = 0.0
         for one, lb in stations(instance):
-            work = sum(one.human_time(t.id) for t in one.tasks)
-            work += one.kit_overhead_human * one.n_tasks
+            work = sum(human_times(one)) + one.kit_overhead_human * one.n_tasks
             total += max(instance.kit_overhead_robot + one.delivery_time, lb - work)
         return total
 

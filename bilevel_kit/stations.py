@@ -22,17 +22,6 @@ if TYPE_CHECKING:
     from .plan import Timeline
 
 
-def __getattr__(name: str) -> frozenset[str]:
-    """``STATION_METHODS``: the registered methods whose spec declares ``supports_stations``
-    (:func:`bilevel_kit.methods.station_methods`, read on each use; kept for the simulation's
-    ``optimized`` policy, :mod:`bilevel_kit.sim.stations`)."""
-    if name == "STATION_METHODS":
-        from .methods import station_methods
-
-        return station_methods()
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def objective_of(timeline: Timeline, objective: str) -> float:
     """The value of ``objective`` on ``timeline`` in seconds: the registry's evaluation
     (:data:`bilevel_kit.objectives.OBJECTIVES`; with one station ``sum_completion`` is the

@@ -19,18 +19,18 @@ A station's policy plans as if the robot served it alone: ``cpsat-rolling`` re-p
 of that station's tasks exactly, but not the other stations' kits that will share the robot.
 
 Policies with stations: :data:`STATION_POLICIES`, and ``optimized`` (greedy-ce online) when
-``"greedy-ce"`` is in :data:`bilevel_kit.stations.STATION_METHODS` (the offline method then
-plans stations by the same rule).
+greedy-ce's method spec declares ``supports_stations`` (:class:`bilevel_kit.methods.MethodSpec`;
+the offline method then plans stations by the same rule).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .. import stations as _stations
 from ..errors import UsageError
 from ..instance import Instance
 from ..plan import Kit
+from ..stations import station_instance
 from .state import Policy, SimState
 
 if TYPE_CHECKING:
@@ -42,9 +42,10 @@ STATION_POLICIES = ("single-task", "whole-assembly", "cpsat-rolling")
 
 def station_policies() -> tuple[str, ...]:
     """The simulation policies that take several stations now: the baselines, cpsat-rolling,
-    and ``optimized`` once greedy-ce plans stations (in
-    :data:`bilevel_kit.stations.STATION_METHODS`)."""
-    extra = ("optimized",) if "greedy-ce" in _stations.STATION_METHODS else ()
+    and ``optimized`` once greedy-ce plans stations (its spec declares ``supports_stations``)."""
+    from ..methods import get_method
+
+    extra = ("optimized",) if get_method("greedy-ce").supports_stations else ()
     return STATION_POLICIES + extra
 
 
@@ -73,9 +74,7 @@ class StationsPolicy:
         self.instance = instance
         self.name: str = getattr(factory, "name", "policy")
         self.policies: dict[str, Policy] = {
-            s: factory(
-                _stations.station_instance(instance, s), seed=seed, params=params, options=options
-            )
+            s: factory(station_instance(instance, s), seed=seed, params=params, options=options)
             for s in instance.station_ids
         }
         self._tasks = {

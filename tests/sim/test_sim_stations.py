@@ -102,11 +102,12 @@ def test_policies_without_stations_refuse_and_the_list_follows_the_methods(monke
 
         simulate(inst, SingleTaskPolicy(inst))
     assert station_policies()[: len(STATION_POLICIES)] == STATION_POLICIES
-    import bilevel_kit.stations as st
+    from bilevel_kit.methods import REGISTRY
 
-    monkeypatch.setattr(st, "STATION_METHODS", st.STATION_METHODS | {"greedy-ce"})
+    spec = REGISTRY["greedy-ce"]
+    monkeypatch.setitem(REGISTRY, "greedy-ce", replace(spec, supports_stations=True))
     assert "optimized" in station_policies()
-    monkeypatch.setattr(st, "STATION_METHODS", st.STATION_METHODS - {"greedy-ce"})
+    monkeypatch.setitem(REGISTRY, "greedy-ce", replace(spec, supports_stations=False))
     assert "optimized" not in station_policies()
 
 
@@ -131,10 +132,11 @@ def test_cli_simulates_stations_and_refuses_other_policies_before_any_run(capsys
 def test_optimized_runs_per_station_once_greedy_ce_plans_stations(monkeypatch) -> None:
     """The study picks ``optimized`` up when greedy-ce plans stations; the wrapper already
     runs it (a greedy-ce policy per station) and its run is timed by the evaluator."""
-    import bilevel_kit.stations as st
     from bilevel_kit.heuristics.cross_entropy import CEParams
+    from bilevel_kit.methods import REGISTRY
 
-    monkeypatch.setattr(st, "STATION_METHODS", st.STATION_METHODS | {"greedy-ce"})
+    spec = REGISTRY["greedy-ce"]
+    monkeypatch.setitem(REGISTRY, "greedy-ce", replace(spec, supports_stations=True))
     inst = load("instances/stations/table_u1_s2.json")
     ce = CEParams(samples=30, elite=6, max_iter=8)
     res = simulate(inst, "optimized", params=replace(DET, ce=ce), seed=0)
