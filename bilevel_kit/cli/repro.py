@@ -1,5 +1,5 @@
-"""``bilevel-kit repro``: the paper's user study (Fig. 5), Figure 6, the horizon study or
-the adaptive-pace study beyond the paper (see paper_repro/)."""
+"""``bilevel-kit repro STUDY``: the paper's user study (Fig. 5) and Figure 6, and the studies
+beyond the paper (see paper_repro/); each study is a subcommand with its own options only."""
 
 from __future__ import annotations
 
@@ -29,35 +29,94 @@ HELP = (
     "stations and robust studies"
 )
 DESCRIPTION = (
-    "calibrate: fit the robot's speed, the human's pickup time and the participant x condition "
-    "SD to 3 of the paper's numbers on a calibration cohort, with a parametric bootstrap; its "
-    "CSVs (committed in paper_repro/results/) are the one calibration every other experiment "
-    "reads (--calibration DIR: another one). "
-    "user-study: within-subject participants x {Whole Assembly, Single Task, Optimized}; 200 "
-    "fresh studies of 18 give every paper number a median and 95% prediction interval, with "
-    "and without the calibration's uncertainty. fig6: MAT x MTTF grid of "
-    "the shop-floor simulation (10 tables per run), percent improvement heatmaps with ANOVA + "
-    "Tukey marks; saved per cell (resumable). --jobs/--scheduler run the cells (fig6 grid "
-    "points, user-study studies) in parallel (docs/cluster.md); exit 5 when a cell failed. "
-    "horizon: greedy-ce at horizon N = 1..12 against the exact cpsat optimum (or its bound) on "
-    "the table, 2 and 5 table units and instances/generated, and cpsat-rolling's window against "
-    "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s). adaptive: "
-    "optimized, optimized-adaptive (learns the human's pace) and optimized-oracle over fast, "
-    "median, slow and sampled participants, without and with supply delays "
-    "(docs/simulation.md). stations: how many assembly stations one robot keeps busy: "
-    "throughput, human idle per station and robot utilisation against S = 1..6 stations of "
-    "the table, stool, chair and mixed lines, per policy, without and with feeders "
-    "(docs/stations.md). robust: plans for the mean human times against sample-average "
-    "plans for their spread, VSS and EVPI per cv and tray count (docs/robust.md). See "
-    "paper_repro/README.md."
+    "One study per subcommand; `bilevel-kit repro STUDY --help` lists that study's options "
+    "only. See paper_repro/README.md."
 )
+
+#: Each study's ``--help`` line and description, in the order ``repro --help`` lists them.
+STUDIES: dict[str, tuple[str, str]] = {
+    "calibrate": (
+        "fit the robot and human parameters to 3 of the paper's numbers",
+        "Fit the robot's speed, the human's pickup time and the participant x condition SD to "
+        "3 of the paper's numbers on a calibration cohort, with a parametric bootstrap; its "
+        "CSVs (committed in paper_repro/results/) are the one calibration every other "
+        "experiment reads (their --calibration DIR: another one).",
+    ),
+    "user-study": (
+        "the paper's within-subject user study (Fig. 5), as prediction intervals",
+        "Within-subject participants x {Whole Assembly, Single Task, Optimized}; 200 fresh "
+        "studies of 18 give every paper number a median and 95% prediction interval, with and "
+        "without the calibration's uncertainty. --jobs/--scheduler run the studies in parallel "
+        "(docs/cluster.md); exit 5 when a cell failed.",
+    ),
+    "fig6": (
+        "the paper's Figure 6: the shop-floor simulation over MAT x MTTF",
+        "MAT x MTTF grid of the shop-floor simulation (10 tables per run), percent improvement "
+        "heatmaps with ANOVA + Tukey marks; saved per cell (resumable). --jobs/--scheduler run "
+        "the grid points in parallel (docs/cluster.md); exit 5 when a cell failed.",
+    ),
+    "horizon": (
+        "greedy-ce's horizon N and cpsat-rolling's window (beyond the paper)",
+        "greedy-ce at horizon N = 1..12 against the exact cpsat optimum (or its bound) on the "
+        "table, 2 and 5 table units and instances/generated, and cpsat-rolling's window against "
+        "Optimized in the Figure 6 simulation (no delay, MAT 60 and 90 s at MTTF 60 s).",
+    ),
+    "adaptive": (
+        "policies that learn the human's pace (beyond the paper)",
+        "optimized, optimized-adaptive (learns the human's pace) and optimized-oracle over "
+        "fast, median, slow and sampled participants, without and with supply delays "
+        "(docs/simulation.md).",
+    ),
+    "stations": (
+        "how many assembly stations one robot keeps busy (beyond the paper)",
+        "Throughput, human idle per station and robot utilisation against S = 1..6 stations "
+        "of the table, stool, chair and mixed lines, per policy, without and with feeders "
+        "(docs/stations.md).",
+    ),
+    "robust": (
+        "plans for the mean human times against plans for their spread (beyond the paper)",
+        "Plans for the mean human times against sample-average plans for their spread, VSS and "
+        "EVPI per cv and tray count (docs/robust.md).",
+    ),
+}
+
+#: ``--reps``' meaning in each study that has it.
+_REPS = {
+    "fig6": "replications per cell (default 30; 3 with --quick)",
+    "horizon": "replications per simulation cell (default 3; 1 with --quick)",
+    "adaptive": "runs per participant group (default 10; 2 with --quick), 3R sampled participants",
+    "stations": "replications (default 5; 2 with --quick)",
+}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "experiment",
-        choices=("calibrate", "user-study", "fig6", "horizon", "adaptive", "stations", "robust"),
-    )
+    """One subparser per study, each with the common options and its own only."""
+    from .common import Parser
+
+    sub = p.add_subparsers(dest="experiment", metavar="STUDY", parser_class=Parser)
+    sub.required = True
+    for name, (line, description) in STUDIES.items():
+        s = sub.add_parser(name, help=line, description=description)
+        _add_common(s)
+        if name in _REPS:
+            s.add_argument("--reps", type=positive_int, metavar="R", help=_REPS[name])
+        if name in ("user-study", "fig6", "horizon", "adaptive", "stations"):
+            s.add_argument(
+                "--calibration",
+                metavar="DIR",
+                help="the folder of the calibration's CSVs (default: the committed one, "
+                "paper_repro/results/)",
+            )
+        {
+            "calibrate": _add_calibrate,
+            "fig6": _add_fig6,
+            "horizon": _add_horizon,
+            "stations": _add_stations,
+        }.get(name, lambda _: None)(s)
+        add_sweep_options(s)
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--quick",
         action="store_true",
@@ -65,112 +124,103 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "its outputs say so",
     )
     add_output(
-        p, "--out", folder=True, metavar="DIR", help="output folder (default out/repro/EXPERIMENT)"
+        p, "--out", folder=True, metavar="DIR", help="output folder (default out/repro/STUDY)"
     )
     add_derived_outputs(p, _default_out)
     add_seed(p)
-    p.add_argument(
-        "--reps",
-        type=positive_int,
-        metavar="R",
-        help="fig6: replications per cell (default 30; 3 with --quick); horizon: replications "
-        "per simulation cell (default 3; 1 with --quick); adaptive: runs per participant group "
-        "(default 10; 2 with --quick), 3R sampled participants; stations: replications "
-        "(default 5; 2 with --quick)",
-    )
-    p.add_argument(
-        "--mats",
-        type=numbers,
-        metavar="30,60",
-        help="fig6: the MAT values of the grid (default 30,60,90,120; 30,120 with --quick); "
-        "horizon: of the delay cells (default 60,90; 60 with --quick)",
-    )
-    p.add_argument(
-        "--mttfs",
-        type=numbers,
-        metavar="60,90",
-        help="fig6: the MTTF values of the grid (default 30,60,90,120; 60 with --quick); "
-        "horizon: of the delay cells (default 60)",
-    )
-    add_delivery_time(p, "fig6: delivery time (default: the instance's)")
-    p.add_argument(
-        "--calibration",
-        metavar="DIR",
-        help="user-study, fig6, horizon, adaptive: the folder of the calibration's CSVs "
-        "(default: the committed one, paper_repro/results/)",
-    )
+
+
+def _add_calibrate(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--draws",
         type=positive_int,
         metavar="B",
-        help="calibrate: parametric bootstrap draws (default 50; 3 with --quick)",
+        help="parametric bootstrap draws (default 50; 3 with --quick)",
     )
+
+
+def _add_grid(p: argparse.ArgumentParser, mats: str, mttfs: str) -> None:
+    p.add_argument("--mats", type=numbers, metavar="30,60", help=mats)
+    p.add_argument("--mttfs", type=numbers, metavar="60,90", help=mttfs)
+
+
+def _add_fig6(p: argparse.ArgumentParser) -> None:
+    _add_grid(
+        p,
+        "the MAT values of the grid (default 30,60,90,120; 30,120 with --quick)",
+        "the MTTF values of the grid (default 30,60,90,120; 60 with --quick)",
+    )
+    add_delivery_time(p, "delivery time (default: the instance's)")
     p.add_argument(
         "--with-cpsat",
         action="store_true",
-        help="fig6: add the cpsat-rolling policy and compare it with Optimized",
+        help="add the cpsat-rolling policy and compare it with Optimized",
     )
     add_time_limit(
         p,
-        "fig6 --with-cpsat: CP-SAT time limit per decision (default 1 s)",
+        "with --with-cpsat: CP-SAT time limit per decision (default 1 s)",
         default=1.0,
         flag="--cpsat-time-limit",
     )
-    g = p.add_argument_group("horizon")
-    g.add_argument(
+
+
+def _add_horizon(p: argparse.ArgumentParser) -> None:
+    _add_grid(
+        p,
+        "the MAT values of the delay cells (default 60,90; 60 with --quick)",
+        "the MTTF values of the delay cells (default 60)",
+    )
+    p.add_argument(
         "--horizons",
         type=integers,
         metavar="1,2,5",
-        help="greedy horizons N (default 1..12; 1,2,4,6,8,12 with --quick)",
+        help="greedy horizons N (default 1..12; 1,2,4,5,6,8,12 with --quick)",
     )
-    g.add_argument(
+    p.add_argument(
         "--windows",
         type=integers,
         metavar="4,12",
         help="cpsat-rolling windows, tasks (default 4,8,...,24; 4,12,24 with --quick)",
     )
-    g.add_argument(
+    p.add_argument(
         "--instances",
         nargs="+",
         metavar="FILE",
         help="planning instances (default: the table, 2 and 5 table units, "
         "instances/generated; the table and 2 units with --quick)",
     )
-    g.add_argument(
+    p.add_argument(
         "--reference-time-limit",
         type=positive,
         metavar="S",
         help="CP-SAT time limit of the exact reference per instance (default 60 s; 20 s with "
         "--quick)",
     )
-    g.add_argument(
+    p.add_argument(
         "--no-simulation", action="store_true", help="planning only (skip the window study)"
     )
-    _add_stations_arguments(p)
-    add_sweep_options(p)
 
 
-def _add_stations_arguments(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("stations")
-    g.add_argument(
+def _add_stations(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
         "--lines",
         type=lambda t: listed(t, str),
         metavar="table,mix",
         help="lines: table, stool, chair, mix (default all)",
     )
-    g.add_argument(
+    p.add_argument(
         "--stations",
         type=integers,
         metavar="1,2,3",
         help="stations per robot S (default 1..6; 1,2,4 with --quick)",
     )
-    g.add_argument(
+    p.add_argument(
         "--units",
         type=positive_int,
         metavar="U",
         help="units each station builds (default 2)",
     )
-    g.add_argument(
+    p.add_argument(
         "--supply",
         type=lambda t: listed(t, str),
         metavar="none,feeders",
@@ -216,7 +266,8 @@ def _run(args: argparse.Namespace) -> int:
 
     out = args.out or _default(args)
     run: dict[str, Any] = {"quick": args.quick, "jobs": args.jobs, "seed": args.seed}
-    grid = {"mats": args.mats, "mttfs": args.mttfs}  # the Figure 6 delay cells
+    # the Figure 6 delay cells (fig6 and horizon only)
+    grid = {"mats": getattr(args, "mats", None), "mttfs": getattr(args, "mttfs", None)}
     if args.experiment == "calibrate":
         res = repro.run_calibration(out, draws=args.draws, **run)
         return _report(res)
