@@ -65,7 +65,7 @@ def predictions_markdown(rows: Sequence[Row]) -> str:
         "our median",
         "95 % interval, participants",
         "95 % interval, with calibration",
-        "wider by",
+        "width change with calibration",
         "inside?",
     ]
     from .predictions import inside_count
