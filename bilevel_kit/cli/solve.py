@@ -164,7 +164,8 @@ def no_model_note(result: Result) -> str | None:
         why = NO_MODEL.get(str(x.get(key)))
         if why is not None:
             plan = f" (the plan is {x['hint_method']}'s)" if x.get("hint_method") else ""
-            return f"{result.method}: no model built ({why}): {x.get('reason')}{plan}"
+            reason = str(x.get("reason")).removeprefix(f"{result.method}: ")
+            return f"{result.method}: no model built ({why}): {reason}{plan}"
     return None
 
 
