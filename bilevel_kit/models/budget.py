@@ -166,9 +166,14 @@ def no_model_reason(
     if refusal is not None and has_plan:
         return "too_large", refusal
     check_model_memory(owner, cells, bytes_per_cell, what)
-    if too_slow_to_build(budget, cells * build_s_per_cell, margin):
+    estimate = cells * build_s_per_cell
+    if too_slow_to_build(budget, estimate, margin):
         why = f"a model of {cells:,} task x kit variables would not be built and solved"
-        return "not_built", f"{why} within the time limit"
+        left = budget.remaining(margin)
+        return (
+            "not_built",
+            f"{why} within the time limit (about {estimate:.1f} s to build, {left:.1f} s left)",
+        )
     return None
 
 

@@ -53,13 +53,19 @@ def test_milp_objectives_equal_brute_force_on_stations(seed, n_stations, objecti
     assert out.bound <= evaluate(inst, out.plan).makespan + 1e-9  # still a makespan bound
 
 
-def test_milp_stations_refuses_a_hint():
+def test_milp_stations_honours_a_hint_that_models_stations():
+    """``hint`` with stations: a method that models them joins the warm start (the best plan
+    is the incumbent, ``hint_method`` names it); one that does not is refused in one line."""
     from bilevel_kit.errors import UsageError
     from bilevel_kit.models.milp import MilpOptions, milp
 
     inst = from_dict(strategies.stations_doc(1, 2, n=4))
-    with pytest.raises(UsageError, match="hint=none"):
-        milp(inst, MilpOptions(hint="single-task"), time_limit=5)
+    out = milp(inst, MilpOptions(hint="single-task", fallback="none"), time_limit=20)
+    assert out.plan is not None and check(inst, out.plan) == []
+    assert out.extra["hint_method"] in ("single-task", "whole-assembly", "greedy-ce")
+    with pytest.raises(UsageError, match="hint=lns") as exc:
+        milp(inst, MilpOptions(hint="lns"), time_limit=5)
+    assert "\n" not in str(exc.value) and "lns does not model them" in str(exc.value)
 
 
 def test_milp_sum_completion_on_one_station_is_the_makespan(table):
@@ -133,16 +139,15 @@ def test_milp_stations_master_prices_a_plan_at_its_timeline(kits, objective):
 
     from bilevel_kit.models.budget import Budget
     from bilevel_kit.models.milp import run_solver
-    from bilevel_kit.models.milp import stations as master_of
-    from bilevel_kit.models.milp.model import model_objective
+    from bilevel_kit.models.milp.model import build, model_objective, set_start
     from bilevel_kit.plan import Kit, Plan
 
     inst = from_dict(first_tray_doc())
     value = model_objective(
         inst, evaluate(inst, Plan(tuple(Kit(tuple(k)) for k in kits))), objective
     )
-    master = master_of.build(inst, inst.n_tasks, 100.0, 0.0, objective)
-    master_of.set_start(master, inst, kits)
+    master = build(inst, inst.n_tasks, 100.0, objective, 0.0)
+    set_start(master, inst, kits)
     m = master.model
     for var in m.component_data_objects(pyo.Var):
         if var.is_binary():

@@ -36,12 +36,11 @@ REFUSED = {
     ("cpsat", "pack_resolution"): 2.0,
     ("cpsat", "fallback"): "none",
     ("cpsat", "hint"): "none",
-    ("milp", "hint"): "lns",
 }
 #: The table of the CHANGELOG and docs/formulations.md: the honoured options.
 HONOURED = {
     "cpsat": {"workers", "objective", "log"},
-    "milp": {"solver", "objective", "tray", "log", "fallback"},
+    "milp": {"solver", "objective", "tray", "log", "fallback", "hint"},
 }
 
 
@@ -155,8 +154,8 @@ def test_cpsat_workers_and_tray_benders_are_honoured(inst, monkeypatch):
 
 
 def test_milp_solver_tray_and_fallback_are_honoured(inst, monkeypatch):
-    """``solver`` solves the station master; ``tray`` and ``fallback`` are accepted (``auto``
-    and ``lns`` act as ``benders`` and ``none`` there: the option help)."""
+    """``solver`` solves the model with its station variables; ``tray`` and ``fallback`` are
+    accepted (``auto`` and ``lns`` act as ``benders`` and ``none`` there: the option help)."""
     from bilevel_kit.models.milp import method
 
     used = []
@@ -170,7 +169,7 @@ def test_milp_solver_tray_and_fallback_are_honoured(inst, monkeypatch):
     res = solve(inst, "milp", time_limit=20, solver="appsi_highs", tray="benders", fallback="none")
     assert res.status == "optimal" and res.objective == 31.0
     assert res.extra["solver"] == "appsi_highs" and res.extra["tray_mode"] == "benders"
-    assert used and set(used) == {("milp_stations", "appsi_highs")}
+    assert used and set(used) == {("milp_schedule", "appsi_highs")}
 
 
 def test_cpsat_keyword_entry_refuses_stations(inst):

@@ -37,7 +37,7 @@ CPSAT = NoModelSpec(
 #: a child process; bench/results/scale.md); 0.7-0.8 ms to build it and about 1.3 ms more to
 #: write it for the HiGHS child (7 s for 5,263 variables on a loaded machine).
 MILP = NoModelSpec(
-    "milp", 12_000, 2.5e-3, "the quick plan", "termination", "too_large", "not_built", False
+    "milp", 12_000, 2.5e-3, "the incumbent", "termination", "too_large", "not_built", False
 )
 
 

@@ -4,9 +4,10 @@
 process, :mod:`.highs_child`, or any Pyomo solver; shared with ``bilevel-milp``),
 :mod:`.method` (the registered entry, its options, the Python :func:`solve`, the Benders
 loop; the steps of a run are :mod:`..exact.driver`'s, the ``extra`` keys are listed in
-docs/formulations.md, "One driver for cpsat and milp"), :mod:`.stations` (the master with
-several assembly stations, docs/timeline.md#several-stations). The formulation is in
-docs/formulations.md. Importing this package loads neither Pyomo nor a solver.
+docs/formulations.md, "One driver for cpsat and milp"), :mod:`.warm` (the incumbent with
+several assembly stations, docs/timeline.md#several-stations; one station is the S = 1 case of
+:mod:`.model`). The formulation is in docs/formulations.md. Importing this package loads
+neither Pyomo nor a solver.
 """
 
 from ...objectives import MODEL_OBJECTIVES as OBJECTIVES  # the registry's

@@ -30,7 +30,8 @@ bound on the makespan in seconds (the master's best bound when every cut is prov
 the closed-form bounds). The run's steps are those of :mod:`..exact.driver`; the ``extra`` keys,
 and where they differ from ``cpsat``'s, are listed in docs/formulations.md, "One driver for
 cpsat and milp" (with stations also ``objective_value``, ``objective_bound``,
-``objective_gap``: :func:`.stations.objective_extra`).
+``objective_gap``: :func:`.model.objective_extra`). With stations the incumbent is the best of
+the baselines', greedy-ce's and the ``hint`` method's plans (:mod:`.warm`).
 
 On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
 needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
@@ -55,7 +56,6 @@ from ..budget import Budget
 from ..common import (
     NoGoodCuts,
     Packer,
-    assignment_cells,
     closed_form_plan,
     pack_time_limit,
     plan_extra,
@@ -74,10 +74,10 @@ from ..exact.driver import (
 )
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import NoModelSpec, improve
-from ..exact.station_options import HONOURED, Refused, check_station_options, declare
+from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from ..packing_oracle import WHY_TIME, Fit
-from . import stations
+from . import warm
 from .model import (
     Master,
     add_cut,
@@ -85,6 +85,8 @@ from .model import (
     extract,
     human_order,
     kit_cap,
+    model_cells,
+    objective_extra,
     objective_value,
     set_start,
 )
@@ -121,8 +123,9 @@ class MilpOptions:
     hint: str = field(
         default="none",
         metadata={
-            "help": "none (the quick plan alone), or a registered method (e.g. lns) whose plan "
-            "is the incumbent when better, within 30 % of the time limit"
+            "help": "none (the quick plan alone; several stations: the baselines and "
+            "greedy-ce), or a registered method (e.g. lns) whose plan is the incumbent when "
+            "better, within 30 % of the time limit"
         },
     )
 
@@ -130,7 +133,7 @@ class MilpOptions:
         default="lns",
         metadata={
             "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: none, the LNS does not model them)"
+            "(several stations: the incumbent, the LNS does not model them; extra['fallback'])"
         },
     )
 
@@ -138,9 +141,11 @@ class MilpOptions:
         check_hint(self.hint, ("none",))
 
 
-#: What the station master (:mod:`.stations`) does with each option (docs/formulations.md,
-#: "Options with several stations"); every option is declared (:func:`declare`). ``tray=auto``
-#: and ``fallback=lns`` are accepted and act as ``benders`` and ``none`` there.
+#: What the model with several stations (:mod:`.model`) does with each option
+#: (docs/formulations.md, "Options with several stations"); every option is declared
+#: (:func:`declare`). ``tray=auto`` and ``fallback=lns`` act as ``benders`` and ``none``
+#: there, said in ``extra["tray_mode"]`` and ``extra["fallback"]``; a ``hint`` method that
+#: does not support stations is refused (:func:`.warm.check_station_hint`).
 STATION_OPTIONS = declare(
     MilpOptions,
     {
@@ -149,9 +154,7 @@ STATION_OPTIONS = declare(
         "tray": HONOURED,
         "log": HONOURED,
         "fallback": HONOURED,
-        "hint": Refused(
-            "its station master starts from the better of single-task and whole-assembly"
-        ),
+        "hint": HONOURED,
     },
 )
 
@@ -188,10 +191,11 @@ def run(
 
     Returns the result of the module docstring: ``bound`` is a proven lower bound on the
     makespan in seconds, every kit has a topological human order and a non-overlapping layout
-    from the packing oracle. Several assembly stations: :mod:`.stations`, with the options of
-    :data:`STATION_OPTIONS`.
+    from the packing oracle. Several assembly stations: the station part of :mod:`.model`,
+    with the options of :data:`STATION_OPTIONS`.
     """
     check_station_options(instance, "milp", options, STATION_OPTIONS)
+    warm.check_station_hint(instance, options.hint)
     if not instance.stations and get_objective(options.objective).makespan_with_one_station:
         options = replace(options, objective="makespan")  # e.g. sum_completion
     budget = Budget(time_limit)
@@ -263,9 +267,9 @@ class _Run:
 
     def start(self) -> list[list[str]] | None:
         """The incumbent, its objective, the upper bound U and the kit cap K."""
-        instance, options = self.instance, self.options
-        if instance.stations:  # docs/timeline.md#several-stations: a master of its own
-            inc, inc_obj, upper, K = stations.incumbent(instance, options.objective, options.hint)
+        instance = self.instance
+        if instance.stations:  # docs/timeline.md#several-stations
+            inc, inc_obj, upper, K = warm.station_incumbent(self, self.seed)
             self.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
         else:
             inc, inc_obj, upper, K = _incumbent(self, pack_time_limit(self.budget), self.seed)
@@ -284,16 +288,15 @@ class _Run:
         return _conclude(self, inc, None, None, ANY_ANGLE, proven=True)
 
     def cells(self) -> int:
-        if self.instance.stations:  # with the station and tray-pair binaries
-            return stations.model_cells(self.instance, self.K)
-        return assignment_cells(self.instance, self.K)
+        return model_cells(self.instance, self.K)
 
     def hand_off(self, inc: list[list[str]]) -> list[list[str]]:
         """The incumbent, or the LNS's better plan from it (makespan objective, one station,
         as the LNS's); its layouts taught to the packer, which lays the result out."""
-        if self.instance.stations:
-            return inc
         self.extra["improved_by"] = None
+        if self.instance.stations:
+            self.extra["fallback"] = "none: the LNS does not model several stations"
+            return inc
         plan = _with_layouts(self.instance, inc, self.packer, {})
         if plan is None or not self.minimised.is_makespan:
             return inc
@@ -387,16 +390,11 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
     """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
     options, K, upper = r.options, r.K, r.upper
     lower = None if r.proven is None else r.proven.value
-    start = set_start
-    if r.instance.stations:
-        assert upper is not None  # the horizon of the baselines' plan
-        master = stations.build(r.instance, K, upper, r.closed, options.objective)
-        start = stations.set_start
-    else:
-        master = build(r.instance, K, upper, options.objective, lower)
+    if r.instance.stations:  # the closed form (the stations' bounds) on C
+        lower = r.closed
+    master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)
-    loop.start = start
     if options.tray == "auto" and not r.instance.stations:  # stations: Benders, as cpsat's
         loop.cuts.seed_pairs()
     info = loop.run(r.opt, r.seed, r.solver_options)
@@ -449,7 +447,7 @@ def _conclude(
     if r.instance.stations and not objective.top_level:
         proofs = (optimal, bool(r.extra["optimal_axis_aligned"]))
         lows = (lower_any, lower)
-        r.extra.update(stations.objective_extra(r.instance, plan, objective.name, lows, proofs))
+        r.extra.update(objective_extra(r.instance, plan, objective.name, lows, proofs))
     return r.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound)
 
 
@@ -563,8 +561,6 @@ class _Benders:
         self.proven = False
         self.infeasible = False
         self.iterations = 0
-        #: loads the incumbent as a MIP start (:func:`.model.set_start`, or the stations')
-        self.start: Any = set_start
 
     def left(self) -> float:
         return self.budget.remaining(MARGIN)
@@ -578,7 +574,7 @@ class _Benders:
         while self.left() > 0.05:
             self.iterations += 1
             if self.inc is not None:
-                self.start(self.master, self.instance, self.inc)
+                set_start(self.master, self.instance, self.inc)
             # the master's bound holds for every plan only while every cut does (its scope);
             # its solutions are no plans
             proof = self.cuts.scope == ANY_ANGLE

@@ -60,26 +60,72 @@ minimise C. ``human_idle``: minimise :math:`C - o_H \sum_k u_k` (= human idle + 
 
 The incumbent is passed to the solver as a MIP start (:func:`set_start`), after relabelling
 its chains into the lexicographic order the model requires (:func:`canonical_kits`).
+
+**Several stations** (docs/timeline.md#several-stations; docs/formulations.md). One station is
+the S = 1 case: everything above is the model, and the variables and constraints below appear
+only when the instance declares ``stations``. K = n kit positions; ``z[s,k]`` = kit k is for
+station s (one per used kit, every task of the kit on it: a kit never mixes stations). With
+continuous robot starts ``S_k`` and human ends ``E_k``::
+
+    R_k = o_R u_k + sum_i r_i x[i,k]     D_k = sum_s d_s z[s,k]
+    H_k = sum_s o_H,s z[s,k] + sum_i h_i x[i,k]
+    S_k >= A_{k-1},  A_k = S_k + R_k + D_k,  E_k >= A_k + H_k,  C >= E_k
+
+Each station's human and trays are followed by two running values per station and position,
+``F[s,k]`` (the end of s's last kit at or before k) and ``G[s,k]`` (the time its tray is
+back, o_H,s after its human start; 0 while s has no kit)::
+
+    F[s,k] >= F[s,k-1],  F[s,k] >= E_k - M (1 - z[s,k])
+    E_k >= F[s,k-1] + H_k - M (1 - z[s,k])                       (s's human, in order)
+    G[s,k] >= G[s,k-1],  G[s,k] >= E_k - H_k + o_H,s - M (1 - z[s,k])
+    S_k >= G[s,k-1] - M (1 - z[s,k])                             (one tray: T_s = 1)
+    S_k >= E_j - H_j + o_H,s - M (3 - z[s,j] - z[s,k] - f[s,j,k])   (T_s >= 2, j < k)
+    sum_{j<=q<k} z[s,q] <= T_s - 1 + K f[s,j,k]
+
+(with ``T_s >= 2`` the binary ``f[s,j,k]`` must be 1 when at least ``T_s`` kits of s lie in
+positions j..k-1; human starts of a station are non-decreasing, so the earlier ones add
+nothing). The ``o_H,s`` of the one-tray rule is inside ``G``: written as
+``S_k >= G[s,k-1] + o_H,s`` with ``G`` the human start, the first kit of s at a position
+k >= 1 waited for a tray that was never out and the master proved a worse plan optimal
+(issue 35, item 1; tests/models/test_milp_stations.py). Every constraint is a lower bound, so
+the timeline is the least solution; every variable is bounded by the horizon U
+(:meth:`bilevel_kit.objectives.Objective.horizon`), so ``M = U + sum_i h_i + max_s o_H,s`` is
+valid. No chain symmetry is broken (equal chains on two stations are not interchangeable);
+``sum_k u_k`` is at least the area bound and the number of stations. The objective is the
+registry's expression on C, the completions ``sum_s F[s,K-1]`` and the overheads
+``sum_s o_H,s sum_k z[s,k]`` (the human's work depends on the kit counts).
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ... import bounds
 from ...bounds import end_tasks, johnson_lines, kit_slacks, lower_bounds, min_kits, tray_wait
-from ...instance import Instance, topological_order
+from ...instance import Instance, StationParams, topological_order
 from ...objectives import ModelTerms, is_top_level
 from ...objectives import get as get_objective
 from ...plan import Kit, Plan, Timeline, evaluate
 from .. import packing
-from ..common import chain_groups, kit_order, kit_positions, reduced_edges, relabel_chains
+from ..common import (
+    assignment_cells,
+    chain_groups,
+    kit_order,
+    kit_positions,
+    reduced_edges,
+    relabel_chains,
+)
 from .solver import TOL
 
 human_order = kit_order  # the human's order inside a kit (one definition: common.py)
+#: :func:`bilevel_kit.bounds.objective_extra` with the master's bounds (for every plan, for
+#: 0/90-degree plans) on its own scale, the constant ``sum_i h_i`` dropped for the human idle.
+objective_extra = functools.partial(bounds.objective_extra, model_scale=True)
 
 
 def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective: str) -> float:
@@ -94,7 +140,7 @@ def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective
 
 
 def model_objective(instance: Instance, tl: Timeline, objective: str) -> float:
-    """The stations master's objective of a plan's timeline (:mod:`.stations`): the
+    """The master's objective of a plan's timeline with several stations: the
     registry's :meth:`~bilevel_kit.objectives.Objective.model_value` (for ``human_idle`` the
     total idle plus the constant ``sum_i h_i`` it drops)."""
     return get_objective(objective).model_value(instance, tl)
@@ -162,45 +208,64 @@ def build(
     lower: float | None = None,
 ) -> Master:
     """The master model of the module docstring with K kit positions (``upper``: C <= U;
-    ``lower``: C >= L, a proven makespan bound, for the makespan objective). The per-count
-    bounds of :mod:`bilevel_kit.models.relax`, which ``cpsat`` adds, made HiGHS up to 3x
-    slower on 12-task flow shops (5.6 s against 15.6 s), the single bound did not."""
+    ``lower``: C >= L, a proven makespan bound, for the makespan objective); the station
+    variables only with several stations (then ``upper`` is required: the horizon of every
+    variable and of the big-M). The per-count bounds of :mod:`bilevel_kit.models.relax`,
+    which ``cpsat`` adds, made HiGHS up to 3x slower on 12-task flow shops (5.6 s against
+    15.6 s), the single bound did not."""
     import pyomo.environ as pyo
 
     data = _Data.of(instance, K)
     m = pyo.ConcreteModel(name="milp_schedule")
     m.x = pyo.Var(data.keys, domain=pyo.Binary)
     m.u = pyo.Var(range(K), domain=pyo.Binary)
-    big_m = sum(data.r) + sum(data.h) + K * (data.o_r + data.o_h + data.d)  # no overlap at all
-    m.E = pyo.Var(range(K), bounds=(0.0, big_m))
+    if instance.stations:
+        if upper is None:
+            raise ValueError("the stations master needs the incumbent's horizon U")
+        hz = upper * (1 + 1e-9) + 1e-6
+        _station_variables(m, instance, K, hz, lower or 0.0)
+    else:
+        big_m = sum(data.r) + sum(data.h) + K * (data.o_r + data.o_h + data.d)  # no overlap
+        m.E = pyo.Var(range(K), bounds=(0.0, big_m))
     m.u[0].fix(1)
     m.cons = pyo.ConstraintList()
     _assignment(m, instance, data, K)
     _precedence(m, instance, data, K)
-    _timeline(m, instance, data, K, upper, objective)
-    if lower is not None and is_top_level(objective) and math.isfinite(lower) and lower > 0:
-        m.cons.add(m.E[K - 1] >= lower)
+    if instance.stations:
+        _station_timeline(m, instance, data, K, hz)
+        m.obj = pyo.Objective(expr=_station_objective(m, instance, K, objective))
+    else:
+        _timeline(m, instance, data, K, upper, objective)
+        if lower is not None and is_top_level(objective) and math.isfinite(lower) and lower > 0:
+            m.cons.add(m.E[K - 1] >= lower)
     master = Master(m, K, data.ids, {key: m.x[key] for key in data.keys})
     _tray(master, instance, data)
     return master
 
 
 def _assignment(m: Any, instance: Instance, data: _Data, K: int) -> None:
-    """Every task in one kit; used kits first, at least ``m_min`` of them."""
+    """Every task in one kit; used kits first, at least ``m_min`` of them; with several
+    stations a used kit on one station with all its tasks, at least one kit per station."""
     add = m.cons.add
+    ids = range(len(instance.station_ids))
+    where = [instance.station_ids.index(t.station) for t in instance.tasks]
     for i in range(len(data.ids)):
         add(sum(m.x[i, k] for k in range(data.ub[i])) == 1)
     for k in range(K):
+        if instance.stations:
+            add(sum(m.z[s, k] for s in ids) == m.u[k])
         for i in data.at_k[k]:
-            add(m.x[i, k] <= m.u[k])
+            add(m.x[i, k] <= (m.z[where[i], k] if instance.stations else m.u[k]))
         add(m.u[k] <= sum(m.x[i, k] for i in data.at_k[k]))
         if k:
             add(m.u[k] <= m.u[k - 1])
-    add(sum(m.u[k] for k in range(K)) >= min(K, min_kits(instance)))
+    least = max(min_kits(instance), len(ids)) if instance.stations else min_kits(instance)
+    add(sum(m.u[k] for k in range(K)) >= min(K, least))
 
 
 def _precedence(m: Any, instance: Instance, data: _Data, K: int) -> None:
-    """Precedence and the chains' symmetry breaking (module docstring)."""
+    """Precedence and the chains' symmetry breaking (module docstring; none with several
+    stations: equal chains on two stations are not interchangeable)."""
     add = m.cons.add
     idx, ub = data.idx, data.ub
 
@@ -211,6 +276,8 @@ def _precedence(m: Any, instance: Instance, data: _Data, K: int) -> None:
 
     for a_id, b_id in reduced_edges(instance):
         before(idx[a_id], idx[b_id])
+    if instance.stations:
+        return
 
     # symmetry: interchangeable chains in lexicographic order of their kit vectors, as one
     # linear inequality (positions < K, so lex order = order of sum_j K^(L-1-j) p_{c_j}),
@@ -273,6 +340,94 @@ def _timeline(
     m.obj = pyo.Objective(expr=get_objective(objective).expression(terms), sense=pyo.minimize)
 
 
+def _station_variables(m: Any, instance: Instance, K: int, hz: float, lower: float) -> None:
+    """The station variables (module docstring): ``z``, the robot starts ``S``, the human ends
+    ``E``, the running ``F`` and ``G``, and ``C`` in ``[lower, U]``."""
+    import pyomo.environ as pyo
+
+    ids = range(len(instance.station_ids))  # station positions index the variables
+    m.z = pyo.Var(ids, range(K), domain=pyo.Binary)
+    m.S = pyo.Var(range(K), bounds=(0.0, hz))
+    m.E = pyo.Var(range(K), bounds=(0.0, hz))
+    m.F = pyo.Var(ids, range(K), bounds=(0.0, hz))
+    m.G = pyo.Var(ids, range(K), bounds=(0.0, hz))
+    m.C = pyo.Var(bounds=(max(0.0, min(lower, hz)), hz))
+
+
+def _station_objective(m: Any, instance: Instance, K: int, objective: str) -> Any:
+    """The registry's expression of ``objective`` on C, the completions ``F[s,K-1]`` and the
+    overheads ``sum_s o_H,s m_s``."""
+    ids = range(len(instance.station_ids))
+    prm = [instance.station_params[s] for s in instance.station_ids]
+    terms = ModelTerms(
+        m.C,
+        lambda: sum(m.F[s, K - 1] for s in ids),
+        lambda: sum(prm[s].kit_overhead_human * m.z[s, k] for s in ids for k in range(K)),
+    )
+    return get_objective(objective).expression(terms)
+
+
+def _station_timeline(m: Any, instance: Instance, data: _Data, K: int, hz: float) -> None:
+    """The shared robot, each station's human and trays (module docstring)."""
+    add = m.cons.add
+    prm = [instance.station_params[s] for s in instance.station_ids]
+    ids = range(len(prm))
+    big = hz + sum(data.h) + max(p.kit_overhead_human for p in prm)
+    H: list[Any] = []
+    arrive: Any = 0.0
+    for k in range(K):
+        R = data.o_r * m.u[k] + sum(data.r[i] * m.x[i, k] for i in data.at_k[k])
+        D = sum(prm[s].delivery_time * m.z[s, k] for s in ids)
+        H.append(
+            sum(prm[s].kit_overhead_human * m.z[s, k] for s in ids)
+            + sum(data.h[i] * m.x[i, k] for i in data.at_k[k])
+        )
+        add(m.S[k] >= arrive)
+        arrive = m.S[k] + R + D
+        add(m.E[k] >= arrive + H[k])
+        add(m.E[k] <= m.C)
+        for s in ids:
+            off = big * (1 - m.z[s, k])
+            add(m.F[s, k] >= m.E[k] - off)
+            add(m.G[s, k] >= m.E[k] - H[k] + prm[s].kit_overhead_human - off)
+            if k:
+                add(m.F[s, k] >= m.F[s, k - 1])
+                add(m.G[s, k] >= m.G[s, k - 1])
+                add(m.E[k] >= m.F[s, k - 1] + H[k] - off)
+    for s in ids:
+        _station_trays(m, prm[s], s, H, big)
+
+
+def _station_trays(m: Any, params: StationParams, s: int, H: list[Any], big: float) -> None:
+    """The tray rule of station ``s`` (its position): through ``G`` (the tray is back, ``o_H``
+    included) with one tray, pairwise with more."""
+    import pyomo.environ as pyo
+
+    K = len(H)
+    trays, o_h = params.tray_limit, params.kit_overhead_human
+    if trays is None:
+        return
+    add = m.cons.add
+    for k in range(1, K):
+        if trays == 1:
+            add(m.S[k] >= m.G[s, k - 1] - big * (1 - m.z[s, k]))
+            continue
+        for j in range(k):
+            f = pyo.Var(domain=pyo.Binary)
+            m.add_component(f"f_{s}_{j}_{k}", f)
+            add(sum(m.z[s, q] for q in range(j, k)) <= trays - 1 + K * f)
+            add(m.S[k] >= m.E[j] - H[j] + o_h - big * (3 - m.z[s, j] - m.z[s, k] - f))
+
+
+def model_cells(instance: Instance, K: int) -> int:
+    """The model's size in task x kit cells (:func:`..common.assignment_cells`), with several
+    stations the station and tray-pair binaries too (its size grows with them)."""
+    if not instance.stations:
+        return assignment_cells(instance, K)
+    pairs = sum(1 for p in instance.station_params.values() if (p.tray_limit or 0) >= 2)
+    return instance.n_tasks * K + len(instance.station_ids) * K * (2 + K * pairs)
+
+
 def _tray(master: Master, instance: Instance, data: _Data) -> None:
     """The area relaxation on the packing grid (the oracle's notion of "fits") and the part
     counts per (type, kit) that the cuts use."""
@@ -327,9 +482,13 @@ def add_cut(master: Master, counts: Mapping[str, int]) -> None:
 
 def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
     """Load a plan into the master's variables (a MIP start); its kits are put into the
-    canonical chain order first, so the start satisfies the symmetry constraints."""
+    canonical chain order first, so the start satisfies the symmetry constraints (several
+    stations: :func:`_set_station_start`)."""
     m = master.model
     if len(kits) > master.K:
+        return
+    if instance.stations:
+        _set_station_start(master, instance, kits)
         return
     kits = canonical_kits(instance, kits)
     where = {t: k for k, kit in enumerate(kits) for t in kit}
@@ -356,6 +515,36 @@ def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]])
         m.E[k].set_value(end, skip_validation=True)
         if trays is not None and k >= trays:
             m.S[k].set_value(start, skip_validation=True)
+    _set_cut_binaries(master, instance, kits)
+
+
+def _set_station_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
+    """The kits, stations and tray binaries of a plan (HiGHS completes the continuous
+    values)."""
+    m = master.model
+    where = {t: k for k, kit in enumerate(kits) for t in kit}
+    for (i, k), v in master.x.items():
+        v.set_value(float(where[master.ids[i]] == k), skip_validation=True)
+    station = [instance.station_ids.index(instance.station_of(kit[0])) for kit in kits]
+    for k in range(master.K):
+        if k:
+            m.u[k].set_value(float(k < len(kits)), skip_validation=True)
+        for s in range(len(instance.station_ids)):
+            m.z[s, k].set_value(float(k < len(kits) and station[k] == s), skip_validation=True)
+    for s, sid in enumerate(instance.station_ids):
+        trays = instance.station_params[sid].tray_limit
+        if trays is None or trays < 2:
+            continue
+        for k in range(1, master.K):
+            for j in range(k):
+                count = sum(1 for q in range(j, min(k, len(kits))) if station[q] == s)
+                f = getattr(m, f"f_{s}_{j}_{k}")
+                f.set_value(float(count >= trays), skip_validation=True)
+    _set_cut_binaries(master, instance, kits)
+
+
+def _set_cut_binaries(master: Master, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
+    """The cut binaries ``lam`` of a plan's kits."""
     for (t, k, c), var in master.lam.items():
         have = instance.kit_parts(kits[k]).get(t, 0) if k < len(kits) else 0
         var.set_value(float(have <= c - 1), skip_validation=True)

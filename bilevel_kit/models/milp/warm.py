@@ -1,0 +1,128 @@
+"""The incumbent of ``milp`` with several assembly stations (docs/timeline.md#several-stations;
+docs/formulations.md, "Options with several stations"): the best plan, for the run's
+objective, of the baselines, greedy-ce and the ``hint`` method, within the warm start's share
+of the time limit.
+
+Why greedy-ce: the better baseline alone was the incumbent before, and at a time limit (or
+when the model was too large to build) ``milp`` returned it, 20-24 % above greedy-ce's plan
+(issue 37: an in-tree of 90 tasks on 3 stations, 1728 s against 1434 s). The incumbent is the
+MIP start and ``C <= U``, so ``milp``'s plan is never worse than greedy-ce's; when the model
+will not be built the warm start has the whole time limit (:func:`warm_share`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from ...errors import KitDoesNotFit, UsageError
+from ...instance import Instance
+from ...objectives import get as get_objective
+from ...plan import Plan, evaluate
+from ...stations import objective_of
+from ..exact.driver import HINT_SHARE
+from .model import model_cells, model_objective
+from .solver import TOL
+
+if TYPE_CHECKING:
+    from .method import _Run
+
+#: The heuristics whose best plan is the incumbent with several stations (all take them).
+STATION_METHODS = ("single-task", "whole-assembly", "greedy-ce")
+#: Seconds per task kept back for a heuristic's run past its own ``time_limit``: greedy-ce's
+#: was +0.5-1.4 s at 1,000 tasks (:data:`..cpsat.warm.HINT_OVERRUN_S_PER_TASK`, whose 0.01 s
+#: per task left greedy-ce 0.8 s of a 10 s run on 900 tasks on 3 stations, and its plan
+#: 1,000 s above its own at 10 s).
+OVERRUN_S_PER_TASK = {"greedy-ce": 0.002}
+
+
+def check_station_hint(instance: Instance, hint: str) -> None:
+    """A ``hint`` method that does not model several stations is a one-line UsageError (exit 2)
+    with stations: its plan would be silently missing from the incumbent."""
+    from ...methods import get_method
+
+    if not instance.stations or hint == "none" or get_method(hint).supports_stations:
+        return
+    raise UsageError(
+        f"{instance.source}: milp does not use option 'hint={hint}' with several assembly "
+        f"stations ({hint} does not model them); drop it or use hint=none or a method that "
+        "supports stations (docs/timeline.md#several-stations)"
+    )
+
+
+def station_incumbent(
+    r: _Run, seed: int
+) -> tuple[list[list[str]] | None, float | None, float | None, int]:
+    """The best of :data:`STATION_METHODS` and the ``hint`` method for the objective (its
+    layouts taught to the packer), its master objective (:func:`.model.model_objective`), the
+    horizon U (:meth:`bilevel_kit.objectives.Objective.horizon`) and the kit cap K = n;
+    ``extra["hint_method"]`` names the method whose plan it is."""
+    from ..cpsat.warm import MIN_RUN, _kernels_would_compile
+
+    instance, objective, hint = r.instance, r.options.objective, r.options.hint
+    methods = STATION_METHODS + ((hint,) if hint not in ("none", *STATION_METHODS) else ())
+    end = r.budget.elapsed() + warm_share(r) * r.budget.remaining(r.margin)
+    best: tuple[float, Plan, str] | None = None
+    for name in methods:
+        if name == "greedy-ce" and best is not None and _kernels_would_compile():
+            # a compile of 15-60 s is not in the budget; bilevel_kit.solve compiles first
+            r.extra["warm_start_skipped"] = "greedy-ce: its kernels are not compiled"
+            continue
+        left = end - r.budget.elapsed() - OVERRUN_S_PER_TASK.get(name, 0.0) * instance.n_tasks
+        plan = _heuristic_plan(instance, name, seed, max(MIN_RUN, left))
+        if plan is None:
+            continue
+        value = objective_of(evaluate(instance, plan), objective)
+        if best is None or value < best[0] - TOL * max(1.0, abs(value)):
+            best = (value, plan, name)
+    if best is None:  # every task fits alone (checked before), so single-task always plans
+        raise KitDoesNotFit(f"{instance.source}: no heuristic plan for the milp incumbent")
+    _, plan, r.extra["hint_method"] = best
+    _learn(r, plan)
+    tl = evaluate(instance, plan)
+    kits = [list(k.tasks) for k in plan.kits if k.tasks]
+    upper = get_objective(objective).horizon(instance, tl)
+    return kits, model_objective(instance, tl, objective), upper, max(instance.n_tasks, len(kits))
+
+
+def warm_share(r: _Run) -> float:
+    """The share of the time left for the warm start: :data:`HINT_SHARE` of the time limit,
+    or all of it when the model of K = n positions will not be built anyway (over the memory
+    limit, or its estimated build time above :data:`..budget.BUILD_SHARE` of what the warm
+    start leaves): then the warm start's plan is the result, and greedy-ce given less time
+    than on its own would leave tasks in kits of their own (a 200-task sparse instance on 2
+    stations needs more than 10 s)."""
+    from ..budget import BUILD_SHARE, memory_refusal
+
+    spec, left = r.spec, r.budget.remaining(r.margin)
+    if left <= 0:
+        return 0.0
+    share = min(1.0, HINT_SHARE * r.budget.time_limit / left)
+    cells = model_cells(r.instance, r.instance.n_tasks)
+    what = "task x kit variables"
+    if memory_refusal(spec.owner, cells, spec.bytes_per_cell, what) is not None:
+        return 1.0
+    return 1.0 if cells * spec.build_s_per_cell > BUILD_SHARE * left * (1 - share) else share
+
+
+def _heuristic_plan(instance: Instance, name: str, seed: int, time_limit: float) -> Plan | None:
+    """The plan of the registered method ``name`` with its default options within
+    ``time_limit`` s; None when it has none or refuses the instance."""
+    from ...errors import BilevelKitError
+    from ...methods import get_method
+
+    spec = get_method(name)
+    fn = spec.load()
+    try:
+        if spec.options:
+            return fn(instance, spec.parse({}), seed=seed, time_limit=time_limit).plan
+        return fn(instance, seed=seed).plan
+    except BilevelKitError:
+        return None
+
+
+def _learn(r: Any, plan: Plan) -> None:
+    """The plan's layouts (a heuristic's, perhaps at any angle) taught to the run's packer,
+    which lays out the result's kits."""
+    for kit in plan.kits:
+        if kit.layout:
+            r.packer.learn(r.instance.kit_parts(kit.tasks), kit.layout)
