@@ -267,7 +267,10 @@ def _run(args: argparse.Namespace) -> int:
     out = args.out or _default(args)
     run: dict[str, Any] = {"quick": args.quick, "jobs": args.jobs, "seed": args.seed}
     # the Figure 6 delay cells (fig6 and horizon only)
-    grid = {"mats": getattr(args, "mats", None), "mttfs": getattr(args, "mttfs", None)}
+    grid: dict[str, Any] = {
+        "mats": getattr(args, "mats", None),
+        "mttfs": getattr(args, "mttfs", None),
+    }
     if args.experiment == "calibrate":
         res = repro.run_calibration(out, draws=args.draws, **run)
         return _report(res)
