@@ -19,21 +19,9 @@ from bilevel_kit import UsageError, load, solve
 from bilevel_kit.cli import main
 from bilevel_kit.methods import REGISTRY
 from bilevel_kit.registry import PLUGIN_GROUP, load_plugins, reset_plugins
-from bilevel_kit.sim import POLICIES, SimParams, run
+from bilevel_kit.sim import SimParams, run
 
 PLUGIN = Path(__file__).parent / "example_plugin"
-
-
-@pytest.fixture
-def pairs(monkeypatch):
-    """The example registered the way the guide says (its plugin function), then removed."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    import bk_example_plugin
-
-    bk_example_plugin.register_plugin()
-    yield "pairs"
-    REGISTRY.remove("pairs")
-    POLICIES.remove("pairs")
 
 
 @pytest.mark.parametrize("name", INSTANCES)
@@ -58,8 +46,10 @@ def test_its_options_are_checked_before_it_runs(pairs, tiny):
 def test_a_name_is_registered_once(pairs):
     import bk_example_plugin
 
+    with pytest.raises(UsageError, match="objective 'kit_handling' is already registered"):
+        bk_example_plugin.register_plugin()  # its objective comes first
     with pytest.raises(UsageError, match="method 'pairs' is already registered"):
-        bk_example_plugin.register_plugin()
+        REGISTRY.add(REGISTRY[pairs])
 
 
 def test_it_appears_in_methods_solve_and_compare(pairs, root, tmp_path, capsys):
