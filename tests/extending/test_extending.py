@@ -151,6 +151,13 @@ def test_an_installed_plugin_appears_in_the_cli(tmp_path, root):
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert "check: valid" in run.stdout and "452.78" in run.stdout
+    # its objective, with no registration in code: cpsat minimises it as it is
+    table = str(root / "instances/hrc_table.json")
+    obj = ["-m", "cpsat", "-p", "objective=kit_handling", "--check"]
+    run = subprocess.run([*cli, "solve", table, *obj], env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "kit_handling: optimal  472.78 s  bound 472.78 s  gap 0.00%" in run.stdout
+    assert "check: valid" in run.stdout
     # without the plugin on the path the name is unknown: a clear exit 2
     bare = subprocess.run(
         [*cli, "solve", str(root / "instances/hrc_table.json"), "--method", "pairs"],
