@@ -21,6 +21,13 @@ from typing import Any
 from .. import atomic
 
 
+def read_csv(path: str | Path) -> list[dict[str, str]]:
+    """A CSV file's rows as dicts of strings (UTF-8; the reader of :func:`write_csv`'s files
+    and of the committed result tables)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
 def write_csv(
     path: str | Path,
     records: Sequence[Mapping[str, Any]],

@@ -20,7 +20,6 @@ over the draws for its intervals "with calibration" (:mod:`.user_study`).
 
 from __future__ import annotations
 
-import csv
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
@@ -32,7 +31,7 @@ import numpy as np
 from .. import __version__, atomic
 from ..errors import UsageError
 from ..experiments.cells import run_cells, write_json
-from ..experiments.tables import markdown_lines, write_csv
+from ..experiments.tables import markdown_lines, read_csv, write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import load
 from ..sim import SimParams, TimingModel
@@ -144,16 +143,14 @@ def load_calibration(
             f"no calibration at {path}: run `bilevel-kit repro calibrate` (its folder is "
             "out/repro/calibration) and pass --calibration DIR, or use the committed one"
         )
-    with open(path, newline="", encoding="utf-8") as fh:
-        values = {r["name"]: r["value"] for r in csv.DictReader(fh)}
+    values = {r["name"]: r["value"] for r in read_csv(path)}
     draws: tuple[Draw, ...] = ()
     boot = base / FILES["bootstrap"]
     if boot.is_file():
-        with open(boot, newline="", encoding="utf-8") as fh:
-            draws = tuple(
-                Draw(float(r["robot_scale"]), float(r["kit_overhead_human"]), float(r["within_cv"]))
-                for r in csv.DictReader(fh)
-            )
+        draws = tuple(
+            Draw(float(r["robot_scale"]), float(r["kit_overhead_human"]), float(r["within_cv"]))
+            for r in read_csv(boot)
+        )
     cal = Calibration(
         robot_scale=float(values["robot_scale"]),
         kit_overhead_human=float(values["kit_overhead_human"]),

@@ -23,7 +23,7 @@ import numpy as np
 from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import run_cells, write_json
-from ..experiments.tables import write_csv
+from ..experiments.tables import read_csv, write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance
 from ..plots import save_figure
@@ -326,14 +326,11 @@ def _bound(cal: Calibration) -> float:
 def _f_fit(cal: Calibration) -> dict[str, Any]:
     """The F target's row of the calibration (the paper's F and the cohort's median at the
     fit), read from the calibration's folder."""
-    import csv
-
     path = Path(cal.source) / "calibration_targets.csv"
     if path.is_file():
-        with open(path, newline="", encoding="utf-8") as fh:
-            for r in csv.DictReader(fh):
-                if r["quantity"] == "F":
-                    return {"paper": float(r["paper"]), "fitted": float(r["fitted"])}
+        for r in read_csv(path):
+            if r["quantity"] == "F":
+                return {"paper": float(r["paper"]), "fitted": float(r["fitted"])}
     return {"paper": F_TARGET[1], "fitted": float("nan")}
 
 

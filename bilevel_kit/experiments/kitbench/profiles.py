@@ -12,14 +12,13 @@ A method without a valid plan on an instance is never within a factor of either 
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..tables import block_names, fill_blocks, marked_blocks
+from ..tables import block_names, fill_blocks, marked_blocks, read_csv
 from .library import Record
 
 if TYPE_CHECKING:
@@ -32,8 +31,7 @@ LEVELS = (0.01, 0.05)
 
 def read_rows(path: str | Path) -> list[dict[str, Any]]:
     """A pass's rows from its CSV: ``makespan`` a float (``None``: no plan), ``valid`` a bool."""
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
+    rows: list[dict[str, Any]] = list(read_csv(path))
     for r in rows:
         r["makespan"] = float(r["makespan"]) if r.get("makespan") else None
         r["valid"] = r.get("valid") == "True"
