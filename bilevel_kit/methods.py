@@ -27,7 +27,13 @@ from typing import Any
 from .errors import PluginError, UsageError, one_line
 from .instance import Instance
 from .interrupt import checkpoint
-from .objectives import MODEL_OBJECTIVES, OBJECTIVES, is_top_level, relative_gap
+from .objectives import (
+    MODEL_OBJECTIVES,
+    OBJECTIVES,
+    is_top_level,
+    model_objectives,
+    relative_gap,
+)
 from .options import Registered, import_target
 from .plan import Plan, Timeline, evaluate
 from .progress import Sink, reporting
@@ -121,23 +127,37 @@ class MethodSpec(Registered):
     (docs/timeline.md#several-stations); :func:`solve` refuses an instance with stations
     otherwise.
     ``objectives``: the objectives of :mod:`bilevel_kit.objectives` it minimises, its default
-    first; an ``objective`` option is held to them (docs/extending.md#adding-a-method)."""
+    first; an ``objective`` option is held to them (docs/extending.md#adding-a-method).
+    ``modelled_objectives``: it also minimises every other modelled objective of the registry
+    by the objective's model expression (``cpsat``, ``milp``), a plugin's too
+    (:meth:`objective_names`)."""
 
     options: str  # every method declares its options class
     prepare: str | None = None
     in_default: bool = True
     supports_stations: bool = False
     objectives: tuple[str, ...] = ("makespan",)
+    modelled_objectives: bool = False
+
+    def objective_names(self) -> tuple[str, ...]:
+        """The objectives it minimises: the declared ones, its default first, then (with
+        ``modelled_objectives``) the registry's other modelled ones, read now so that the
+        plugins' are among them."""
+        if not self.modelled_objectives:
+            return self.objectives
+        more = tuple(o for o in model_objectives() if o not in self.objectives)
+        return self.objectives + more
 
     def parse(self, params: Mapping[str, Any]) -> Any:
         """The options, validated (:meth:`~bilevel_kit.options.Registered.parse`), with an
-        ``objective`` option among the declared :attr:`objectives`."""
+        ``objective`` option among :meth:`objective_names`."""
         options = super().parse(params)
         chosen = getattr(options, "objective", None)
-        if isinstance(chosen, str) and chosen not in self.objectives:
+        names = self.objective_names()
+        if isinstance(chosen, str) and chosen not in names:
             raise UsageError(
                 f"method {self.name!r}: option 'objective': must be one of "
-                f"{', '.join(repr(o) for o in self.objectives)}, got {chosen!r}"
+                f"{', '.join(repr(o) for o in names)}, got {chosen!r}"
             )
         return options
 
@@ -231,11 +251,14 @@ def register(
     in_default: bool = True,
     supports_stations: bool = False,
     objectives: tuple[str, ...] = ("makespan",),
+    modelled_objectives: bool = False,
 ) -> None:
     """Add a method by import paths (``"module:function"``, ``"module:OptionsClass"``), so
     registering imports nothing; a name already registered, or an objective the registry
     (:mod:`bilevel_kit.objectives`) does not know, is a :class:`UsageError`. ``prepare``,
-    ``in_default``, ``supports_stations`` and ``objectives``: see :class:`MethodSpec`."""
+    ``in_default``, ``supports_stations``, ``objectives`` and ``modelled_objectives``: see
+    :class:`MethodSpec`. A plugin registers its own objectives first
+    (:func:`bilevel_kit.objectives.register`)."""
     unknown = [o for o in objectives if o not in OBJECTIVES]
     if unknown or not objectives:
         raise UsageError(
@@ -243,7 +266,15 @@ def register(
             f"({', '.join(OBJECTIVES)}), got {', '.join(objectives) or 'none'}"
         )
     spec = MethodSpec(
-        name, target, summary, options, prepare, in_default, supports_stations, tuple(objectives)
+        name,
+        target,
+        summary,
+        options,
+        prepare,
+        in_default,
+        supports_stations,
+        tuple(objectives),
+        modelled_objectives,
     )
     REGISTRY.add(spec)
 
@@ -482,6 +513,7 @@ register(
     prepare=COMPILE_KERNELS,  # its warm start runs greedy-ce
     supports_stations=True,
     objectives=MODEL_OBJECTIVES,
+    modelled_objectives=True,  # and a plugin's objective, by its model expression
 )
 register(
     "milp",
@@ -491,6 +523,7 @@ register(
     prepare=COMPILE_KERNELS,  # its hint and its lns fallback may run greedy-ce
     supports_stations=True,
     objectives=MODEL_OBJECTIVES,
+    modelled_objectives=True,  # and a plugin's objective, by its model expression
 )
 register(
     "bilevel-milp",

@@ -12,6 +12,9 @@ so that no module compares objective names. The checker (:mod:`bilevel_kit.valid
 brute-force tests iterate over :data:`OBJECTIVES`: an objective added here is checked
 everywhere without a special case; a method declares the ones it minimises on its spec
 (:class:`bilevel_kit.methods.MethodSpec`, docs/extending.md#adding-an-objective).
+:data:`OBJECTIVES` is a :class:`~bilevel_kit.registry.Registry` like the methods', so a
+plugin's registration function adds an objective with :func:`register`, and ``cpsat`` and
+``milp`` minimise every modelled one (:func:`model_objectives`) by its expression.
 
 The objectives (docs/timeline.md#metrics, docs/timeline.md#several-stations,
 docs/formulations.md):
@@ -39,6 +42,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
+
+from .errors import UsageError
+from .registry import Registry
 
 if TYPE_CHECKING:
     from .instance import Instance
@@ -167,6 +173,13 @@ class Objective:
         """What the exact models minimise: it, less :meth:`dropped` (docs/formulations.md)."""
         raise self._not_modelled("model expression")
 
+    def makespan_bound(self, instance: Instance, bound: float, kits: int) -> float | None:
+        """A lower bound on the makespan of every plan of a one-station ``instance`` that
+        ``bound``, a lower bound on this objective over every plan (s), implies, given that
+        every plan has at least ``kits`` kits (:func:`bilevel_kit.bounds.min_kits`); None:
+        none (the exact drivers then keep the closed-form makespan bound)."""
+        return None
+
     def dropped(self, human: Sequence[Any]) -> Any:
         """The constant the models' :meth:`expression` leaves out, from the tasks' human times
         ``human`` (s, or the model's integer grid): value = model value less it."""
@@ -240,6 +253,10 @@ class HumanIdle(Objective):
     def dropped(self, human: Sequence[Any]) -> Any:
         return sum(human)
 
+    def makespan_bound(self, instance: Instance, bound: float, kits: int) -> float | None:
+        """``C = idle + sum_i h_i + o_H m`` with ``m >= kits``."""
+        return bound + sum(human_times(instance)) + instance.kit_overhead_human * kits
+
 
 def human_times(instance: Instance) -> list[float]:
     """Every task's human time (s), in task order: what :meth:`Objective.dropped` takes."""
@@ -253,7 +270,9 @@ def _sum_completion(timeline: Timeline) -> float:
     return sum(float(m["completion"]) for m in timeline.station_metrics().values())
 
 
-_EXTRA_KEYS = (("objective_value",), ("objective_bound",), ("objective_gap",))
+#: Where a result's ``extra`` keeps an objective's value, bound and gap besides the makespan:
+#: the ``value_keys``, ``bound_keys`` and ``gap_keys`` of a new objective (a plugin's too).
+EXTRA_KEYS = (("objective_value",), ("objective_bound",), ("objective_gap",))
 
 #: What J is, in one line: printed below a list or table that first shows it (``bilevel-kit
 #: methods``, ``compare``'s status column "feasible (for J)", ``solve``'s status line). The
@@ -264,61 +283,89 @@ J_MEANING = (
     "at a time) summed over the plan's kits; lower is better, and it is not the makespan"
 )
 
-#: The registry, by name.
-OBJECTIVES: dict[str, Objective] = {
-    o.name: o
-    for o in (
-        Makespan(
-            "makespan",
-            "the makespan",
-            lambda tl: tl.makespan,
-            ("objective",),
-            ("bound",),
-            ("gap",),
-            top_level=True,
-        ),
-        SumCompletion(
-            "sum_completion", "the sum of the stations' completions", _sum_completion, *_EXTRA_KEYS
-        ),
-        HumanIdle(
-            "human_idle",
-            "the total human idle",
-            lambda tl: tl.human_idle,
-            ("objective_value",),
-            ("objective_bound", "idle_bound"),  # idle_bound: the one-station models' key
-            ("objective_gap",),
-        ),
-        Objective(
-            "expected_makespan",
-            "the sample-average makespan over the scenarios of the human times",
-            None,  # a function of the plan and its scenarios, not of one timeline
-            ("expected_makespan",),
-            ("expected_makespan_bound",),
-            ("expected_makespan_gap",),
-            # a bound speaks of the result's own scenarios; another method's plan is held
-            # against it only on the same scenarios (bilevel_kit/stochastic.py)
-            bound_holds_for_every_plan=False,
-            modelled=False,
-            rel_tol=1e-4,  # scenario times rounded down on a 1 ms grid (docs/formulations.md)
-            scenarios=True,
-        ),
-        Objective(
-            "J",
-            "the paper's objective J",
-            None,
-            ("plan_objective_J",),
-            ("plan_objective_J_bound",),
-            ("plan_objective_J_gap",),
-            gap=_signed_gap,
-            modelled=False,
-            rel_tol=1e-6,
-            meaning=J_MEANING,
-        ),
-    )
-}
+#: The registry, by name: the built-in objectives, then those plugins add (:func:`register`).
+OBJECTIVES: Registry[Objective] = Registry("objective")
+_BUILTINS = (
+    Makespan(
+        "makespan",
+        "the makespan",
+        lambda tl: tl.makespan,
+        ("objective",),
+        ("bound",),
+        ("gap",),
+        top_level=True,
+    ),
+    SumCompletion(
+        "sum_completion", "the sum of the stations' completions", _sum_completion, *EXTRA_KEYS
+    ),
+    HumanIdle(
+        "human_idle",
+        "the total human idle",
+        lambda tl: tl.human_idle,
+        ("objective_value",),
+        ("objective_bound", "idle_bound"),  # idle_bound: the one-station models' key
+        ("objective_gap",),
+    ),
+    Objective(
+        "expected_makespan",
+        "the sample-average makespan over the scenarios of the human times",
+        None,  # a function of the plan and its scenarios, not of one timeline
+        ("expected_makespan",),
+        ("expected_makespan_bound",),
+        ("expected_makespan_gap",),
+        # a bound speaks of the result's own scenarios; another method's plan is held
+        # against it only on the same scenarios (bilevel_kit/stochastic.py)
+        bound_holds_for_every_plan=False,
+        modelled=False,
+        rel_tol=1e-4,  # scenario times rounded down on a 1 ms grid (docs/formulations.md)
+        scenarios=True,
+    ),
+    Objective(
+        "J",
+        "the paper's objective J",
+        None,
+        ("plan_objective_J",),
+        ("plan_objective_J_bound",),
+        ("plan_objective_J_gap",),
+        gap=_signed_gap,
+        modelled=False,
+        rel_tol=1e-6,
+        meaning=J_MEANING,
+    ),
+)
+for _builtin in _BUILTINS:
+    # set directly: the paper's "J" predates the registry's lower-case names (registry.py)
+    OBJECTIVES[_builtin.name] = _builtin
 
-#: The objectives ``cpsat`` and ``milp`` take (``-p objective=``), the makespan first.
-MODEL_OBJECTIVES: tuple[str, ...] = tuple(n for n, o in OBJECTIVES.items() if o.modelled)
+#: The built-in objectives ``cpsat`` and ``milp`` take (``-p objective=``), the makespan
+#: first; :func:`model_objectives` adds the plugins'.
+MODEL_OBJECTIVES: tuple[str, ...] = tuple(o.name for o in _BUILTINS if o.modelled)
+
+
+def register(objective: Objective) -> None:
+    """Add ``objective`` (a plugin's, docs/extending.md#adding-an-objective) under its name:
+    a lower-case name not yet taken (:data:`bilevel_kit.registry.NAME_PATTERN`), else a
+    :class:`~bilevel_kit.errors.UsageError`. A modelled one must define its closed-form
+    bound, horizon and model expression (a subclass of :class:`Objective`)."""
+    if not isinstance(objective, Objective):
+        raise UsageError(f"objective {objective!r} is not a bilevel_kit.objectives.Objective")
+    if objective.modelled:
+        missing = [
+            m
+            for m in ("bound", "horizon", "expression")
+            if getattr(type(objective), m) is getattr(Objective, m)
+        ]
+        if missing:
+            raise UsageError(
+                f"objective {objective.name!r} is modelled but does not define {', '.join(missing)}"
+            )
+    OBJECTIVES.add(objective)
+
+
+def model_objectives() -> tuple[str, ...]:
+    """Every objective the exact models minimise by its expression (:attr:`Objective.modelled`),
+    the plugins' too, the makespan first: what ``cpsat`` and ``milp`` take."""
+    return tuple(n for n, o in OBJECTIVES.items() if o.modelled)
 
 
 def extra_claims(

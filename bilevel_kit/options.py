@@ -9,7 +9,9 @@ a solver.
 
 A field's ``metadata`` may hold ``help`` (one line for ``bilevel-kit methods NAME``), ``min``
 and ``max`` (inclusive bounds for numbers), and ``choices`` (allowed strings, when the type is
-a plain ``str``). ``typing.Literal`` types give their choices themselves.
+a plain ``str``: a collection, or a function returning one, called when a value is parsed, so
+that a list a plugin adds to, the objectives' registry say, is read when it is complete).
+``typing.Literal`` types give their choices themselves.
 """
 
 from __future__ import annotations
@@ -77,10 +79,18 @@ def describe(cls: type) -> list[OptionInfo]:
             default = f.default_factory()
         else:
             default = None
-        out.append(
-            OptionInfo(f.name, _type_name(hints[f.name]), default, f.metadata.get("help", ""))
-        )
+        allowed = allowed_choices(f.metadata)
+        kind = _type_name(hints[f.name]) if allowed is None else " | ".join(map(repr, allowed))
+        out.append(OptionInfo(f.name, kind, default, f.metadata.get("help", "")))
     return out
+
+
+def allowed_choices(meta: Mapping[str, Any]) -> tuple[str, ...] | None:
+    """A field's ``choices`` (None: any string), a function's called now."""
+    allowed = meta.get("choices")
+    if allowed is None:
+        return None
+    return tuple(allowed() if callable(allowed) else allowed)
 
 
 def _coerce(value: Any, tp: Any, meta: Mapping[str, Any], where: str) -> Any:
@@ -151,10 +161,10 @@ def _coerce(value: Any, tp: Any, meta: Mapping[str, Any], where: str) -> Any:
     if tp is str:
         if not isinstance(value, str):
             value = str(value)
-        allowed: Any = meta.get("choices")
+        allowed = allowed_choices(meta)
         if allowed is not None and value not in allowed:
             raise UsageError(
-                f"{where}: must be one of {', '.join(map(str, allowed))}, got {value!r}"
+                f"{where}: must be one of {', '.join(map(repr, allowed))}, got {value!r}"
             )
         return value
     return value  # structured values (Python API only) are passed as given

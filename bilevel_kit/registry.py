@@ -1,10 +1,11 @@
-"""Named registries of methods and policies, and the plugins that add to them.
+"""Named registries of methods, objectives and policies, and the plugins that add to them.
 
-Why: a researcher's own method or simulation policy, in their own package, should appear in
-``bilevel-kit solve``/``compare``/``simulate`` without editing this package. A package
-declares a function in the entry-point group ``bilevel_kit.plugins``; the first time a
+Why: a researcher's own method, objective or simulation policy, in their own package, should
+appear in ``bilevel-kit solve``/``compare``/``simulate`` without editing this package. A
+package declares a function in the entry-point group ``bilevel_kit.plugins``; the first time a
 registry is listed, or asked for a name it does not hold, every such function is called once,
-and it registers its methods (:func:`bilevel_kit.methods.register`) and policies
+and it registers its objectives (:func:`bilevel_kit.objectives.register`), methods
+(:func:`bilevel_kit.methods.register`) and policies
 (``bilevel_kit.sim.registry.POLICIES.register``). docs/extending.md#plugins shows one.
 
 A plugin that fails to load (an import error, a name that is already taken or not valid,

@@ -50,8 +50,8 @@ def _notes(spec: MethodSpec) -> str:
     notes = [] if spec.in_default else ["not in compare's default set: name it"]
     if spec.supports_stations:
         notes.append("stations")
-    if spec.objectives != ("makespan",):
-        notes.append(f"objectives: {', '.join(spec.objectives)}")
+    if (names := spec.objective_names()) != ("makespan",):
+        notes.append(f"objectives: {', '.join(names)}")
     return f" [{'; '.join(notes)}]" if notes else ""
 
 

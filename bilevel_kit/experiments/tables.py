@@ -3,7 +3,8 @@
 CSV: every key of every row (in first-seen order) is a column; lists and dicts are written as
 JSON; the file is written atomically (:mod:`bilevel_kit.atomic`). Markdown: a header row, a
 ``|---|`` rule and one line per row (:func:`markdown_lines`), used by ``compare`` and the paper
-reproductions alike.
+reproductions alike. Generated blocks of a documentation page, between ``<!-- TAG:NAME -->``
+and ``<!-- /TAG:NAME -->``, are rewritten in place (:func:`marked_blocks`, :func:`fill_blocks`).
 """
 
 from __future__ import annotations
@@ -12,11 +13,19 @@ import csv
 import io
 import json
 import math
-from collections.abc import Collection, Mapping, Sequence
+import re
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from .. import atomic
+
+
+def read_csv(path: str | Path) -> list[dict[str, str]]:
+    """A CSV file's rows as dicts of strings (UTF-8; the reader of :func:`write_csv`'s files
+    and of the committed result tables)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
 
 
 def write_csv(
@@ -141,3 +150,24 @@ def format_table(records: Sequence[dict[str, Any]]) -> str:
 def format_markdown(records: Sequence[dict[str, Any]]) -> str:
     """A Markdown table of compare records."""
     return "\n".join(markdown_lines(*table_rows(records))) + "\n"
+
+
+def marked_blocks(tag: str) -> re.Pattern[str]:
+    """The generated blocks ``<!-- TAG:NAME -->`` ... ``<!-- /TAG:NAME -->`` of a page; groups:
+    the opening line, NAME, the body and the closing marker."""
+    return re.compile(rf"(<!-- {tag}:(\w+) -->\n)(.*?)(<!-- /{tag}:\2 -->)", re.S)
+
+
+def fill_blocks(blocks: re.Pattern[str], text: str, render: Callable[[str], str | None]) -> str:
+    """``text`` with each block's body replaced by ``render(NAME)`` (None: left as it is)."""
+
+    def fill(m: re.Match[str]) -> str:
+        body = render(m.group(2))
+        return m.group(0) if body is None else m.group(1) + body + m.group(4)
+
+    return blocks.sub(fill, text)
+
+
+def block_names(blocks: re.Pattern[str], text: str) -> list[str]:
+    """The NAME of each block of ``text``, in order."""
+    return [m.group(2) for m in blocks.finditer(text)]

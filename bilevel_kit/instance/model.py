@@ -96,6 +96,14 @@ class Supply:
     mttf: float | None = None
     repair_time: float = DEFAULT_REPAIR_TIME
 
+    @property
+    def cycle(self) -> float:
+        """The mean time between arrivals, failures included: ``MAT * (1 + repair / MTTF)`` (a
+        failure costs the repair time and starts the wait over; exact for this process)."""
+        if self.mttf is None:
+            return self.mat
+        return self.mat * (1.0 + self.repair_time / self.mttf)
+
 
 @dataclass(frozen=True)
 class AssemblyStation:

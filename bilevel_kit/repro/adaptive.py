@@ -24,8 +24,6 @@ difference", never "no loss".
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 import statistics
 import time
@@ -45,7 +43,15 @@ from ..instance import load
 from ..sim import SimParams, TimingModel, effective_instance, make_policy, simulate
 from ..sim.timing import PAPER_CV
 from .calibrated import load_calibration
-from .common import FIG6_REPAIR, FIG6_SUPPLIED, FIG6_UNITS, load_instance, paper_idle
+from .common import (
+    FIG6_REPAIR,
+    FIG6_SUPPLIED,
+    FIG6_UNITS,
+    config_digest,
+    load_instance,
+    paper_idle,
+)
+from .stats import t_interval
 from .verdict import GAP, side, verdict
 
 FIXED, ADAPTIVE, ORACLE = "optimized", "optimized-adaptive", "optimized-oracle"
@@ -87,11 +93,8 @@ class AdaptiveCell:
         return "none" if self.mat is None else f"MAT {self.mat:g}, MTTF {self.mttf:g}"
 
     def key(self) -> str:
-        cfg = {k: v for k, v in asdict(self).items() if k != "instance"}
-        cfg["instance_sha1"] = hashlib.sha1(Path(self.instance).read_bytes()).hexdigest()[:12]
-        blob = json.dumps(cfg, sort_keys=True, default=str).encode()
         label = "nodelay" if self.mat is None else f"mat{self.mat:g}_mttf{self.mttf:g}"
-        return f"{label}_{self.group}__{hashlib.sha1(blob).hexdigest()[:10]}"
+        return f"{label}_{self.group}__{config_digest(self)}"
 
     def params(self, factor: float) -> SimParams:
         supplied = {t: self.mat for t in FIG6_SUPPLIED} if self.mat is not None else {}
@@ -134,17 +137,6 @@ def adaptive_cell(cell: AdaptiveCell) -> dict[str, Any]:
 BOOTSTRAP = 2000
 
 
-def _t_interval(x: np.ndarray) -> tuple[float, float, float]:
-    """Mean, and the 95 % t-interval of the mean of paired differences ``x``."""
-    from scipy.stats import t
-
-    n, m = len(x), float(x.mean())
-    if n < 2:
-        return m, m, m
-    half = float(t.ppf(0.975, n - 1) * x.std(ddof=1) / math.sqrt(n))
-    return m, m - half, m + half
-
-
 def share_interval(
     gap: np.ndarray, closed: np.ndarray, rng: np.random.Generator, resamples: int = BOOTSTRAP
 ) -> tuple[float | None, float | None]:
@@ -173,8 +165,8 @@ def summarize(record: Mapping[str, Any]) -> list[dict[str, Any]]:
         v = {p: np.asarray(runs[p][metric], float) for p in POLICIES}
         gap_runs, closed_runs = v[FIXED] - v[ORACLE], v[FIXED] - v[ADAPTIVE]
         n = len(gap_runs)
-        gap, gap_lo, gap_hi = _t_interval(gap_runs)
-        closed, closed_lo, closed_hi = _t_interval(closed_runs)
+        gap, gap_lo, gap_hi = t_interval(gap_runs)
+        closed, closed_lo, closed_hi = t_interval(closed_runs)
         rng = np.random.default_rng(zlib.crc32(f"{delay}|{cell['group']}|{metric}".encode()))
         share = closed / gap if side(gap_lo, gap_hi) > 0 else None
         lo, hi = share_interval(gap_runs, closed_runs, rng) if share is not None else (None, None)

@@ -20,9 +20,6 @@ over the draws for its intervals "with calibration" (:mod:`.user_study`).
 
 from __future__ import annotations
 
-import csv
-import hashlib
-import json
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
@@ -33,11 +30,11 @@ import numpy as np
 
 from .. import __version__, atomic
 from ..errors import UsageError
-from ..experiments.cells import is_failed, run_cells, write_json
-from ..experiments.tables import markdown_lines, write_csv
+from ..experiments.cells import run_cells, write_json
+from ..experiments.tables import markdown_lines, read_csv, write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import load
-from ..sim import SimParams, SimulationError, TimingModel
+from ..sim import SimParams, TimingModel
 from ..sim.timing import WithinSubjectModel
 from .calibration import (
     CALIBRATION,
@@ -64,8 +61,10 @@ from .common import (
     SINGLE,
     STUDY_DELIVERY,
     WHOLE,
+    config_digest,
     file_digest,
     load_instance,
+    succeeded,
 )
 from .stats import anova_rm
 
@@ -144,16 +143,14 @@ def load_calibration(
             f"no calibration at {path}: run `bilevel-kit repro calibrate` (its folder is "
             "out/repro/calibration) and pass --calibration DIR, or use the committed one"
         )
-    with open(path, newline="", encoding="utf-8") as fh:
-        values = {r["name"]: r["value"] for r in csv.DictReader(fh)}
+    values = {r["name"]: r["value"] for r in read_csv(path)}
     draws: tuple[Draw, ...] = ()
     boot = base / FILES["bootstrap"]
     if boot.is_file():
-        with open(boot, newline="", encoding="utf-8") as fh:
-            draws = tuple(
-                Draw(float(r["robot_scale"]), float(r["kit_overhead_human"]), float(r["within_cv"]))
-                for r in csv.DictReader(fh)
-            )
+        draws = tuple(
+            Draw(float(r["robot_scale"]), float(r["kit_overhead_human"]), float(r["within_cv"]))
+            for r in read_csv(boot)
+        )
     cal = Calibration(
         robot_scale=float(values["robot_scale"]),
         kit_overhead_human=float(values["kit_overhead_human"]),
@@ -188,10 +185,7 @@ class CalibrationDraw:
     learning: float
 
     def key(self) -> str:
-        cfg = {k: v for k, v in asdict(self).items() if k != "instance"}
-        cfg["instance_sha1"] = file_digest(self.instance)
-        blob = json.dumps(cfg, sort_keys=True).encode()
-        return f"draw{self.draw:03d}__{hashlib.sha1(blob).hexdigest()[:10]}"
+        return f"draw{self.draw:03d}__{config_digest(self)}"
 
 
 def calibration_draw(cell: CalibrationDraw) -> dict[str, Any]:
@@ -330,9 +324,7 @@ def run_calibration(
         progress=progress,
         desc="calibration draws",
     )
-    failed = [r for r in records if is_failed(r)]
-    if failed:
-        raise SimulationError(f"{len(failed)} bootstrap draw(s) failed: {failed[0]['error']}")
+    succeeded(records, "bootstrap draw(s)")
     result = _result(cal, design, records, setup, path, inst.name)
     result["wall_s"] = time.perf_counter() - t0
     _write(Path(out_dir), result)

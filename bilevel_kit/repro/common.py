@@ -5,14 +5,18 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import sys
 from collections.abc import Mapping, Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from ..errors import UsageError
+from ..experiments.cells import is_failed
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
+from ..sim import SimulationError
 
 #: What ``bilevel_kit.repro`` re-exports from here.
 __all__ = [
@@ -150,6 +154,26 @@ def file_digest(path: str | Path) -> str:
     """The first 12 hex digits of a file's SHA-1: cell keys and the calibration's provenance
     name an instance by its content, not its path."""
     return hashlib.sha1(Path(path).read_bytes()).hexdigest()[:12]
+
+
+def config_digest(cell: Any) -> str:
+    """The first 10 hex digits of the SHA-1 of a cell dataclass's configuration, its
+    ``instance`` file named by content (:func:`file_digest`), not by path: what a resumable
+    cell's key ends with, so a moved checkout still resumes and a changed file is a new cell."""
+    cfg = {k: v for k, v in asdict(cell).items() if k != "instance"}
+    cfg["instance_sha1"] = file_digest(cell.instance)
+    blob = json.dumps(cfg, sort_keys=True, default=str).encode()
+    return hashlib.sha1(blob).hexdigest()[:10]
+
+
+def succeeded(records: Sequence[dict[str, Any]], what: str) -> Sequence[dict[str, Any]]:
+    """``records`` when no cell failed, else a :class:`~bilevel_kit.sim.SimulationError`
+    counting the failed ``what`` (e.g. "study(ies)") with the first one's error: a study's
+    numbers are all its cells' or none."""
+    failed = [r for r in records if is_failed(r)]
+    if failed:
+        raise SimulationError(f"{len(failed)} {what} failed: {failed[0]['error']}")
+    return records
 
 
 def announce(what: str, cells: Sequence[Any], cell_dir: Path, detail: str) -> None:

@@ -10,8 +10,6 @@ whose file is missing, and the cells run wherever the sweep session says (docs/c
 
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -47,7 +45,7 @@ from .common import (
     SINGLE,
     WHOLE,
     announce,
-    file_digest,
+    config_digest,
     load_instance,
     paper_idle,
     participant_seeds,
@@ -83,10 +81,7 @@ class Fig6Cell:
     def key(self) -> str:
         """A stable file name: the grid point plus a digest of the whole configuration and
         of the instance file's content (not its path, so a moved checkout still resumes)."""
-        cfg = {k: v for k, v in asdict(self).items() if k != "instance"}
-        cfg["instance_sha1"] = file_digest(self.instance)
-        blob = json.dumps(cfg, sort_keys=True, default=str)
-        return f"{self.label}__{hashlib.sha1(blob.encode()).hexdigest()[:10]}"
+        return f"{self.label}__{config_digest(self)}"
 
     def sim_params(self, policy: str | None = None) -> SimParams:
         """The run parameters of the cell; for ``policy``, its options only if it takes any

@@ -3,9 +3,9 @@ values alike)."""
 
 from __future__ import annotations
 
-import csv
-from pathlib import Path
 from typing import Any
+
+from ..experiments.tables import read_csv
 
 
 def f(x: Any, nd: int = 1) -> str:
@@ -28,6 +28,5 @@ def nd_of(quantity: str) -> int:
     return 2 if "F(2, 34)" in quantity else 1
 
 
-def read_rows(path: str | Path) -> list[dict[str, str]]:
-    with open(path, newline="", encoding="utf-8") as fh:
-        return list(csv.DictReader(fh))
+#: A CSV file's rows as dicts of strings.
+read_rows = read_csv

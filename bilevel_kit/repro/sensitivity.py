@@ -17,21 +17,25 @@ random numbers), so the settings differ by their effect, not by their draws.
 
 from __future__ import annotations
 
-import hashlib
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from ..experiments.cells import is_failed, run_cells
+from ..experiments.cells import run_cells
 from ..heuristics.cross_entropy import CEParams
 from ..instance import DEFAULT_WEIGHTS, load
-from ..sim import SimulationError
 from ..sim.timing import WithinSubjectModel
 from .calibrated import Calibration
 from .calibration import CALIBRATION, EVALUATION, calibrate, draw_cohort, study_params, study_runs
-from .common import CALIBRATION_STUDIES, DEFAULT_TARGETS, F_TARGET, PAPER_N, file_digest
+from .common import (
+    CALIBRATION_STUDIES,
+    DEFAULT_TARGETS,
+    F_TARGET,
+    PAPER_N,
+    config_digest,
+    succeeded,
+)
 from .predictions import PREDICTED, inside_count, prediction_table, summaries_of
 
 #: Delivery times and tray rules of the what-if fits.
@@ -66,11 +70,8 @@ class SettingCell:
     quick: bool = False
 
     def key(self) -> str:
-        cfg = {k: v for k, v in asdict(self).items() if k != "instance"}
-        cfg["instance_sha1"] = file_digest(self.instance)
-        blob = json.dumps(cfg, sort_keys=True, default=str).encode()
         slug = "".join(ch if ch.isalnum() else "_" for ch in self.label)[:40]
-        return f"{self.group}_{slug}__{hashlib.sha1(blob).hexdigest()[:10]}"
+        return f"{self.group}_{slug}__{config_digest(self)}"
 
 
 def _fit(cell: SettingCell, inst: Any, ce: CEParams | None) -> tuple[Any, WithinSubjectModel]:
@@ -181,10 +182,7 @@ def run_settings(
     records = run_cells(
         cells, setting_cell, cell_dir=cell_dir, jobs=jobs, progress=progress, desc=desc
     )
-    failed = [r for r in records if is_failed(r)]
-    if failed:
-        raise SimulationError(f"{len(failed)} setting(s) failed: {failed[0]['error']}")
-    return [row for r in records for row in r["rows"]]
+    return [row for r in succeeded(records, "setting(s)") for row in r["rows"]]
 
 
 def predicted_only(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:

@@ -49,6 +49,7 @@ from ..plan import Kit, Timeline
 from ..sim import SimParams, TimingModel, simulate
 from ..sim.stations import station_policies
 from .stations_stats import capacity, idle_floor, per_unit, served_rows
+from .stats import t_interval
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -213,22 +214,6 @@ def station_idle(timeline: Timeline) -> list[float]:
     return [max(0.0, 1.0 - work[s] / (end[s] - first[s])) for s in first]
 
 
-def _t_interval(
-    x: Sequence[float], low: float = 0.0, high: float = math.inf
-) -> tuple[float, float, float]:
-    """Mean and its 95 % t-interval (the mean twice with one value), cut to the metric's
-    possible range ``[low, high]``: a t-interval of a few values near a bound crosses it (an
-    idle share of -1.6 %, a station count of -0.36), which no run can give."""
-    from scipy.stats import t
-
-    a = np.asarray(x, float)
-    m = float(a.mean())
-    if len(a) < 2:
-        return m, m, m
-    half = float(t.ppf(0.975, len(a) - 1) * a.std(ddof=1) / math.sqrt(len(a)))
-    return m, max(low, m - half), min(high, m + half)
-
-
 #: each metric of ``stations.csv``: its scale to the reported unit and its largest value
 _METRICS = (
     ("throughput", 1.0, math.inf),
@@ -250,7 +235,7 @@ def summarize(records: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
         row: dict[str, Any] = {"line": line, "delay": delay, "policy": policy, "stations": s}
         row["reps"] = len(rs)
         for metric, scale, top in _METRICS:
-            m, lo, hi = _t_interval([scale * float(r[metric]) for r in rs], 0.0, top)
+            m, lo, hi = t_interval([scale * float(r[metric]) for r in rs], 0.0, top)
             row.update({metric: round(m, 2), f"{metric}_low": round(lo, 2)})
             row[f"{metric}_high"] = round(hi, 2)
         row["wall_s"] = round(sum(float(r["wall_s"]) for r in rs), 2)

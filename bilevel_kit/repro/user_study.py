@@ -22,12 +22,12 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import is_failed, run_cells, write_json
-from ..experiments.tables import write_csv
+from ..experiments.cells import run_cells, write_json
+from ..experiments.tables import read_csv, write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance
 from ..plots import save_figure
-from ..sim import SimParams, SimulationError
+from ..sim import SimParams
 from ..sim.timing import WithinSubjectModel
 from .calibrated import QUICK_DRAWS, Calibration, load_calibration
 from .calibration import EVALUATION, Cohort, draw_cohort, resampled, study_params, study_runs
@@ -40,6 +40,7 @@ from .common import (
     READOFF,
     STUDY_DELIVERY,
     load_instance,
+    succeeded,
 )
 from .predictions import (
     FITTED,
@@ -196,10 +197,8 @@ def _study_rows(
         for j, (params, design) in enumerate(specs)
     ]
     records = run_cells(cells, study_cell, jobs=jobs, progress=progress, desc=desc)
-    failed = [r for r in records if is_failed(r)]
-    if failed:
-        raise SimulationError(f"{len(failed)} study(ies) failed: {failed[0]['error']}")
-    return [row for r in sorted(records, key=lambda r: r["study"]) for row in r["rows"]]
+    ok = succeeded(records, "study(ies)")
+    return [row for r in sorted(ok, key=lambda r: r["study"]) for row in r["rows"]]
 
 
 def run_user_study(
@@ -327,14 +326,11 @@ def _bound(cal: Calibration) -> float:
 def _f_fit(cal: Calibration) -> dict[str, Any]:
     """The F target's row of the calibration (the paper's F and the cohort's median at the
     fit), read from the calibration's folder."""
-    import csv
-
     path = Path(cal.source) / "calibration_targets.csv"
     if path.is_file():
-        with open(path, newline="", encoding="utf-8") as fh:
-            for r in csv.DictReader(fh):
-                if r["quantity"] == "F":
-                    return {"paper": float(r["paper"]), "fitted": float(r["fitted"])}
+        for r in read_csv(path):
+            if r["quantity"] == "F":
+                return {"paper": float(r["paper"]), "fitted": float(r["fitted"])}
     return {"paper": F_TARGET[1], "fitted": float("nan")}
 
 

@@ -130,9 +130,7 @@ class Feeder:
         failure costs the repair time and starts over: ``E = MAT * (1 + repair / MTTF)``
         (exact for this process). While broken, add the repair time still to go.
         """
-        s = self.supply
-        up = s.mat * (1.0 + s.repair_time / s.mttf) if s.mttf is not None else s.mat
-        return self.repair_remaining() + up
+        return self.repair_remaining() + self.supply.cycle
 
     def stats(self) -> dict[str, float | int]:
         """Counters for tests and run records (JSON-serialisable)."""

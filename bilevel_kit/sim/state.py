@@ -146,8 +146,7 @@ class SimState:
         short = count - self.available.get(part_type, UNLIMITED)
         if short <= 0:
             return 0.0
-        s = self.supply[part_type]
-        cycle = s.mat * (1.0 + s.repair_time / s.mttf) if s.mttf is not None else s.mat
+        cycle = self.supply[part_type].cycle  # (Supply.cycle)
         return self.expected_arrival[part_type] + (short - 1) * cycle
 
     def policy_state(self) -> PolicyState:

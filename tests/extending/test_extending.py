@@ -19,21 +19,9 @@ from bilevel_kit import UsageError, load, solve
 from bilevel_kit.cli import main
 from bilevel_kit.methods import REGISTRY
 from bilevel_kit.registry import PLUGIN_GROUP, load_plugins, reset_plugins
-from bilevel_kit.sim import POLICIES, SimParams, run
+from bilevel_kit.sim import SimParams, run
 
 PLUGIN = Path(__file__).parent / "example_plugin"
-
-
-@pytest.fixture
-def pairs(monkeypatch):
-    """The example registered the way the guide says (its plugin function), then removed."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    import bk_example_plugin
-
-    bk_example_plugin.register_plugin()
-    yield "pairs"
-    REGISTRY.remove("pairs")
-    POLICIES.remove("pairs")
 
 
 @pytest.mark.parametrize("name", INSTANCES)
@@ -58,8 +46,10 @@ def test_its_options_are_checked_before_it_runs(pairs, tiny):
 def test_a_name_is_registered_once(pairs):
     import bk_example_plugin
 
+    with pytest.raises(UsageError, match="objective 'kit_handling' is already registered"):
+        bk_example_plugin.register_plugin()  # its objective comes first
     with pytest.raises(UsageError, match="method 'pairs' is already registered"):
-        bk_example_plugin.register_plugin()
+        REGISTRY.add(REGISTRY[pairs])
 
 
 def test_it_appears_in_methods_solve_and_compare(pairs, root, tmp_path, capsys):
@@ -161,6 +151,13 @@ def test_an_installed_plugin_appears_in_the_cli(tmp_path, root):
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert "check: valid" in run.stdout and "452.78" in run.stdout
+    # its objective, with no registration in code: cpsat minimises it as it is
+    table = str(root / "instances/hrc_table.json")
+    obj = ["-m", "cpsat", "-p", "objective=kit_handling", "--check"]
+    run = subprocess.run([*cli, "solve", table, *obj], env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "kit_handling: optimal  472.78 s  bound 472.78 s  gap 0.00%" in run.stdout
+    assert "check: valid" in run.stdout
     # without the plugin on the path the name is unknown: a clear exit 2
     bare = subprocess.run(
         [*cli, "solve", str(root / "instances/hrc_table.json"), "--method", "pairs"],

@@ -13,6 +13,7 @@ import pytest
 from bilevel_kit.cli import main
 from bilevel_kit.interrupt import signal_guard
 from bilevel_kit.methods import REGISTRY, MethodOutput, register
+from bilevel_kit.objectives import OBJECTIVES
 from bilevel_kit.registry import PLUGIN_GROUP, check_name, load_plugins, reset_plugins
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -38,6 +39,11 @@ def bad_name():
 
 
 def partial():
+    from dataclasses import replace
+
+    from bilevel_kit import objectives
+
+    objectives.register(replace(objectives.OBJECTIVES["sum_completion"], name="partial_obj"))
     register("partial-ok", "bad_plugins:nothing", "registered, then the plugin fails", OPTIONS)
     raise ValueError("first line\\nsecond line")
 
@@ -98,6 +104,7 @@ def test_a_broken_registration_is_one_line_and_skipped(plugins, capsys):
     assert "is not valid" in err
     # the failed plugin's registration was taken back; the good plugin's methods stay
     assert "partial-ok" not in REGISTRY and "a b/../x\n" not in REGISTRY
+    assert "partial_obj" not in OBJECTIVES  # an objective too
     assert all(m in REGISTRY for m in METHODS) and "cpsat" in REGISTRY
 
 

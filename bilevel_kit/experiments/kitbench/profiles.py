@@ -12,13 +12,13 @@ A method without a valid plan on an instance is never within a factor of either 
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..tables import block_names, fill_blocks, marked_blocks, read_csv
 from .library import Record
 
 if TYPE_CHECKING:
@@ -31,8 +31,7 @@ LEVELS = (0.01, 0.05)
 
 def read_rows(path: str | Path) -> list[dict[str, Any]]:
     """A pass's rows from its CSV: ``makespan`` a float (``None``: no plan), ``valid`` a bool."""
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
+    rows: list[dict[str, Any]] = list(read_csv(path))
     for r in rows:
         r["makespan"] = float(r["makespan"]) if r.get("makespan") else None
         r["valid"] = r.get("valid") == "True"
@@ -145,26 +144,23 @@ def profile_figure(
     return fig
 
 
-_BLOCK = re.compile(
-    r"(<!-- kitbench-profile:(\w+) -->\n)(.*?)(<!-- /kitbench-profile:\2 -->)", re.S
-)
+_BLOCK = marked_blocks("kitbench-profile")
 
 
 def render_profile_blocks(text: str, records: Sequence[Record], results: str | Path) -> str:
     """``text`` with every ``kitbench-profile:LABEL`` block rendered by :func:`profile_text`
     from ``results/kitbench_LABEL.csv`` (its time limit: the label's leading number)."""
 
-    def fill(m: re.Match[str]) -> str:
-        label = m.group(2)
+    def render(label: str) -> str:
         limit = float(re.match(r"\d+", label).group(0))  # type: ignore[union-attr]
         rows = read_rows(Path(results) / f"kitbench_{label}.csv")
-        return m.group(1) + profile_text(rows, records, limit) + "\n" + m.group(4)
+        return profile_text(rows, records, limit) + "\n"
 
-    return _BLOCK.sub(fill, text)
+    return fill_blocks(_BLOCK, text, render)
 
 
 def profile_blocks_in(text: str) -> list[str]:
-    return [m.group(2) for m in _BLOCK.finditer(text)]
+    return block_names(_BLOCK, text)
 
 
 __all__ = [

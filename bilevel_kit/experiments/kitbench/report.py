@@ -8,12 +8,11 @@ never drift from ``index.csv``.
 
 from __future__ import annotations
 
-import re
 import statistics
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..tables import markdown_lines
+from ..tables import block_names, fill_blocks, markdown_lines, marked_blocks
 from .library import SHARES, Record, trays_text
 
 #: The size steps of the size table: (label, largest task count in the step).
@@ -191,20 +190,18 @@ BLOCKS: dict[str, Callable[[Sequence[Record]], str]] = {
     "sizes": sizes_markdown,
     "status": status_markdown,
 }
-_BLOCK = re.compile(r"(<!-- kitbench:(\w+) -->\n)(.*?)(<!-- /kitbench:\2 -->)", re.S)
+_BLOCK = marked_blocks("kitbench")
 
 
 def render_blocks(text: str, records: Sequence[Record]) -> str:
     """``text`` with every ``kitbench:NAME`` block rendered from ``records``."""
 
-    def fill(m: re.Match[str]) -> str:
-        render = BLOCKS.get(m.group(2))
-        if render is None:
-            return m.group(0)
-        return m.group(1) + render(records) + m.group(4)
+    def render(name: str) -> str | None:
+        block = BLOCKS.get(name)
+        return None if block is None else block(records)
 
-    return _BLOCK.sub(fill, text)
+    return fill_blocks(_BLOCK, text, render)
 
 
 def blocks_in(text: str) -> list[str]:
-    return [m.group(2) for m in _BLOCK.finditer(text)]
+    return block_names(_BLOCK, text)

@@ -59,12 +59,13 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
-from ...bounds import best_bound, min_kits
+from ...bounds import best_bound, min_kits, objective_extra
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import Objective as ObjectiveSpec
 from ...objectives import get as get_objective
+from ...objectives import model_objectives
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -96,7 +97,6 @@ if TYPE_CHECKING:
     from .live import Live as LiveProgress
 
 TrayMode = Literal["auto", "embedded", "benders"]
-Objective = Literal["makespan", "sum_completion", "human_idle"]
 Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
@@ -124,8 +124,12 @@ class ScheduleOptions:
             "(several stations: Benders)"
         },
     )
-    objective: Objective = field(
-        default="makespan", metadata={"help": "makespan, (stations) sum_completion or human_idle"}
+    objective: str = field(
+        default="makespan",
+        metadata={  # the registry's modelled objectives, a plugin's too (checked when parsed)
+            "help": "makespan, (stations) sum_completion, human_idle, or a plugin's objective",
+            "choices": model_objectives,
+        },
     )
     time_resolution: float = field(
         default=0.1,
@@ -610,7 +614,7 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
     closed = best_bound(instance)
     lower_s = None if state.lower is None else round(state.lower * sc.res, 9)  # >= 1e-4
     any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
-    idle_bound = None
+    obj_bound = obj_axis = None  # another objective's model bounds (s), every plan / 0-90
     if ctx.minimised.is_makespan:
         strong = known_bound(ctx)  # the closed forms and models.relax: every plan
         bound_s = strong if any_s is None else max(strong, any_s)  # every plan (module doc)
@@ -623,33 +627,33 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
         )
         extra.update(bound_axis_aligned=bound_axis, optimal_axis_aligned=optimal_axis)
     else:
-        idle_axis = None
-        if sc.exact and mdl is not None:  # the model's bounds on human idle, in s
+        if sc.exact and mdl is not None:  # the model's bounds on its objective, in s
             if state.lower is not None:
-                idle_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
+                obj_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
             if state.lower_any is not None:
-                idle_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
-        w_min = (
-            sum(instance.human_time(i) for i in ctx.ids)
-            + min_kits(instance) * instance.kit_overhead_human
+                obj_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
+        # the makespan bound the objective's bound implies (human idle: C = idle + work)
+        implied = (
+            None
+            if obj_bound is None
+            else ctx.minimised.makespan_bound(instance, obj_bound, min_kits(instance))
         )
-        bound_s = closed if idle_bound is None else max(closed, idle_bound + w_min)
+        bound_s = closed if implied is None else max(closed, implied)
         optimal_axis = state.proven and sc.exact and state.scope is not None
         optimal = optimal_axis and state.scope == ANY_ANGLE
-        extra.update(
-            idle_bound=idle_bound,
-            idle_bound_axis_aligned=idle_axis,
-            optimal_axis_aligned=optimal_axis,
-        )
+        extra["optimal_axis_aligned"] = optimal_axis
     extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
     missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
         return report.finish(None, Status.UNKNOWN, bound_s)
+    if not ctx.minimised.is_makespan:  # its value, bound and gap (the registry's keys)
+        lows, proofs = (obj_bound, obj_axis), (optimal, bool(optimal_axis))
+        extra.update(objective_extra(instance, plan, ctx.objective, lows, proofs))
     if ctx.live is not None:  # the final numbers, as the result reports them
         makespan = ctx.minimised.is_makespan
         ctx.live.tracker.report(
-            incumbent=ctx.minimised.value(real), bound=bound_s if makespan else idle_bound
+            incumbent=ctx.minimised.value(real), bound=bound_s if makespan else obj_bound
         )
     extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
     if sc.rel:  # the model's makespan is the released one (module docstring)

@@ -29,9 +29,10 @@ The proven bound of :mod:`bilevel_kit.models.relax` takes at most 5 % of the tim
 bound on the makespan in seconds (the master's best bound when every cut is proven, never below
 the closed-form bounds). The run's steps are those of :mod:`..exact.driver`; the ``extra`` keys,
 and where they differ from ``cpsat``'s, are listed in docs/formulations.md, "One driver for
-cpsat and milp" (with stations also ``objective_value``, ``objective_bound``,
-``objective_gap``: :func:`.model.objective_extra`). With stations the incumbent is the best of
-the baselines', greedy-ce's and the ``hint`` method's plans (:mod:`.warm`).
+cpsat and milp" (for an objective besides the makespan also ``objective_value``,
+``objective_bound``, ``objective_gap``: :func:`.model.objective_extra`). With stations the
+incumbent is the best of the baselines', greedy-ce's and the ``hint`` method's plans
+(:mod:`.warm`).
 
 On the table (12 tasks) both exact models take about 1-3 s; on 5 tables (60 tasks) HiGHS
 needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py).
@@ -48,7 +49,7 @@ from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
-from ...objectives import Objective, human_times
+from ...objectives import Objective, human_times, model_objectives
 from ...objectives import get as get_objective
 from ...plan import Kit, Plan, evaluate
 from ...stations import objective_of
@@ -108,9 +109,13 @@ class MilpOptions:
             "(cbc, glpk, gurobi, scip ...)"
         },
     )
-    objective: Literal["makespan", "sum_completion", "human_idle"] = field(
+    objective: str = field(
         default="makespan",
-        metadata={"help": "minimise makespan, (stations) sum of completions, or human idle"},
+        metadata={  # the registry's modelled objectives, a plugin's too (checked when parsed)
+            "help": "minimise makespan, (stations) sum of completions, human idle, or a "
+            "plugin's objective",
+            "choices": model_objectives,
+        },
     )
     tray: Literal["auto", "benders"] = field(
         default="auto",
@@ -444,7 +449,7 @@ def _conclude(
         r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
     r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
     # docs/timeline.md#several-stations: its value, bound and gap not the result's own
-    if r.instance.stations and not objective.top_level:
+    if not objective.top_level:
         proofs = (optimal, bool(r.extra["optimal_axis_aligned"]))
         lows = (lower_any, lower)
         r.extra.update(objective_extra(r.instance, plan, objective.name, lows, proofs))
@@ -482,12 +487,11 @@ def _makespan_bound(
         bound = closed if lower is None else max(closed, lower)
     elif instance.stations:  # the master's bound is on another objective: objective_extra
         bound = closed
-    else:
-        idle_lb = None if lower is None else lower - objective.dropped(human_times(instance))
-        extra["idle_bound"] = idle_lb
-        bound = closed
-        if lower is not None:  # C = idle + sum h + o_H m >= idle_lb + sum h + o_H m_min
-            bound = max(closed, lower + instance.kit_overhead_human * min_kits(instance))
+    else:  # the makespan bound its bound implies (human idle: C = idle + work)
+        obj_lb = None if lower is None else lower - objective.dropped(human_times(instance))
+        m_min = min_kits(instance)
+        implied = None if obj_lb is None else objective.makespan_bound(instance, obj_lb, m_min)
+        bound = closed if implied is None else max(closed, implied)
     if bound > real.makespan:  # only float noise of the solver can do this
         bound = real.makespan
     extra.update(plan_extra(plan, real, bound, closed, lower))
