@@ -12,7 +12,7 @@ will not be built the warm start has the whole time limit (:func:`warm_share`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance
@@ -23,8 +23,9 @@ from ..exact.driver import HINT_SHARE
 from .model import model_cells, model_objective
 from .solver import TOL
 
-if TYPE_CHECKING:
-    from .method import _Run
+#: The milp driver's run state (``.method._Run``); not imported, so that ``method`` may import
+#: this module without a cycle (tests/core/test_imports.py).
+_Run = Any
 
 #: The heuristics whose best plan is the incumbent with several stations (all take them).
 STATION_METHODS = ("single-task", "whole-assembly", "greedy-ce")
