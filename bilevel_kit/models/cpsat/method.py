@@ -403,7 +403,11 @@ class _Cpsat:
         return None if state is None else _proven_without_model(self.ctx, state, self.report)
 
     def cells(self) -> int:
-        return assignment_cells(self.instance, self.K)
+        """The task x kit cells; with stations also the station x kit cells and the position
+        pairs of the stations with two trays or more (:mod:`.station_model`)."""
+        K, sc = self.K, self.sc
+        pairs = sum(K * (K - 1) // 2 for t in sc.st_trays if t is not None and t >= 2)
+        return assignment_cells(self.instance, K) + len(sc.st_d) * K + pairs
 
     def hand_off(self, state: State) -> State:
         """``state``, or the better plan the LNS finds from it in the time left (makespan
