@@ -17,10 +17,12 @@ from bilevel_kit.models.cpsat.scaling import (
     released_makespan,
     scale_times,
     scaled_makespan,
+    scaled_objective,
     scaled_timeline,
 )
 from bilevel_kit.models.lns.state import kit_times, tail_response, window_edge
 from bilevel_kit.plan import Kit, Plan, evaluate
+from bilevel_kit.stations import objective_of
 
 MANY = settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -49,6 +51,29 @@ def test_scaled_timeline_is_the_evaluator_on_an_exact_grid(case, empty):
         assert close(arrive * sc.res, kt.arrive)
         assert close(end * sc.res, kt.human_end)
     assert close(scaled_makespan(sc, kits + [[]] * empty) * sc.res, tl.makespan)
+
+
+@MANY
+@given(timeline_cases(max_stations=3, grid=True), st.integers(0, 3))
+def test_scaled_timeline_with_stations_is_the_reference(case, empty):
+    """One to three stations (declared or not) on an exact grid: every kit's robot start,
+    arrival and human end are those of the independent reference timeline
+    (tests/reference_timeline.py), and the makespan, the sum of completions and the human
+    idle (the model's expression plus its dropped constant) the evaluator's."""
+    inst, ids, kits, tl = _case(case)
+    sc = scale_times(inst, 0.1)
+    assert sc.exact
+    ref = reference(inst, ids)
+    rows = scaled_timeline(sc, kits + [[]] * empty)
+    for (start, arrive, end), kt in zip(rows, ref.kits, strict=False):
+        assert close(start * sc.res, kt.robot_start)
+        assert close(arrive * sc.res, kt.arrive)
+        assert close(end * sc.res, kt.human_end)
+    assert close(scaled_makespan(sc, kits) * sc.res, tl.makespan)
+    done = objective_of(tl, "sum_completion")  # (one station: the makespan)
+    assert close(scaled_objective(sc, kits, "sum_completion") * sc.res, done)
+    idle = (scaled_objective(sc, kits, "human_idle") - sum(sc.h)) * sc.res
+    assert close(idle, tl.human_idle, 1e-7)
 
 
 @MANY

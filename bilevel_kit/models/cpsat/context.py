@@ -39,6 +39,16 @@ class Model:
     counts: dict[tuple[str, int], Any] = field(default_factory=dict)
     cut_lits: dict[tuple[str, int, int], Any] = field(default_factory=dict)
     n_cuts: int = 0
+    #: Several stations only (:mod:`.station_model`): ``z[s][k]``, the running ends ``F[s][k]``,
+    #: each position's human work ``H_k`` and the one-tray stations' ``G[s][k]``.
+    z: list[list[Any]] = field(default_factory=list)
+    last: list[list[Any]] = field(default_factory=list)
+    human: list[Any] = field(default_factory=list)
+    back: dict[int, list[Any]] = field(default_factory=dict)
+    #: Several stations only: each task's kit ``p_i`` and order encoding ``y[i][k]`` (hinted).
+    order: tuple[list[Any], list[list[Any]]] = ((), ())  # type: ignore[assignment]
+    #: Several stations only: each task's parts (type, count), for the counts' hints.
+    parts: list[tuple[tuple[str, int], ...]] = field(default_factory=list)
 
 
 class Live(Protocol):

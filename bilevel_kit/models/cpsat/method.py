@@ -28,6 +28,9 @@ into account, each kit lists its tasks in release order, the closed-form shortcu
 the release bound of :func:`.model.release_bound` is added; ``extra['release_makespan']`` is
 the model's makespan (on the grid), on which ``gap``, ``bound`` and ``optimal`` are.
 
+**Several stations** (docs/formulations.md, "Several stations"): the same run and model, its
+station part in :mod:`.station_model`, the station-specific steps in :mod:`.station_run`.
+
 **Trays.** The instance's tray limit is a constraint of the model (:mod:`.model`), of its
 scaled timeline (:mod:`.scaling`) and of every hint.
 
@@ -55,14 +58,14 @@ driver for cpsat and milp".
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
 from ...bounds import best_bound, min_kits, objective_extra
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
-from ...methods import MethodOutput, Status, gap
+from ...methods import MethodOutput, Status, gap, require_stations_support
 from ...objectives import Objective as ObjectiveSpec
 from ...objectives import get as get_objective
 from ...objectives import model_objectives
@@ -84,12 +87,13 @@ from ..common import (
 from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import improve
-from ..exact.station_options import HONOURED, Refused, check_station_options, declare
+from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
 from .model import build, canonical, release_bound
 from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
+from .station_run import station_baselines, station_claims, station_hand_off
 from .tray import embed_scope, tray_mode
 from .warm import MIN_RUN, best_heuristic_plan
 
@@ -119,10 +123,7 @@ class ScheduleOptions:
     workers: int = field(default=2, metadata={"help": "CP-SAT worker threads", "min": 1})
     tray: TrayMode = field(
         default="auto",
-        metadata={
-            "help": "tray packing: embedded in the model, by Benders cuts, or auto "
-            "(several stations: Benders)"
-        },
+        metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
     )
     objective: str = field(
         default="makespan",
@@ -155,7 +156,7 @@ class ScheduleOptions:
         default="lns",
         metadata={
             "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: a model over the memory limit is refused)"
+            "(several stations: lns returns the plan, it models one station)"
         },
     )
 
@@ -170,8 +171,8 @@ class CpsatOptions(ScheduleOptions):
     hint: str = field(
         default="auto",
         metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce; "
-            "several stations: of single-task, whole-assembly), a method name, or none"
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), "
+            "a method name, or none"
         },
     )
 
@@ -180,29 +181,9 @@ class CpsatOptions(ScheduleOptions):
         check_hint(self.hint, ("auto", "none"))
 
 
-#: What the station model (:mod:`.stations`) does with each option (docs/formulations.md,
-#: "Options with several stations"); every option is declared (:func:`declare`).
-STATION_OPTIONS = declare(
-    CpsatOptions,
-    {
-        "workers": HONOURED,
-        "objective": HONOURED,
-        "log": HONOURED,
-        "tray": Refused("its station model checks the kits by Benders cuts", also=("benders",)),
-        "time_resolution": Refused(
-            "its station model works on the coarsest exact grid of 1, 0.5, 0.25, 0.2, 0.1, "
-            "0.05, 0.01 or 0.001 s"
-        ),
-        "refine_times": Refused("its station model always looks for an exact time scale"),
-        "pack_resolution": Refused("its station model packs on the 1 mm grid"),
-        "fallback": Refused(
-            "its station model has no LNS hand-off: a model over the memory limit is refused"
-        ),
-        "hint": Refused(
-            "its station model starts from the better of single-task and whole-assembly"
-        ),
-    },
-)
+#: What the model does with each option on several stations (docs/formulations.md, "Options
+#: with several stations"): every option is honoured (:func:`declare` checks each is declared).
+STATION_OPTIONS = declare(CpsatOptions, {f.name: HONOURED for f in fields(CpsatOptions)})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -218,14 +199,11 @@ def cpsat(
     time_limit: float | None = None,
 ) -> MethodOutput:
     """Registered method ``cpsat``: :func:`run` warm-started from the plan of ``options.hint``
-    (module docstring). Several assembly stations: :mod:`.stations`, with the options of
-    :data:`STATION_OPTIONS`."""
+    (module docstring). Several assembly stations are the same run on the same model (its
+    station part: :mod:`.station_model`), every option honoured (:data:`STATION_OPTIONS`)."""
     check_station_options(instance, "cpsat", options, STATION_OPTIONS)
-    if instance.stations:
-        from .stations import solve_stations
-
-        return solve_stations(instance, options, seed=seed, time_limit=time_limit, one=cpsat)
-    if get_objective(options.objective).makespan_with_one_station:  # e.g. sum_completion
+    one = len(instance.station_ids) == 1
+    if one and get_objective(options.objective).makespan_with_one_station:  # sum_completion
         options = replace(options, objective="makespan")
     objective = get_objective(options.objective)
     budget = Budget(time_limit)
@@ -234,12 +212,14 @@ def cpsat(
     hint_tl = HINT_SHARE * budget.time_limit
     live = progress.tracker(options.objective)
     live.report(bound=_closed_bound(instance, objective), stage="warm start")
-    if objective.is_makespan and _closed_form_optimal(instance, budget):
+    kw: dict[str, Any] = {"seed": seed, "time_limit": hint_tl, "objective": options.objective}
+    if objective.is_makespan and one and _closed_form_optimal(instance, budget):
         pass  # the run proves a quick plan optimal at once: no warm start needed
     elif options.hint == "auto":
-        plan, source = best_heuristic_plan(instance, seed=seed, time_limit=hint_tl)
+        plan, source = best_heuristic_plan(instance, **kw)
     elif options.hint != "none":
-        plan, source = best_heuristic_plan(instance, (options.hint,), seed=seed, time_limit=hint_tl)
+        require_stations_support(instance, options.hint)  # one line, exit 2
+        plan, source = best_heuristic_plan(instance, (options.hint,), **kw)
         if source is None:
             raise UsageError(f"cpsat: hint method {options.hint!r} gave no plan")
     if plan is not None and live.active:
@@ -334,12 +314,12 @@ def run(
     deterministic: bool = False,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
-    docstring); ``time_limit`` (None: 60 s) covers everything, packing included. One station
-    only: several are the registered method's (:func:`cpsat`, :mod:`.stations`)."""
-    if instance.stations:  # this model would ignore them (and claim a false optimum)
+    docstring); ``time_limit`` (None: 60 s) covers everything, packing included. Several
+    stations: :mod:`.station_model` and :mod:`.station_run`, without release times."""
+    if len(instance.station_ids) > 1 and releases:
         raise UsageError(
-            f"{instance.source}: cpsat's solve/run entry models one assembly station; run the "
-            "method cpsat (bilevel_kit.solve) for several (docs/timeline.md#several-stations)"
+            f"{instance.source}: cpsat models release times with one assembly station only "
+            "(docs/timeline.md#several-stations)"
         )
     stretch = packing_oracle.SAFETY_NET if deterministic else 1.0
     budget = Budget(time_limit, keep_back=KEEP_BACK, stretch=stretch)
@@ -423,19 +403,31 @@ class _Cpsat:
         return None if state is None else _proven_without_model(self.ctx, state, self.report)
 
     def cells(self) -> int:
-        return assignment_cells(self.instance, self.K)
+        """The task x kit cells; with stations also the station x kit cells and the position
+        pairs of the stations with two trays or more (:mod:`.station_model`)."""
+        K, sc = self.K, self.sc
+        pairs = sum(K * (K - 1) // 2 for t in sc.st_trays if t is not None and t >= 2)
+        return assignment_cells(self.instance, K) + len(sc.st_d) * K + pairs
 
     def hand_off(self, state: State) -> State:
         """``state``, or the better plan the LNS finds from it in the time left (makespan
-        objective without release times, which the LNS does not model; not in a reproducible
-        run, ``deterministic``, whose result must not depend on the clock)."""
+        objective without release times, which the LNS does not model; with stations, which
+        it does not model either, greedy-ce's plan in the time left when better:
+        :func:`.station_run.station_hand_off`; not in a reproducible run, ``deterministic``,
+        whose result must not depend on the clock)."""
         ctx = self.ctx
         assert state.kits is not None
-        plan = _plan_of(ctx, state.kits, None, ctx.packer)
         self.extra["improved_by"] = None
-        if not ctx.minimised.is_makespan or any(ctx.sc.rel) or ctx.instance.stations:
-            return state
         if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
+            return state
+        plan = _plan_of(ctx, state.kits, None, ctx.packer)
+        if ctx.instance.stations:
+            found = station_hand_off(ctx, plan, self.seed, self.extra)
+            if found is None:
+                return state
+            kits, layouts = found
+            return State(kits, scaled_objective(ctx.sc, kits, ctx.objective), layouts=layouts)
+        if not ctx.minimised.is_makespan or any(ctx.sc.rel):
             return state
         bound, left = known_bound(ctx), ctx.left()
         better = improve(
@@ -467,7 +459,9 @@ def _context(
 ) -> Context:
     """The run's context, with the interchangeable chains (symmetry breaking)."""
     n = instance.n_tasks
-    sig = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
+    sig: list[Any] = [(sc.r[i], sc.h[i], tuple(sorted(instance.tasks[i].parts))) for i in range(n)]
+    if sc.station:  # chains are interchangeable on one station only
+        sig = [(*sig[i], sc.station[i]) for i in range(n)]
     groups = chain_groups_idx(n, _edges(instance), sig)
     extra["symmetric_chains"] = sum(len(g) for g in groups)
     ctx = Context(instance, sc, options.objective, groups, packer, budget, options.pack_resolution)
@@ -591,18 +585,45 @@ def _incumbent(
         if all(packer.fits([ids[i] for i in k]) for k in hk):
             candidates.append(hk)
             extra["hint_used"] = True
-    if ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
+    if ctx.sc.station:  # several stations: the baselines (a quick plan would mix stations)
+        candidates += station_baselines(instance)
+    elif ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
         qp = closed_form_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
         if qp is not None:  # optimal by the closed-form bound: the run ends at once
             return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
-    # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
-    qp = quick_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.next(0.1)))
-    if qp is not None:
-        candidates.append([[idx[t] for t in k] for k in qp])
+    if not ctx.sc.station:
+        # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
+        qp = quick_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.next(0.1)))
+        if qp is not None:
+            candidates.append([[idx[t] for t in k] for k in qp])
     if not candidates:
         return None
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
     return canonical(best, ctx.groups)
+
+
+def _objective_claims(
+    ctx: Context, mdl: Model | None, state: State, closed: float, extra: dict[str, Any]
+) -> tuple[float, bool, float | None, float | None]:
+    """One station, an objective besides the makespan: the makespan bound its model bound
+    implies (:meth:`~bilevel_kit.objectives.Objective.makespan_bound`), whether the plan is
+    optimal, and the model's bounds on the objective (s; every plan, 0/90 degrees)."""
+    sc, instance = ctx.sc, ctx.instance
+    obj_bound = obj_axis = None
+    if sc.exact and mdl is not None:  # the model's bounds on its objective, in s
+        if state.lower is not None:
+            obj_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
+        if state.lower_any is not None:
+            obj_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
+    implied = (
+        None
+        if obj_bound is None
+        else ctx.minimised.makespan_bound(instance, obj_bound, min_kits(instance))
+    )
+    bound_s = closed if implied is None else max(closed, implied)
+    optimal_axis = state.proven and sc.exact and state.scope is not None
+    extra["optimal_axis_aligned"] = optimal_axis
+    return bound_s, optimal_axis and state.scope == ANY_ANGLE, obj_bound, obj_axis
 
 
 def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
@@ -626,29 +647,19 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
             real.makespan <= bound_s + 1e-6 and not sc.rel
         )
         extra.update(bound_axis_aligned=bound_axis, optimal_axis_aligned=optimal_axis)
+    elif sc.station:  # several stations: the objective's own bound (docs/formulations.md)
+        bound_s, optimal = closed, station_claims(ctx, plan, state, extra)
+        obj_bound, lower_s = extra["objective_bound"], None  # (lower: not on the makespan)
     else:
-        if sc.exact and mdl is not None:  # the model's bounds on its objective, in s
-            if state.lower is not None:
-                obj_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
-            if state.lower_any is not None:
-                obj_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
-        # the makespan bound the objective's bound implies (human idle: C = idle + work)
-        implied = (
-            None
-            if obj_bound is None
-            else ctx.minimised.makespan_bound(instance, obj_bound, min_kits(instance))
-        )
-        bound_s = closed if implied is None else max(closed, implied)
-        optimal_axis = state.proven and sc.exact and state.scope is not None
-        optimal = optimal_axis and state.scope == ANY_ANGLE
-        extra["optimal_axis_aligned"] = optimal_axis
+        bound_s, optimal, obj_bound, obj_axis = _objective_claims(ctx, mdl, state, closed, extra)
     extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
     missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"
         return report.finish(None, Status.UNKNOWN, bound_s)
-    if not ctx.minimised.is_makespan:  # its value, bound and gap (the registry's keys)
-        lows, proofs = (obj_bound, obj_axis), (optimal, bool(optimal_axis))
+    if not ctx.minimised.is_makespan and not sc.station:  # the registry's keys
+        lows = (obj_bound, obj_axis)
+        proofs = (optimal, bool(extra["optimal_axis_aligned"]))
         extra.update(objective_extra(instance, plan, ctx.objective, lows, proofs))
     if ctx.live is not None:  # the final numbers, as the result reports them
         makespan = ctx.minimised.is_makespan

@@ -1,5 +1,9 @@
 r"""The CP-SAT schedule model (docs/formulations.md), on the integer times of :mod:`.scaling`.
 
+One station is the S = 1 case: with several stations :mod:`.station_model` replaces the
+timeline, bounds and objective below (the assignment, used kits, chains and tray are these);
+with one, nothing of it is built.
+
 **Variables.** Kit positions k = 1..K (K <= n, the number of tasks; trimmed by an upper bound,
 see :mod:`.method`). ``x[i,k]`` = task i is in kit k, ``y[i,k] = [p_i <= k]`` its order
 encoding, ``p_i = sum_k k x[i,k]`` its kit, ``u_k`` = kit k is used. Task i can only be in the
@@ -85,11 +89,19 @@ def build(
     from ortools.sat.python import cp_model
 
     m = cp_model.CpModel()
-    x, p = _assignment(m, instance, K)
+    x, p, y = _assignment(m, instance, K)
     used = _used_kits(m, instance, x, K)
     for group in groups:
         for c1, c2 in itertools.pairwise(group):
             add_lex_leq(m, [p[i] for i in c1], [p[i] for i in c2])
+    if sc.station:  # several stations: their variables, timeline and objective
+        from .station_model import build_stations
+
+        out = build_stations(m, instance, sc, x, used, upper, objective)
+        out.order = (p, y)  # (hinted: a complete hint, :func:`.station_model.hint_stations`)
+        out.parts = [tuple(t.parts) for t in instance.tasks]
+        _tray(instance, out, embedded, pack_res)
+        return out
     start, arrive, end = _timeline(m, sc, x, used, K, upper)
     C = end[-1]
     m.add(_closed_form_bound(instance, sc, K) <= C)
@@ -114,8 +126,11 @@ def build(
     return out
 
 
-def _assignment(m: Any, instance: Instance, K: int) -> tuple[list[dict[int, Any]], list[Any]]:
-    """``x[i][k]`` and the kit ``p_i`` of every task, with precedence on the reduced graph."""
+def _assignment(
+    m: Any, instance: Instance, K: int
+) -> tuple[list[dict[int, Any]], list[Any], list[list[Any]]]:
+    """``x[i][k]``, the kit ``p_i`` of every task and the order encoding ``y[i][k]``, with
+    precedence on the reduced graph."""
     n = instance.n_tasks
     idx = instance.index
     ub = kit_positions(instance, K)  # p_i <= n - |descendants(i)|: every later kit needs a task
@@ -139,7 +154,7 @@ def _assignment(m: Any, instance: Instance, K: int) -> tuple[list[dict[int, Any]
         m.add(p[ia] <= p[ib])
         for k in range(min(ub[ia], ub[ib]) - 1):
             m.add_implication(y[ib][k], y[ia][k])
-    return x, p
+    return x, p, y
 
 
 def _used_kits(m: Any, instance: Instance, x: list[dict[int, Any]], K: int) -> list[Any]:
@@ -378,7 +393,11 @@ def hint(
         for k, v in xs.items():
             m.add_hint(v, where.get(i) == k)
     padded = [list(kits[k]) if k < len(kits) else [] for k in range(mdl.K)]
-    for k, (start, arrive, end) in enumerate(scaled_timeline(sc, padded)):
+    if sc.station:
+        from .station_model import hint_stations
+
+        hint_stations(mdl, sc, padded)
+    for k, (start, arrive, end) in enumerate([] if sc.station else scaled_timeline(sc, padded)):
         m.add_hint(mdl.used[k], bool(padded[k]))
         if mdl.start and mdl.start[k] is not None:
             m.add_hint(mdl.start[k], start)

@@ -22,6 +22,8 @@ def strong_bound(ctx: Context, upper_s: float | None, extra: dict[str, Any]) -> 
     ``upper_s``: the incumbent's makespan in s, :func:`..exact.driver.proven_bound`)."""
     if not is_top_level(ctx.objective) or any(ctx.sc.rel):  # a bound on the makespan
         return
+    if ctx.instance.stations:  # the kit-count LP models one station
+        return
     ctx.proven = proven_bound(ctx.instance, ctx.budget, upper_s, extra)
 
 
@@ -66,7 +68,10 @@ def kit_cap(ctx: Context, upper: int | None) -> int:
         return K
     K = proven_kit_cap(ctx, upper, K)
     kit = (sc.o_r, sc.d, sc.o_h, tray_wait(sc))  # one tray: the robot waits o_H per kit
-    for slack, per_kit in kit_slacks(upper, (sc.r, sc.h), kit, end_tasks(ctx.instance)):
+    slacks = kit_slacks(upper, (sc.r, sc.h), kit, end_tasks(ctx.instance))
+    if sc.station:  # several stations: the robot's alone (sc.d, sc.o_h: the least), the
+        slacks = slacks[:1]  # humans work in parallel (docs/timeline.md#several-stations)
+    for slack, per_kit in slacks:
         if per_kit > 0:
             K = min(K, max(1, slack // per_kit))
     return K

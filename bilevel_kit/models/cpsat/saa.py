@@ -66,7 +66,7 @@ def _build(instance: Instance, scenarios: np.ndarray, resolution: float) -> Mode
     m = cp_model.CpModel()
     K = instance.n_tasks
     sc = scale_times(instance, resolution, refine=False)
-    x, _ = _assignment(m, instance, K)
+    x, _, _ = _assignment(m, instance, K)
     used = _used_kits(m, instance, x, K)
     timelines = [
         _timeline(m, replace(sc, h=[math.floor(v / sc.res + 1e-9) for v in row]), x, used, K, None)

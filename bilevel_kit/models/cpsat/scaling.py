@@ -57,6 +57,12 @@ class Scaled:
     o_h: int
     trays: int | None = None
     rel: list[int] = field(default_factory=list)
+    #: Several stations (docs/timeline.md#several-stations; empty: one): each task's station
+    #: (an index into ``station_ids``) and per station its delivery, human overhead and trays.
+    station: list[int] = field(default_factory=list)
+    st_d: list[int] = field(default_factory=list)
+    st_oh: list[int] = field(default_factory=list)
+    st_trays: list[int | None] = field(default_factory=list)
 
 
 def scale_times(
@@ -74,6 +80,9 @@ def scale_times(
         + [instance.human_time(i) for i in ids]
         + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
     )
+    params = [instance.station_params[s] for s in instance.station_ids]
+    if instance.stations:  # their own delivery times and overheads are on the grid too
+        values += [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
     res, exact = resolution, False
     for q in REFINE if refine else (1,):
         cand = resolution / q
@@ -88,17 +97,26 @@ def scale_times(
     def sc(v: float) -> int:
         return round(v / res) if exact else math.floor(v / res + 1e-9)
 
-    return Scaled(
+    out = Scaled(
         res=res,
         exact=exact,
         r=[sc(instance.robot_time(i)) for i in ids],
         h=[sc(instance.human_time(i)) for i in ids],
-        d=sc(instance.delivery_time),
+        # one station: the instance's, or its declared one's; several: the least (the values
+        # the one-station bounds may use as a relaxation) and no tray limit
+        d=min(sc(p.delivery_time) for p in params),
         o_r=sc(instance.kit_overhead_robot),
-        o_h=sc(instance.kit_overhead_human),
-        trays=instance.tray_limit,
+        o_h=min(sc(p.kit_overhead_human) for p in params),
+        trays=params[0].tray_limit if len(params) == 1 else None,
         rel=[sc(v) for v in rel] if any(rel) else [],
     )
+    if len(params) > 1:
+        ids = list(instance.station_ids)
+        out.station = [ids.index(t.station) for t in instance.tasks]
+        out.st_d = [sc(p.delivery_time) for p in params]
+        out.st_oh = [sc(p.kit_overhead_human) for p in params]
+        out.st_trays = [p.tray_limit for p in params]
+    return out
 
 
 def released(instance: Instance, releases: Mapping[str, float] | None) -> list[float]:
@@ -131,7 +149,10 @@ def pick_end(sc: Scaled, start: int, kit: Sequence[int]) -> int:
 def scaled_timeline(sc: Scaled, kits: Sequence[Sequence[int]]) -> list[tuple[int, int, int]]:
     """Robot start, arrival and human end of every kit position on scaled times, with the tray
     rule (docs/timeline.md); empty kits (unused trailing positions) take no time and need no
-    tray, which is exactly the least solution of the model's constraints on them."""
+    tray, which is exactly the least solution of the model's constraints on them. Several
+    stations: :func:`stations_timeline`."""
+    if sc.station:
+        return stations_timeline(sc, kits)[0]
     out: list[tuple[int, int, int]] = []
     hs: list[int] = []  # human starts
     arrive = end = 0
@@ -148,8 +169,37 @@ def scaled_timeline(sc: Scaled, kits: Sequence[Sequence[int]]) -> list[tuple[int
     return out
 
 
+def stations_timeline(
+    sc: Scaled, kits: Sequence[Sequence[int]]
+) -> tuple[list[tuple[int, int, int]], dict[int, int]]:
+    """:func:`scaled_timeline` with several stations (docs/timeline.md#several-stations; a
+    kit's station is its tasks'), and each station's completion (the end of its last kit).
+    An unused position takes no time: its start, arrival and end are the previous arrival,
+    the least solution of the model's constraints on it."""
+    out: list[tuple[int, int, int]] = []
+    starts: dict[int, list[int]] = {}  # each station's human starts
+    done: dict[int, int] = {}  # each station's last end
+    arrive = 0
+    for kit in kits:
+        if not kit:
+            out.append((arrive, arrive, arrive))
+            continue
+        s = sc.station[kit[0]]
+        mine = starts.setdefault(s, [])
+        start, trays = arrive, sc.st_trays[s]
+        if trays is not None and len(mine) >= trays:  # its T_s-th previous kit's tray is back
+            start = max(start, mine[-trays] + sc.st_oh[s])
+        arrive = pick_end(sc, start, kit) + sc.st_d[s]
+        mine.append(max(arrive, done.get(s, 0)))
+        done[s] = mine[-1] + sc.st_oh[s] + sum(sc.h[i] for i in kit)
+        out.append((start, arrive, done[s]))
+    return out, done
+
+
 def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
     """The timeline of docs/timeline.md on scaled integer times (kits of task indices)."""
+    if sc.station:
+        return max(stations_timeline(sc, kits)[1].values(), default=0)
     tl = scaled_timeline(sc, kits)
     return tl[-1][2] if tl else 0
 
@@ -158,6 +208,13 @@ def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) 
     """Scaled objective of a plan, as the model minimises it (the registry's
     :meth:`~bilevel_kit.objectives.Objective.expression`: the human idle without its
     constant -sum h)."""
+    if sc.station:
+        done = stations_timeline(sc, kits)[1]
+        overhead = sum(sc.st_oh[sc.station[k[0]]] for k in kits if k)
+        terms = ModelTerms(
+            max(done.values(), default=0), lambda: sum(done.values()), lambda: overhead
+        )
+        return get_objective(objective).expression(terms)
     c = scaled_makespan(sc, kits)
     terms = ModelTerms.one_station(c, lambda: sc.o_h * len(kits))
     return get_objective(objective).expression(terms)

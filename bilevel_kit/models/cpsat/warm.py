@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 from ...instance import Instance
 from ...plan import Plan, evaluate
+from ...stations import objective_of
 
 #: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
 HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
@@ -30,8 +31,9 @@ def best_heuristic_plan(
     methods: Sequence[str] = HINT_METHODS,
     seed: int = 0,
     time_limit: float | None = None,
+    objective: str = "makespan",
 ) -> tuple[Plan | None, str | None]:
-    """The plan of lowest makespan among heuristic methods (a warm start for exact models);
+    """The plan of least ``objective`` among heuristic methods (a warm start for exact models);
     methods that cannot lay out a kit are skipped. ``time_limit`` (None: none) bounds them
     all: each gets what is left of it, and once it is spent the remaining methods are
     skipped (unless no plan is known yet)."""
@@ -39,7 +41,7 @@ def best_heuristic_plan(
     import time
 
     from ...errors import BilevelKitError
-    from ...methods import get_method
+    from ...methods import get_method, require_stations_support
 
     end = None if time_limit is None else time.perf_counter() + time_limit
     best: tuple[float, Plan, str] | None = None
@@ -56,6 +58,7 @@ def best_heuristic_plan(
             if name == "greedy-ce" and best is not None and _kernels_would_compile():
                 continue  # a compile of ~15-60 s (or a load of 1-3 s) is not in the budget
         try:
+            require_stations_support(instance, name)  # (several stations: those that plan them)
             spec = get_method(name)
             fn = spec.load()
             tl = None if left is None else max(MIN_RUN, left)
@@ -67,7 +70,7 @@ def best_heuristic_plan(
             continue
         if out.plan is None:
             continue
-        ms = evaluate(instance, out.plan).makespan
+        ms = objective_of(evaluate(instance, out.plan), objective)
         if best is None or ms < best[0]:
             best = (ms, out.plan, name)
     return (best[1], best[2]) if best else (None, None)
