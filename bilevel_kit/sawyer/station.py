@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StationError
-from .gripper import DEFAULT_GRIPPER, Gripper, gripper_schema
+from .fingers import DEFAULT_GRIPPER, Gripper, gripper_schema
 
 Vec3 = tuple[float, float, float]
 
