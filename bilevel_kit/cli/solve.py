@@ -97,11 +97,15 @@ def run(args: argparse.Namespace) -> int:
     from ..progress import LiveLine
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
-    instance = load_instance(args)
-    if args.work_cell is not None:
+    if args.work_cell is None:
+        instance = load_instance(args)
+    else:  # the cell first: the command-line overrides apply to the instance in its cell
+        from ..instance import load
         from ..sawyer.workcell import apply_work_cell, load_work_cell
 
-        instance = apply_work_cell(instance, load_work_cell(args.work_cell))
+        cell = load_work_cell(args.work_cell)
+        base = apply_work_cell(load(args.instance), cell)
+        instance = base.with_overrides(**instance_overrides(args))
     prepare([args.method])  # a compile is announced, and never charged to --time-limit
     with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
         result = solve(

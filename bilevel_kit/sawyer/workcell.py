@@ -86,7 +86,8 @@ def load_work_cell(path: str | Path) -> WorkCell:
 def apply_work_cell(instance: Instance, cell: WorkCell) -> Instance:
     """``instance`` in the work cell: its station keys merged over the instance's station (or
     the default one), its grasp widths on the part types. Unknown part types and a grasp
-    width wider than the part's smaller side are :class:`WorkCellError` naming the cell."""
+    width wider than the part's smaller side are :class:`WorkCellError` naming the cell. The
+    instance is rebuilt from its document: apply the cell before ``with_overrides``."""
     from ..instance import from_dict
 
     unknown = sorted(set(cell.grasp_widths) - set(instance.part_types))
