@@ -25,8 +25,11 @@ from .common import EXIT_OK, add_derived_outputs, add_output, positive, positive
 TOOL_SPEED = 0.6
 
 if TYPE_CHECKING:
+    from ..instance import Instance
     from ..paths import Output
+    from ..plan import Plan
     from ..sawyer.bags import BagInfo
+    from ..sawyer.gripper import GraspCheck
     from ..sawyer.trajectory import Execution
 
 HELP = "write a plan's Sawyer trajectories as ROS bags and an animated 3-D view"
@@ -37,7 +40,10 @@ DESCRIPTION = (
     "times, as ROS 1 and/or ROS 2 bags with standard message types; and a standalone HTML page "
     "animating the arm, the trays and the parts. Prints per kit the trajectory's duration "
     "against the modelled time. Exit 2, writing nothing, when the solution does not fit the "
-    "instance or a bin or slot is out of the arm's reach. See docs/execution.md."
+    "instance, a bin or slot is out of the arm's reach, or (--grasp-check strict) a part fails "
+    "the gripper's feasibility pass, whose verdict is one line of the report. The station, its "
+    "gripper and the parts' grasp widths may come from a work-cell file (--work-cell). See "
+    "docs/execution.md."
 )
 
 
@@ -76,6 +82,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="robot",
         help="joint-limit profile: the real arm's (default) or the Gazebo simulator's, whose "
         "right_j6 stays within +-3.14 rad",
+    )
+    p.add_argument(
+        "--grasp-check",
+        choices=("strict", "warn", "off"),
+        default="warn",
+        help="the gripper's feasibility pass (docs/execution.md#the-gripper): warn (default) "
+        "reports in one line the parts no grasp holds or whose open fingers leave the tray or "
+        "overlap a placed part; strict exits 2, writing nothing, on the first; off skips it",
+    )
+    p.add_argument(
+        "--work-cell",
+        metavar="FILE",
+        help="work-cell JSON (docs/execution.md#the-work-cell): station keys, the gripper and "
+        "grasp_widths {part type: mm} that override the instance's, e.g. "
+        "examples/hrc_table_cell.json",
     )
     p.add_argument(
         "--tool-speed",
@@ -186,8 +207,9 @@ def _staging() -> Iterator[_Staging]:
         raise
 
 
-def _load(args: argparse.Namespace) -> Execution:
-    """The execution of the solution (or of its kit ``--kit``), after checking it fits."""
+def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
+    """The execution of the solution (or of its kit ``--kit``), after checking it fits, and
+    the gripper's feasibility pass."""
     from .. import solution
     from ..errors import UsageError
     from ..instance import load
@@ -195,6 +217,10 @@ def _load(args: argparse.Namespace) -> Execution:
     from ..sawyer.trajectory import plan_execution
 
     instance = load(args.instance)
+    if args.work_cell is not None:
+        from ..sawyer.workcell import apply_work_cell, load_work_cell
+
+        instance = apply_work_cell(instance, load_work_cell(args.work_cell))
     sol = solution.read(args.solution)
     violations = sol.check(instance)
     if violations:
@@ -209,7 +235,63 @@ def _load(args: argparse.Namespace) -> Execution:
     params = MotionParams(
         speed_scale=args.speed_scale, tool_speed=args.tool_speed, limits=args.limits
     )
-    return plan_execution(instance, sol.plan, kits=kits, params=params)
+    checks = _check_grasps(args, instance, sol.plan, kits)
+    return plan_execution(instance, sol.plan, kits=kits, params=params), checks
+
+
+def _check_grasps(
+    args: argparse.Namespace, instance: Instance, plan: Plan, kits: list[int] | None
+) -> tuple[GraspCheck, ...]:
+    """The gripper's feasibility pass (none with ``--grasp-check off``); with ``strict``,
+    exit 2 on the first part that fails it."""
+    from ..errors import UsageError
+    from ..sawyer.gripper import check_grasps
+
+    if args.grasp_check == "off":
+        return ()
+    checks = check_grasps(instance, plan, kits)
+    bad = [c for c in checks if c.problem]
+    if bad and args.grasp_check == "strict":
+        raise UsageError(
+            f"{args.solution}: {bad[0].problem} ({len(bad)} of {len(checks)} part(s) fail "
+            "the gripper check; nothing written)"
+        )
+    return checks
+
+
+def _mm(value: float) -> str:
+    """A clearance to two decimals, a touching finger as 0.00 (never -0.00)."""
+    return f"{round(value, 2) + 0.0:.2f}"
+
+
+def _grip_line(checks: tuple[GraspCheck, ...], work_cell: str | None) -> str:
+    """One line: how many parts fail the gripper's pass and why, or the fingers' smallest
+    clearances when none does."""
+    bad = [c for c in checks if c.problem]
+    if not bad:
+        tray = min(checks, key=lambda c: c.tray_clearance)
+        near = min(checks, key=lambda c: c.part_clearance)
+        line = (
+            f"gripper: all {len(checks)} part(s) pass; smallest finger clearance to the tray "
+            f"{_mm(tray.tray_clearance)} mm (kit {tray.kit}, {tray.part})"
+        )
+        if near.nearest:
+            gap = _mm(near.part_clearance)
+            line += f", to a placed part {gap} mm (kit {near.kit}, {near.part})"
+        return line
+    why = {"stroke": "beyond the stroke", "tray": "with fingers off the tray"}
+    counts = ", ".join(
+        f"{sum(c.fault == f for c in bad)} {why.get(f, 'with fingers on a placed part')}"
+        for f in ("stroke", "tray", "part")
+        if any(c.fault == f for c in bad)
+    )
+    hint = "--grasp-check strict makes this exit 2"
+    if work_cell is None and any(c.fault == "stroke" for c in bad):
+        hint = "declare the gripper and grasp widths with --work-cell; " + hint
+    return (
+        f"gripper: {len(bad)} of {len(checks)} part(s) fail the check ({counts}); first: "
+        f"{bad[0].problem}; {hint} (docs/execution.md#the-gripper)"
+    )
 
 
 def _report(ex: Execution, cap: float) -> None:
@@ -297,7 +379,7 @@ def _write(
 
 
 def run(args: argparse.Namespace) -> int:
-    ex = _load(args)
+    ex, checks = _load(args)
     targets = _bag_targets(args, _stem(args))  # as checked up front (:func:`_outputs`)
     page = None
     if args.html:
@@ -306,6 +388,8 @@ def run(args: argparse.Namespace) -> int:
         page = html_page(ex)
     infos = _write(ex, targets, args.html, page)
     _report(ex, args.tool_speed)
+    if checks:
+        print(_grip_line(checks, args.work_cell))
     for info in infos:
         print(_describe(info))
     if page is not None:

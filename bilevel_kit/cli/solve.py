@@ -84,6 +84,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="print only the summary line (and no live progress line on the terminal)",
     )
     add_instance_overrides(p)
+    p.add_argument(
+        "--work-cell",
+        metavar="FILE",
+        help="work-cell JSON whose station, gripper and grasp widths replace the instance's "
+        "(docs/execution.md#the-work-cell), e.g. for greedy-ce's -p finger_room=true",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,7 +97,15 @@ def run(args: argparse.Namespace) -> int:
     from ..progress import LiveLine
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
-    instance = load_instance(args)
+    if args.work_cell is None:
+        instance = load_instance(args)
+    else:  # the cell first: the command-line overrides apply to the instance in its cell
+        from ..instance import load
+        from ..sawyer.workcell import apply_work_cell, load_work_cell
+
+        cell = load_work_cell(args.work_cell)
+        base = apply_work_cell(load(args.instance), cell)
+        instance = base.with_overrides(**instance_overrides(args))
     prepare([args.method])  # a compile is announced, and never charged to --time-limit
     with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
         result = solve(

@@ -36,7 +36,9 @@ Decisions taken where the paper is silent (docs/errata.md):
 
 Options (:class:`GreedyCEOptions`, validated centrally): ``horizon`` (N), ``signed``,
 ``precedence``, ``polish`` (convex polish of every CE layout, :mod:`bilevel_kit.heuristics.convex`),
-the weights ``W1``..``W7`` and every :class:`~bilevel_kit.heuristics.cross_entropy.CEParams` field.
+the weights ``W1``..``W7``, every :class:`~bilevel_kit.heuristics.cross_entropy.CEParams` field
+and ``finger_room`` (every kit is laid out with its parts' grasp footprints, which hold the
+station gripper's open fingers, then given back their true sizes: docs/execution.md#finger-room).
 Past ``time_limit``: single-task kits. Several stations: :mod:`.greedy_stations`.
 
 ``extra`` of the registered method ``greedy-ce``:
@@ -519,7 +521,14 @@ def greedy_ce(
             f"{SETUP_PER_TASK * 1e6:.0f} us per task); give at least {math.ceil(need - 1)} s"
         )
     make = functools.partial(GreedyCEPolicy, params=params, seed=seed)
-    result, st = plan_greedy(instance, make, PolicyState, plan, deadline)  # one or more stations
+    packed = instance
+    if options.finger_room:  # pack the grasp footprints, keep the centres and angles
+        from ..sawyer.gripper import true_sizes, with_finger_room
+
+        packed = with_finger_room(instance)
+    result, st = plan_greedy(packed, make, PolicyState, plan, deadline)  # one or more stations
+    if packed is not instance:
+        result = true_sizes(result, instance)
     extra = {
         "epochs": st.epochs,
         "decision": "enumerate"

@@ -171,6 +171,14 @@ class GreedyCEOptions:
         },
     )
 
+    finger_room: bool = field(
+        default=False,
+        metadata={
+            "help": "lay every part out with room for the station gripper's open fingers "
+            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
+        },
+    )
+
     def __post_init__(self) -> None:
         try:
             self.ce_params()

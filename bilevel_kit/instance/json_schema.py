@@ -107,6 +107,11 @@ def _part_type_schema() -> dict[str, Any]:
             "height": _LENGTH,
             "pick_time": _NONNEG,
             "rotatable": {"type": "boolean", "default": True},
+            "grasp_width": {
+                **_LENGTH,
+                "description": "width of the feature a parallel gripper closes on (mm), at "
+                "most the smaller side; default: the smaller side",
+            },
         },
     }
 

@@ -68,6 +68,9 @@ class PartType(_Rectangle):
     name: str = ""
     #: The file's pick time when ``pick_time`` comes from the Sawyer motion model.
     nominal_pick_time: float | None = None
+    #: Width of the feature a parallel gripper closes on (mm); ``None``: the smaller side
+    #: (docs/execution.md#the-gripper).
+    grasp_width: float | None = None
 
 
 @dataclass(frozen=True)
@@ -460,6 +463,7 @@ class Instance:
                 "height": p.height,
                 "pick_time": p.pick_time if p.nominal_pick_time is None else p.nominal_pick_time,
                 "rotatable": p.rotatable,
+                **({"grasp_width": p.grasp_width} if p.grasp_width is not None else {}),
             }
             for p in self.part_types.values()
         ]

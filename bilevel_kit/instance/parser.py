@@ -168,8 +168,16 @@ def _part_types(entries: list[dict[str, Any]], tray: Tray, source: str) -> dict[
             pick_time=float(p["pick_time"]),
             rotatable=bool(p.get("rotatable", True)),
             name=p.get("name", ""),
+            grasp_width=None if p.get("grasp_width") is None else float(p["grasp_width"]),
         )
         _check_fits(pt, tray, f"$.part_types[{i}]", source)
+        if pt.grasp_width is not None and pt.grasp_width > min(pt.width, pt.height):
+            raise InstanceError(
+                source,
+                f"$.part_types[{i}].grasp_width",
+                f"{pt.grasp_width:g} mm exceeds the smaller side of part {pt.id!r} "
+                f"({pt.width:g} x {pt.height:g} mm), across which the fingers close",
+            )
         part_types[pt.id] = pt
     return part_types
 

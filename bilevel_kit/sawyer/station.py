@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StationError
+from .fingers import DEFAULT_GRIPPER, Gripper, gripper_schema
 
 Vec3 = tuple[float, float, float]
 
@@ -67,6 +68,8 @@ class Station:
     grasp_yaws: tuple[float, ...] = (0.0, 90.0, 180.0, -90.0)
     #: Tool tip distance along the flange (``right_hand``) z axis.
     tool_offset: float = 135.62
+    #: The parallel gripper (docs/execution.md#the-gripper); default: the URDF's fingers.
+    gripper: Gripper = DEFAULT_GRIPPER
 
     def __post_init__(self) -> None:
         bins = self.bins
@@ -95,6 +98,8 @@ class Station:
             if not math.isfinite(value):
                 raise StationError(f"{name} must be finite, got {value!r}")
             object.__setattr__(self, name, value)
+        if not isinstance(self.gripper, Gripper):
+            raise StationError(f"gripper: expected a Gripper, got {self.gripper!r}")
         if not self.grasp_yaws:
             raise StationError("grasp_yaws: at least one allowed gripper yaw is needed")
         if self.approach_height < 0 or self.tool_offset < 0:
@@ -164,6 +169,8 @@ class Station:
             doc["bins"] = {name: list(xyz) for name, xyz in self.bins}
         if self.place_heights:
             doc["place_heights"] = dict(self.place_heights)
+        if self.gripper != DEFAULT_GRIPPER:
+            doc["gripper"] = self.gripper.to_dict()
         return doc
 
     @classmethod
@@ -200,6 +207,8 @@ class Station:
             kwargs["place_heights"] = {
                 k: _number(v, f"station.place_heights.{k}") for k, v in doc["place_heights"].items()
             }
+        if "gripper" in doc:
+            kwargs["gripper"] = Gripper.from_dict(doc["gripper"])
         if "default_bin" in doc:
             kwargs["default_bin"] = _vec3(doc["default_bin"], "station.default_bin")
         for key in ("approach_height", "place_height", "tool_offset"):
@@ -285,5 +294,6 @@ def station_schema() -> dict[str, Any]:
                 "default": d.tool_offset,
                 "description": "tool tip distance beyond the flange (mm)",
             },
+            "gripper": gripper_schema(),
         },
     }
