@@ -637,8 +637,8 @@ def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) ->
         optimal_axis = state.proven and sc.exact and state.scope is not None
         optimal = optimal_axis and state.scope == ANY_ANGLE
         extra.update(
-            idle_bound=idle_bound,
-            idle_bound_axis_aligned=idle_axis,
+            objective_bound=idle_bound,  # the human idle's (methods.OBJECTIVE_KEYS)
+            objective_bound_axis_aligned=idle_axis,
             optimal_axis_aligned=optimal_axis,
         )
     extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))

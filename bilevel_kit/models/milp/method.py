@@ -486,7 +486,7 @@ def _makespan_bound(
         bound = closed
     else:
         idle_lb = None if lower is None else lower - objective.dropped(human_times(instance))
-        extra["idle_bound"] = idle_lb
+        extra["objective_bound"] = idle_lb  # the human idle's (methods.OBJECTIVE_KEYS)
         bound = closed
         if lower is not None:  # C = idle + sum h + o_H m >= idle_lb + sum h + o_H m_min
             bound = max(closed, lower + instance.kit_overhead_human * min_kits(instance))
