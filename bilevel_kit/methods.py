@@ -484,9 +484,10 @@ def _optimised(
     """The value, bound and gap of the objective ``out`` minimised when it is not the
     makespan, taken out of ``extra`` (where the methods state them, :data:`OBJECTIVE_KEYS`)
     so that a result states them once: the value is the registry's evaluation of the
-    timeline where there is one (else the method's), the bound the method's or, for the
-    modelled objectives, the closed-form one (:func:`bilevel_kit.bounds.objective_bound`),
-    "optimal" without a bound a bound equal to the value, and the gap the objective's own."""
+    timeline where there is one (else the method's), the bound the better of the method's and,
+    for the modelled objectives, the closed-form one (:func:`bilevel_kit.bounds.
+    objective_bound`), as for the makespan, and the gap the objective's own. "Optimal" with no
+    bound at all stays without one: the checker names it (docs/formats.md#solutions)."""
     from .bounds import objective_bound
 
     obj = OBJECTIVES.get(out.status_objective)
@@ -495,10 +496,9 @@ def _optimised(
     stated, bound, _ = (extra.pop(key, None) for key in OBJECTIVE_KEYS)
     value = obj.value(timeline) if timeline is not None else None
     value = stated if obj.evaluate is None else value
-    if bound is None and obj.modelled and timeline is not None:
-        bound = objective_bound(instance, obj.name)
-    if bound is None and out.status == Status.OPTIMAL:
-        bound = value
+    if obj.modelled and timeline is not None:
+        closed = objective_bound(instance, obj.name)
+        bound = closed if bound is None else max(bound, closed)
     obj_gap = obj.gap(value, bound) if value is not None and bound is not None else None
     return value, bound, obj_gap
 

@@ -14,6 +14,7 @@ import pytest
 from solution_v1 import to_format_1
 
 from bilevel_kit import load, solution, solve
+from bilevel_kit.bounds import objective_bound
 from bilevel_kit.errors import SolutionError
 from bilevel_kit.methods import OBJECTIVE_KEYS, MethodOutput, Status
 from bilevel_kit.objectives import OBJECTIVES, relative_gap
@@ -130,7 +131,8 @@ def idle_claim(instance, options, *, seed=0, time_limit=None):
 
 def test_solve_moves_the_stated_numbers_out_of_extra(tiny):
     """The method's ``extra`` numbers become the result's: the value the registry's evaluation
-    (not the stated 1e9), the gap recomputed; ``extra`` keeps none of them."""
+    (not the stated 1e9), the bound the better of the stated 1 s and the closed-form 3 s
+    (``bounds.objective_bound``), the gap recomputed; ``extra`` keeps none of them."""
     from bilevel_kit.methods import REGISTRY, register
 
     if "idle-claim-test" not in REGISTRY:
@@ -143,7 +145,8 @@ def test_solve_moves_the_stated_numbers_out_of_extra(tiny):
     res = solve(tiny, "idle-claim-test", check=True)
     assert res.objective_name == "human_idle" and res.status_text == "feasible (for human_idle)"
     assert res.objective == OBJECTIVES["human_idle"].value(res.timeline) == 4.0
-    assert (res.bound, res.gap) == (1.0, relative_gap(4.0, 1.0)) == (1.0, 0.75)
+    assert objective_bound(tiny, "human_idle") == 3.0
+    assert (res.bound, res.gap) == (3.0, relative_gap(4.0, 3.0)) == (3.0, 0.25)
     assert (res.makespan, res.makespan_bound) == (25.5, 24.5)
     assert not set(OBJECTIVE_KEYS) & set(res.extra) and res.extra["note"] == 1
     assert res.extra["violations"] == []
@@ -156,4 +159,33 @@ def test_a_format_2_claim_names_the_block_it_is_in(tiny, tiny_result):
     found = solution.from_dict(doc).check(tiny)
     assert [v.message for v in found] == [
         "status 'optimal' for sum_completion without a bound (objective.bound)"
+    ]
+
+
+def j_claim(instance, options, *, seed=0, time_limit=None):
+    """Single-task's plan claimed optimal for J, with J's value and no bound."""
+    from bilevel_kit.heuristics.baselines import single_task
+
+    return MethodOutput(
+        single_task(instance).plan, Status.OPTIMAL, None, {"objective_value": -3.0}, "J"
+    )
+
+
+def test_an_optimum_without_a_bound_is_not_made_one(tiny):
+    """J has no closed-form bound: its stated value stays the result's, with no bound, and
+    ``solve --check`` names the unproven "optimal"."""
+    from bilevel_kit.methods import REGISTRY, register
+
+    if "j-claim-test" not in REGISTRY:
+        register(
+            "j-claim-test",
+            f"{__name__}:j_claim",
+            "claims a J optimum without a bound",
+            "bilevel_kit.options:NoOptions",
+            objectives=("J",),
+        )
+    res = solve(tiny, "j-claim-test", check=True)
+    assert (res.objective_name, res.objective, res.bound, res.gap) == ("J", -3.0, None, None)
+    assert [v["message"] for v in res.extra["violations"]] == [
+        "status 'optimal' for J without a bound (bound)"
     ]
