@@ -447,9 +447,12 @@ def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
     )
     if top:
         other = doc.get("makespan") or {}
-        refused = claims.refused | {"value"} if "objective" in claims.refused else claims.refused
-        for k in ("value", "bound", "gap"):
-            if k in other and k in own and k not in refused and other[k] != own[k]:
+        for k in (k for k in ("value", "bound", "gap") if k in other and k in own):
+            theirs = num.optional(other[k], f"$.makespan.{k}")
+            refused = (theirs is None) != (other[k] is None) or (
+                (stated[k] is None) != (own[k] is None)
+            )
+            if not refused and theirs != stated[k]:  # a refused number: its own violation
                 msg = f"$.makespan.{k} {other[k]!r} differs from $.objective.{k} {own[k]!r}"
                 num.faults.append(Violation("objective_mismatch", msg))
         return claims

@@ -189,3 +189,12 @@ def test_an_optimum_without_a_bound_is_not_made_one(tiny):
     assert [v["message"] for v in res.extra["violations"]] == [
         "status 'optimal' for J without a bound (bound)"
     ]
+
+
+def test_a_huge_number_in_the_makespan_block_is_a_bad_number(tiny, tiny_result):
+    doc = json.loads(json.dumps(solution.result_to_dict(tiny_result)))
+    doc["makespan"]["value"] = 1e300
+    found = solution.from_dict(doc).check(tiny)
+    assert [(v.kind, v.message.split(":")[0]) for v in found] == [
+        ("bad_number", "$.makespan.value")
+    ]
