@@ -424,14 +424,20 @@ def _claims_of_1(doc: dict[str, Any], num: _Numbers) -> Claims:
 
 def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
     """A format-2 file's claims: the ``makespan`` block's, and the ``objective`` block's on the
-    objective it names. When that is the makespan, the two blocks are one claim: the
-    ``objective`` block is checked (a ``makespan`` block that differs is a mismatch)."""
+    objective it names. When that is the makespan, the two blocks are one claim: a number in
+    either is checked (the ``objective`` block's where both state it, a ``makespan`` block
+    that differs being a mismatch)."""
     own = doc.get("objective") or {"name": "makespan"}
     name = str(own["name"])
     top = is_top_level(name)
-    block = own if top else (doc.get("makespan") or {})
-    where = "$.objective" if top else "$.makespan"
-    stated = {k: num.optional(block.get(k), f"{where}.{k}") for k in ("value", "bound", "gap")}
+    other = doc.get("makespan") or {}
+    keys = ("value", "bound", "gap")
+    block = {**other, **{k: own[k] for k in keys if k in own}} if top else other
+
+    def where(k: str) -> str:
+        return f"$.objective.{k}" if top and k in own else f"$.makespan.{k}"
+
+    stated = {k: num.optional(block.get(k), where(k)) for k in keys}
     claims = Claims(
         status=doc["status"],
         objective=stated["value"],
@@ -446,8 +452,7 @@ def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
         ),
     )
     if top:
-        other = doc.get("makespan") or {}
-        for k in (k for k in ("value", "bound", "gap") if k in other and k in own):
+        for k in (k for k in keys if k in other and k in own):
             theirs = num.optional(other[k], f"$.makespan.{k}")
             refused = (theirs is None) != (other[k] is None) or (
                 (stated[k] is None) != (own[k] is None)

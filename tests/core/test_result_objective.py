@@ -198,3 +198,12 @@ def test_a_huge_number_in_the_makespan_block_is_a_bad_number(tiny, tiny_result):
     assert [(v.kind, v.message.split(":")[0]) for v in found] == [
         ("bad_number", "$.makespan.value")
     ]
+
+
+def test_the_makespan_block_is_checked_when_the_objective_block_states_nothing(tiny, tiny_result):
+    doc = json.loads(json.dumps(solution.result_to_dict(tiny_result)))
+    doc["objective"] = {"name": "makespan"}
+    assert solution.from_dict(doc).check(tiny) == []
+    doc["makespan"]["bound"] = 30.0  # above the makespan 25.5 of the valid plan
+    found = solution.from_dict(doc).check(tiny)
+    assert "bound_above_makespan" in [v.kind for v in found]
