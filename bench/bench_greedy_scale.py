@@ -48,7 +48,7 @@ wall, cpu = time.perf_counter() - t0, time.process_time() - c0
 e = res.extra
 print(json.dumps({
     "tasks": inst.n_tasks, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
-    "makespan": res.objective,
+    "makespan": res.makespan,
     "kits": len(res.plan.kits), "valid": e["violations"] == [],
     **{k: e[k] for k in ("prefix_sets", "evaluated", "beam_epochs", "rest_capped",
                          "ce_calls", "time_limit_hit")},

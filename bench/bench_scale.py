@@ -60,8 +60,9 @@ e = res.extra
 print(json.dumps({
     "tasks": inst.n_tasks, "wall_s": round(res.wall_time_s, 3),
     "with_check_s": round(wall, 3), "status": str(res.status),
-    "status_objective": res.status_objective, "objective": res.objective, "bound": res.bound,
-    "gap": res.gap, "valid": None if res.plan is None else e["violations"] == [],
+    "status_objective": res.objective_name, "objective": res.makespan,
+    "bound": res.makespan_bound, "gap": res.makespan_gap,
+    "valid": None if res.plan is None else e["violations"] == [],
     "kits": None if res.plan is None else len(res.plan.kits),
     "note": e.get("reason", "") or e.get("cpsat_status", "") or e.get("termination", ""),
 }))

@@ -57,7 +57,7 @@ plan = [[list(k.tasks), [[p.part, round(p.x, 6), round(p.y, 6), round(p.theta, 6
                           for p in k.layout]] for k in res.plan.kits]
 print(json.dumps({
     "tasks": inst.n_tasks, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
-    "makespan": res.objective, "bound": res.bound, "kits": len(res.plan.kits),
+    "makespan": res.makespan, "bound": res.makespan_bound, "kits": len(res.plan.kits),
     "time_limit_hit": res.extra["time_limit_hit"], "epoch_F_sum": res.extra["epoch_F_sum"],
     "plan_sha": hashlib.sha256(json.dumps(plan).encode()).hexdigest()[:16],
     "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),

@@ -282,8 +282,9 @@ def objective_extra(
     model_scale: bool = False,
 ) -> dict[str, Any]:
     """An exact model's ``extra`` for ``objective`` besides the makespan: ``objective_value``,
-    ``objective_bound``, ``objective_gap`` (s; the objective's gap; ``idle_bound`` too for the
-    human idle, among its bound keys) and ``objective_bound_axis_aligned``. Each bound is
+    ``objective_bound``, ``objective_gap`` (s; the objective's gap: the keys every method states
+    its minimised objective under, :data:`bilevel_kit.methods.OBJECTIVE_KEYS`) and
+    ``objective_bound_axis_aligned``. Each bound is
     :func:`objective_bound` or the model's ``lower``, valid for every plan and for
     0/90-degree plans (None: none), in s or (``model_scale``) on the model's scale, with the
     constant :meth:`~bilevel_kit.objectives.Objective.dropped`; the value when ``optimal`` in
@@ -307,5 +308,4 @@ def objective_extra(
         "objective_gap": obj.gap(value, bounds[0]),
         "objective_bound_axis_aligned": bounds[1],
     }
-    out.update((key, bounds[0]) for key in obj.bound_keys if key != "objective_bound")
     return out

@@ -52,6 +52,11 @@ class Status(enum.StrEnum):
 
 STATUSES = tuple(s.value for s in Status)
 
+#: Where a method states the value, bound and gap of the objective it minimised, when that is
+#: not the makespan, in its output's ``extra`` (the one scheme; solution files of format 1 used
+#: the registry's keys, :attr:`bilevel_kit.objectives.Objective.value_keys`).
+OBJECTIVE_KEYS = ("objective_value", "objective_bound", "objective_gap")
+
 
 @dataclass(frozen=True)
 class MethodOutput:
@@ -61,7 +66,9 @@ class MethodOutput:
     the method's own diagnostics, each key documented in the method's module docstring.
     ``status_objective`` names the objective ``status`` speaks of: ``makespan`` unless the
     method optimised another one (``human_idle``, or bilevel-milp's paper objective ``J``), in
-    which case "optimal" does not mean a zero makespan gap.
+    which case "optimal" does not mean a zero makespan gap, and ``extra`` states that
+    objective's value, bound and gap under :data:`OBJECTIVE_KEYS` (:func:`solve` makes them
+    the result's ``objective``, ``bound`` and ``gap``).
     """
 
     plan: Plan | None
@@ -79,10 +86,16 @@ class MethodOutput:
 
 @dataclass
 class Result:
-    """A solve: status, objective (makespan, s), bound, gap, wall time, seed and parameters.
+    """A solve: status, the optimised objective's value, bound and gap, wall time, seed and
+    parameters.
 
-    ``gap = (objective - bound) / objective`` with ``bound`` the best lower bound known (the
-    method's own, or the closed-form bounds of :mod:`bilevel_kit.bounds`).
+    ``objective``, ``bound`` and ``gap`` are about the objective the method minimised,
+    ``objective_name`` (a name of :data:`bilevel_kit.objectives.OBJECTIVES`, the one ``status``
+    refers to): ``gap`` is that objective's gap of the two (``(objective - bound) / objective``
+    for the makespan). The makespan is one metric among the others (``metrics["makespan"]``,
+    :attr:`makespan`), with its own ``makespan_bound`` (the method's, or the closed-form bounds
+    of :mod:`bilevel_kit.bounds`) and ``makespan_gap``; with the default objective the two
+    sets of numbers are the same (docs/formats.md#solutions).
     """
 
     method: str
@@ -97,17 +110,37 @@ class Result:
     params: dict[str, Any]
     instance: str
     extra: dict[str, Any] = field(default_factory=dict)
-    #: The objective ``status`` refers to (see :class:`MethodOutput`).
-    status_objective: str = "makespan"
+    #: The objective minimised: ``objective``, ``bound``, ``gap`` and ``status`` are about it.
+    objective_name: str = "makespan"
     #: Delivery time, kit overheads and trays the timeline was computed with.
     timeline_params: dict[str, Any] = field(default_factory=dict)
+    #: A lower bound on the makespan over every plan (s), and the makespan's gap to it; the
+    #: same as ``bound`` and ``gap`` when the objective is the makespan (left None there).
+    makespan_bound: float | None = None
+    makespan_gap: float | None = None
+
+    def __post_init__(self) -> None:
+        if is_top_level(self.objective_name) and self.makespan_bound is None:
+            self.makespan_bound = self.bound
+        if is_top_level(self.objective_name) and self.makespan_gap is None:
+            self.makespan_gap = self.gap
+
+    @property
+    def status_objective(self) -> str:
+        """The objective ``status`` refers to: :attr:`objective_name`."""
+        return self.objective_name
+
+    @property
+    def makespan(self) -> float | None:
+        """The plan's makespan (s), whichever objective was minimised."""
+        return self.timeline.makespan if self.timeline is not None else None
 
     @property
     def status_text(self) -> str:
         """``status``, with the objective it refers to when that is not the makespan."""
-        if is_top_level(self.status_objective):
+        if is_top_level(self.objective_name):
             return str(self.status)
-        return f"{self.status} (for {self.status_objective})"
+        return f"{self.status} (for {self.objective_name})"
 
     @property
     def metrics(self) -> dict[str, float | int] | None:
@@ -383,14 +416,12 @@ def fold_kitless_output(instance: Instance, out: MethodOutput) -> MethodOutput:
     status = out.status
     if status == Status.OPTIMAL and (before is None or after is None or after > before + 1e-9):
         status = Status.FEASIBLE
+    value_key, bound_key, gap_key = OBJECTIVE_KEYS
     if obj is not None and not obj.top_level and after is not None:
-        value_key = next((k for k in obj.value_keys if k in extra), None)
-        bound = next((extra[k] for k in obj.bound_keys if extra.get(k) is not None), None)
-        gap_key = next((k for k in obj.gap_keys if k in extra), None)
-        if value_key is not None:
+        if value_key in extra:
             extra[value_key] = after
-        if gap_key is not None and bound is not None:
-            extra[gap_key] = obj.gap(after, bound)
+        if gap_key in extra and extra.get(bound_key) is not None:
+            extra[gap_key] = obj.gap(after, extra[bound_key])
     return MethodOutput(folded, status, out.bound, extra, status_objective=out.status_objective)
 
 
@@ -430,56 +461,94 @@ def solve(
     wall = time.perf_counter() - t0
     out = fold_kitless_output(instance, out)
     timeline = evaluate(instance, out.plan) if out.plan is not None else None
-    objective = timeline.makespan if timeline is not None else None
+    makespan = timeline.makespan if timeline is not None else None
     bounds = [b for b in (out.bound, best_bound(instance)) if b is not None]
-    bound = max(bounds) if bounds else None
+    makespan_bound = max(bounds) if bounds else None
     if (
         out.status == Status.OPTIMAL
         and is_top_level(out.status_objective)
         and out.bound is None
-        and objective is not None
+        and makespan is not None
     ):
-        bound = objective  # a proof of optimality is a bound equal to the objective
+        makespan_bound = makespan  # a proof of optimality is a bound equal to the objective
     extra = dict(out.extra)
+    value, bound, obj_gap = _optimised(instance, out, timeline, extra)
+    if is_top_level(out.status_objective):
+        value, bound, obj_gap = makespan, makespan_bound, gap(makespan, makespan_bound)
     extra["time_limit_hit"] = time_limit_reached(out, wall, time_limit)
     if prepare_s is not None:
         extra["prepare_s"] = prepare_s
     if instance.stations and timeline is not None:
         per = timeline.station_metrics()  # docs/timeline.md, in the file's station order
         extra["station_metrics"] = {s: per[s] for s in instance.station_ids if s in per}
-    result_gap = gap(objective, bound)
-    if check and out.plan is not None:
-        from .objectives import extra_claims
-        from .validate import Claims
-        from .validate import check as run_check
-
-        # the result's own claims too: a bound above the makespan, or "optimal" with a gap,
-        # is a violation like an overlap (docs/formats.md, the checker's table)
-        claims = Claims(
-            status=str(out.status),
-            objective=objective,
-            bound=bound,
-            gap=result_gap,
-            has_gap=True,
-            status_objective=out.status_objective,
-            objective_claims=extra_claims(out.status_objective, extra),
-        )
-        extra["violations"] = [v.to_dict() for v in run_check(instance, out.plan, claims=claims)]
-    return Result(
+    result = Result(
         method=method,
         status=out.status,
         plan=out.plan,
         timeline=timeline,
-        objective=objective,
+        objective=value,
         bound=bound,
-        gap=result_gap,
+        gap=obj_gap,
         wall_time_s=wall,
         seed=seed,
         params={"time_limit": time_limit, **params},
         instance=instance.name,
         extra=extra,
-        status_objective=out.status_objective,
+        objective_name=out.status_objective,
         timeline_params=timeline_params(instance),
+        makespan_bound=makespan_bound,
+        makespan_gap=gap(makespan, makespan_bound),
+    )
+    if check and out.plan is not None:
+        from .validate import check as run_check
+
+        # the result's own claims too: a bound above the makespan, or "optimal" with a gap,
+        # is a violation like an overlap (docs/formats.md, the checker's table)
+        found = run_check(instance, out.plan, claims=result_claims(result))
+        extra["violations"] = [v.to_dict() for v in found]
+    return result
+
+
+def _optimised(
+    instance: Instance, out: MethodOutput, timeline: Timeline | None, extra: dict[str, Any]
+) -> tuple[float | None, float | None, float | None]:
+    """The value, bound and gap of the objective ``out`` minimised when it is not the
+    makespan, taken out of ``extra`` (where the methods state them, :data:`OBJECTIVE_KEYS`)
+    so that a result states them once: the value is the registry's evaluation of the
+    timeline where there is one (else the method's), the bound the better of the method's and,
+    for the modelled objectives, the closed-form one (:func:`bilevel_kit.bounds.
+    objective_bound`), as for the makespan, and the gap the objective's own. "Optimal" with no
+    bound at all stays without one: the checker names it (docs/formats.md#solutions)."""
+    from .bounds import objective_bound
+
+    obj = OBJECTIVES.get(out.status_objective)
+    if obj is None or obj.top_level:
+        return None, None, None
+    stated, bound, _ = (extra.pop(key, None) for key in OBJECTIVE_KEYS)
+    value = obj.value(timeline) if timeline is not None else None
+    value = stated if obj.evaluate is None else value
+    if obj.modelled and timeline is not None:
+        closed = objective_bound(instance, obj.name)
+        bound = closed if bound is None else max(bound, closed)
+    obj_gap = obj.gap(value, bound) if value is not None and bound is not None else None
+    return value, bound, obj_gap
+
+
+def result_claims(result: Result) -> Any:
+    """What ``result`` claims, for the checker (:class:`bilevel_kit.validate.Claims`): the
+    makespan's value, bound and gap, and the minimised objective's when it is another."""
+    from .validate import Claims
+
+    top = is_top_level(result.objective_name)
+    return Claims(
+        status=str(result.status),
+        objective=result.makespan,
+        bound=result.makespan_bound,
+        gap=result.makespan_gap,
+        has_gap=True,
+        status_objective=result.objective_name,
+        objective_claims=None if top else (result.objective, result.bound, result.gap, True),
+        objective_where=None if top else ("objective", "bound"),
     )
 
 

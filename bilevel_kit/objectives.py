@@ -99,9 +99,10 @@ class Objective:
     label: str
     #: Its value on a timeline (s); None: not a function of the timeline (J).
     evaluate: Callable[[Timeline], float] | None
-    #: Keys holding its value, bound and gap, first found wins: in a result's ``extra``, or
-    #: (``top_level``) the result's own fields, as the makespan's ``objective``, ``bound``,
-    #: ``gap``.
+    #: Keys holding its value, bound and gap in a solution file of format 1, first found wins:
+    #: in its ``extra``, or (``top_level``) its own ``objective``, ``bound``, ``gap``. A result
+    #: and a file of format 2 state them as ``objective``, ``bound``, ``gap`` of the objective
+    #: they name (docs/formats.md#format-1).
     value_keys: tuple[str, ...]
     bound_keys: tuple[str, ...]
     gap_keys: tuple[str, ...]
@@ -368,25 +369,10 @@ def model_objectives() -> tuple[str, ...]:
     return tuple(n for n, o in OBJECTIVES.items() if o.modelled)
 
 
-def extra_claims(
-    name: str, extra: Mapping[str, Any]
-) -> tuple[float | None, float | None, float | None, bool] | None:
-    """A fresh result's value, bound and gap on objective ``name`` where the registry keeps
-    them in ``extra`` (None for the makespan and unknown names; a non-number reads as not
-    stated), for :class:`bilevel_kit.validate.Claims`."""
-    obj = OBJECTIVES.get(name)
-    if obj is None or obj.top_level:
-        return None
-    *stated, has_gap = obj.stated({}, extra)
-    value, bound, gap = (
-        float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None for v in stated
-    )
-    return value, bound, gap, has_gap
-
-
 def is_top_level(name: str) -> bool:
-    """Whether a result's own ``objective``, ``bound`` and ``gap`` are about objective ``name``
-    (:attr:`Objective.top_level`: the makespan; an unknown name is not)."""
+    """Whether objective ``name`` is the makespan, whose numbers a result also states as
+    ``makespan_bound``, ``makespan_gap`` (:attr:`Objective.top_level`; an unknown name is
+    not)."""
     obj = OBJECTIVES.get(name)
     return obj is not None and obj.top_level
 

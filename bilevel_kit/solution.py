@@ -1,13 +1,17 @@
-"""Solution files (format ``bilevel-kit-solution/1``): the result of one solve, as JSON.
+"""Solution files (format ``bilevel-kit-solution/2``): the result of one solve, as JSON.
 
-Keys other tools can rely on: ``method``, ``status``, ``objective`` (makespan, s), ``bound``,
-``gap``, ``seed``, ``params``, ``wall_time_s``, ``metrics`` {``makespan``, ``human_idle``,
-``robot_idle``, ``n_kits``} and ``kits`` [{``tasks``, ``robot_start``, ``robot_end``,
-``arrive``, ``human_start``, ``human_end``, ``layout`` [{``part``, ``type``, ``x``, ``y``,
-``theta``, ``w``, ``h``}]}]; with several stations also each kit's ``station`` and
-``station_metrics`` {station: {``completion``, ``human_idle``, ``n_kits``}}. Lengths in mm,
-angles in degrees, times in s. ``overrides``: the instance overrides the plan was solved with
-(``--units``, ``--trays``, ...), which ``bilevel-kit check`` applies again (docs/formats.md).
+Keys other tools can rely on: ``method``, ``status``, ``objective`` {``name``, ``value``,
+``bound``, ``gap``} (the objective the method minimised, the one ``status`` refers to),
+``makespan`` {``value``, ``bound``, ``gap``} (s), ``seed``, ``params``, ``wall_time_s``,
+``metrics`` {``makespan``, ``human_idle``, ``robot_idle``, ``n_kits``} and ``kits``
+[{``tasks``, ``robot_start``, ``robot_end``, ``arrive``, ``human_start``, ``human_end``,
+``layout`` [{``part``, ``type``, ``x``, ``y``, ``theta``, ``w``, ``h``}]}]; with several
+stations also each kit's ``station`` and ``station_metrics`` {station: {``completion``,
+``human_idle``, ``n_kits``}}. Lengths in mm, angles in degrees, times in s. ``overrides``: the
+instance overrides the plan was solved with (``--units``, ``--trays``, ...), which
+``bilevel-kit check`` applies again (docs/formats.md).
+Files of format 1 (a number ``objective``, ``bound`` and ``gap`` about the makespan, the
+minimised objective's numbers in ``extra``) are still read and checked.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -24,11 +28,13 @@ from .errors import SolutionError
 from .instance import Instance
 from .jsonio import read_json, validate_document
 from .methods import Result
-from .objectives import OBJECTIVES
+from .objectives import OBJECTIVES, is_top_level
 from .plan import Kit, KitTimes, Placement, Plan
 from .validate import Claims, Violation, check
 
-FORMAT = "bilevel-kit-solution/1"
+FORMAT = "bilevel-kit-solution/2"
+#: The previous format, still read: its ``objective``, ``bound`` and ``gap`` are the makespan's.
+FORMAT_1 = "bilevel-kit-solution/1"
 _TIME_KEYS = ("robot_start", "robot_end", "arrive", "human_start", "human_end")
 _METRIC_KEYS = ("makespan", "human_idle", "robot_idle", "n_kits")
 #: per station, with several stations (:meth:`bilevel_kit.plan.Timeline.station_metrics`)
@@ -72,11 +78,18 @@ def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -
         "instance": result.instance,
         "method": result.method,
         "status": result.status,
-        "status_objective": result.status_objective,
+        "objective": {
+            "name": result.objective_name,
+            "value": result.objective,
+            "bound": result.bound,
+            "gap": result.gap,
+        },
         "timeline_params": result.timeline_params,
-        "objective": result.objective,
-        "bound": result.bound,
-        "gap": result.gap,
+        "makespan": {
+            "value": result.makespan,
+            "bound": result.makespan_bound,
+            "gap": result.makespan_gap,
+        },
         "seed": result.seed,
         "params": _jsonable(result.params),
         "wall_time_s": result.wall_time_s,
@@ -120,10 +133,10 @@ _OVERRIDES = {
 }
 
 
-def schema() -> dict[str, Any]:
-    """JSON Schema of a solution file (what :func:`read` requires). Every key the writer
-    stores is typed, and no other key is allowed: the checker recomputes each number it is
-    given, so a misspelt or foreign key cannot pass unnoticed."""
+def schema(version: str = FORMAT) -> dict[str, Any]:
+    """JSON Schema of a solution file of format ``version`` (what :func:`read` requires).
+    Every key the writer stores is typed, and no other key is allowed: the checker recomputes
+    each number it is given, so a misspelt or foreign key cannot pass unnoticed."""
     placement = {
         "type": "object",
         "required": ["part", "type", "x", "y", "theta", "w", "h"],
@@ -161,15 +174,11 @@ def schema() -> dict[str, Any]:
         "required": ["format", "method", "status", "kits"],
         "additionalProperties": False,
         "properties": {
-            "format": {"const": FORMAT},
+            "format": {"const": version},
             "instance": {"type": "string"},
             "method": {"type": "string"},
             "status": {"enum": ["optimal", "feasible", "infeasible", "unknown"]},
-            "status_objective": {
-                "type": "string",
-                "description": "the objective the status refers to "
-                "(makespan, human_idle, sum_completion, J)",
-            },
+            **(_claims_1() if version == FORMAT_1 else _claims_2()),
             "timeline_params": {
                 "type": "object",
                 "description": "delivery_time, kit_overhead and trays the times were computed for",
@@ -194,9 +203,6 @@ def schema() -> dict[str, Any]:
                     },
                 },
             },
-            "objective": _OPT_NUM,
-            "bound": _OPT_NUM,
-            "gap": {"type": ["number", "null"], "minimum": 0},
             "seed": {"type": "integer", "minimum": 0},
             "params": {"type": "object"},
             "wall_time_s": {"type": "number", "minimum": 0},
@@ -219,6 +225,50 @@ def schema() -> dict[str, Any]:
             "extra": {"type": "object"},
             "overrides": _OVERRIDES,
         },
+    }
+
+
+_GAP = {"type": ["number", "null"], "minimum": 0}
+
+
+def _claims_1() -> dict[str, Any]:
+    """Format 1's claims: the makespan's, and the name of the objective ``status`` is about
+    (its numbers in ``extra``, under the keys the registry lists)."""
+    return {
+        "status_objective": {
+            "type": "string",
+            "description": "the objective the status refers to "
+            "(makespan, human_idle, sum_completion, J)",
+        },
+        "objective": _OPT_NUM,
+        "bound": _OPT_NUM,
+        "gap": _GAP,
+    }
+
+
+def _claims_2() -> dict[str, Any]:
+    """Format 2's claims: the minimised objective's, named, and the makespan's."""
+
+    def block(name: bool) -> dict[str, Any]:
+        return {
+            "type": "object",
+            "required": ["name"] if name else [],
+            "additionalProperties": False,
+            "properties": {
+                **({"name": {"type": "string"}} if name else {}),
+                "value": _OPT_NUM,
+                "bound": _OPT_NUM,
+                "gap": _GAP,
+            },
+        }
+
+    return {
+        "objective": {
+            **block(True),
+            "description": "the objective the method minimised (status refers to it): its "
+            "name (makespan, sum_completion, human_idle, J, expected_makespan), value, bound, gap",
+        },
+        "makespan": {**block(False), "description": "the plan's makespan, its bound and gap (s)"},
     }
 
 
@@ -297,7 +347,14 @@ class _Numbers:
 def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
     """Validate a parsed solution document; a kit with some but not all of the five times, or
     times on some kits only, raises :class:`SolutionError` naming the missing field."""
-    validate_document(doc, source, schema(), SolutionError)
+    version = doc.get("format") if isinstance(doc, dict) else None
+    if isinstance(doc, dict) and "format" in doc and version not in (FORMAT, FORMAT_1):
+        raise SolutionError(
+            source, "$.format", f"expected {FORMAT!r} (or {FORMAT_1!r}), got {version!r}"
+        )
+    validate_document(
+        doc, source, schema(FORMAT_1 if version == FORMAT_1 else FORMAT), SolutionError
+    )
     num = _Numbers()
     kits = []
     times = []
@@ -327,19 +384,8 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
     if metrics is not None:  # a refused metric is left out (its violation says why)
         read = {k: num(v, f"$.metrics.{k}") for k, v in metrics.items()}
         metrics = {k: v for k, v in read.items() if not math.isnan(v)}
-    stated = {k: num.optional(doc.get(k), f"$.{k}") for k in ("objective", "bound", "gap")}
-    status_objective = doc.get("status_objective", "makespan")
-    claims = Claims(
-        status=doc["status"],
-        objective=stated["objective"],
-        bound=stated["bound"],
-        gap=stated["gap"],
-        has_gap="gap" in doc,
-        status_objective=status_objective,
-        objective_claims=_objective_claims(status_objective, doc.get("extra") or {}, num),
-        timeline=_timeline(doc.get("timeline_params"), num),
-        refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
-    )
+    reader = _claims_of_1 if doc["format"] == FORMAT_1 else _claims_of_2
+    claims = replace(reader(doc, num), timeline=_timeline(doc.get("timeline_params"), num))
     per_station = doc.get("station_metrics")
     if per_station is not None:
         per_station = {
@@ -356,6 +402,71 @@ def from_dict(doc: Any, source: str = "<memory>") -> LoadedSolution:
         tuple(num.faults),
         per_station,
         tuple(kit_stations) if any(s is not None for s in kit_stations) else None,
+    )
+
+
+def _claims_of_1(doc: dict[str, Any], num: _Numbers) -> Claims:
+    """A format-1 file's claims: ``objective``, ``bound``, ``gap`` the makespan's, those on
+    ``status_objective`` in ``extra`` (the registry's keys)."""
+    stated = {k: num.optional(doc.get(k), f"$.{k}") for k in ("objective", "bound", "gap")}
+    status_objective = doc.get("status_objective", "makespan")
+    return Claims(
+        status=doc["status"],
+        objective=stated["objective"],
+        bound=stated["bound"],
+        gap=stated["gap"],
+        has_gap="gap" in doc,
+        status_objective=status_objective,
+        objective_claims=_objective_claims(status_objective, doc.get("extra") or {}, num),
+        refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
+    )
+
+
+def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
+    """A format-2 file's claims: the ``makespan`` block's, and the ``objective`` block's on the
+    objective it names. When that is the makespan, the two blocks are one claim: a number in
+    either is checked (the ``objective`` block's where both state it, a ``makespan`` block
+    that differs being a mismatch)."""
+    own = doc.get("objective") or {"name": "makespan"}
+    name = str(own["name"])
+    top = is_top_level(name)
+    other = doc.get("makespan") or {}
+    keys = ("value", "bound", "gap")
+    block = {**other, **{k: own[k] for k in keys if k in own}} if top else other
+
+    def where(k: str) -> str:
+        return f"$.objective.{k}" if top and k in own else f"$.makespan.{k}"
+
+    stated = {k: num.optional(block.get(k), where(k)) for k in keys}
+    claims = Claims(
+        status=doc["status"],
+        objective=stated["value"],
+        bound=stated["bound"],
+        gap=stated["gap"],
+        has_gap="gap" in block,
+        status_objective=name,
+        refused=frozenset(
+            {"value": "objective"}.get(k, k)
+            for k, v in stated.items()
+            if v is None and block.get(k) is not None
+        ),
+    )
+    if top:
+        for k in (k for k in keys if k in other and k in own):
+            theirs = num.optional(other[k], f"$.makespan.{k}")
+            refused = (theirs is None) != (other[k] is None) or (
+                (stated[k] is None) != (own[k] is None)
+            )
+            if not refused and theirs != stated[k]:  # a refused number: its own violation
+                msg = f"$.makespan.{k} {other[k]!r} differs from $.objective.{k} {own[k]!r}"
+                num.faults.append(Violation("objective_mismatch", msg))
+        return claims
+    value, bound, gap = (
+        num.optional(own.get(k), f"$.objective.{k}") for k in ("value", "bound", "gap")
+    )
+    stated_in = ("objective.value", "objective.bound")
+    return replace(
+        claims, objective_claims=(value, bound, gap, "gap" in own), objective_where=stated_in
     )
 
 

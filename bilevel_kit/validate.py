@@ -89,10 +89,12 @@ class Claims:
     #: The objective ``status`` refers to; "optimal" only promises a zero makespan gap when it
     #: is ``makespan``.
     status_objective: str = "makespan"
-    #: What the file states about ``status_objective`` when the registry keeps it in
-    #: ``extra`` (:meth:`bilevel_kit.objectives.Objective.stated`): value, bound, gap (None:
-    #: not stated) and whether a gap key is present.
+    #: What the result states about ``status_objective`` when it is not the makespan (a
+    #: format-2 file's ``objective`` block, a format-1 file's ``extra``): value, bound, gap
+    #: (None: not stated) and whether a gap key is present.
     objective_claims: tuple[float | None, float | None, float | None, bool] | None = None
+    #: Where those are stated, for the messages (None: a format-1 file's ``extra`` keys).
+    objective_where: tuple[str, str] | None = None
     #: The instance parameters the times were computed for (:func:`timeline_params`).
     timeline: Mapping[str, Any] | None = None
     #: The claims whose number the strict reader refused (``bound``, ``gap`` ...): reported
@@ -287,7 +289,10 @@ def _check_objective(
         return []
     value, bound, gap, has_gap = claims.objective_claims or (None, None, None, False)
     real = obj.value(evaluate(instance, plan))
-    keys = f"extra.{obj.value_keys[0]}"
+    keys, bound_key = claims.objective_where or (
+        f"extra.{obj.value_keys[0]}",
+        f"extra.{obj.bound_keys[0]}",
+    )
     out: list[Violation] = []
     if value is not None and real is not None and not _close(value, real):
         msg = f"{keys} {value:.6g} for {obj.name}, the plan's is {real:.6g}"
@@ -308,7 +313,7 @@ def _check_objective(
         msg = f"{obj.name} gap {shown}, recomputed from its value and bound: {wanted}"
         out.append(Violation("gap_mismatch", msg))
     if claims.status == "optimal" and bound is None:
-        msg = f"status 'optimal' for {obj.name} without a bound (extra.{obj.bound_keys[0]})"
+        msg = f"status 'optimal' for {obj.name} without a bound ({bound_key})"
         out.append(Violation("status_mismatch", msg))
     elif claims.status == "optimal" and bound is not None and ref - bound > tol:
         msg = f"status 'optimal' but {obj.name} {ref:.6g} is above its bound {bound:.6g}"

@@ -19,10 +19,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.solution:
-        from ..solution import schema
+        from .. import solution
+
+        doc = solution.schema()
     else:
         from ..instance import schema
-    text = json.dumps(schema(), indent=2) + "\n"
+
+        doc = schema()
+    text = json.dumps(doc, indent=2) + "\n"
     if args.out:
         from ..atomic import write_text
 

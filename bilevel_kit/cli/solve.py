@@ -203,15 +203,15 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
     follows on a line of its own with that objective's numbers (docs/cli.md#shared-options),
     so "optimal" never stands beside a gap it is not about."""
     m = result.metrics or {}
-    own = is_top_level(result.status_objective)
+    own = is_top_level(result.objective_name)
     head = f"{result.method} {result.status}" if own else f"{result.method}"
     which = "" if own else "makespan "
     lines = [
         f"{instance.name}: {head}{limit_note(result)}"
         f"  makespan {_fmt(m.get('makespan'))} s"
         f"  human idle {_fmt(m.get('human_idle'))} s  robot idle {_fmt(m.get('robot_idle'))} s"
-        f"  kits {m.get('n_kits', '-')}  {which}bound {_fmt(result.bound)} s"
-        f"  {which}gap {_pct(result.gap)}  time {result.wall_time_s:.3f} s"
+        f"  kits {m.get('n_kits', '-')}  {which}bound {_fmt(result.makespan_bound)} s"
+        f"  {which}gap {_pct(result.makespan_gap)}  time {result.wall_time_s:.3f} s"
     ]
     for station, sm in result.extra.get("station_metrics", {}).items():
         lines.append(
@@ -234,14 +234,13 @@ def summary(instance: Instance, result: Result, quiet: bool) -> str:
 
 
 def _status_line(result: Result) -> str:
-    """``  OBJECTIVE: STATUS`` and that objective's value, bound and gap (when known); J's
-    meaning on a line of its own."""
+    """``  OBJECTIVE: STATUS`` and the value, bound and gap of the objective minimised (when
+    known); J's meaning on a line of its own."""
     from ..objectives import OBJECTIVES
 
-    x = result.extra
-    obj = OBJECTIVES.get(result.status_objective)
+    obj = OBJECTIVES.get(result.objective_name)
+    value, bound, gap = result.objective, result.bound, result.gap
     if obj is not None and obj.meaning is not None:  # J: no unit, its meaning below
-        value, bound, gap, _ = obj.stated({}, x)
         numbers = ""
         if value is not None:
             numbers = (
@@ -250,12 +249,9 @@ def _status_line(result: Result) -> str:
             )
         return f"  {obj.name}: {result.status}{numbers}\n  ({obj.meaning})"
     numbers = ""
-    if x.get("objective_value") is not None:
-        numbers = (
-            f"  {_fmt(x['objective_value'])} s  bound {_fmt(x.get('objective_bound'))} s"
-            f"  gap {_pct(x.get('objective_gap'))}"
-        )
-    return f"  {result.status_objective}: {result.status}{numbers}"
+    if value is not None:
+        numbers = f"  {_fmt(value)} s  bound {_fmt(bound)} s  gap {_pct(gap)}"
+    return f"  {result.objective_name}: {result.status}{numbers}"
 
 
 def _convergence_figure(result: Result, kit: int | None) -> Figure | SubFigure:

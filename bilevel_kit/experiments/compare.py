@@ -147,8 +147,8 @@ def compare_cell(cell: CompareCell) -> dict[str, Any]:
         "human_idle": m.get("human_idle"),
         "robot_idle": m.get("robot_idle"),
         "n_kits": m.get("n_kits"),
-        "bound": res.bound,
-        "gap_own": res.gap,
+        "bound": res.makespan_bound,
+        "gap_own": res.makespan_gap,
         "wall_time_s": res.wall_time_s,
         # the run stopped at its time limit, not on its own (docs/cli.md#time-limits)
         "time_limit_hit": bool(res.extra.get("time_limit_hit")),
@@ -174,12 +174,9 @@ def objective_record(inst: Instance, res: Result) -> dict[str, Any]:
     if res.plan is not None and res.plan.kits:
         tl = evaluate(inst, res.plan)
         values = {o.name: o.value(tl) for o in evaluated()}
-    obj = OBJECTIVES.get(res.status_objective)
-    bound = None
-    if obj is not None and obj.bound_holds_for_every_plan:
-        fields = {"objective": res.objective, "bound": res.bound, "gap": res.gap}
-        bound = obj.stated(fields, res.extra)[1]
-    claim = {"name": res.status_objective, "optimal": res.status == "optimal", "bound": bound}
+    obj = OBJECTIVES.get(res.objective_name)
+    bound = res.bound if obj is not None and obj.bound_holds_for_every_plan else None
+    claim = {"name": res.objective_name, "optimal": res.status == "optimal", "bound": bound}
     return {"objective_values": values, "objective_claim": claim}
 
 

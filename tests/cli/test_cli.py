@@ -40,7 +40,7 @@ def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
         "method",
         "status",
         "objective",
-        "bound",
+        "makespan",
         "seed",
         "params",
         "wall_time_s",
@@ -48,6 +48,8 @@ def test_solve_writes_a_valid_solution(capsys, tmp_path, root):
         "kits",
     ):
         assert key in doc
+    assert doc["objective"]["name"] == "makespan"
+    assert doc["objective"]["value"] == doc["makespan"]["value"] == pytest.approx(459.78)
     assert doc["metrics"] == {
         "makespan": pytest.approx(459.78),
         "human_idle": pytest.approx(37),
@@ -551,12 +553,7 @@ def test_a_status_about_j_prints_j_and_its_bound(tiny):
 
     res = solve(tiny, "single-task")
     assert "refers to J" not in summary(tiny, res, True)
-    extra = {
-        "plan_objective_J": 11.375,
-        "plan_objective_J_bound": 11.0,
-        "plan_objective_J_gap": 0.033,
-    }
-    res = replace(res, status_objective="J", extra={**res.extra, **extra})
+    res = replace(res, objective_name="J", objective=11.375, bound=11.0, gap=0.033)
     lines = summary(tiny, res, True).splitlines()
     assert lines[1] == "  J: feasible  J 11.38  J bound 11.00  J gap 3.30%"
     from bilevel_kit.objectives import J_MEANING

@@ -1,5 +1,5 @@
 """The checker cannot be crashed or fooled (issue 23, item 4), and results are held to their
-claims: one strict reader for every number of a solution file, ``status_objective`` naming a
+claims: one strict reader for every number of a solution file, the ``objective`` named a
 known objective, the overlap test as a grid hash (the same answers as comparing every pair),
 ``solve --check`` checking a fresh result's status and bound, and ``compare`` a bound against
 every valid plan of the comparison."""
@@ -42,9 +42,9 @@ def _set(doc, path, value):
 @pytest.mark.parametrize(
     "path",
     [
-        "objective",
-        "bound",
-        "gap",
+        "objective.value",
+        "objective.bound",
+        "objective.gap",
         "metrics.makespan",
         "metrics.n_kits",
         "kits.0.arrive",
@@ -72,22 +72,25 @@ def test_huge_numbers_are_violations_never_exceptions(tiny, doc, path, value):
 
 
 def test_a_400_digit_integer_reads_as_out_of_range(tiny, doc):
-    found = _check(tiny, _set(doc, "objective", BIG))
+    found = _check(tiny, _set(doc, "objective.value", BIG))
     assert "a 400-digit integer is out of range" in found[0].message
 
 
 @pytest.mark.parametrize("name", ["", "banana", "J ", "Makespan"])
 def test_status_objective_must_name_a_known_objective(tiny, doc, name):
-    opt = _set(_set(_set(doc, "status", "optimal"), "bound", doc["objective"]), "gap", 0.0)
+    value = doc["objective"]["value"]
+    opt = _set(_set(doc, "status", "optimal"), "objective", {"name": "makespan", "value": value})
+    opt = _set(_set(opt, "objective.bound", value), "objective.gap", 0.0)
+    opt = _set(opt, "makespan", {"value": value, "bound": value, "gap": 0.0})
     assert _check(tiny, opt) == []
-    found = _check(tiny, _set(opt, "status_objective", name))
+    found = _check(tiny, _set(opt, "objective.name", name))
     assert [v.kind for v in found] == ["status_mismatch"]
     assert f"status_objective {name!r} names no known objective" in found[0].message
 
 
 def test_known_objectives_are_accepted(tiny, doc):
     for name in ("makespan", "human_idle", "J"):
-        assert _check(tiny, _set(doc, "status_objective", name)) == []
+        assert _check(tiny, _set(doc, "objective", {"name": name})) == []  # no numbers stated
 
 
 # ---------------------------------------------------------------------------------------------
@@ -260,13 +263,13 @@ def test_add_best_bound_gap_keeps_consistent_bounds():
 def test_a_tampered_solution_file_names_every_refused_number(tmp_path, tiny, doc, capsys):
     from bilevel_kit.cli import main
 
-    bad = _set(_set(doc, "objective", BIG), "kits.0.layout.0.y", -BIG)
+    bad = _set(_set(doc, "objective.value", BIG), "kits.0.layout.0.y", -BIG)
     path = tmp_path / "s.json"
     path.write_text(json.dumps(bad))
     assert main(["check", str(tiny.source), str(path)]) == 1
     out, err = capsys.readouterr()
     err = out + err
-    assert "[bad_number] $.objective: a 400-digit integer is out of range" in err
+    assert "[bad_number] $.objective.value: a 400-digit integer is out of range" in err
     assert "[bad_number] $.kits[0].layout[0].y: a 400-digit integer is out of range" in err
 
 

@@ -10,12 +10,13 @@ import json
 import typing
 
 import pytest
+from solution_v1 import to_format_1
 from stations_example import worked_example_doc
 
 from bilevel_kit import solution
 from bilevel_kit.instance import from_dict
 from bilevel_kit.methods import MethodOutput, Result, Status
-from bilevel_kit.objectives import MODEL_OBJECTIVES, OBJECTIVES, evaluated, extra_claims, get
+from bilevel_kit.objectives import MODEL_OBJECTIVES, OBJECTIVES, evaluated, get
 from bilevel_kit.plan import Kit, Plan, evaluate
 from bilevel_kit.stations import objective_of
 from bilevel_kit.validate import timeline_params
@@ -101,57 +102,59 @@ def test_what_the_exact_drivers_ask_of_an_objective(tiny):
     assert get("human_idle").value(tl) != tl.makespan
 
 
-def _doc(inst, plan, name, status, extra):
-    """A solution file of ``plan`` whose status refers to objective ``name``."""
+def _doc(inst, plan, name, status, stated, fmt):
+    """A solution file (format ``fmt``) of ``plan`` whose status refers to objective
+    ``name``, stating ``stated`` (value, bound, gap) on it."""
     tl = evaluate(inst, plan)
+    value, bound, gap = stated
     res = Result(
         method="x",
         status=Status(status),
         plan=plan,
         timeline=tl,
-        objective=tl.makespan,
-        bound=None,
-        gap=None,
+        objective=value,
+        bound=bound,
+        gap=gap,
         wall_time_s=0.0,
         seed=0,
         params={},
         instance=inst.name,
-        extra=extra,
-        status_objective=name,
+        objective_name=name,
         timeline_params=timeline_params(inst),
     )
-    return json.loads(json.dumps(solution.result_to_dict(res)))
+    doc = json.loads(json.dumps(solution.result_to_dict(res)))
+    return to_format_1(doc) if fmt == 1 else doc
 
 
+@pytest.mark.parametrize("fmt", [1, 2])
 @pytest.mark.parametrize("obj", [o for o in OBJECTIVES.values() if not o.top_level])
-def test_every_stated_objective_is_held_to_its_numbers(obj):
-    """For each registered objective stated in ``extra``: its true numbers pass; a tampered
-    value, a bound above the value, a wrong gap and "optimal" without a bound are each named."""
+def test_every_stated_objective_is_held_to_its_numbers(obj, fmt):
+    """For each registered objective besides the makespan, in the ``objective`` block of a
+    format-2 file and in ``extra`` of a format-1 one: its true numbers pass; a tampered value,
+    a bound above the value, a wrong gap and "optimal" without a bound are each named."""
     inst = from_dict(worked_example_doc())
     plan = Plan((Kit(("a1",)), Kit(("a2",)), Kit(("b1",))))
     real = obj.value(evaluate(inst, plan))
     # not a function of the timeline: its stated value stands in (J may be negative, a
     # sample-average makespan is a time)
     value = real if real is not None else (-3.0 if obj.name == "J" else 30.0)
-    key_v, key_b, key_g = obj.value_keys[0], obj.bound_keys[0], obj.gap_keys[0]
-    good = {key_v: value, key_b: value, key_g: 0.0}
+    good = (value, value, 0.0)
 
-    def kinds(status, **extra):
-        doc = _doc(inst, plan, obj.name, status, {**good, **extra})
+    def kinds(status, value=value, bound=value, gap=0.0):
+        doc = _doc(inst, plan, obj.name, status, (value, bound, gap), fmt)
         return sorted(v.kind for v in solution.from_dict(doc).check(inst))
 
     assert kinds("optimal") == []
-    assert extra_claims(obj.name, good) == (value, value, 0.0, True)
+    v1 = solution.from_dict(to_format_1(_doc(inst, plan, obj.name, "optimal", good, 2)))
+    assert v1.claims.objective_claims == (value, value, 0.0, True)
     if real is not None:
         for tampered in (1.0, 1e9, 0.0):
-            assert "objective_mismatch" in kinds("feasible", **{key_v: tampered})
+            assert "objective_mismatch" in kinds("feasible", value=tampered)
         # the gap clips at 0, as the stated one: only the bound is named
-        assert kinds("feasible", **{key_b: value + 1}) == ["bound_above_objective"]
-    assert kinds("feasible", **{key_g: 0.5}) == ["gap_mismatch"]
-    assert kinds("optimal", **{key_b: None, key_g: None}) == ["status_mismatch"]
-    assert kinds("optimal", **{key_b: value - 2, key_g: obj.gap(value, value - 2)}) == [
-        "status_mismatch"
-    ]
+        assert kinds("feasible", bound=value + 1) == ["bound_above_objective"]
+    assert kinds("feasible", gap=0.5) == ["gap_mismatch"]
+    assert kinds("optimal", bound=None, gap=None) == ["status_mismatch"]
+    assert kinds("optimal", bound=value - 2, gap=obj.gap(value, value - 2)) == ["status_mismatch"]
 
 
 def test_solve_check_holds_a_fresh_result_to_its_objective(tiny):

@@ -40,11 +40,15 @@ def tiny_doc() -> Doc:
 
 @cache
 def tiny_solution() -> Doc:
-    """The single-task solution of the tiny instance, as its solution file holds it."""
+    """The single-task solution of the tiny instance, as a format-1 file holds it: the claims
+    rows below use its keys (still read, docs/formats.md#solutions; format 2's claims:
+    tests/core/test_result_objective.py)."""
+    from solution_v1 import to_format_1
+
     from bilevel_kit import load, solve
     from bilevel_kit.solution import result_to_dict
 
-    return json.loads(json.dumps(result_to_dict(solve(load(TINY), "single-task"))))
+    return to_format_1(json.loads(json.dumps(result_to_dict(solve(load(TINY), "single-task")))))
 
 
 PACK_DOC: Doc = {

@@ -22,8 +22,9 @@ def test_a_status_about_another_objective_stands_on_its_own_line() -> None:
     """ "optimal" never stands beside the makespan's bound and gap it is not about."""
     tiny = load(TINY)
     res = solve(tiny, "single-task")
-    extra = {"objective_value": 25.0, "objective_bound": 25.0, "objective_gap": 0.0}
-    res = replace(res, status="optimal", status_objective="sum_completion", extra=extra)
+    res = replace(
+        res, status="optimal", objective_name="sum_completion", objective=25.0, bound=25.0, gap=0.0
+    )
     lines = summary(tiny, res, True).splitlines()
     assert lines[0].startswith("tiny: single-task  makespan 25.50 s")
     assert "optimal" not in lines[0] and "makespan bound 24.50 s  makespan gap 3.92%" in lines[0]

@@ -4,6 +4,7 @@ method's valid plan's value of it is exit 1 naming both methods."""
 
 from __future__ import annotations
 
+import json
 import sys
 from dataclasses import dataclass, field
 
@@ -115,3 +116,55 @@ def test_compare_exits_1_on_a_false_optimum_of_another_objective(tiny, capsys):
         "human_idle 4 of a valid plan of single-task" in err
     )
     assert "Traceback" not in out + err
+
+
+def idle_optimum(instance, options, *, seed=0, time_limit=None):
+    """Single-task's plan on the tiny instance, claimed optimal for the human idle (4 s, the
+    optimum cpsat proves, tests/models/test_result_objective.py) with that bound."""
+    from bilevel_kit.heuristics.baselines import single_task
+
+    extra = {"objective_value": 4.0, "objective_bound": 4.0, "objective_gap": 0.0}
+    return MethodOutput(single_task(instance).plan, Status.OPTIMAL, None, extra, "human_idle")
+
+
+def test_compare_reports_the_makespan_by_name_whatever_was_minimised(tiny, tmp_path, capsys):
+    """A row of a method that minimised the human idle: its makespan, bound and gap columns
+    are the makespan's (25.5 s over the bound 24.5 s), its status names the idle (issue 36)."""
+    import csv
+
+    from bilevel_kit import methods
+    from bilevel_kit.cli import main
+
+    module = sys.modules[__name__]
+    if "idle-optimum-test" not in methods.REGISTRY:
+        methods.register(
+            "idle-optimum-test",
+            f"{module.__name__}:idle_optimum",
+            "claims the idle optimum",
+            f"{module.__name__}:IdleOptions",
+        )
+    out = tmp_path / "c.csv"
+    code = main(
+        [
+            "compare",
+            str(tiny.source),
+            "--methods",
+            "single-task,idle-optimum-test",
+            "--csv",
+            str(out),
+        ]
+    )
+    printed = capsys.readouterr().out
+    assert code == 0
+    rows = {r["method"]: r for r in csv.DictReader(out.open())}
+    idle, plain = rows["idle-optimum-test"], rows["single-task"]
+    assert idle["status"] == "optimal (for human_idle)" and plain["status"] == "feasible"
+    for r in (idle, plain):
+        assert (float(r["makespan"]), float(r["bound"])) == (25.5, 24.5)
+        assert float(r["gap_own"]) == pytest.approx(1 / 25.5)
+    assert json.loads(idle["objective_claim"]) == {
+        "name": "human_idle",
+        "optimal": True,
+        "bound": 4.0,
+    }
+    assert "makespan (s)" in next(line for line in printed.splitlines() if "method" in line)

@@ -176,10 +176,10 @@ def test_bilevel_optimum_is_exact_and_never_above_greedy(inst):
     assert (out.status == "optimal") == proven, out.extra  # proven at any angle
     assert check(inst, out.plan) == []
     lower = kc.LowerLevel(inst, lower="ce", ce_params=ce)
-    value = out.extra["plan_objective_J"]
+    value = out.extra["objective_value"]
     assert value == pytest.approx(kc.paper_objective(inst, out.plan, lower), abs=1e-9)
     assert value == pytest.approx(out.extra["plan_objective_J_milp"], abs=1e-5)
-    assert out.extra["plan_objective_J_bound"] <= value + 1e-9
+    assert out.extra["objective_bound"] <= value + 1e-9
     assert value == pytest.approx(brute_force(inst, lower), abs=1e-5)
     assert out.bound is not None and out.bound <= out.extra["makespan"] + 1e-9
 
@@ -201,11 +201,11 @@ def test_stool_optimum_equals_greedy_and_its_number():
     assert out.status == "optimal"
     assert out.extra["columns"] == 7  # every subset but {} is convex here, and all fit
     assert [k.tasks for k in out.plan.kits] == [("a1",), ("a2",), ("a3",)]
-    assert out.extra["plan_objective_J"] == pytest.approx(54.0581203987, abs=1e-6)
+    assert out.extra["objective_value"] == pytest.approx(54.0581203987, abs=1e-6)
     greedy = greedy_ce(inst, seed=0)
     lower = kc.LowerLevel(inst, lower="ce")
     assert kc.paper_objective(inst, greedy.plan, lower) == pytest.approx(
-        out.extra["plan_objective_J"], abs=1e-6
+        out.extra["objective_value"], abs=1e-6
     )
 
 
@@ -230,7 +230,7 @@ def test_warm_start_and_cpsat_lower_level_keep_the_contract():
     a = kc.solve(inst, time_limit=30.0, lower="ce", ce_params=ce, warm_plan=greedy.plan)
     b = kc.solve(inst, time_limit=30.0, lower="best", ce_params=ce, pack_time_limit=0.5)
     assert a.status == b.status == "optimal"
-    assert b.extra["plan_objective_J"] <= a.extra["plan_objective_J"] + 1e-9
+    assert b.extra["objective_value"] <= a.extra["objective_value"] + 1e-9
     for out in (a, b):
         assert check(inst, out.plan) == []
 
@@ -248,9 +248,13 @@ def test_registered_method_reports_a_makespan_bound(monkeypatch):
     res = solve(inst, "bilevel-milp", time_limit=30.0, check=True, lower="ce")
     assert res.status == "optimal"
     assert res.extra["violations"] == []
-    assert res.bound == pytest.approx(best_bound(inst))
-    assert res.bound <= res.objective
-    assert res.extra["plan_objective_J"] == pytest.approx(54.0581203987, abs=1e-6)
+    assert res.makespan_bound == pytest.approx(best_bound(inst))
+    assert res.makespan_bound <= res.makespan
+    # the result reports J, the objective it minimised, with its bound and gap
+    assert res.objective_name == "J" and "objective_value" not in res.extra
+    assert res.objective == pytest.approx(54.0581203987, abs=1e-6)
+    assert res.bound <= res.objective + 1e-9
+    assert res.gap == pytest.approx(abs(res.objective - res.bound) / max(1.0, abs(res.objective)))
 
 
 def test_options_of_the_registered_method():
@@ -277,8 +281,8 @@ def test_a_solver_stopped_without_a_solution_leaves_the_warm_start(monkeypatch):
     inst = load(TABLE.parent / "stool.json")
     out = kc.solve(inst, time_limit=30.0, lower="ce")
     assert out.status == "feasible" and out.extra["incumbent"] == "warm start"
-    assert out.extra["termination"] == "killed" and out.extra["plan_objective_J_bound"] is None
+    assert out.extra["termination"] == "killed" and out.extra["objective_bound"] is None
     assert check(inst, out.plan) == []
     assert [k.tasks for k in out.plan.kits] == [("a1",), ("a2",), ("a3",)]
-    assert out.extra["plan_objective_J"] == pytest.approx(out.extra["local_search_objective"])
+    assert out.extra["objective_value"] == pytest.approx(out.extra["local_search_objective"])
     assert kc.solve(inst, time_limit=30.0, lower="ce", warm_plan=None).status == "unknown"

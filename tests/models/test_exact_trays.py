@@ -184,7 +184,7 @@ def test_bilevel_milp_is_exact_for_its_objective_under_trays(seed, trays):
     assert (out.status == "optimal") == proven, out.extra
     assert check(inst, out.plan) == []
     lower = kc.LowerLevel(inst, lower="ce", ce_params=ce)
-    value = out.extra["plan_objective_J"]
+    value = out.extra["objective_value"]
     assert value == pytest.approx(kc.paper_objective(inst, out.plan, lower), abs=1e-9)
     assert value == pytest.approx(out.extra["plan_objective_J_milp"], abs=1e-5)
     best = min(

@@ -141,7 +141,7 @@ def test_honoured_objective_and_log(inst, capfd, method):
     params = {"workers": 1} if method == "cpsat" else {}
     quiet = solve(inst, method, time_limit=20, objective="human_idle", **params)
     assert quiet.status_objective == "human_idle" and quiet.extra["objective"] == "human_idle"
-    assert quiet.extra["objective_value"] == quiet.timeline.human_idle
+    assert quiet.objective == quiet.timeline.human_idle
     silent = capfd.readouterr().out
     solve(inst, method, time_limit=20, log=True, **params)
     logged = capfd.readouterr().out

@@ -69,8 +69,8 @@ def bench_cell(cell: BenchCell) -> dict[str, Any]:
     return {
         **record,
         "status": res.status_text,
-        "makespan": res.objective,
-        "bound": res.bound,
+        "makespan": res.makespan,
+        "bound": res.makespan_bound,
         "wall_time_s": res.wall_time_s,
         "valid": None if res.plan is None else not violations,
         "violations": len(violations),

@@ -94,9 +94,10 @@ provably fits at no angle) / unknown.
 ``bound`` is the closed-form *makespan* bound (the method does not minimise makespan).
 ``extra`` keys:
 
-* ``plan_objective_J`` (J of the plan, by :func:`paper_objective`), ``plan_objective_J_milp``
-  (J as the MILP computed it), ``plan_objective_J_bound`` (the MILP's bound on J*),
-  ``plan_objective_J_gap`` (``|J - bound| / max(1, |J|)``), ``makespan`` (of the plan),
+* ``objective_value`` (J of the plan, by :func:`paper_objective`), ``objective_bound`` (the
+  MILP's bound on J*), ``objective_gap`` (``|J - bound| / max(1, |J|)``): the result's
+  ``objective``, ``bound`` and ``gap`` (:func:`bilevel_kit.methods.solve`); and
+  ``plan_objective_J_milp`` (J as the MILP computed it), ``makespan`` (of the plan),
   ``optimal_over_columns`` (the MILP proved J optimal over its columns);
 * ``excluded_axis_aligned``, ``excluded_unproven``: candidates left out on a proof for
   0/90-degree layouts only, or without a proof; ``status_reason`` when they cost the status;

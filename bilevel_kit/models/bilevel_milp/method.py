@@ -319,11 +319,11 @@ def _plan_extra(r: _Run, plan: Plan, info: SolveInfo) -> None:
     bound = info.bound
     if bound is not None and bound > value:
         bound = value  # solver tolerance
-    r.extra.update(
-        plan_objective_J=value,
+    r.extra.update(  # J's value, bound and gap: the result's own (methods.OBJECTIVE_KEYS)
+        objective_value=value,
         plan_objective_J_milp=info.objective,
-        plan_objective_J_bound=bound,
-        plan_objective_J_gap=None if bound is None else abs(value - bound) / max(1.0, abs(value)),
+        objective_bound=bound,
+        objective_gap=None if bound is None else abs(value - bound) / max(1.0, abs(value)),
         makespan=evaluate(r.instance, plan).makespan,
         lower_level_cut=r.lower_level.n_cut,
     )

@@ -11,13 +11,13 @@
 **Result.** ``status_objective`` ``expected_makespan``; ``status`` ``optimal`` when the model
 proved the plan optimal for the scenarios (among the plans the packing oracle accepts, as
 ``cpsat``'s Benders); ``bound`` is the mean-time run's proven bound on the *makespan* (the
-result's top-level claims speak of the makespan, docs/formats.md). ``extra``:
-``expected_makespan`` (the in-sample sample average, biased low: estimate a plan on an
-independent sample, :func:`bilevel_kit.stochastic.estimate`), ``expected_makespan_bound``
-(the model's bound on the sample average of every plan on these scenarios),
-``expected_makespan_gap``, ``mean_plan_expected_makespan`` (the mean-value plan on the same
-scenarios), ``scenarios``, ``scenario_seed``, ``cv``, ``makespan`` (mean times) and the SAA
-loop's counters (``saa_*``).
+result's ``makespan_bound``, docs/formats.md). ``extra``: ``objective_value`` (the in-sample
+sample average, biased low: estimate a plan on an independent sample,
+:func:`bilevel_kit.stochastic.estimate`), ``objective_bound`` (the model's bound on the sample
+average of every plan on these scenarios), ``objective_gap``: the result's ``objective``,
+``bound`` and ``gap`` (:func:`bilevel_kit.methods.solve`); ``mean_plan_expected_makespan``
+(the mean-value plan on the same scenarios), ``scenarios``, ``scenario_seed``, ``cv``,
+``makespan`` (mean times) and the SAA loop's counters (``saa_*``).
 """
 
 from __future__ import annotations
@@ -86,9 +86,9 @@ def lns_saa(
     optimal = out.proven and out.bound is not None and value - out.bound <= _tol(value)
     extra.update(
         out.info,
-        expected_makespan=value,
-        expected_makespan_bound=out.bound,
-        expected_makespan_gap=None if out.bound is None else gap(value, out.bound),
+        objective_value=value,  # the result's own (methods.OBJECTIVE_KEYS)
+        objective_bound=out.bound,
+        objective_gap=None if out.bound is None else gap(value, out.bound),
         makespan=evaluate(instance, plan).makespan,
         n_kits=len(plan.kits),
     )
