@@ -18,7 +18,7 @@ from bilevel_kit import UsageError, solve
 from bilevel_kit.bounds import best_bound
 from bilevel_kit.cli import main
 from bilevel_kit.instance import from_dict
-from bilevel_kit.objectives import OBJECTIVES, extra_claims, model_objectives
+from bilevel_kit.objectives import OBJECTIVES, model_objectives
 from bilevel_kit.plan import Kit, Plan, evaluate
 from bilevel_kit.validate import Claims, check
 
@@ -64,15 +64,16 @@ def test_the_exact_methods_minimise_the_plugin_objective(pairs, table, method):
     assert res.status_text == "optimal (for kit_handling)"
     value = OBJECTIVES["kit_handling"].value(res.timeline)
     assert value == pytest.approx(kit_handling(res.timeline))
-    assert res.extra["objective_value"] == pytest.approx(value, abs=1e-9)
-    assert res.extra["objective_bound"] == pytest.approx(value, abs=1e-6)
-    assert res.extra["objective_gap"] == pytest.approx(0.0, abs=1e-9)
+    assert res.objective_name == "kit_handling"
+    assert res.objective == pytest.approx(value, abs=1e-9)
+    assert res.bound == pytest.approx(value, abs=1e-6)
+    assert res.gap == pytest.approx(0.0, abs=1e-9)
     assert value == pytest.approx(TABLE_OPTIMUM, abs=1e-6)
-    assert res.objective == pytest.approx(TABLE_MAKESPAN, abs=1e-6)
+    assert res.makespan == pytest.approx(TABLE_MAKESPAN, abs=1e-6)
     assert len(res.plan.kits) == 3
-    # the makespan stays the result's own number, its bound at least the closed form's and
-    # at most the makespan optimum, 435.085 s
-    assert best_bound(table) <= res.bound <= 435.085 + 1e-9
+    # the makespan is a metric with its own bound: at least the closed form's and at most the
+    # makespan optimum, 435.085 s
+    assert best_bound(table) <= res.makespan_bound <= 435.085 + 1e-9
 
 
 @pytest.mark.parametrize(
@@ -107,10 +108,12 @@ def test_check_holds_a_stated_plugin_objective(pairs, tiny):
 
     def kinds(status: str, **extra: float) -> list[str]:
         stated = {"objective_value": value, "objective_bound": value, "objective_gap": 0.0}
+        stated.update(extra)  # a format-2 file's objective block: value, bound, gap
+        numbers = (stated["objective_value"], stated["objective_bound"], stated["objective_gap"])
         claims = Claims(
             status=status,
             status_objective="kit_handling",
-            objective_claims=extra_claims("kit_handling", {**stated, **extra}),
+            objective_claims=(*numbers, True),
         )
         return sorted(v.kind for v in check(tiny, plan, claims=claims))
 
