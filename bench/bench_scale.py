@@ -63,7 +63,7 @@ print(json.dumps({
     "status_objective": res.status_objective, "objective": res.objective, "bound": res.bound,
     "gap": res.gap, "valid": None if res.plan is None else e["violations"] == [],
     "kits": None if res.plan is None else len(res.plan.kits),
-    "note": e.get("reason", "") or e.get("cpsat_status", "") or e.get("termination", ""),
+    "note": e.get("reason", "") or e.get("solver_status") or "",
 }))
 """
 
