@@ -64,7 +64,7 @@ print(json.dumps({
     "bound": res.makespan_bound, "gap": res.makespan_gap,
     "valid": None if res.plan is None else e["violations"] == [],
     "kits": None if res.plan is None else len(res.plan.kits),
-    "note": e.get("reason", "") or e.get("cpsat_status", "") or e.get("termination", ""),
+    "note": e.get("reason", "") or e.get("solver_status") or "",
 }))
 """
 

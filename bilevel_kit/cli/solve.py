@@ -159,28 +159,24 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
             save_figure(fig, path)
 
 
-#: The ``extra`` values of an exact method that built no model (docs/formulations.md, "Model
-#: too large"), ``milp``'s ``termination`` and ``cpsat``'s ``cpsat_status``, in words.
-NO_MODEL = {
-    "too_large": "too large",
-    "not_built": "too slow to build",
-    "TOO_LARGE": "too large",
-    "NOT_BUILT": "too slow to build",
-}
+#: The ``solver_status`` of an exact method that built no model (docs/formulations.md, "Model
+#: too large"), in words.
+NO_MODEL = {"too_large": "too large", "not_built": "too slow to build"}
 
 
 def no_model_note(result: Result) -> str | None:
     """``METHOD: no model built (WHY): REASON`` when an exact method built no model (over the
     memory limit or too slow to build, with its estimated size), and whose plan it returns;
     else None."""
+    from ..models.exact import keys
+
     x = result.extra
-    for key in ("termination", "cpsat_status"):
-        why = NO_MODEL.get(str(x.get(key)))
-        if why is not None:
-            plan = f" (the plan is {x['hint_method']}'s)" if x.get("hint_method") else ""
-            reason = str(x.get("reason")).removeprefix(f"{result.method}: ")
-            return f"{result.method}: no model built ({why}): {reason}{plan}"
-    return None
+    why = NO_MODEL.get(str(keys.read(x, keys.SOLVER_STATUS)))  # (old records: old names)
+    if why is None:
+        return None
+    plan = f" (the plan is {x['hint_method']}'s)" if x.get("hint_method") else ""
+    reason = str(x.get("reason")).removeprefix(f"{result.method}: ")
+    return f"{result.method}: no model built ({why}): {reason}{plan}"
 
 
 def _fmt(v: float | None, unit: str = "") -> str:

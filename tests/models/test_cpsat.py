@@ -260,7 +260,9 @@ def test_hint_and_embedded_equals_benders_on_the_table(table):
     )
     a = cs.solve(inst, tray="embedded", hint=single, **FAST)
     b = cs.solve(inst, tray="benders", **FAST)
-    assert a.extra["hint_used"] is True
+    # the single-task plan packs but the quick plan is better: that is the incumbent
+    assert a.extra["hint_used"] is False and a.extra["hint_method"] is None
+    assert a.extra["upper_start"] < evaluate(inst, single).makespan
     assert a.status == b.status == "optimal"
     assert a.extra["makespan"] == pytest.approx(b.extra["makespan"])
     assert a.extra["makespan"] <= evaluate(inst, single).makespan

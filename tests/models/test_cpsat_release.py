@@ -135,7 +135,7 @@ def test_zero_releases_give_the_run_without_them(seed):
         assert out.status == base.status
         assert out.plan == base.plan
         assert "release_makespan" not in out.extra
-        for key in ("makespan", "gap", "max_kits", "upper_start", "cpsat_status"):
+        for key in ("makespan", "gap", "max_kits", "upper_start", "solver_status"):
             assert out.extra[key] == base.extra[key], key
 
 

@@ -99,7 +99,7 @@ def test_cli_says_in_one_line_when_no_model_is_built(tmp_path, capsys):
     )
     assert err[0].endswith("the incumbent is returned (the plan is greedy-ce's)")
     extra = json.loads(out.read_text())["extra"]
-    assert extra["termination"] == "not_built" and extra["model_cells"] == 8640
+    assert extra["solver_status"] == "not_built" and extra["model_cells"] == 8640
     assert extra["fallback"] == "none: the LNS does not model several stations"
 
 

@@ -16,6 +16,7 @@ from typing import Any
 
 from .. import stoppable
 from ..common import NoGoodCuts, kit_order
+from ..exact.keys import MASTER_SOLVES
 from ..packing import ANY_ANGLE
 from ..packing_oracle import WHY_TIME, Fit
 from .context import MARGIN, Context, Model, State
@@ -39,7 +40,7 @@ def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]
         if not loop.iterate(solver):
             break
     loop.state.info = {
-        "benders_iterations": it,
+        MASTER_SOLVES: it,
         "unproven_cuts": loop.cuts.unproven,
         "axis_aligned_cuts": loop.cuts.axis_only,
     }

@@ -66,7 +66,6 @@ from ...bounds import best_bound, min_kits, objective_extra
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, gap, require_stations_support
-from ...objectives import Objective as ObjectiveSpec
 from ...objectives import get as get_objective
 from ...objectives import model_objectives
 from ...plan import Kit, Placement, Plan, evaluate
@@ -84,6 +83,7 @@ from ..common import (
     reduced_edges,
     scope_claims,
 )
+from ..exact import keys
 from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import improve
@@ -95,7 +95,7 @@ from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, stron
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .station_run import station_baselines, station_claims, station_hand_off
 from .tray import embed_scope, tray_mode
-from .warm import MIN_RUN, best_heuristic_plan
+from .warm import MIN_RUN, best_heuristic_plan, closed_bound, closed_form_optimal
 
 if TYPE_CHECKING:
     from .live import Live as LiveProgress
@@ -211,9 +211,9 @@ def cpsat(
     source = None
     hint_tl = HINT_SHARE * budget.time_limit
     live = progress.tracker(options.objective)
-    live.report(bound=_closed_bound(instance, objective), stage="warm start")
+    live.report(bound=closed_bound(instance, objective), stage="warm start")
     kw: dict[str, Any] = {"seed": seed, "time_limit": hint_tl, "objective": options.objective}
-    if objective.is_makespan and one and _closed_form_optimal(instance, budget):
+    if objective.is_makespan and one and closed_form_optimal(instance, budget):
         pass  # the run proves a quick plan optimal at once: no warm start needed
     elif options.hint == "auto":
         plan, source = best_heuristic_plan(instance, **kw)
@@ -226,22 +226,10 @@ def cpsat(
         live.report(incumbent=objective.value(evaluate(instance, plan)))
     rest = max(MIN_RUN, budget.remaining())
     out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
-    out.extra["hint_method"] = source
+    out.extra["hint_method"] = source if out.extra["hint_used"] else None  # (its plan is the start)
     out.extra["hint_time_s"] = budget.elapsed() - out.extra.get("wall_time_s", 0.0)
     out.extra["wall_time_s"] = budget.elapsed()
     return out
-
-
-def _closed_bound(instance: Instance, objective: ObjectiveSpec) -> float | None:
-    """The closed-form makespan bound (:mod:`bilevel_kit.bounds`) when ``objective`` is the
-    makespan; None for the others (live progress reports no closed-form bound on them)."""
-    return best_bound(instance) if objective.is_makespan else None
-
-
-def _closed_form_optimal(instance: Instance, budget: Budget) -> bool:
-    """Does a quick plan attain the closed-form bound (then :func:`run` ends at once)?"""
-    packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
-    return closed_form_plan(instance, packer) is not None
 
 
 def solve(
@@ -337,9 +325,10 @@ def run(
             "time_resolution": sc.res,
             "times_exact": sc.exact,
             "objective": options.objective,
-            "benders_iterations": 0,
+            keys.MASTER_SOLVES: 0,
             "cuts": 0,
             "hint_used": False,
+            "hint_method": None,
         },
     )
     backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
@@ -389,18 +378,21 @@ class _Cpsat:
         if incumbent is not None and ctx.minimised.is_makespan:
             upper = scaled_makespan(self.sc, incumbent)  # C <= U and the kit cap need makespan
         start = None if incumbent is None else evaluate(instance, _plan_of(ctx, incumbent, None))
-        strong_bound(ctx, None if start is None else start.makespan, extra)
+        self.start_ms = None if start is None else start.makespan
+        strong_bound(ctx, self.start_ms, extra)
         self.K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
         self.mode = tray_mode(instance, options.tray, self.K, ctx.embed_scope)
         extra.update(
             tray_mode=self.mode,
             max_kits=self.K,
-            upper_start=None if start is None else start.makespan,
+            upper_start=None if start is None else ctx.minimised.value(start),
         )
         return None if incumbent is None else State(incumbent, upper)
 
     def shortcut(self, state: State | None) -> MethodOutput | None:
-        return None if state is None else _proven_without_model(self.ctx, state, self.report)
+        if state is None or self.start_ms is None:
+            return None
+        return _proven_without_model(self.ctx, state, self.report, self.start_ms)
 
     def cells(self) -> int:
         """The task x kit cells; with stations also the station x kit cells and the position
@@ -478,31 +470,32 @@ def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress
     from .live import Live
 
     ctx.live = live = Live(ctx, tracker)
-    tracker.report(bound=_closed_bound(ctx.instance, ctx.minimised), stage="CP-SAT")
+    tracker.report(bound=closed_bound(ctx.instance, ctx.minimised), stage="CP-SAT")
     if incumbent is not None:
         tracker.report(incumbent=live.real(incumbent))
     return live
 
 
-def _proven_without_model(ctx: Context, start: State, report: _Report) -> MethodOutput | None:
+def _proven_without_model(
+    ctx: Context, start: State, report: _Report, start_ms: float
+) -> MethodOutput | None:
     """The result when the incumbent ``start`` attains a closed-form bound or the release bound
     (then it is optimal and no model is built); None otherwise."""
     instance, sc, extra = ctx.instance, ctx.sc, report.extra
     incumbent, upper = start.kits, start.obj
-    start_ms = extra["upper_start"]
     closed_done = start_ms <= best_bound(instance) + 1e-9 and not any(sc.rel)
     if ctx.minimised.is_makespan and closed_done:
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
-        extra.update(build_time_s=0.0, cpsat_status="CLOSED_FORM_BOUND", cuts=0)
+        keys.no_solve(extra, keys.CLOSED_FORM_BOUND)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
     if ctx.proven is not None and start_ms <= ctx.proven.value + 1e-9:
         # the incumbent attains the proven bound of models.relax: optimal without a model
-        extra.update(build_time_s=0.0, cpsat_status="PROVEN_BOUND", cuts=0)
+        keys.no_solve(extra, keys.PROVEN_BOUND)
         return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
     if upper is not None and sc.rel and upper <= release_bound(instance, sc):
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
-        extra.update(build_time_s=0.0, cpsat_status="RELEASE_BOUND", cuts=0)
+        keys.no_solve(extra, keys.RELEASE_BOUND)
         state = State(incumbent, upper, upper, proven=True, lower_any=upper)
         return _conclude(ctx, None, state, report)
     return None
@@ -540,7 +533,7 @@ def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | No
         live.bound_valid = mode != "embedded" or ctx.embed_scope == ANY_ANGLE
     state = _search(ctx, mdl, solver, mode, incumbent)
     extra.update(state.info)
-    extra["cpsat_status"] = state.status_name
+    keys.solved(extra, keys.status_word(state.status_name), state.status_name)
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
         return without_plan(run, state.infeasible, state.scope)
@@ -575,16 +568,17 @@ def _incumbent(
     ids = ctx.ids
     idx = instance.index
     candidates: list[list[list[int]]] = []
+    hk = None
     if hint is not None and sorted(hint.task_order) == sorted(ids):
         from ...validate import check
 
         if not check(instance, hint):  # its layouts are valid: its kits fit, at any angle
             for kit in hint.kits:
                 packer.learn(instance.kit_parts(kit.tasks), kit.layout)
-        hk = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
-        if all(packer.fits([ids[i] for i in k]) for k in hk):
-            candidates.append(hk)
-            extra["hint_used"] = True
+        kits = [[idx[t] for t in k.tasks] for k in hint.kits if k.tasks]
+        if all(packer.fits([ids[i] for i in kit]) for kit in kits):
+            candidates.append(kits)
+            hk = kits
     if ctx.sc.station:  # several stations: the baselines (a quick plan would mix stations)
         candidates += station_baselines(instance)
     elif ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
@@ -599,6 +593,7 @@ def _incumbent(
     if not candidates:
         return None
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
+    extra["hint_used"] = best is hk  # the hint's plan is the incumbent (ties: the hint)
     return canonical(best, ctx.groups)
 
 

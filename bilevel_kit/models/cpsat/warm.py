@@ -5,9 +5,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from ...bounds import best_bound
 from ...instance import Instance
+from ...objectives import Objective
 from ...plan import Plan, evaluate
 from ...stations import objective_of
+from ..budget import Budget
+from ..common import Packer, closed_form_plan, pack_time_limit
 
 #: The heuristics ``hint="auto"`` runs; the best plan is the warm start.
 HINT_METHODS = ("single-task", "whole-assembly", "greedy-ce")
@@ -24,6 +28,13 @@ HINT_OVERRUN_S_PER_TASK = {"greedy-ce": 0.01}
 #: can look at its clock, when numba is not loaded yet: about 1 s idle, 2-3 s on a busy
 #: machine (a 4,000-part task at 2 s took 5.1 s with it, docs/scaling.md).
 KERNEL_LOAD_S = 1.0
+
+
+def hint_methods(hint: str) -> tuple[str, ...]:
+    """The methods the option ``hint`` runs, the same in ``cpsat`` and ``milp``
+    (docs/formulations.md, "One driver for cpsat and milp"): ``auto`` the three of
+    :data:`HINT_METHODS`, ``none`` none, else the one named."""
+    return {"auto": HINT_METHODS, "none": ()}.get(hint, (hint,))
 
 
 def best_heuristic_plan(
@@ -84,3 +95,15 @@ def _kernels_would_compile() -> bool:
     from ...heuristics.warmup import ready
 
     return not ready()
+
+
+def closed_bound(instance: Instance, objective: Objective) -> float | None:
+    """The closed-form makespan bound (:mod:`bilevel_kit.bounds`) when ``objective`` is the
+    makespan; None for the others (live progress reports no closed-form bound on them)."""
+    return best_bound(instance) if objective.is_makespan else None
+
+
+def closed_form_optimal(instance: Instance, budget: Budget) -> bool:
+    """Does a quick plan attain the closed-form bound (then :func:`run` ends at once)?"""
+    packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
+    return closed_form_plan(instance, packer) is not None

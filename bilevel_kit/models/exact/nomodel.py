@@ -1,7 +1,8 @@
 """When an exact method builds no model: too large or too slow to build (:func:`buildable`),
 and what it does with the time left then (:func:`improve`: the LNS from the incumbent,
 docs/formulations.md, "Model too large"). ``cpsat`` and ``milp`` differ only in their measured
-costs and in the ``extra`` keys that name the outcome (:class:`NoModelSpec`)."""
+costs (:class:`NoModelSpec`); the outcome is ``solver_status`` ``too_large`` or ``not_built`` in
+both (:mod:`.keys`)."""
 
 from __future__ import annotations
 
@@ -11,34 +12,27 @@ from typing import Any
 from ...instance import Instance
 from ...plan import Plan
 from ..budget import Budget, no_model_reason
+from .keys import NOT_BUILT, TOO_LARGE, no_solve
 
 
 @dataclass(frozen=True)
 class NoModelSpec:
-    """A backend's costs and how its ``extra`` names a model that was not built."""
+    """A backend's measured costs of a model."""
 
     owner: str  # the method's name, in the refusal's message
     bytes_per_cell: float  # peak memory per task x kit variable
     build_s_per_cell: float  # build time per task x kit variable
     kept: str  # what is returned instead ("the incumbent", "the quick plan")
-    status_key: str  # the extra key naming the outcome
-    too_large: str  # its value over the memory limit
-    not_built: str  # its value when too slow to build
-    zero_cuts: bool  # whether ``cuts`` is reset to 0 (cpsat's extra)
 
 
 #: ``cpsat``: peak memory 4.5-4.7 kB per variable above a 216 MB run of 14,000 variables,
 #: 1.27 GB at 247,000 on a 500-task in-tree (model and a 2-worker solve); build time 90-120 us
 #: per variable on in-trees of 60-500 tasks.
-CPSAT = NoModelSpec(
-    "cpsat", 6_000, 150e-6, "the incumbent", "cpsat_status", "TOO_LARGE", "NOT_BUILT", True
-)
+CPSAT = NoModelSpec("cpsat", 6_000, 150e-6, "the incumbent")
 #: ``milp``: 5-9 kB per variable of the Pyomo model on in-trees of 60-120 tasks (HiGHS runs in
 #: a child process; bench/results/scale.md); 0.7-0.8 ms to build it and about 1.3 ms more to
 #: write it for the HiGHS child (7 s for 5,263 variables on a loaded machine).
-MILP = NoModelSpec(
-    "milp", 12_000, 2.5e-3, "the incumbent", "termination", "too_large", "not_built", False
-)
+MILP = NoModelSpec("milp", 12_000, 2.5e-3, "the incumbent")
 
 
 def buildable(
@@ -62,10 +56,8 @@ def buildable(
         return True
     kind, reason = why
     keep = f"{spec.kept} is returned" + (" with the proven bound" if kind == "too_large" else "")
-    extra.update(reason=f"{reason}; {keep}", build_time_s=0.0)
-    extra[spec.status_key] = spec.too_large if kind == "too_large" else spec.not_built
-    if spec.zero_cuts:
-        extra["cuts"] = 0
+    extra["reason"] = f"{reason}; {keep}"
+    no_solve(extra, TOO_LARGE if kind == "too_large" else NOT_BUILT)
     return False
 
 

@@ -11,8 +11,9 @@ incumbent is checked with the memoised packing oracle
 a deletion filter to a minimal non-fitting one (with a proof of the same scope) and cut from
 **every** kit (:func:`.model.add_cut`). The master is re-solved
 until its optimum packs (then it is optimal for the full problem) or the time is up; kits that
-do not fit are split greedily to keep an incumbent. ``tray="auto"`` first seeds cuts for every
-pair of tasks that does not fit; ``"benders"`` starts from the area relaxation alone. "Fits"
+do not fit are split greedily to keep an incumbent. Cuts are first seeded for every pair of
+tasks that does not fit (``tray`` ``auto`` and ``benders`` alike, as ``cpsat``'s Benders; not
+with several stations). "Fits"
 means what the oracle means: an axis-aligned layout on its grid (a "no" confirmed on the exact
 grid), the same notion as the CP-SAT model; "optimal" and ``bound`` speak of every plan the
 checker accepts, the master's own verdict and bound of the plans its cuts were proven for
@@ -73,6 +74,7 @@ from ..exact.driver import (
     proven_bound,
     without_plan,
 )
+from ..exact.keys import CLOSED_FORM_BOUND, PROVEN_BOUND, no_solve, solve_outcome, solved
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import NoModelSpec, improve
 from ..exact.station_options import HONOURED, check_station_options, declare
@@ -120,17 +122,16 @@ class MilpOptions:
     tray: Literal["auto", "benders"] = field(
         default="auto",
         metadata={
-            "help": "auto: seed cuts for task pairs that do not fit; benders: area only "
-            "(several stations: area only)"
+            "help": "auto (milp has no embedded tray: benders) or benders: Benders cuts, seeded "
+            "for the task pairs that do not fit (one station)"
         },
     )
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
     hint: str = field(
-        default="none",
+        default="auto",
         metadata={
-            "help": "none (the quick plan alone; several stations: the baselines and "
-            "greedy-ce), or a registered method (e.g. lns) whose plan is the incumbent when "
-            "better, within 30 % of the time limit"
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
+            "method name, or none; its plan is the incumbent when better than the quick plan"
         },
     )
 
@@ -143,7 +144,7 @@ class MilpOptions:
     )
 
     def __post_init__(self) -> None:
-        check_hint(self.hint, ("none",))
+        check_hint(self.hint, ("auto", "none"))
 
 
 #: What the model with several stations (:mod:`.model`) does with each option
@@ -174,7 +175,7 @@ def solve(
     tray: str = "auto",
     log: bool = False,
     solver_options: Mapping[str, Any] | None = None,
-    hint: str = "none",
+    hint: str = "auto",
     fallback: str = "lns",
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
@@ -214,8 +215,9 @@ def run(
     r.extra.update(
         solver=options.solver,
         objective=options.objective,
-        tray_mode=options.tray,
-        iterations=0,
+        tray_mode="benders",  # (auto: milp has no embedded tray)
+        master_solves=0,
+        hint_method=None,
         cuts=0,
         unproven_cuts=0,
         time_limit_enforced=options.solver == "highs" or options.solver in SOLVER_OPTIONS,
@@ -275,7 +277,8 @@ class _Run:
         instance = self.instance
         if instance.stations:  # docs/timeline.md#several-stations
             inc, inc_obj, upper, K = warm.station_incumbent(self, self.seed)
-            self.extra.update(max_kits=K, upper_start=inc_obj, tray_mode="benders")
+            upper_start = self.live.seconds(inc_obj)  # the objective's value in s
+            self.extra.update(max_kits=K, upper_start=upper_start)
         else:
             inc, inc_obj, upper, K = _incumbent(self, pack_time_limit(self.budget), self.seed)
             K = max(_strong_bound(self, upper, K), len(inc) if inc is not None else 1)
@@ -288,8 +291,8 @@ class _Run:
         upper = self.upper
         if upper is None or upper > self.best + TOL or not self.minimised.is_makespan:
             return None
-        done = "closed_form_bound" if upper <= self.closed + TOL else "proven_bound"
-        self.extra.update(build_time_s=0.0, termination=done)
+        done = CLOSED_FORM_BOUND if upper <= self.closed + TOL else PROVEN_BOUND
+        no_solve(self.extra, done)
         return _conclude(self, inc, None, None, ANY_ANGLE, proven=True)
 
     def cells(self) -> int:
@@ -345,7 +348,7 @@ def _incumbent(
         K = min(K, kit_cap(instance, upper))
         K = max(K, len(inc))
     r.extra["max_kits"] = K
-    r.extra["upper_start"] = inc_obj
+    r.extra["upper_start"] = r.live.seconds(inc_obj)  # the objective's value in s
     r.live.tracker.report(
         r.live.seconds(inc_obj),
         r.closed if makespan else None,
@@ -359,10 +362,12 @@ def _hinted(
 ) -> tuple[list[list[str]] | None, float | None]:
     """The plan of the ``hint`` method within :data:`HINT_SHARE` of the time limit when its
     kits pack and it beats ``inc`` (``extra['hint_method']`` names it), else ``inc``."""
-    from ..cpsat.method import best_heuristic_plan
+    from ..cpsat.warm import best_heuristic_plan, hint_methods
 
     left = min(HINT_SHARE * r.budget.time_limit, r.budget.remaining(MARGIN))
-    plan, source = best_heuristic_plan(r.instance, (r.options.hint,), seed=seed, time_limit=left)
+    methods = hint_methods(r.options.hint)
+    kw: dict[str, Any] = {"seed": seed, "time_limit": left, "objective": r.options.objective}
+    plan, source = best_heuristic_plan(r.instance, methods, **kw)
     r.extra["hint_method"] = None
     if plan is None:
         return inc, inc_obj
@@ -400,21 +405,30 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
     master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)
-    if options.tray == "auto" and not r.instance.stations:  # stations: Benders, as cpsat's
-        loop.cuts.seed_pairs()
+    if not r.instance.stations:  # (stations: docs/formulations.md, "Options with several stations")
+        loop.cuts.seed_pairs()  # tray=auto or benders: pair cuts seeded, as cpsat's Benders
     info = loop.run(r.opt, r.seed, r.solver_options)
     scope = loop.cuts.scope
     r.extra.update(
-        iterations=loop.iterations,
+        master_solves=loop.iterations,
         cuts=master.n_cuts,
         unproven_cuts=loop.cuts.unproven,
         axis_aligned_cuts=loop.cuts.axis_only,
-        termination=None if info is None else info.termination,
         master_time_s=None if info is None else info.wall_time_s,
     )
+    solved(r.extra, *_outcome(info))
     if loop.inc is None:  # (an infeasible master has every cut proven: scope not None)
         return without_plan(r, loop.infeasible, scope)
     return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
+
+
+def _outcome(info: SolveInfo | None) -> tuple[str, str | None]:
+    """The last master solve's ``solver_status`` and ``backend_status`` (:mod:`..exact.keys`;
+    no solve: ``unknown``)."""
+    if info is None:
+        return "unknown", None
+    kw = {"optimal": info.optimal, "has_solution": info.has_solution}
+    return solve_outcome(**kw, infeasible=info.infeasible), info.termination
 
 
 def _conclude(

@@ -1,7 +1,7 @@
 """The incumbent of ``milp`` with several assembly stations (docs/timeline.md#several-stations;
 docs/formulations.md, "Options with several stations"): the best plan, for the run's
-objective, of the baselines, greedy-ce and the ``hint`` method, within the warm start's share
-of the time limit.
+objective, of the baselines and the ``hint`` methods (``auto``, the default: greedy-ce too;
+``none``: the baselines alone, as ``cpsat``'s), within the warm start's share of the time limit.
 
 Why greedy-ce: the better baseline alone was the incumbent before, and at a time limit (or
 when the model was too large to build) ``milp`` returned it, 20-24 % above greedy-ce's plan
@@ -27,8 +27,9 @@ from .solver import TOL
 #: this module without a cycle (tests/core/test_imports.py).
 _Run = Any
 
-#: The heuristics whose best plan is the incumbent with several stations (all take them).
-STATION_METHODS = ("single-task", "whole-assembly", "greedy-ce")
+#: The heuristics whose best plan is the incumbent with several stations (all take them) and
+#: ``hint=none`` (``auto``, the default, adds greedy-ce: :func:`..cpsat.warm.hint_methods`).
+STATION_METHODS = ("single-task", "whole-assembly")
 #: Seconds per task kept back for a heuristic's run past its own ``time_limit``: greedy-ce's
 #: was +0.5-1.4 s at 1,000 tasks (:data:`..cpsat.warm.HINT_OVERRUN_S_PER_TASK`, whose 0.01 s
 #: per task left greedy-ce 0.8 s of a 10 s run on 900 tasks on 3 stations, and its plan
@@ -41,7 +42,7 @@ def check_station_hint(instance: Instance, hint: str) -> None:
     with stations: its plan would be silently missing from the incumbent."""
     from ...methods import get_method
 
-    if not instance.stations or hint == "none" or get_method(hint).supports_stations:
+    if not instance.stations or hint in ("auto", "none") or get_method(hint).supports_stations:
         return
     raise UsageError(
         f"{instance.source}: milp does not use option 'hint={hint}' with several assembly "
@@ -53,14 +54,14 @@ def check_station_hint(instance: Instance, hint: str) -> None:
 def station_incumbent(
     r: _Run, seed: int
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
-    """The best of :data:`STATION_METHODS` and the ``hint`` method for the objective (its
+    """The best of :data:`STATION_METHODS` and the ``hint`` methods for the objective (its
     layouts taught to the packer), its master objective (:func:`.model.model_objective`), the
     horizon U (:meth:`bilevel_kit.objectives.Objective.horizon`) and the kit cap K = n;
     ``extra["hint_method"]`` names the method whose plan it is."""
-    from ..cpsat.warm import MIN_RUN, _kernels_would_compile
+    from ..cpsat.warm import MIN_RUN, _kernels_would_compile, hint_methods
 
     instance, objective, hint = r.instance, r.options.objective, r.options.hint
-    methods = STATION_METHODS + ((hint,) if hint not in ("none", *STATION_METHODS) else ())
+    methods = STATION_METHODS + tuple(m for m in hint_methods(hint) if m not in STATION_METHODS)
     end = r.budget.elapsed() + warm_share(r) * r.budget.remaining(r.margin)
     best: tuple[float, Plan, str] | None = None
     for name in methods:
