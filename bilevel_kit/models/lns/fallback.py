@@ -7,6 +7,8 @@ limit unused. With option ``fallback="lns"`` (the default) they hand the time le
 :func:`.method.lns`, started from that incumbent (so the result is never worse than it) and
 given their proven bound (so the LNS stops when it meets it, and computes none of its own).
 The caller keeps its own bound and status rules: the LNS's plan is only a better incumbent.
+The same call improves their warm start before a model they do build, within a share of the
+time left (:mod:`..exact.lns_first`, docs/formulations.md, "The LNS first").
 """
 
 from __future__ import annotations
