@@ -401,7 +401,7 @@ class _Cpsat:
         pairs = sum(K * (K - 1) // 2 for t in sc.st_trays if t is not None and t >= 2)
         return assignment_cells(self.instance, K) + len(sc.st_d) * K + pairs
 
-    def hand_off(self, state: State) -> State:
+    def hand_off(self, state: State, seconds: float = float("inf")) -> State:
         """``state``, or the better plan the LNS finds from it in the time left (makespan
         objective without release times, which the LNS does not model; with stations, which
         it does not model either, greedy-ce's plan in the time left when better:
@@ -421,7 +421,7 @@ class _Cpsat:
             return State(kits, scaled_objective(ctx.sc, kits, ctx.objective), layouts=layouts)
         if not ctx.minimised.is_makespan or any(ctx.sc.rel):
             return state
-        bound, left = known_bound(ctx), ctx.left()
+        bound, left = known_bound(ctx), min(ctx.left(), seconds)
         better = improve(
             ctx.instance, plan, bound=bound, seed=self.seed, time_limit=left, extra=self.extra
         )

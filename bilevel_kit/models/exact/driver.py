@@ -11,11 +11,15 @@ backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
    build is not built; the time left goes to the LNS from the incumbent (option ``fallback``,
    :meth:`Backend.hand_off`) and the incumbent is concluded with the bound known before the
    model.
-5. Otherwise the backend builds its model and searches (:meth:`Backend.solve`).
+5. Otherwise the LNS improves the incumbent first within a share of the time left
+   (:mod:`.lns_first`; option ``fallback=lns``): a plan that meets the bound known before the
+   model is concluded without one, else the backend builds its model and searches from it
+   (:meth:`Backend.solve`).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
@@ -26,6 +30,7 @@ from ...options import field_names, parse_options
 from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from . import lns_first
 from .nomodel import NoModelSpec, buildable
 
 if TYPE_CHECKING:
@@ -79,8 +84,9 @@ class Backend(Protocol[Inc]):
         """The model's task x kit variables with K kits (its size)."""
         ...
 
-    def hand_off(self, inc: Inc) -> Inc:
-        """``inc`` or the better incumbent the LNS finds from it in the time left."""
+    def hand_off(self, inc: Inc, seconds: float = math.inf) -> Inc:
+        """``inc`` or the better incumbent the LNS finds from it in the time left (at most
+        ``seconds``)."""
         ...
 
     def conclude(self, inc: Inc) -> MethodOutput:
@@ -107,7 +113,13 @@ def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:
     cells = backend.cells()
     spec, budget, margin = backend.spec, backend.budget, backend.margin
     if buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, has_plan):
-        return backend.solve(inc)
+        if inc is not None:
+            better, met = lns_first.before_model(backend, inc, fallback)
+            if met:  # the LNS's plan meets the proven bound: optimal without a model
+                return backend.conclude(better)
+            inc = better
+        t_model = budget.elapsed()
+        return lns_first.after_model(backend, backend.solve(inc), t_model)
     if inc is None:
         return backend.finish(None, Status.UNKNOWN, backend.known_bound())
     if fallback == "lns":  # the time left to the LNS from the incumbent

@@ -7,6 +7,8 @@ limit unused. With option ``fallback="lns"`` (the default) they hand the time le
 :func:`.method.lns`, started from that incumbent (so the result is never worse than it) and
 given their proven bound (so the LNS stops when it meets it, and computes none of its own).
 The caller keeps its own bound and status rules: the LNS's plan is only a better incumbent.
+The same call improves their warm start before a model they do build, within a share of the
+time left (:mod:`..exact.lns_first`, docs/formulations.md, "The LNS first").
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from typing import Any
 
 from ...instance import Instance
 from ...plan import Plan, evaluate
+from ...validate import check
 
 #: The values of option ``fallback``.
 FALLBACKS: tuple[str, ...] = ("lns", "none")
@@ -33,7 +36,8 @@ def improve(
     """The LNS's plan from ``plan`` within ``time_limit`` s when it is strictly better (else
     None), and what happened (``extra['fallback']`` of the caller): ``method``, ``time_s``
     (the time given), ``makespan_before``, ``makespan_after``, ``windows`` (windows solved),
-    ``start_method``, ``stop``, and ``skipped`` (why the LNS did not run) when it did not."""
+    ``start_method``, ``stop``, ``skipped`` (why the LNS did not run) when it did not, and
+    ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
     from .method import LnsOptions, lns
 
     before = evaluate(instance, plan).makespan
@@ -57,6 +61,10 @@ def improve(
     )
     after = None if out.plan is None else evaluate(instance, out.plan).makespan
     if out.plan is None or after is None or after >= before - 1e-9:
+        return None, info
+    problems = check(instance, out.plan)  # the caller returns it as its own: checked
+    if problems:
+        info["rejected"] = f"the checker refused the LNS's plan: {problems[0]}"
         return None, info
     info["makespan_after"] = after
     return out.plan, info

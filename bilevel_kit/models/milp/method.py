@@ -298,7 +298,7 @@ class _Run:
     def cells(self) -> int:
         return model_cells(self.instance, self.K)
 
-    def hand_off(self, inc: list[list[str]]) -> list[list[str]]:
+    def hand_off(self, inc: list[list[str]], seconds: float = float("inf")) -> list[list[str]]:
         """The incumbent, or the LNS's better plan from it (makespan objective, one station,
         as the LNS's); its layouts taught to the packer, which lays the result out."""
         self.extra["improved_by"] = None
@@ -308,7 +308,7 @@ class _Run:
         plan = _with_layouts(self.instance, inc, self.packer, {})
         if plan is None or not self.minimised.is_makespan:
             return inc
-        left = self.budget.remaining(MARGIN)
+        left = min(self.budget.remaining(MARGIN), seconds)
         better = improve(
             self.instance, plan, bound=self.best, seed=self.seed, time_limit=left, extra=self.extra
         )
@@ -317,6 +317,7 @@ class _Run:
         for kit in better.kits:
             if kit.layout:
                 self.packer.learn(self.instance.kit_parts(kit.tasks), kit.layout)
+        self.upper = self.inc_obj = evaluate(self.instance, better).makespan  # the model's U
         return [list(k.tasks) for k in better.kits if k.tasks]
 
     def conclude(self, inc: list[list[str]]) -> MethodOutput:

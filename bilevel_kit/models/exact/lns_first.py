@@ -1,0 +1,86 @@
+"""The LNS inside an exact model's budget (docs/formulations.md, "The LNS first"): before
+``cpsat`` or ``milp`` build their model, the large-neighbourhood search improves their warm
+start for at most :data:`SHARE` of the time left, so that their plan at a time limit is never
+worse than the LNS's. The model then searches from the better incumbent (a tighter C <= U and
+a better hint) in the rest of the time.
+
+The LNS ends early at a local optimum or when its plan meets the proven bound; then the model
+is not built (the plan is optimal by the bound computed before the model, as in the driver's
+shortcut). Otherwise the status stays the model's: a plan the LNS found is ``optimal`` only
+when the model proves it or it meets that bound. Skipped (``extra["lns_first"]["skipped"]``)
+with option ``fallback=none``, several stations, other objectives and release times (which the
+LNS does not model), and in a reproducible run (``deterministic``): the LNS's start is
+clock-bound, as for the no-model hand-off (:mod:`.nomodel`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from ...plan import evaluate
+
+if TYPE_CHECKING:
+    from ...methods import MethodOutput
+    from .driver import Backend
+
+Inc = TypeVar("Inc")
+#: The share of the time left (after the warm start and the proven bound) the LNS may use
+#: before the model; measured in docs/formulations.md, "The LNS first".
+SHARE = 0.5
+#: The ``extra`` key the backends' :meth:`~.driver.Backend.hand_off` reports the LNS under.
+HAND_OFF_KEY = "fallback"
+#: Tolerance (s) of "the same makespan".
+TOL = 1e-6
+
+
+def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
+    """The incumbent after the LNS from ``inc`` within :data:`SHARE` of the time left, and
+    whether it meets the bound known before the model (then no model is needed).
+    ``extra["lns_first"]`` gets the LNS's report and the time split."""
+    extra, budget = backend.extra, backend.budget
+    skipped = _skipped(backend, fallback)
+    if skipped is not None:
+        extra["lns_first"] = {"skipped": skipped}
+        return inc, False
+    t0, saved = budget.elapsed(), extra.pop(HAND_OFF_KEY, None)
+    seconds = SHARE * max(0.0, budget.remaining(backend.margin))
+    inc = backend.hand_off(inc, seconds)
+    info: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
+    if saved is not None:
+        extra[HAND_OFF_KEY] = saved
+    info.update(share=SHARE, used_s=round(budget.elapsed() - t0, 3))
+    extra["lns_first"] = info
+    after = info.get("makespan_after")
+    met = after is not None and after <= backend.known_bound() + TOL
+    if met and extra.get("improved_by") == "lns":  # the driver's shortcut, after the LNS
+        extra.update(build_time_s=0.0)
+        cpsat = backend.spec.owner == "cpsat"
+        extra[backend.spec.status_key] = "PROVEN_BOUND" if cpsat else "proven_bound"
+        return inc, True
+    return inc, False
+
+
+def after_model(backend: Backend[Inc], out: MethodOutput, t_model: float) -> MethodOutput:
+    """``out`` with the model's share of the time and ``improved_by``: ``lns`` when the plan is
+    the LNS's, ``model`` when the model improved on the LNS's plan (None: the LNS did not
+    improve the warm start)."""
+    info = backend.extra.get("lns_first")
+    if info is None or "skipped" in info:
+        return out
+    info["model_s"] = round(backend.budget.elapsed() - t_model, 3)
+    if out.extra.get("improved_by") == "lns" and out.plan is not None:
+        makespan = evaluate(backend.instance, out.plan).makespan
+        if makespan < info["makespan_after"] - TOL:
+            out.extra["improved_by"] = "model"
+    return out
+
+
+def _skipped(backend: Backend[Any], fallback: str) -> str | None:
+    """Why the LNS does not run first (None: it does)."""
+    if fallback != "lns":
+        return "option fallback=none"
+    if backend.instance.stations:
+        return "several stations (the LNS models one)"
+    if backend.budget.deterministic:
+        return "a reproducible run (the LNS's start is clock-bound)"
+    return None
