@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from ...plan import evaluate
+from . import keys
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
@@ -53,9 +54,7 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
     after = info.get("makespan_after")
     met = after is not None and after <= backend.known_bound() + TOL
     if met and extra.get("improved_by") == "lns":  # the driver's shortcut, after the LNS
-        extra.update(build_time_s=0.0)
-        cpsat = backend.spec.owner == "cpsat"
-        extra[backend.spec.status_key] = "PROVEN_BOUND" if cpsat else "proven_bound"
+        keys.no_solve(extra, keys.PROVEN_BOUND)
         return inc, True
     return inc, False
 
