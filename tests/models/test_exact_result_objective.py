@@ -29,16 +29,12 @@ def test_the_result_reports_the_minimised_objective(method, objective):
     params = {"workers": 1} if method == "cpsat" else {}
     res = solve(inst, method, time_limit=60, check=True, objective=objective, **params)
     assert res.extra["violations"] == []
-    # cpsat's one model with stations meets a kit only CP-SAT's packer rules out (a proof for
-    # 0/90-degree layouts): its optimum is then proven among those plans (docs/formulations.md)
-    proven = res.status == "optimal" or (method == "cpsat" and res.extra["optimal_axis_aligned"])
-    assert res.objective_name == objective and proven, (res.status, res.extra)
+    assert res.objective_name == objective and res.status == "optimal", (res.status, res.extra)
     assert res.objective == OBJECTIVES[objective].value(res.timeline)
     assert res.objective == pytest.approx(OPTIMA[objective], abs=1e-6)
     assert res.bound is not None and res.bound <= res.objective + 1e-9
     assert res.gap == relative_gap(res.objective, res.bound)
-    if res.status == "optimal":
-        assert res.gap == pytest.approx(0.0, abs=1e-9)  # proven optimal for every plan
+    assert res.gap == pytest.approx(0.0, abs=1e-9)  # proven optimal for every plan
     # the makespan: a metric with its own bound, not the minimised objective's numbers
     assert res.makespan == res.metrics["makespan"] == res.timeline.makespan
     assert res.makespan_bound is not None and res.makespan_bound <= res.makespan + 1e-9

@@ -33,7 +33,8 @@ STATION_PACK_SHARE = 0.1
 def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]] | None) -> State:
     """Iterate master solves and packing checks (module docstring) within the budget."""
     loop = _Benders(ctx, mdl, incumbent)
-    loop.cuts.seed_pairs()
+    if not ctx.sc.station:  # with stations, as the MILP: pair cuts proven for 0/90-degree
+        loop.cuts.seed_pairs()  # layouts only would limit every proof (docs/formulations.md)
     it = 0
     while ctx.left() > 0.01:
         it += 1
