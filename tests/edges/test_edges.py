@@ -637,11 +637,19 @@ ISSUE_23A_ROWS: dict[str, Row] = {
         "makespan 46.00",
         i=offgrid_text(),
     ),
-    "cpsat without an exact grid": row(
-        "solve {i} -m cpsat -p hint=none --time-limit 20 --check -q",
+    "cpsat without an exact grid": row(  # fallback=none: the model's own plan, no LNS first
+        "solve {i} -m cpsat -p hint=none -p fallback=none --time-limit 20 --check -q",
         0,
         "feasible",
         "makespan 56.00",
+        "bound 46.00",
+        i=offgrid_text(50.1234567, 100.2469134),
+    ),
+    "cpsat without an exact grid, the LNS first meets the bound": row(
+        "solve {i} -m cpsat -p hint=none --time-limit 20 --check -q",
+        0,
+        "optimal",  # proven by the closed-form bound the LNS's plan meets, not by the model
+        "makespan 46.00",
         "bound 46.00",
         i=offgrid_text(50.1234567, 100.2469134),
     ),

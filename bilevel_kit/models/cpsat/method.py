@@ -203,8 +203,8 @@ def cpsat(
     station part: :mod:`.station_model`), every option honoured (:data:`STATION_OPTIONS`)."""
     check_station_options(instance, "cpsat", options, STATION_OPTIONS)
     one = len(instance.station_ids) == 1
-    if one and get_objective(options.objective).makespan_with_one_station:  # sum_completion
-        options = replace(options, objective="makespan")
+    if not instance.stations and get_objective(options.objective).makespan_with_one_station:
+        options = replace(options, objective="makespan")  # e.g. sum_completion, as milp
     objective = get_objective(options.objective)
     budget = Budget(time_limit)
     plan: Plan | None = None
