@@ -22,7 +22,9 @@ from . import keys
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
-    from .driver import Backend
+
+# ``backend`` below is the driver's ``.driver.Backend``, not imported: the driver imports this
+# module, and an import cycle is refused even for type checking (tests/core/test_imports.py).
 
 Inc = TypeVar("Inc")
 #: The share of the time left (after the warm start and the proven bound) the LNS may use
@@ -34,7 +36,7 @@ HAND_OFF_KEY = "fallback"
 TOL = 1e-6
 
 
-def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
+def before_model(backend: Any, inc: Inc, fallback: str) -> tuple[Inc, bool]:
     """The incumbent after the LNS from ``inc`` within :data:`SHARE` of the time left, and
     whether it meets the bound known before the model (then no model is needed).
     ``extra["lns_first"]`` gets the LNS's report and the time split."""
@@ -59,7 +61,7 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
     return inc, False
 
 
-def after_model(backend: Backend[Inc], out: MethodOutput, t_model: float) -> MethodOutput:
+def after_model(backend: Any, out: MethodOutput, t_model: float) -> MethodOutput:
     """``out`` with the model's share of the time and ``improved_by``: ``lns`` when the plan is
     the LNS's, ``model`` when the model improved on the LNS's plan (None: the LNS did not
     improve the warm start)."""
@@ -74,7 +76,7 @@ def after_model(backend: Backend[Inc], out: MethodOutput, t_model: float) -> Met
     return out
 
 
-def _skipped(backend: Backend[Any], fallback: str) -> str | None:
+def _skipped(backend: Any, fallback: str) -> str | None:
     """Why the LNS does not run first (None: it does)."""
     if fallback != "lns":
         return "option fallback=none"
