@@ -139,7 +139,8 @@ def test_without_a_proof_the_status_says_so():
     inst = from_dict(offgrid_doc(50.1234567, 100.2469134))
     whole = solve(inst, "whole-assembly", check=True)
     assert whole.extra["violations"] == [] and whole.objective == pytest.approx(46.0)
-    cold = solve(inst, "cpsat", hint="none", time_limit=20.0, check=True)
+    # fallback=none: no LNS before the model either (it would find the one-kit plan)
+    cold = solve(inst, "cpsat", hint="none", fallback="none", time_limit=20.0, check=True)
     assert cold.extra["violations"] == []
     assert cold.status == "feasible" and cold.objective == pytest.approx(56.0)
     assert cold.bound <= whole.objective
