@@ -232,6 +232,7 @@ def test_decisions_do_not_depend_on_the_packing_clock(monkeypatch):
 
     def wall(*args, **kw):
         kw["deterministic"] = False
+        kw["fallback"] = "none"  # the model alone (the LNS first runs in wall-clock runs)
         return wall_solve(*args, **kw)
 
     monkeypatch.setattr(exact, "solve", wall)
