@@ -336,6 +336,7 @@ def _describe(info: BagInfo) -> str:
         TF_TOPIC,
         TRAJECTORY_TOPIC,
     )
+    from ..sawyer.moveit import DISPLAY_TOPIC
     from ..style import plural
 
     c = info.counts
@@ -343,6 +344,7 @@ def _describe(info: BagInfo) -> str:
         f"wrote {info.path} ({info.format.upper()} bag, {info.size / 1e3:.0f} kB, "
         f"{info.n_messages} messages: {c[TRAJECTORY_TOPIC]} "
         f"{'trajectory' if c[TRAJECTORY_TOPIC] == 1 else 'trajectories'}, "
+        f"{c[DISPLAY_TOPIC]} on {DISPLAY_TOPIC}, "
         f"{plural(c[GRIPPER_TOPIC], 'gripper command')}, "
         f"{c[JOINT_STATES_TOPIC]} on {JOINT_STATES_TOPIC}, {c[TF_TOPIC]} on {TF_TOPIC}, "
         f"{plural(c[EVENTS_TOPIC], 'event stamp')})"

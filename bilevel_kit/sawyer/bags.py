@@ -8,6 +8,10 @@ Topics (:data:`TOPICS`):
   every point has positions, velocities and accelerations and its ``time_from_start``.
   ``header.stamp`` is zero, ROS's "start when received", so a replayed bag drives a trajectory
   controller with the plan's timing.
+* ``/move_group/display_planned_path``: ``moveit_msgs/DisplayTrajectory`` (:mod:`.moveit`),
+  one per kit at the same time as its trajectory: model ``sawyer``, the kit's
+  ``JointTrajectory`` and its first joint state as ``trajectory_start``, for RViz's MoveIt
+  Trajectory display.
 * ``/bilevel_kit/gripper/command``: ``sensor_msgs/JointState`` of the electric gripper's
   two finger joints, one message per command (close at a grasp, open at a release), stamped
   with the command's time. Positions are the URDF's finger limits: open
@@ -34,6 +38,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from . import moveit
 from .model import JOINT_NAMES, LINK_TREE, tool_arm
 from .trajectory import Event, Execution, KitTrajectory
 
@@ -56,6 +61,7 @@ STATE_DT = 0.05
 #: Topic -> message type, in the order the connections are added.
 TOPICS = {
     TRAJECTORY_TOPIC: TRAJECTORY_TYPE,
+    moveit.DISPLAY_TOPIC: moveit.DISPLAY_TYPE,
     GRIPPER_TOPIC: GRIPPER_TYPE,
     JOINT_STATES_TOPIC: GRIPPER_TYPE,
     TF_TOPIC: TF_TYPE,
@@ -142,12 +148,14 @@ def _events(types: dict[str, Any], ros1: bool, ns: int, events: Sequence[Event])
 
 
 def typestore(fmt: str) -> Any:
-    """rosbags' Noetic (``ros1``) or Humble (``ros2``) typestore, with ``tf2_msgs/TFMessage``."""
+    """rosbags' Noetic (``ros1``) or Humble (``ros2``) typestore, with ``tf2_msgs/TFMessage``
+    and MoveIt's ``DisplayTrajectory``."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.ROS1_NOETIC if fmt == "ros1" else Stores.ROS2_HUMBLE)
     if TF_TYPE not in store.types:
         store.register(get_types_from_msg(TF_MSGDEF, TF_TYPE))
+    moveit.register(store)
     return store
 
 
@@ -200,7 +208,13 @@ def messages(execution: Execution, fmt: str) -> list[tuple[str, int, Any]]:
     types = typestore(fmt).types
     out: list[tuple[str, int, Any]] = []
     for kt in execution.kits:
-        out.append((TRAJECTORY_TOPIC, to_ns(kt.start), _trajectory(types, ros1, kt)))
+        ns = to_ns(kt.start)
+        trajectory = _trajectory(types, ros1, kt)
+        out.append((TRAJECTORY_TOPIC, ns, trajectory))
+        display = moveit.display_trajectory(
+            types, _header(types, ros1, ns, "base"), trajectory, kt.positions[0], kt.velocities[0]
+        )
+        out.append((moveit.DISPLAY_TOPIC, ns, display))
         out += _robot_state(types, ros1, kt)
     for t, _kit, _part, closed in execution.gripper_commands():
         ns = to_ns(t)
