@@ -9,7 +9,9 @@ Keys other tools can rely on: ``method``, ``status``, ``objective`` {``name``, `
 stations also each kit's ``station`` and ``station_metrics`` {station: {``completion``,
 ``human_idle``, ``n_kits``}}. Lengths in mm, angles in degrees, times in s. ``overrides``: the
 instance overrides the plan was solved with (``--units``, ``--trays``, ...), which
-``bilevel-kit check`` applies again (docs/formats.md).
+``bilevel-kit check`` applies again (docs/formats.md). ``work_cell`` {``path``, ``sha256``,
+``cell``}: the work cell of ``solve --work-cell``, which ``execute`` uses (or warns about when
+given another one).
 Files of format 1 (a number ``objective``, ``bound`` and ``gap`` about the makespan, the
 minimised objective's numbers in ``extra``) are still read and checked.
 """
@@ -56,10 +58,15 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
-def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def result_to_dict(
+    result: Result,
+    overrides: Mapping[str, Any] | None = None,
+    work_cell: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
     """The JSON document of a :class:`~bilevel_kit.methods.Result`; ``overrides`` (the
     instance overrides it was solved with) is recorded so that the checker can rebuild the
-    same instance."""
+    same instance, and ``work_cell`` (:func:`bilevel_kit.sawyer.workcell.cell_record`) so
+    that ``execute`` runs the plan in the cell it was solved in."""
     kits = []
     tl = result.timeline
     if result.plan is not None and tl is not None:
@@ -102,13 +109,21 @@ def result_to_dict(result: Result, overrides: Mapping[str, Any] | None = None) -
         doc["station_metrics"] = _jsonable(result.extra["station_metrics"])
     if overrides:
         doc["overrides"] = _jsonable(dict(overrides))
+    if work_cell:
+        doc["work_cell"] = _jsonable(dict(work_cell))
     return doc
 
 
-def write(path: str | Path, result: Result, overrides: Mapping[str, Any] | None = None) -> None:
+def write(
+    path: str | Path,
+    result: Result,
+    overrides: Mapping[str, Any] | None = None,
+    work_cell: Mapping[str, Any] | None = None,
+) -> None:
     """Write a solution file atomically; a non-finite number is refused (it is not JSON)."""
     try:
-        text = json.dumps(result_to_dict(result, overrides), indent=2, allow_nan=False)
+        doc = result_to_dict(result, overrides, work_cell)
+        text = json.dumps(doc, indent=2, allow_nan=False)
     except ValueError:
         raise SolutionError(
             str(path), "$", "non-finite number in the result; not written"
@@ -129,6 +144,21 @@ _OVERRIDES = {
         "horizon": {"type": "integer", "minimum": 1},
         "units": {"type": "integer", "minimum": 1},
         "trays": {"oneOf": [{"type": "integer", "minimum": 1}, {"const": "unlimited"}]},
+    },
+}
+
+
+#: The work cell a plan was solved in (``solve --work-cell``), for ``execute``.
+_WORK_CELL = {
+    "type": "object",
+    "description": "the work cell the plan was solved in: its path as given, the SHA-256 of "
+    "its canonical JSON, and its content; execute uses it",
+    "required": ["path", "sha256", "cell"],
+    "additionalProperties": False,
+    "properties": {
+        "path": {"type": "string"},
+        "sha256": {"type": "string", "pattern": "^[0-9a-f]{64}$"},
+        "cell": {"type": "object"},
     },
 }
 
@@ -224,6 +254,7 @@ def schema(version: str = FORMAT) -> dict[str, Any]:
             "kits": {"type": "array", "items": kit},
             "extra": {"type": "object"},
             "overrides": _OVERRIDES,
+            "work_cell": _WORK_CELL,
         },
     }
 
@@ -292,6 +323,13 @@ class LoadedSolution:
     def overrides(self) -> dict[str, Any]:
         """The instance overrides the file records (empty for files written without any)."""
         return dict(self.document.get("overrides") or {})
+
+    @property
+    def work_cell(self) -> dict[str, Any] | None:
+        """The work cell the file records (``path``, ``sha256``, ``cell``); None for files
+        solved without one and for files written before the record existed."""
+        record = self.document.get("work_cell")
+        return None if record is None else dict(record)
 
     def check(self, instance: Instance) -> list[Violation]:
         """The independent checker on the plan and on every number the file states."""

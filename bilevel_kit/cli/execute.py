@@ -13,6 +13,7 @@ import argparse
 import contextlib
 import os
 import shutil
+import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +32,8 @@ if TYPE_CHECKING:
     from ..sawyer.bags import BagInfo
     from ..sawyer.gripper import GraspCheck
     from ..sawyer.trajectory import Execution
+    from ..sawyer.workcell import WorkCell
+    from ..solution import LoadedSolution
 
 HELP = "write a plan's Sawyer trajectories as ROS bags and an animated 3-D view"
 DESCRIPTION = (
@@ -96,7 +99,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="work-cell JSON (docs/execution.md#the-work-cell): station keys, the gripper and "
         "grasp_widths {part type: mm} that override the instance's, e.g. "
-        "examples/hrc_table_cell.json",
+        "examples/hrc_table_cell.json (default: the cell the solution file records, if any)",
     )
     p.add_argument(
         "--tool-speed",
@@ -207,9 +210,9 @@ def _staging() -> Iterator[_Staging]:
         raise
 
 
-def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
-    """The execution of the solution (or of its kit ``--kit``), after checking it fits, and
-    the gripper's feasibility pass."""
+def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...], str | None]:
+    """The execution of the solution (or of its kit ``--kit``), after checking it fits, the
+    gripper's feasibility pass, and the work cell's source (None without one)."""
     from .. import solution
     from ..errors import UsageError
     from ..instance import load
@@ -217,11 +220,12 @@ def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
     from ..sawyer.trajectory import plan_execution
 
     instance = load(args.instance)
-    if args.work_cell is not None:
-        from ..sawyer.workcell import apply_work_cell, load_work_cell
-
-        instance = apply_work_cell(instance, load_work_cell(args.work_cell))
     sol = solution.read(args.solution)
+    cell = _work_cell(args, sol)
+    if cell is not None:
+        from ..sawyer.workcell import apply_work_cell
+
+        instance = apply_work_cell(instance, cell)
     violations = sol.check(instance)
     if violations:
         raise UsageError(
@@ -236,7 +240,31 @@ def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...]]:
         speed_scale=args.speed_scale, tool_speed=args.tool_speed, limits=args.limits
     )
     checks = _check_grasps(args, instance, sol.plan, kits)
-    return plan_execution(instance, sol.plan, kits=kits, params=params), checks
+    ex = plan_execution(instance, sol.plan, kits=kits, params=params)
+    return ex, checks, None if cell is None else cell.source
+
+
+def _work_cell(args: argparse.Namespace, sol: LoadedSolution) -> WorkCell | None:
+    """``--work-cell``'s cell, else the one the solution file records (docs/formats.md): a
+    plan runs in the cell it was solved in unless told otherwise, and a different cell given
+    on the command line is a warning (its timing and grasps are not the plan's)."""
+    from ..sawyer.workcell import cell_digest, load_work_cell, recorded_cell
+
+    record = sol.work_cell
+    if args.work_cell is not None:
+        cell = load_work_cell(args.work_cell)
+        if record is not None and cell_digest(cell) != record["sha256"]:
+            print(
+                f"warning: --work-cell {args.work_cell} is not the work cell {args.solution} "
+                f"was solved in ({record['path']}, recorded in the file); executing in "
+                f"{args.work_cell}",
+                file=sys.stderr,
+            )
+        return cell
+    if record is None:
+        return None
+    print(f"work cell: {record['path']}, as recorded in {args.solution}")
+    return recorded_cell(record, str(args.solution))
 
 
 def _check_grasps(
@@ -381,7 +409,7 @@ def _write(
 
 
 def run(args: argparse.Namespace) -> int:
-    ex, checks = _load(args)
+    ex, checks, cell = _load(args)
     targets = _bag_targets(args, _stem(args))  # as checked up front (:func:`_outputs`)
     page = None
     if args.html:
@@ -391,7 +419,7 @@ def run(args: argparse.Namespace) -> int:
     infos = _write(ex, targets, args.html, page)
     _report(ex, args.tool_speed)
     if checks:
-        print(_grip_line(checks, args.work_cell))
+        print(_grip_line(checks, cell))
     for info in infos:
         print(_describe(info))
     if page is not None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterable
-from typing import IO, TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Any
 
 from ..objectives import is_top_level
 from .common import (
@@ -97,14 +97,16 @@ def run(args: argparse.Namespace) -> int:
     from ..progress import LiveLine
 
     get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
+    record = None
     if args.work_cell is None:
         instance = load_instance(args)
     else:  # the cell first: the command-line overrides apply to the instance in its cell
         from ..instance import load
-        from ..sawyer.workcell import apply_work_cell, load_work_cell
+        from ..sawyer.workcell import apply_work_cell, cell_record, load_work_cell
 
         cell = load_work_cell(args.work_cell)
         base = apply_work_cell(load(args.instance), cell)
+        record = cell_record(cell)  # the solution file records it, for execute
         instance = base.with_overrides(**instance_overrides(args))
     prepare([args.method])  # a compile is announced, and never charged to --time-limit
     with LiveLine(sys.stderr, quiet=args.quiet) as line:  # exact methods: a live line
@@ -117,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
             progress=line if line.enabled else None,
             **dict(args.param),
         )
-    _write_outputs(args, instance, result)
+    _write_outputs(args, instance, result, record)
     note = no_model_note(result)
     if note is not None:  # one line: the plan is a heuristic's, not the model's
         print(note, file=sys.stderr)
@@ -133,8 +135,14 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result) -> None:
-    """The figures and the solution file; every figure is drawn before any file is written."""
+def _write_outputs(
+    args: argparse.Namespace,
+    instance: Instance,
+    result: Result,
+    work_cell: dict[str, Any] | None = None,
+) -> None:
+    """The figures and the solution file (with the work cell's record, if any); every figure
+    is drawn before any file is written."""
     figures = []
     if args.convergence:
         figures.append((_convergence_figure(result, args.convergence_kit), args.convergence))
@@ -151,7 +159,7 @@ def _write_outputs(args: argparse.Namespace, instance: Instance, result: Result)
     if args.out:
         from ..solution import write
 
-        write(args.out, result, instance_overrides(args))
+        write(args.out, result, instance_overrides(args), work_cell)
     if figures:
         from ..plots import save_figure
 

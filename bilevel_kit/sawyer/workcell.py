@@ -118,3 +118,39 @@ def apply_work_cell(instance: Instance, cell: WorkCell) -> Instance:
         field = "$" + exc.path.removeprefix("$.station") if inside else "$"
         raise WorkCellError(cell.source, field, f"{exc.detail} ({instance.source})") from None
     return out
+
+
+def cell_document(cell: WorkCell) -> dict[str, Any]:
+    """The work cell as a document :func:`parse_work_cell` reads back to the same cell."""
+    doc: dict[str, Any] = {**cell.station}
+    if cell.grasp_widths:
+        doc["grasp_widths"] = dict(cell.grasp_widths)
+    if cell.description:
+        doc["description"] = cell.description
+    return doc
+
+
+def cell_digest(cell: WorkCell) -> str:
+    """SHA-256 of the cell's canonical JSON: equal for equal content, whatever the file's
+    layout, key order or path."""
+    import hashlib
+    import json
+
+    text = json.dumps(cell_document(cell), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def cell_record(cell: WorkCell) -> dict[str, Any]:
+    """What a solution file records of the work cell it was solved in (docs/formats.md):
+    the file's path as given, the content's digest and the content itself, so that
+    ``execute`` can use it without the file and tell a different cell apart."""
+    return {"path": cell.source, "sha256": cell_digest(cell), "cell": cell_document(cell)}
+
+
+def recorded_cell(record: Mapping[str, Any], source: str) -> WorkCell:
+    """The work cell a solution file records (``source`` names the file), validated as a
+    work-cell file is; a content that does not match its digest is :class:`WorkCellError`."""
+    cell = parse_work_cell(record["cell"], f"{source} (work_cell.cell)")
+    if cell_digest(cell) != record["sha256"]:
+        raise WorkCellError(source, "$.work_cell.sha256", "does not match the recorded cell")
+    return cell
