@@ -90,6 +90,7 @@ from ..exact.nomodel import improve
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
+from .finger_room import finger_room_field, with_room
 from .model import build, canonical, release_bound
 from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
@@ -175,6 +176,7 @@ class CpsatOptions(ScheduleOptions):
             "a method name, or none"
         },
     )
+    finger_room: bool = finger_room_field()
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -202,6 +204,8 @@ def cpsat(
     (module docstring). Several assembly stations are the same run on the same model (its
     station part: :mod:`.station_model`), every option honoured (:data:`STATION_OPTIONS`)."""
     check_station_options(instance, "cpsat", options, STATION_OPTIONS)
+    if options.finger_room:  # the grasp footprints packed (docs/execution.md#finger-room)
+        return with_room(cpsat, instance, options, seed=seed, time_limit=time_limit)
     one = len(instance.station_ids) == 1
     if not instance.stations and get_objective(options.objective).makespan_with_one_station:
         options = replace(options, objective="makespan")  # e.g. sum_completion, as milp
