@@ -21,21 +21,32 @@ if TYPE_CHECKING:
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
 
+#: The left edge (%) of the profile's log axis: instances within it of the reference are drawn
+#: there (the reference itself is 0 %, which a log axis cannot show).
+PROFILE_FLOOR = 0.01
+#: The label of the profile's x axis; its y axis reads "share of instances at most x % above".
+PROFILE_X = "x: makespan above best-known (%, log scale; ≤ 0.01 at the left edge)"
+
+
 @styled
 def plot_profile(
     ratios: Mapping[str, Sequence[float]],
     ax: Axes | None = None,
     tau_max: float | None = None,
+    *,
+    legend: bool = True,
 ) -> Axes:
-    """The performance profile: for each method, the share of instances whose makespan is
-    within a factor tau of the best-known (``ratios``: makespan / best-known per instance,
-    ``inf`` where the method has no plan). The x axis is tau - 1 in percent ("above
-    best-known"), linear up to 1 % and logarithmic beyond, so the first percent and the tail
-    both show; dotted lines mark 1 % and 5 %. It runs to ``tau_max`` (default: the largest
-    finite ratio, at least 1.1). Each curve is a step function named ``profile:<method>``."""
+    """The performance profile: for each method, the share of instances whose makespan is at
+    most x % above the best-known (``ratios``: makespan / best-known per instance, ``inf``
+    where the method has no plan; x = 100 (ratio - 1)). The x axis is logarithmic throughout,
+    from :data:`PROFILE_FLOOR` % (instances within it, the best-known's own among them, are
+    drawn at that edge, labelled "≤0.01") to ``tau_max`` (default: the largest finite ratio,
+    at least 1.1); dotted lines mark 1 % and 5 %. Each curve is a step function named
+    ``profile:<method>``. The legend sits outside the axes, right (``legend=False``: none, for
+    a figure that draws one legend for several profiles)."""
     plt = pyplot()
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.5, 4), layout="constrained")
+        _, ax = plt.subplots(figsize=(7.5, 4), layout="constrained")
     finite = [r for rs in ratios.values() for r in rs if math.isfinite(r)]
     top = 100 * ((tau_max or max(1.1, 1.02 * max(finite, default=1.1))) - 1)
     swatches = style.categorical(len(ratios))
@@ -43,7 +54,7 @@ def plot_profile(
         n = len(rs)
         xs = 100 * (np.sort(np.asarray([r for r in rs if math.isfinite(r)], dtype=float)) - 1)
         share = np.arange(1, len(xs) + 1) / max(n, 1)
-        x = np.concatenate([[0.0], np.maximum(xs, 0.0), [top]])
+        x = np.concatenate([[PROFILE_FLOOR], np.maximum(xs, PROFILE_FLOOR), [top]])
         y = np.concatenate([[0.0], share, [share[-1] if len(share) else 0.0]])
         ax.step(
             x,
@@ -59,16 +70,17 @@ def plot_profile(
     for pct in (1.0, 5.0):
         if pct < top:
             ax.axvline(pct, color="0.5", linestyle=":", lw=0.8, gid=f"tau:{pct:g} %")
-    ax.set_xscale("symlog", linthresh=1.0, linscale=1.0)
-    ax.set_xlim(0.0, top)
+    ax.set_xscale("log")
+    ax.set_xlim(PROFILE_FLOOR, top)
     ax.set_ylim(0.0, 1.02)
-    ticks = [t for t in (0, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500) if t <= top]
-    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    ticks = [t for t in (0.01, 0.1, 1, 5, 10, 100, 1000) if t <= top]
+    ax.set_xticks(ticks, ["≤0.01" if t == PROFILE_FLOOR else f"{t:g}" for t in ticks])
     ax.minorticks_off()
-    ax.set_xlabel("above best-known, τ - 1 (%; linear to 1 %, log beyond)")
-    ax.set_ylabel("share of instances within τ")
+    ax.set_xlabel(PROFILE_X)
+    ax.set_ylabel("share of instances at most x % above")
     ax.set_title("performance profile")
-    ax.legend(loc="lower right")
+    if legend:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     return ax
 
 
@@ -85,8 +97,13 @@ def plot_gap_vs_size(
     column: str = "certified_gap",
 ) -> Axes:
     """Each method's gap (``column``, a fraction, drawn in %) against the instance's task
-    count (log scale), one marker per instance and method (``gap:<method>`` collections);
-    rows without a value (no plan) are left out."""
+    count (log scale), one hollow marker per instance and method (``gap:<method>``
+    collections), so that markers on one spot stay countable; rows without a value (no plan)
+    are left out. The y axis is linear to 1 % and logarithmic beyond (most gaps are near 0
+    and a few are large), and each legend entry counts the method's gaps of 0 ("cpsat, 41 at
+    0 %"), which all lie on one line."""
+    from matplotlib.ticker import NullLocator
+
     plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(6.5, 4), layout="constrained")
@@ -94,20 +111,30 @@ def plot_gap_vs_size(
     swatches = style.categorical(len(methods))
     for method, swatch, marker in zip(methods, swatches, _markers(), strict=False):
         mine = [r for r in rows if r["method"] == method and r.get(column) is not None]
+        gaps = [100 * float(r[column]) for r in mine]
+        zeros = sum(g <= 1e-9 for g in gaps)
         ax.scatter(
             [float(r["tasks"]) for r in mine],
-            [100 * float(r[column]) for r in mine],
-            color=swatch.color,
+            gaps,
+            facecolors="none",
+            edgecolors=[swatch.color],
+            linewidths=0.9,
             marker=marker,
-            s=16,
-            alpha=0.8,
-            label=method,
+            s=22,
+            label=f"{method}, {zeros} at 0 %" if zeros else method,
             gid=f"gap:{method}",
         )
+    ax.set_yscale("symlog", linthresh=1.0, linscale=0.6)
+    ax.set_ylim(bottom=-0.05)
+    ax.axhline(1.0, color="0.6", linestyle=":", lw=0.8)
+    high = max(1.0, ax.get_ylim()[1])
+    yticks = [t for t in (0, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000) if t <= high]
+    ax.set_yticks(yticks, [f"{t:g}" for t in yticks])
+    ax.yaxis.set_minor_locator(NullLocator())
     ax.set_xscale("log")
     ax.set_xlabel("tasks (log scale)")
     label = "certified gap" if column == "certified_gap" else column.replace("_", " ")
-    ax.set_ylabel(f"{label} (%)")
+    ax.set_ylabel(f"{label} (%; linear to 1 %, log beyond)")
     ax.set_title(f"{label} against size")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     return ax

@@ -4,8 +4,8 @@ assembly stations one human lane per station under the shared robot's
 
 :func:`plot_gantt` draws in steps: the kits' bars (kitting, delivery, pickup, tasks), their
 labels (inside their bars or on leaders, :mod:`.lanes`), the tray waits and idle time, then the
-axes' dress, the legend, beyond eight kits the colour bar and, when the task bars are too
-narrow to name, the list of tasks by kit. The order of the steps is the order the artists are
+axes' dress, the legend and, when the task bars are too narrow to name, the list of tasks by
+kit. The order of the steps is the order the artists are
 added, hence the drawing order.
 """
 
@@ -35,6 +35,24 @@ HUMAN_Y = 0.0
 BAR_HEIGHT = 0.6
 #: Width bounds (inches) of a new Gantt chart; it grows with the number of tasks in between.
 GANTT_WIDTH = (7.0, 10.0)
+#: Hatches of the rounds of kits: kits 1-8 plain, 9-16 dotted, ... (never ``//`` or ``xx``,
+#: the delivery's and the pickup's hatches). One rule whatever the number of kits, so kit k
+#: looks the same in the charts of two methods (docs/figures.md#colours).
+KIT_HATCHES = ("", "..", "\\\\", "oo", "++", "--")
+#: Most entries of the list of tasks by kit; the rest are counted in one last entry.
+MAX_LISTED_KITS = 30
+
+
+def kit_colors(n: int) -> list[style.RGBA]:
+    """The colours of kits 1..n: kit k takes :data:`bilevel_kit.style.KIT_PALETTE` [(k - 1)
+    mod 8] whatever n (the palette stays clear of the marks' colours)."""
+    palette = style.KIT_PALETTE
+    return [style.rgba(palette[k % len(palette)]) for k in range(n)]
+
+
+def kit_hatch(k: int) -> str:
+    """The hatch of kit ``k`` (0-based): its round of eight colours (:data:`KIT_HATCHES`)."""
+    return KIT_HATCHES[(k // len(style.KIT_PALETTE)) % len(KIT_HATCHES)]
 
 
 def _idle_intervals(
@@ -113,21 +131,24 @@ def plot_gantt(
     one hatched delivery bar (``robot_end``..``arrive``) and, with a tray limit, a light dotted
     bar for each wait for a returned tray (:func:`tray_waits`). Human lane: the kit pickup
     overhead, then each task (``task_start``..``task_end``, in a lighter shade of its kit's
-    colour). Up to eight kits have eight distinct colours; more kits take a continuous
-    colormap explained by a colour bar (:func:`bilevel_kit.style.kit_colors`); no kit colour
-    resembles a mark. Idle time of either lane is hatched red; a dashed line marks the
-    makespan. The title names the instance (and ``method`` when given) and the metrics.
+    colour). Kit k takes the k-th of eight colours, hatched from kit 9 on by its round of
+    eight (:func:`kit_colors`, :func:`kit_hatch`): one rule whatever the number of kits, so
+    kit k looks the same in every chart; no kit colour resembles a mark. Idle time of either
+    lane is hatched red; a dashed line marks the makespan. The title names the instance (and
+    ``method`` when given) and the metrics.
 
     Every kit and task is named: inside its bar where the label fits, else on a leader beside
-    the lane (:mod:`.lanes`); when the leaders do not fit either, a list of the tasks by kit
-    under the chart names them (on a new figure, which grows to hold it). Kit labels take one
+    the lane (:mod:`.lanes`). Task labels take one place per lane: all inside when all fit,
+    else all on leaders; when the leaders do not fit either, a list of the tasks by kit under
+    the chart names them (at most :data:`MAX_LISTED_KITS` kits, the rest counted; on a new
+    figure, which grows to hold it). Kit labels take one
     format per chart, "kit k" when all fit, else "k". ``timeline`` defaults to
     :func:`bilevel_kit.plan.evaluate` of the plan (pass one to draw e.g. a simulated run; the
     simulator's waits for parts are not part of a timeline and are not drawn).
     """
     tl = timeline if timeline is not None else evaluate(instance, plan)
     n_kits = len(tl.kits)
-    colors, colorbar = style.kit_colors(max(n_kits, len(plan.kits)))
+    colors = kit_colors(max(n_kits, len(plan.kits)))
     where = list(tl.kit_stations) or [kit_station(instance, kit.tasks) for kit in plan.kits]
     ids = instance.station_ids  # ("",): one human lane, as without stations
     created = ax is None
@@ -141,7 +162,7 @@ def plot_gantt(
     mean_kit_in = inches_per_s * tl.robot_work / max(n_kits, 1)
     edge: dict[str, Any] = {"edgecolor": "black", "linewidth": 0.5 if mean_kit_in >= 0.15 else 0.15}
     kit_bars, task_bars = _lane_bars(plan, tl, colors, where, ids)
-    robot, human, listed = _place_labels(kit_bars, task_bars, inches_per_s, right, colorbar)
+    robot, human, listed = _place_labels(kit_bars, task_bars, inches_per_s, right)
     ys = _lane_ys(ids, human)
     _draw_kits(ax, instance, plan, tl, (colors, where, ys), edge)
     lanes.draw(ax, robot, ROBOT_Y, +1, BAR_HEIGHT / 2, stagger=False)
@@ -151,9 +172,7 @@ def plot_gantt(
     _draw_waits_and_idle(ax, tl, waits, where, ys)
     ax.axvline(makespan, color=style.MAKESPAN_COLOR, linestyle="--", linewidth=1.2, gid="makespan")
     _dress_gantt(ax, instance, tl, method, (lanes.room(human[-1]), lanes.room(robot)), (where, ys))
-    _gantt_legend(ax, colors, colorbar, edge, bool(waits))
-    if colorbar:
-        _kit_colorbar(ax, len(colors))
+    _gantt_legend(ax, colors, edge, bool(waits))
     if listed:
         _task_list(ax, plan, colors, resize=created)
     return ax
@@ -212,16 +231,16 @@ def _draw_kits(
     kit colours, each kit's station and each station's lane y)."""
     colors, where, ys = lanes_of
     for k, (kit, kt) in enumerate(zip(plan.kits, tl.kits, strict=False)):
-        color = colors[k]
+        color, hatch = colors[k], kit_hatch(k)
         gid = f"robot:kit:{k + 1}"
-        _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, **edge)
+        _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, hatch=hatch, **edge)
         y, o_h = ys[where[k]], instance.station_params[where[k]].kit_overhead_human
         _draw_delivery_and_pickup(ax, k, kt, (y, o_h), edge)
         light = style.lighten(color)
         for t in kit.tasks:
             if t in tl.task_start:
                 s, e = tl.task_start[t], tl.task_end[t]
-                _bar(ax, y, s, e, f"human:task:{t}", color=light, **edge)
+                _bar(ax, y, s, e, f"human:task:{t}", color=light, hatch=hatch, **edge)
 
 
 def _place_labels(
@@ -229,21 +248,23 @@ def _place_labels(
     task_bars: list[list[lanes.Bar]],
     inches_per_s: float,
     width_s: float,
-    colorbar: bool,
 ) -> tuple[lanes.Placement, list[lanes.Placement], bool]:
     """Where the kit and task labels go, and whether the tasks must also be listed by kit.
 
     Kit labels read "kit k" when every one fits its bar that way, else "k" (one format per
-    chart). A lane whose leaders do not fit keeps its inside labels only if at least half of
-    its labels fit (a few scattered labels would suggest the others are missing); the list of
-    tasks by kit then names every task, and every kit when no colour bar does. ``task_bars``:
-    one list per human lane."""
+    chart). A human lane's task labels are all inside their bars when all fit, else all on
+    leaders (one place per lane, never some inside and some outside). A lane whose leaders do
+    not fit keeps no task label; the list of tasks by kit then names every task (and every
+    kit, when the kits' leaders do not fit either). ``task_bars``: one list per human lane."""
     long = [replace(b, text=f"kit {b.text}") for b in kit_bars]
     if all(lanes.fits_inside(b, inches_per_s) for b in long):
         kit_bars = long
     robot = lanes.place(kit_bars, inches_per_s, width_s)
-    human = [lanes.place(bars, inches_per_s, width_s) for bars in task_bars]
-    listed = None in human or (robot is None and not colorbar)
+    human = [
+        lanes.place(bars, inches_per_s, width_s, outside=not _all_fit(bars, inches_per_s))
+        for bars in task_bars
+    ]
+    listed = None in human or robot is None
 
     def inside_only(bars: list[lanes.Bar]) -> lanes.Placement:
         fit = [b for b in bars if lanes.fits_inside(b, inches_per_s)]
@@ -251,9 +272,13 @@ def _place_labels(
 
     return (
         robot if robot is not None else inside_only(kit_bars),
-        [h if h is not None else inside_only(b) for h, b in zip(human, task_bars, strict=True)],
+        [h if h is not None else lanes.Placement([], []) for h in human],
         listed,
     )
+
+
+def _all_fit(bars: Sequence[lanes.Bar], inches_per_s: float) -> bool:
+    return all(lanes.fits_inside(b, inches_per_s) for b in bars)
 
 
 def _draw_delivery_and_pickup(
@@ -399,25 +424,16 @@ def _swatch_handler() -> Any:
     return Handler()
 
 
-def _swatch_colors(colors: Sequence[Any], colorbar: bool) -> list[Any]:
-    """Up to four kit colours for the legend's kit swatches: the first kits of the palette,
-    or the colormap at its ends and thirds."""
-    if colorbar:
-        n = len(colors)
-        return [colors[round(i * (n - 1) / 3)] for i in range(4)]
-    return list(colors[:4]) or [style.KIT_PALETTE[0]]
-
-
-def _gantt_legend(
-    ax: Axes, colors: Sequence[Any], colorbar: bool, edge: dict[str, Any], waits: bool
-) -> None:
+def _gantt_legend(ax: Axes, colors: Sequence[Any], edge: dict[str, Any], waits: bool) -> None:
     """The legend under the chart: one row on a wide figure, else two. Kitting and task
     swatches show the chart's kit colours side by side (tasks in their lighter shades)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    sample = _swatch_colors(colors, colorbar)
-    kit_label = "kitting (colour = kit, see bar)" if colorbar else "kitting (colour = kit)"
+    sample = list(colors[:4]) or [style.rgba(style.KIT_PALETTE[0])]
+    kit_label = "kitting (colour = kit)"
+    if len(colors) > len(style.KIT_PALETTE):
+        kit_label = "kitting (colour = kit; kits 9+ hatched)"
     handles: list[Any] = [
         KitSwatch(sample, edge, kit_label),
         Patch(facecolor=style.DELIVERY_COLOR, hatch="//", label="delivery", **edge),
@@ -444,8 +460,10 @@ def _gantt_legend(
 
 def _task_list(ax: Axes, plan: Plan, colors: Sequence[Any], *, resize: bool) -> None:
     """The tasks of each kit as a legend under the chart ("k: task, task"), in the kits'
-    colours, for charts whose task bars are too narrow to name. ``resize``: grow the figure
-    by the list's height (a figure made by :func:`plot_gantt`)."""
+    swatches, for charts whose task bars are too narrow to name: the first
+    :data:`MAX_LISTED_KITS` kits, the title says where the others are (a list longer than the
+    chart helps nobody; the plan file has every kit). ``resize``: grow the figure by the
+    list's height (a figure made by :func:`plot_gantt`)."""
     import textwrap
 
     from matplotlib.patches import Patch
@@ -455,22 +473,27 @@ def _task_list(ax: Axes, plan: Plan, colors: Sequence[Any], *, resize: bool) -> 
     size = style.SMALL_SIZE
     char_in = style.text_width_in("x", size)
     wrap = max(12, int((width - 1.0) / char_in))
-    labels = [
-        textwrap.fill(f"{k}: {', '.join(kit.tasks)}", wrap) for k, kit in enumerate(plan.kits, 1)
+    shown = plan.kits[:MAX_LISTED_KITS]
+    labels = [textwrap.fill(f"{k}: {', '.join(kit.tasks)}", wrap) for k, kit in enumerate(shown, 1)]
+    handles = [
+        Patch(facecolor=colors[k], hatch=kit_hatch(k), edgecolor="black", linewidth=0.4)
+        for k in range(len(labels))
     ]
+    title = "tasks by kit"
+    if len(plan.kits) > len(shown):
+        title += f" (kits 1-{len(shown)}; kits {len(shown) + 1}-{len(plan.kits)}: in the plan file)"
     lines = [lab.split("\n") for lab in labels]
     entry_in = max(style.text_width_in(x, size) for ls in lines for x in ls) + 0.45
     ncols = max(1, min(len(labels), int((width - 0.3) // entry_in)))
     rows = math.ceil(len(labels) / ncols)
     tall = max(len(ls) for ls in lines)
-    handles = [Patch(facecolor=c, edgecolor="black", linewidth=0.4) for c in colors[: len(labels)]]
     outside = type(fig.get_layout_engine()).__name__ == "ConstrainedLayoutEngine"
     fig.legend(
         handles,
         labels,
         loc="outside lower center" if outside else "lower center",
         ncols=ncols,
-        title="tasks by kit",
+        title=title,
         fontsize=size,
         handlelength=1.0,
         columnspacing=1.0,
@@ -478,17 +501,3 @@ def _task_list(ax: Axes, plan: Plan, colors: Sequence[Any], *, resize: bool) -> 
     )
     if resize:
         fig.set_size_inches(width, height + rows * tall * 1.4 * size / 72 + 0.35)
-
-
-def _kit_colorbar(ax: Axes, n: int) -> None:
-    """The colour bar of :data:`bilevel_kit.style.KIT_CMAP` from kit 1 to kit ``n``."""
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-    from matplotlib.ticker import MaxNLocator
-
-    mappable = ScalarMappable(norm=Normalize(1, n), cmap=style.KIT_CMAP)
-    bar = cast("Figure", ax.get_figure(root=True)).colorbar(
-        mappable, ax=ax, pad=0.01, fraction=0.05, aspect=12
-    )
-    bar.set_label("kit (delivery order)")
-    bar.ax.yaxis.set_major_locator(MaxNLocator(nbins=5, integer=True))

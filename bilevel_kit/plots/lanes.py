@@ -67,14 +67,20 @@ def fits_inside(bar: Bar, inches_per_s: float) -> bool:
 
 
 def place(
-    bars: Sequence[Bar], inches_per_s: float, width_s: float, max_tiers: int = MAX_TIERS
+    bars: Sequence[Bar],
+    inches_per_s: float,
+    width_s: float,
+    max_tiers: int = MAX_TIERS,
+    *,
+    outside: bool = False,
 ) -> Placement | None:
     """Every bar's label inside it where it fits, the others on leaders in the lowest row where
     the label overlaps no other label of that row, no leader line of a row nearer the lane
     crosses it, and its own line crosses no label nearer the lane. ``width_s`` is the width
-    of the chart (s). None when a label finds no row within ``max_tiers``."""
-    inside = [b for b in bars if fits_inside(b, inches_per_s)]
-    rest = sorted((b for b in bars if not fits_inside(b, inches_per_s)), key=lambda b: b.mid)
+    of the chart (s). ``outside``: every label on a leader (one place for a lane's labels).
+    None when a label finds no row within ``max_tiers``."""
+    inside = [] if outside else [b for b in bars if fits_inside(b, inches_per_s)]
+    rest = sorted((b for b in bars if b not in inside), key=lambda b: b.mid)
     pad = PAD_IN / inches_per_s
     placed: list[tuple[int, float, float, float]] = []  # tier, left, right, line x (s)
     leaders: list[Leader] = []

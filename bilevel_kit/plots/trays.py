@@ -21,9 +21,19 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-#: Most columns of a new :func:`plot_trays` grid, and the size (inches) of its cells.
+#: Most columns of a new :func:`plot_trays` grid, and the size (inches) of its cells (a
+#: single tray, e.g. Whole Assembly's, gets :data:`SINGLE_CELL`: its title lists every task).
 TRAY_COLUMNS = 10
 TRAY_CELL = (1.7, 3.4)
+SINGLE_CELL = 5.5
+#: Lines of task names in a tray's title before "+N more".
+TASK_LINES = 2
+#: What the kit fitness means, for the captions (docs/figures.md#tray-layouts, docs/errata.md).
+FITNESS_MEANING = (
+    "kit fitness = sum of the distances between parts of different types - sum of those "
+    "between parts of one type (mm; paper Eq. 11, minus W6 x overlap, 0 in a valid layout): "
+    "bigger is better, negative for a kit of one part type"
+)
 
 
 def type_swatches(instance: Instance) -> dict[str, style.Swatch]:
@@ -110,8 +120,46 @@ def kit_fitness(instance: Instance, kit: Kit) -> float | None:
 
 
 def _fitness_text(instance: Instance, kit: Kit) -> str:
+    """ "fitness 2,218 mm", with a true minus sign ("−6 mm": same-type parts only)."""
     f = kit_fitness(instance, kit)
-    return "no layout" if f is None else f"fitness {round(f):,} mm"  # an int: never "-0"
+    if f is None:
+        return "no layout"
+    return f"fitness {round(f):,} mm".replace("-", "−")  # an int: never "-0"
+
+
+def off_quarter_turn(plan: Plan, tol_deg: float = 0.05) -> int:
+    """How many parts of the plan lie at an angle that is not a multiple of 90 degrees: the
+    cross-entropy method samples continuous angles (paper Algorithm 1; docs/figures.md,
+    "Quarter turns"), and the figure draws them as solved, never rounded."""
+    return sum(
+        1
+        for kit in plan.kits
+        for p in kit.layout
+        if min(p.theta % 90.0, 90.0 - p.theta % 90.0) > tol_deg
+    )
+
+
+def _task_lines(tasks: Sequence[str], width_in: float, size: float) -> str:
+    """The task ids on up to :data:`TASK_LINES` lines of ``width_in`` inches, the last ending
+    in "+N more" when they do not all fit (never a task cut in the middle)."""
+
+    def fits(words: list[str]) -> bool:
+        return style.text_width_in(", ".join(words) + ",", size) <= width_in
+
+    lines: list[list[str]] = [[]]
+    for i, t in enumerate(tasks):
+        if fits([*lines[-1], t]):
+            lines[-1].append(t)
+        elif len(lines) < TASK_LINES and lines[-1]:
+            lines.append([t])
+        else:
+            placed = i
+            while lines[-1] and not fits([*lines[-1], f"+{len(tasks) - placed} more"]):
+                lines[-1].pop()
+                placed -= 1
+            lines[-1].append(f"+{len(tasks) - placed} more")
+            break
+    return ",\n".join(", ".join(words) for words in lines if words)
 
 
 def _extent(
@@ -184,8 +232,8 @@ def _draw_tray_outline(ax: Axes, width: float, height: float) -> None:
             height,
             fill=True,
             facecolor="#f5f5f0",
-            edgecolor="black",
-            linewidth=1.2,
+            edgecolor="0.45",
+            linewidth=0.6,
             gid="tray",
             zorder=1,
         )
@@ -350,12 +398,11 @@ def _overlap(a: _Box, b: _Box) -> bool:
 
 
 def _tray_title(instance: Instance, kit: Kit) -> str:
-    """The default title: number of parts and kit fitness, then the tasks (cut at 40 chars)."""
+    """The default title: number of parts and kit fitness, then the tasks (two lines at
+    most, "+N more")."""
     if not kit.tasks:
         return "empty kit"
-    tasks = ", ".join(kit.tasks)
-    if len(tasks) > 40:
-        tasks = tasks[:37] + "..."
+    tasks = _task_lines(kit.tasks, 4.5, style.FONT_SIZE)
     return f"{plural(len(kit.layout), 'part')}, {_fitness_text(instance, kit)}\ntasks {tasks}"
 
 
@@ -377,10 +424,12 @@ def plot_trays(
         ncols = min(TRAY_COLUMNS, max(3, math.ceil(math.sqrt(n))))
     ncols = max(1, min(ncols, n))
     extent = _extent(instance, (p for kit in plan.kits for p in kit.layout))
-    cell = float(np.clip(12.0 / ncols, *TRAY_CELL))
+    cell = SINGLE_CELL if ncols == 1 else float(np.clip(12.0 / ncols, *TRAY_CELL))
     used = sorted({p.type for kit in plan.kits for p in kit.layout})
     keys = type_keys(instance)
     grid = _TrayGrid(n, ncols, cell, extent, [type_label(t, keys[t]) for t in used])
+    caption = _caption(instance, plan, method, grid.width - 0.3)
+    grid.caption_lines(caption.count("\n") + 1)
     fig, flat = grid.figure()
     for k, kit in enumerate(plan.kits):
         _draw_tray_cell(instance, kit, k, flat[k], grid)
@@ -397,23 +446,46 @@ def plot_trays(
             bbox_to_anchor=(1.0, 1 - (grid.top + grid.hgap) / grid.height),
             frameon=False,
         )
-    W, H = instance.tray.width, instance.tray.height
-    head = instance.name if method is None else f"{instance.name} / {method}"
     fig.suptitle(
-        f"{head}: tray layouts of {plural(n, 'kit')} ({W:g} x {H:g} mm; "
-        "kit fitness, bigger is better)",
+        caption,
         y=1 - 0.12 / grid.height,
         va="top",
+        fontsize=style.FONT_SIZE,
     )
     return fig
 
 
+def _caption(instance: Instance, plan: Plan, method: str | None, width_in: float) -> str:
+    """The page's title, wrapped to ``width_in``: the instance (and method), what the kit
+    fitness means (:data:`FITNESS_MEANING`) and, when parts lie off a quarter turn, that the
+    angles are drawn as solved (continuous angles of the cross-entropy method)."""
+    import textwrap
+
+    W, H = instance.tray.width, instance.tray.height
+    head = instance.name if method is None else f"{instance.name} / {method}"
+    text = f"{head}: tray layouts of {plural(len(plan.kits), 'kit')} ({W:g} x {H:g} mm). "
+    text += FITNESS_MEANING + "."
+    off = off_quarter_turn(plan)
+    if off:
+        text += (
+            f" {plural(off, 'part')} at angles off a quarter turn, drawn as solved "
+            "(continuous angles; greedy-ce -p snap=true turns them)."
+        )
+    chars = max(40, int(width_in / style.text_width_in("x", style.FONT_SIZE)))
+    return textwrap.fill(text, chars)
+
+
 class _TrayGrid:
     """The page of :func:`plot_trays`: ``nrows`` x ``ncols`` cells ``cell`` inches wide, and
-    margins and gaps fixed in inches (two title lines above each tray, ticks and labels
-    outside, the legend of part types on the right)."""
+    margins and gaps fixed in inches (three title lines above each tray, ticks and labels
+    outside, the legend of part types on the right, ``top`` for the page's caption)."""
 
     left, bottom, top, wgap = 0.75, 0.55, 0.5, 0.15
+
+    def caption_lines(self, lines: int) -> None:
+        """Make room above the trays for a caption of ``lines`` lines."""
+        self.height += 0.2 + lines * 1.3 * style.FONT_SIZE / 72 - self.top
+        self.top = 0.2 + lines * 1.3 * style.FONT_SIZE / 72
 
     def __init__(
         self,
@@ -433,7 +505,7 @@ class _TrayGrid:
         self.right = 0.3 + (
             max(style.text_width_in(t, style.LEGEND_SIZE) for t in legend) + 0.5 if legend else 0
         )
-        self.hgap = 2.6 * self.title_size / 72 + 0.2
+        self.hgap = (TASK_LINES + 1.3) * 1.2 * self.title_size / 72 + 0.2
         self.width = self.left + ncols * cell + (ncols - 1) * self.wgap + self.right
         self.height = (
             self.bottom
@@ -465,15 +537,13 @@ def _draw_tray_cell(instance: Instance, kit: Kit, k: int, ax: Axes, grid: _TrayG
     left column and on the lowest tray of each column."""
     from matplotlib.ticker import NullLocator
 
-    width = 22 if grid.small else 32
-    tasks = ", ".join(kit.tasks)
-    if len(tasks) > width:
-        tasks = tasks[: width - 3] + "..."
+    head = f"kit {k + 1}: " + (kit.tasks[0] if kit.tasks else "no tasks")
+    tasks = _task_lines([head, *kit.tasks[1:]], grid.cell, grid.title_size)
     plot_tray(
         instance,
         kit,
         ax=ax,
-        title=f"kit {k + 1}: {tasks}\n{_fitness_text(instance, kit)}",
+        title=f"{tasks}\n{_fitness_text(instance, kit)}",
         legend=False,
     )
     ax.title.set_fontsize(grid.title_size)

@@ -15,6 +15,20 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+#: Figure 6's diverging colour map: ColorBrewer's red-blue, colour-blind safe (the paper's
+#: red-green is not); blue is an improvement, red a loss.
+FIG6_CMAP = "RdBu"
+#: Figure 6's axes, spelled out (docs/simulation.md, "Processes").
+MTTF_LABEL = "MTTF: the feeders' mean time to failure (s)"
+MAT_LABEL = "MAT: mean time between part arrivals (s)"
+#: Largest spread (in N) of the horizon study's instances around each N.
+HORIZON_DODGE = 0.4
+#: What the tags over the user study's bars mean.
+KIND_NOTE = (
+    "tags: fitted = a bar the calibration was fitted to, implied = fixed by the fitted bars;"
+    " neither is a prediction"
+)
+
 
 def plot_user_study(
     table: Sequence[Mapping[str, Any]],
@@ -42,25 +56,63 @@ def plot_user_study(
             if r is None:
                 continue
             x = g + (i - (len(conds) - 1) / 2) * width
-            _user_study_pair(ax, r, x, width, colors[c], first=g == 0, label=LABELS[c])
+            _user_study_pair(ax, r, x, width, colors[c])
     ax.set_xticks([0, 1], ["Total task time", "Human idle time"])
     ax.set_ylabel("time per table (s)")
     n = f"{studies} simulated studies" if studies else "simulated studies"
     ax.set_title(
-        f"User study: our median study mean per condition over {n} of 18 participants\n"
-        "error bars, 95 % prediction intervals: thick = participants only, "
-        "thin = with calibration uncertainty\n"
-        f"hatched: the paper's Fig. 5 bar (± its read-off){' - QUICK run' if quick else ''}",
+        f"User study: our median study mean per condition over {n} of 18 participants"
+        f"{' - QUICK run' if quick else ''}",
         fontsize=8.5,
     )
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    _user_study_legend(ax, colors, conds)
     return ax
 
 
-def _user_study_pair(
-    ax: Axes, r: Mapping[str, Any], x: float, width: float, color: str, *, first: bool, label: str
-) -> None:
+def _user_study_legend(ax: Axes, colors: Mapping[str, str], conds: Sequence[str]) -> None:
+    """Under the axes: each condition's bar and its paper bar (hatched, in its colour), the
+    two kinds of error bar as drawn, and what the tags mean."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles: list[Any] = []
+    for c in conds:
+        handles.append(Patch(facecolor=colors[c], label=f"{LABELS[c]} (ours)"))
+        handles.append(
+            Patch(
+                facecolor="white",
+                edgecolor=colors[c],
+                hatch="///",
+                hatchcolor=colors[c],
+                label=f"{LABELS[c]}, paper's Fig. 5 bar (± read-off)",
+            )
+        )
+    handles += [
+        Line2D([], [], color="black", lw=3.0, label="95 % PI, participants only (thick)"),
+        Line2D(
+            [],
+            [],
+            color="0.35",
+            lw=0.9,
+            marker="_",
+            markersize=7,
+            label="95 % PI, with calibration uncertainty (thin, capped)",
+        ),
+    ]
+    ax.legend(
+        handles=handles,
+        fontsize=7,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.08),
+        ncols=3,
+        title=KIND_NOTE,
+        title_fontsize=7,
+        frameon=False,
+    )
+
+
+def _user_study_pair(ax: Axes, r: Mapping[str, Any], x: float, width: float, color: str) -> None:
     """Our bar (two intervals) and the paper's hatched bar beside it for one condition."""
     med = float(r["median"])
     lo, hi = float(r["pi_low"]), float(r["pi_high"])
@@ -75,18 +127,22 @@ def _user_study_pair(
         med,
         width * 0.44,
         color=color,
-        label=f"{label} (ours)" if first else None,
         gid=f"bar:{m}:{cond}",
     )
-    for low, high, line, cap in ((clo, chi, 0.9, 3), (lo, hi, 3.0, 0)):
+    # side by side, so the thin interval never hides behind the thick one
+    for low, high, line, cap, dx, bar_color, kind in (
+        (clo, chi, 0.9, 3, 0.09, "0.35", "calibration"),
+        (lo, hi, 3.0, 0, -0.07, "black", "participants"),
+    ):
         ax.errorbar(
-            xo,
+            xo + dx * width,
             med,
             yerr=[[max(med - low, 0.0)], [max(high - med, 0.0)]],
             fmt="none",
-            ecolor="black",
+            ecolor=bar_color,
             elinewidth=line,
             capsize=cap,
+            gid=f"pi:{kind}:{m}:{cond}",
         )
     h = float(r.get("readoff") or 0.0)
     paper = float(r["paper"])
@@ -97,9 +153,9 @@ def _user_study_pair(
         color="white",
         edgecolor=color,
         hatch="///",
+        hatchcolor=color,
         yerr=[[h], [h]],
         capsize=2,
-        label="paper (Fig. 5)" if first and cond == OPT else None,
         gid=f"paper:{m}:{cond}",
     )
     kind = str(r.get("kind") or r.get("role") or "")
@@ -147,7 +203,7 @@ def plot_fig6_panel(
     if span is None:
         span = _span(rows, [(metric, f"{subject}_over_{baseline}")])
     im = ax.imshow(
-        z, origin="lower", cmap="RdYlGn", norm=TwoSlopeNorm(0.0, -span, span), aspect="auto"
+        z, origin="lower", cmap=FIG6_CMAP, norm=TwoSlopeNorm(0.0, -span, span), aspect="auto"
     )
     for i in range(len(mats)):
         for j in range(len(mttfs)):
@@ -164,8 +220,8 @@ def plot_fig6_panel(
                 )
     ax.set_xticks(range(len(mttfs)), [f"{v:g}" for v in mttfs])
     ax.set_yticks(range(len(mats)), [f"{v:g}" for v in mats])
-    ax.set_xlabel("MTTF (s)")
-    ax.set_ylabel("MAT (s)")
+    ax.set_xlabel(MTTF_LABEL)
+    ax.set_ylabel(MAT_LABEL)
     title = (
         f"{METRIC_LABELS[metric]}: {LABELS.get(subject, subject)} over "
         f"{LABELS.get(baseline, baseline)}"
@@ -224,7 +280,11 @@ def plot_fig6(
             plot_fig6_panel(rows, m, subject, b, ax=axes[i][j], span=span, colorbar=False)
     fig.tight_layout(rect=(0, 0.06, 0.9, 1))
     cax = fig.add_axes((0.91, 0.12, 0.018, 0.8))
-    fig.colorbar(axes[0][0].images[0], cax=cax, label="improvement (%), one scale for all panels")
+    fig.colorbar(
+        axes[0][0].images[0],
+        cax=cax,
+        label="improvement (%; blue: better, red: worse), one scale for all panels",
+    )
     r0 = next(iter(rows), {})
     fig.text(
         0.01,
@@ -232,7 +292,8 @@ def plot_fig6(
         f"R = {r0.get('reps', '?')} replications per cell, {r0.get('units', '?')} tables per run."
         " * p < .05, ** p < .001: one-way ANOVA over the three policies, then Tukey HSD"
         " (per cell, no correction over cells).\n▲/▼: significantly better/worse by the paired"
-        " t-test over the replications, after Holm over the panel's cells."
+        " t-test over the replications, after Holm over the panel's cells. MAT: mean time between"
+        " part arrivals; MTTF: the feeders' mean time to failure."
         + ("  QUICK run: fewer cells and replications." if quick else ""),
         fontsize=8,
         gid="fig6:note",
@@ -265,8 +326,10 @@ def plot_horizon_gap(
     mean: Mapping[int, float] | None = None,
 ) -> Axes:
     """Part A of the horizon study: the gap (%) of greedy-ce's makespan to the exact reference
-    against the horizon N, one line per instance (hollow markers: the reference is CP-SAT's
-    lower bound, not a proven optimum) and ``mean`` (N -> mean gap) as a thick black line.
+    against the horizon N, one thin line per instance, dodged along N by up to
+    :data:`HORIZON_DODGE` (hollow markers: the reference is CP-SAT's lower bound, not a proven
+    optimum; the title says so) and ``mean`` (N -> mean gap) as a thick black line; the
+    legend beside the axes.
     The plan times are a panel of their own (:func:`plot_horizon_time`): one y axis per
     panel, so no line reads against the wrong axis."""
     import matplotlib.pyplot as plt
@@ -276,25 +339,49 @@ def plot_horizon_gap(
         _, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     names = list(dict.fromkeys(str(r["instance_file"]) for r in rows))
     handles = []
-    for name, sw in zip(names, style.categorical(len(names)), strict=True):
+    for k, (name, sw) in enumerate(zip(names, style.categorical(len(names)), strict=True)):
         rs = sorted((r for r in rows if r["instance_file"] == name), key=lambda r: r["horizon"])
-        pts = [(r["horizon"], r["gap_pct"]) for r in rs if r["gap_pct"] is not None]
+        # each instance a little apart along N (at most +-0.2), thin and light, so that eight
+        # series on one spot stay apart and the mean reads above them
+        dx = HORIZON_DODGE * (k - (len(names) - 1) / 2) / max(len(names) - 1, 1)
+        pts = [(r["horizon"] + dx, r["gap_pct"]) for r in rs if r["gap_pct"] is not None]
         bound = any(r["reference"] == "bound" for r in rs)
         if pts:
             x, y = zip(*pts, strict=True)
             face = "white" if bound else sw.color
-            ax.plot(x, y, marker="o", color=sw.color, markerfacecolor=face, gid=f"gap:{name}")
+            ax.plot(
+                x,
+                y,
+                marker="o",
+                markersize=4,
+                lw=0.9,
+                alpha=0.75,
+                color=sw.color,
+                markerfacecolor=face,
+                gid=f"gap:{name}",
+            )
         label = f"{rs[0]['instance']}" + (" (vs bound)" if bound else "")
-        handles.append(Line2D([], [], color=sw.color, marker="o", label=label))
+        handles.append(Line2D([], [], color=sw.color, marker="o", markersize=4, label=label))
     if mean:
-        ax.plot(list(mean), list(mean.values()), color="black", lw=2.4, gid="gap:mean")
+        ax.plot(list(mean), list(mean.values()), color="black", lw=2.4, gid="gap:mean", zorder=5)
         handles.append(Line2D([], [], color="black", lw=2.4, label="mean over instances"))
     ax.set_xlabel("greedy horizon N (tasks per window)")
-    ax.set_ylabel("gap to exact reference (%)")
-    ax.set_title("greedy-ce: makespan gap against the horizon N")
+    ax.set_ylabel("gap to the exact reference (%)")
+    ax.set_title(
+        "greedy-ce: makespan gap against the horizon N\n"
+        "exact reference: CP-SAT's proven optimum (filled), else its lower bound (hollow)",
+        fontsize=style.FONT_SIZE,
+    )
     ax.grid(alpha=0.3)
     ax.set_xticks(sorted({int(r["horizon"]) for r in rows}))
-    ax.legend(handles=handles, fontsize=style.SMALL_SIZE, ncols=2)
+    ax.legend(
+        handles=handles,
+        fontsize=style.SMALL_SIZE,
+        ncols=1,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        borderaxespad=0.0,
+    )
     return ax
 
 

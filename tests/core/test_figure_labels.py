@@ -20,7 +20,7 @@ from bilevel_kit import plots, solve, style
 from bilevel_kit.generate import generate
 from bilevel_kit.instance import Instance, from_dict
 from bilevel_kit.plan import Kit, Placement, Plan
-from bilevel_kit.plots.gantt import KitSwatch
+from bilevel_kit.plots.gantt import MAX_LISTED_KITS, KitSwatch, kit_colors
 
 #: greedy-ce's plan of the table (8 kits), without layouts: the Gantt chart needs none.
 GREEDY_KITS = (
@@ -72,14 +72,73 @@ def test_every_task_and_kit_is_named(table):
     for name, (inst, plan) in charts(table).items():
         ax = plots.plot_gantt(inst, plan, method=name)
         named = labels(ax, "task")
-        listed = " ".join(legend_texts(ax))
+        listed = " ".join(legend_texts(ax) + legend_titles(ax))
         for k, kit in enumerate(plan.kits, 1):
+            if k > MAX_LISTED_KITS and "tasks by kit" in listed:  # counted in the title
+                assert f"kits {MAX_LISTED_KITS + 1}-{len(plan.kits)}: in the plan file" in listed
+                continue
             for t in kit.tasks:
                 on_chart = named.get(f"label:task:{t}") == t
                 in_list = re.search(rf"(^|\s){k}: ([^\s]+, )*{re.escape(t)}(,|$|\s)", listed)
                 assert on_chart or in_list, (name, t)
-            if len(plan.kits) <= len(style.KIT_PALETTE):  # else the colour bar names them
+            if len(plan.kits) <= len(style.KIT_PALETTE):
                 assert f"label:kit:{k}" in labels(ax, "kit") or re.search(rf"\b{k}: ", listed)
+
+
+def legend_titles(ax: Axes) -> list[str]:
+    fig = ax.figure
+    legends = [*fig.legends, *(a.get_legend() for a in fig.axes if a.get_legend())]
+    return [leg.get_title().get_text() for leg in legends]
+
+
+def test_kit_k_has_one_colour_whatever_the_number_of_kits(table):
+    """Issue 40 item 11: kit 3 of an 8-kit chart and of a 12-kit chart look the same (the
+    viridis bar beyond 8 kits made two methods' charts look unrelated)."""
+    swatch = {}
+    for name in ("greedy-ce", "single-task trays=1"):
+        inst, plan = charts(table)[name]
+        ax = plots.plot_gantt(inst, plan)
+        swatch[name] = {
+            p.get_gid(): (tuple(p.get_facecolor()), p.get_hatch() or "")
+            for p in ax.patches
+            if (p.get_gid() or "").startswith("robot:kit:")
+        }
+    few, many = swatch["greedy-ce"], swatch["single-task trays=1"]
+    assert len(few) == 8 and len(many) == 12
+    for k in range(1, 9):
+        assert few[f"robot:kit:{k}"] == many[f"robot:kit:{k}"]
+        assert few[f"robot:kit:{k}"][1] == ""  # kits 1-8: plain
+    # kit 9 takes kit 1's colour with the dotted hatch of the second round
+    assert many["robot:kit:9"] == (many["robot:kit:1"][0], "..")
+
+
+def test_task_labels_take_one_place_per_lane(table):
+    """All inside their bars, or all on leaders: never some of each (issue 40 item 11)."""
+    for name, (inst, plan) in charts(table).items():
+        ax = plots.plot_gantt(inst, plan)
+        named = set(labels(ax, "task"))
+        on_leaders = {
+            ln.get_gid().removeprefix("leader:")
+            for ln in ax.lines
+            if (ln.get_gid() or "").startswith("leader:label:task:")
+        }
+        assert not named or on_leaders in (set(), named), name
+    inst, plan = charts(table)["whole-assembly"]
+    ax = plots.plot_gantt(inst, plan)
+    assert len(labels(ax, "task")) == 12  # conn1..conn4 do not fit: all twelve on leaders
+    assert sum((ln.get_gid() or "").startswith("leader:label:task:") for ln in ax.lines) == 12
+
+
+def test_task_list_is_capped(table):
+    inst, plan = charts(table)["100 kits"]
+    ax = plots.plot_gantt(inst, plan)
+    (legend,) = ax.figure.legends
+    assert len(legend.get_texts()) == MAX_LISTED_KITS == 30
+    assert legend.get_title().get_text() == (
+        "tasks by kit (kits 1-30; kits 31-100: in the plan file)"
+    )
+    height = ax.figure.get_size_inches()[1]
+    assert height < 5.0  # the list no longer outgrows the 3.4-inch chart
 
 
 def test_whole_assembly_names_all_twelve_tasks_on_the_chart(table):
@@ -115,11 +174,9 @@ def test_kit_labels_take_one_format_per_chart(table):
 
 @pytest.mark.parametrize("n", [1, 4, 8, 9, 12, 100])
 def test_kit_colours_never_resemble_idle_or_makespan(n):
-    colors, _ = style.kit_colors(n)
+    colors = kit_colors(n)
     marks = style.mark_colors()
-    must_differ = ("idle", "idle hatch", "makespan")
-    if n <= len(style.KIT_PALETTE):  # the palette also stays clear of the grey marks
-        must_differ = tuple(marks)
+    must_differ = tuple(marks)  # one palette for any n: clear of the grey marks too
     for c in colors:
         for shade in (c, style.lighten(c)):
             for m in must_differ:
@@ -149,7 +206,7 @@ def test_chart_draws_kits_apart_from_idle_and_makespan(table):
 def test_legend_swatches_show_the_kits_colours_not_kit_1s(table):
     inst, plan = charts(table)["greedy-ce"]
     ax = plots.plot_gantt(inst, plan)
-    colors, _ = style.kit_colors(8)
+    colors = kit_colors(8)
     drawn = [
         p
         for p in ax.get_legend().findobj()

@@ -397,7 +397,15 @@ def test_profile_and_gap_plots():
     # a reaches 2 of 3 instances (the third has no plan), b all three
     assert lines["profile:a"].get_ydata()[-1] == pytest.approx(2 / 3)
     assert lines["profile:b"].get_ydata()[-1] == pytest.approx(1.0)
-    assert ax.get_xscale() == "symlog" and ax.get_xlim()[0] == 0.0
+    # one log scale (no linear part below 1 %), the best-known at the 0.01 % edge
+    assert ax.get_xscale() == "log" and ax.get_xlim()[0] == pytest.approx(0.01)
+    assert lines["profile:b"].get_xdata()[1] == pytest.approx(0.01)
+    # x and y name the same quantity; the legend is outside the axes (not over the curves)
+    assert ax.get_xlabel().startswith("x: makespan above best-known (%")
+    assert ax.get_ylabel() == "share of instances at most x % above"
+    ax.figure.canvas.draw()
+    legend_box, axes_box = ax.get_legend().get_window_extent(), ax.get_window_extent()
+    assert legend_box.x0 >= axes_box.x1
     plt.close(ax.figure)
     _, mine = plt.subplots()
     rows = [
@@ -408,4 +416,13 @@ def test_profile_and_gap_plots():
     assert plot_gap_vs_size(rows, ax=mine) is mine
     points = {c.get_gid(): c.get_offsets() for c in mine.collections}
     assert len(points["gap:a"]) == 1 and list(points["gap:b"][0]) == [50, 20]
+    assert mine.get_yscale() == "symlog"  # gaps near 0 spread out, large ones on a log scale
+    labels = [t.get_text() for t in mine.get_legend().get_texts()]
+    assert labels == ["a", "b"]  # no gap of 0: nothing to count
+    _, other = plt.subplots()
+    plot_gap_vs_size([{**r, "certified_gap": 0.0} for r in rows], ax=other)
+    texts = [t.get_text() for t in other.get_legend().get_texts()]
+    assert texts == ["a, 2 at 0 %", "b, 1 at 0 %"]  # every row set to 0 here
+    assert all(len(c.get_facecolors()) == 0 for c in other.collections)  # hollow markers
+    plt.close(other.figure)
     plt.close(mine.figure)

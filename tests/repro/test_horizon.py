@@ -136,10 +136,24 @@ def test_plot_draws_into_given_axes_with_units():
     ]  # fmt: skip
     fig, ax = plt.subplots()
     assert plot_horizon_gap(rows, ax=ax) is ax
-    assert ax.get_ylabel() == "gap to exact reference (%)"
+    assert ax.get_ylabel() == "gap to the exact reference (%)"
     assert "(tasks" in ax.get_xlabel()
     assert fig.axes == [ax]  # one y axis per panel: the plan times are a panel of their own
     assert [line.get_gid() for line in ax.lines] == ["gap:a.json"]
+    assert "exact reference: CP-SAT's proven optimum (filled), else its lower bound" in (
+        ax.get_title()
+    )
+    plt.close(fig)
+    # eight series: dodged along N (at most +-0.2) so that they do not sit on one another
+    many = [
+        {**r, "instance": f"i{k}", "instance_file": f"i{k}.json"} for k in range(8) for r in rows
+    ]
+    fig, ax = plt.subplots()
+    plot_horizon_gap(many, ax=ax)
+    xs = sorted(line.get_xdata()[0] for line in ax.lines)
+    assert len(set(xs)) == 8 and xs[0] == pytest.approx(0.8) and xs[-1] == pytest.approx(1.2)
+    fig.canvas.draw()  # the legend beside the axes, not over the lines
+    assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
     plt.close(fig)
     fig, ax = plt.subplots()
     assert plot_horizon_time(rows, ax=ax) is ax
@@ -163,7 +177,7 @@ def test_figure_panels_have_one_y_axis_each():
     fig = plot_horizon(plan, window)
     assert len(fig.axes) == 4  # gap, plan time, gain, time per decision: no twin axes
     assert {a.get_ylabel() for a in fig.axes} == {
-        "gap to exact reference (%)",
+        "gap to the exact reference (%)",
         "plan time (s)",
         "total time, gain over Optimized (%)",
         "planning time per decision (s)",

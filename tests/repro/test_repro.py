@@ -196,6 +196,25 @@ def test_plot_user_study_draws_into_given_axes(study):
     ours = next(p for p in ax.patches if p.get_gid() == "bar:idle:optimized")
     paper = next(p for p in ax.patches if p.get_gid() == "paper:idle:optimized")
     assert ours.get_x() + ours.get_width() <= paper.get_x() + 1e-9  # beside, not on, our bar
+    # issue 40 item 11: the paper's bar hatched in its condition's colour, one legend entry per
+    # condition's hatch; the two intervals side by side and told apart in the legend; tags
+    # explained
+    assert paper.get_hatch() == "///"
+    assert paper.get_edgecolor() == ours.get_facecolor() == paper.get_hatchcolor()
+    legend = ax.get_legend()
+    labels = [t.get_text() for t in legend.get_texts()]
+    hatched = [h for h in legend.legend_handles if getattr(h, "get_hatch", lambda: None)()]
+    assert len(hatched) == 3 and len({tuple(h.get_edgecolor()) for h in hatched}) == 3
+    assert "95 % PI, participants only (thick)" in labels
+    assert "95 % PI, with calibration uncertainty (thin, capped)" in labels
+    assert legend.get_title().get_text().startswith("tags: fitted = a bar the calibration")
+    thick = [c for c in ax.collections if str(c.get_gid()).startswith("pi:participants:")]
+    thin = [c for c in ax.collections if str(c.get_gid()).startswith("pi:calibration:")]
+    assert len(thick) == len(thin) == 6
+    x_thick = thick[0].get_segments()[0][0][0]
+    x_thin = thin[0].get_segments()[0][0][0]
+    assert x_thin > x_thick  # side by side, not one hidden behind the other
+    assert thick[0].get_linewidth()[0] > 3 * thin[0].get_linewidth()[0]
     plt.close(fig)
 
 
@@ -238,6 +257,12 @@ def test_fig6_figure_shares_one_colour_scale(fig6):
     assert len(norms) == 1
     texts = " ".join(t.get_text() for t in fig.texts)
     assert "Tukey" in texts and "R = 3" in texts and "QUICK" in texts
+    # colour-blind safe (ColorBrewer RdBu, not red-green), the axes spelled out
+    assert {im.get_cmap().name for ax in fig.axes for im in ax.images} == {"RdBu"}
+    panel = fig.axes[0]
+    assert panel.get_xlabel() == "MTTF: the feeders' mean time to failure (s)"
+    assert panel.get_ylabel() == "MAT: mean time between part arrivals (s)"
+    assert "MAT: mean time between part arrivals" in texts
     plt.close(fig)
 
 

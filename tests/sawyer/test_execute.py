@@ -345,12 +345,29 @@ def test_joint_trajectory_figure(instance, plan):
     kt = plan_execution(instance, plan.plan, kits=[1]).kits[0]
     _fig, ax = plt.subplots()
     assert plot_joint_positions(kt, ax=ax) is ax
-    assert len(limit_lines(ax)) == 14  # lower and upper of every joint
-    assert ax.get_xlabel() and ax.get_ylabel()
+    # positions in % of each joint's range: the 14 limits are two shared lines, 0 and 100 %
+    assert [tuple(line.get_ydata()) for line in limit_lines(ax)] == [(0.0, 0.0), (100.0, 100.0)]
+    assert ax.get_xlabel() and ax.get_ylabel() == "joint angle (% of its range)"
+    shares = [line.get_ydata() for line in ax.get_lines() if "q:" in str(line.get_gid())]
+    assert len(shares) == 7 and all(y.min() >= 0.0 and y.max() <= 100.0 for y in shares)
+    ax.figure.canvas.draw()  # the legend is beside the axes, not over the curves and limits
+    assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
     ax2 = plot_joint_velocities(kt)
     assert len(limit_lines(ax2)) == 2
-    top = max(line.get_ydata().max() for line in ax2.get_lines() if "v:" in str(line.get_gid()))
+    v_lines = [line for line in ax2.get_lines() if "v:" in str(line.get_gid())]
+    top = max(line.get_ydata().max() for line in v_lines)
     assert top <= 100.0 + 1e-6
+    # drawn from the exact profile on a 0.01 s grid, whatever the samples' dt: a run with
+    # dt = 0.2 draws the same velocities
+    t = v_lines[0].get_xdata()
+    assert np.diff(t).max() <= 0.01 + 1e-9 and len(t) > len(kt.times)
+    coarse = plan_execution(instance, plan.plan, kits=[1], dt=0.2).kits[0]
+    again = [ln for ln in plot_joint_velocities(coarse).get_lines() if "v:" in str(ln.get_gid())]
+    y_fine = np.interp(np.linspace(0, kt.duration, 997), t, v_lines[0].get_ydata())
+    y_coarse = np.interp(
+        np.linspace(0, kt.duration, 997), again[0].get_xdata(), again[0].get_ydata()
+    )
+    np.testing.assert_allclose(y_coarse, y_fine, atol=1e-6)
     figure = plot_kit_trajectory(kt)
     assert len(figure.axes) == 2
     plt.close("all")

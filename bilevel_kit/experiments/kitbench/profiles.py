@@ -131,16 +131,20 @@ def profile_figure(
     the records (``extra``: rows of a separate pass, drawn against the records only)."""
     import matplotlib.pyplot as plt
 
-    from ...plots.bench import plot_profile
+    from ...plots.bench import PROFILE_X, plot_profile
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.2), layout="constrained")
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6), layout="constrained")
     methods = methods_of(rows)
-    plot_profile(ratios(rows, methods, pass_best(rows)), ax=left)
+    plot_profile(ratios(rows, methods, pass_best(rows)), ax=left, legend=False)
     left.set_title(f"{title}: against the best of the same pass")
-    left.set_xlabel("above the best of the pass, τ - 1 (%; linear to 1 %, log beyond)")
+    left.set_xlabel(PROFILE_X.replace("best-known", "the best of the pass"))
     both = [*rows, *({**r, "method": f"{r['method']} (own pass)"} for r in extra)]
-    plot_profile(ratios(both, methods_of(both), records_best(records)), ax=right)
+    plot_profile(ratios(both, methods_of(both), records_best(records)), ax=right, legend=False)
     right.set_title(f"{title}: against the {len(records)} records")
+    # one legend for both panels, under them (never over the curves); the right panel's
+    # methods include the left's, in the same order and colours
+    handles, labels = right.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 5))
     return fig
 
 
