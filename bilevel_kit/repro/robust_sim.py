@@ -168,10 +168,14 @@ def robust_sim_cell(cell: RobustSimCell) -> dict[str, Any]:
     a, b = makespans(inst, mean_plan, ev), makespans(inst, saa_plan, ev)
     timeline = {"mean-plan": estimate(a), "saa-plan": estimate(b), "vss": paired(a, b)}
     plans = {"mean-plan": mean_plan, "saa-plan": saa_plan}
+    opt = sample(inst, SCENARIOS, cell.seed, cv=cell.cv, stream=OPTIMISE)
     return {
         "key": cell.key(),
         "cell": asdict(cell),
         "timeline": {k: asdict(v) for k, v in timeline.items()},
+        # the SAA objective of each plan on the scenarios optimised on (robust.csv's
+        # ``*_in_sample``): which solve went further
+        "in_sample": {k: float(makespans(inst, p, opt).mean()) for k, p in plans.items()},
         "plans": {k: [list(kit.tasks) for kit in p.kits] for k, p in plans.items()},
         "runs": {law: simulated(inst, plans, law, cell.cv, cell.reps) for law in LAWS},
         "cpu_s": time.process_time() - t0,
@@ -182,7 +186,8 @@ def robust_sim_cell(cell: RobustSimCell) -> dict[str, Any]:
 COLUMNS = (
     "instance", "trays", "cv", "seed", "law", "policy", "reps", "makespan", "makespan_low",
     "makespan_high", "gain", "gain_low", "gain_high", "n_kits", "timeline_makespan",
-    "timeline_vss", "timeline_vss_low", "timeline_vss_high", "committed_vss", "reproduced",
+    "timeline_vss", "timeline_vss_low", "timeline_vss_high", "committed_vss", "in_sample",
+    "committed_in_sample", "reproduced",
 )  # fmt: skip
 
 
@@ -200,6 +205,12 @@ def _committed(cell: Mapping[str, Any], path: Path = COMMITTED) -> Mapping[str, 
         ):
             return r
     return None
+
+
+def _committed_in_sample(committed: Mapping[str, Any] | None, name: str) -> float | str:
+    """The committed study's in-sample SAA objective of a fixed plan ("" for the others)."""
+    column = {"mean-plan": "mean_plan_in_sample", "saa-plan": "saa_in_sample"}.get(name)
+    return "" if committed is None or column is None else float(committed[column])
 
 
 def _reproduced(rec: Mapping[str, Any], committed: Mapping[str, Any] | None) -> bool:
@@ -241,6 +252,8 @@ def rows_of(records: Sequence[Mapping[str, Any]], committed: Path = COMMITTED) -
                     "timeline_vss_low": vss["mean"] - vss["half"],
                     "timeline_vss_high": vss["mean"] + vss["half"],
                     "committed_vss": "" if old is None else float(old["vss"]),
+                    "in_sample": rec.get("in_sample", {}).get(name, ""),
+                    "committed_in_sample": _committed_in_sample(old, name),
                     "reproduced": ok,
                 }
                 out.append(
@@ -254,6 +267,10 @@ def rows_of(records: Sequence[Mapping[str, Any]], committed: Path = COMMITTED) -
 
 def _interval(r: Mapping[str, Any], name: str) -> str:
     return f"{float(r[name]):.2f} [{float(r[f'{name}_low']):.2f}, {float(r[f'{name}_high']):.2f}]"
+
+
+def _pair(r: Mapping[str, Any], a: str, b: str) -> str:
+    return " / ".join("-" if r.get(k) in ("", None) else f"{float(r[k]):.2f}" for k in (a, b))
 
 
 def sim_vss_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
@@ -274,11 +291,13 @@ def sim_vss_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
                 if first["committed_vss"] in ("", None)
                 else f"{float(first['committed_vss']):.2f}",
                 "yes" if str(first["reproduced"]) in ("True", "true") else "no",
+                _pair(saa[laws[0]], "in_sample", "committed_in_sample"),
                 *(_interval(saa[law], "gain") for law in laws),
                 str(first["reps"]),
             ]
         )
     head = ["instance", "trays", "cv", "timeline VSS (s)", "committed (s)", "plans reproduced"]
+    head += ["SAA plan in sample, recomputed / committed (s)"]
     head += [f"simulated VSS, {law} law (s)" for law in laws] + ["R"]
     return "\n".join(markdown_lines(head, body))
 

@@ -47,6 +47,9 @@ def test_committed_rows_are_paired_and_complete() -> None:
             # the gain is the difference of the means on the same seeds (paired)
             assert float(r["gain"]) == pytest.approx(base - float(r["makespan"]), abs=0.02)
             assert float(r["makespan_low"]) <= float(r["makespan"]) <= float(r["makespan_high"])
+        # the SAA solve is hinted with the mean-value plan: never worse on its own scenarios
+        assert float(pols["saa-plan"]["in_sample"]) <= float(pols["mean-plan"]["in_sample"])
+        assert float(pols["saa-plan"]["committed_in_sample"]) > 0
     # a fixed plan runs its own kits under either law (never re-planned)
     for key, pols in cells.items():
         other = cells[(*key[:3], LAWS[1] if key[3] == LAWS[0] else LAWS[0])]
