@@ -78,6 +78,13 @@ STUDIES: dict[str, tuple[str, str]] = {
         "Plans for the mean human times against sample-average plans for their spread, VSS and "
         "EVPI per cv and tray count (docs/robust.md).",
     ),
+    "robust-sim": (
+        "the robust study's plans in the shop-floor simulation, online policies beside them",
+        "The robust study's mean-value and SAA plans (recomputed, checked against robust.csv) "
+        "run as fixed plans in the shop-floor simulation with the simulator's human model at "
+        "the cell's cv, cpsat-rolling and optimized-adaptive beside them on the same seeds "
+        "(docs/robust.md).",
+    ),
 }
 
 #: ``--reps``' meaning in each study that has it.
@@ -86,6 +93,7 @@ _REPS = {
     "horizon": "replications per simulation cell (default 3; 1 with --quick)",
     "adaptive": "runs per participant group (default 10; 2 with --quick), 3R sampled participants",
     "stations": "replications (default 5; 2 with --quick)",
+    "robust-sim": "replications per cell and human-time law (default 30; 5 with --quick)",
 }
 
 
@@ -278,6 +286,10 @@ def _run(args: argparse.Namespace) -> int:
         from ..repro.robust import run_robust
 
         return _report(run_robust(out, **run))
+    if args.experiment == "robust-sim":
+        from ..repro.robust_sim import run_robust_sim
+
+        return _report(run_robust_sim(out, reps=args.reps, **run))
     run["calibration"] = args.calibration
     if args.experiment == "stations":
         from ..repro.stations import run_stations

@@ -63,10 +63,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("instance")
     p.add_argument(
         "--policy",
-        default="optimized",
         metavar="NAME",
         help="single-task | whole-assembly | optimized | cpsat-rolling | optimized-adaptive | "
-        "cpsat-rolling-adaptive | optimized-oracle | cpsat-rolling-oracle (default optimized)",
+        "cpsat-rolling-adaptive | optimized-oracle | cpsat-rolling-oracle | fixed-plan "
+        "(default optimized; fixed-plan with --plan)",
+    )
+    p.add_argument(
+        "--plan",
+        metavar="SOLUTION",
+        help="run this solution file's kits (solve -o) in its order, never re-planned "
+        "(policy fixed-plan); checked against the simulated instance first",
+    )
+    p.add_argument(
+        "--mean-times",
+        action="store_true",
+        help="no sampling: every task takes its mean human time, every pick its pick time",
     )
     p.add_argument(
         "--mat",
@@ -92,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     from ..experiments.cells import is_failed, run_cells
     from ..experiments.replications import ReplicationCell, replication_cell
     from ..instance import load
-    from ..sim import POLICIES, SimParams
+    from ..sim import POLICIES, SimParams, TimingModel
     from ..sim.stations import require_station_policy
 
     if args.buffer is not None:
@@ -105,15 +116,22 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--mat: unknown part type(s) {', '.join(unknown)}")
     if args.mttf is not None and not args.mat and not instance.supply:
         raise UsageError("--mttf needs feeders: give --mat or an instance 'supply' section")
+    args.policy = _resolve_plan(args)
     params = SimParams(
         **instance_overrides(args),
         mat=args.mat,
         mttf=args.mttf,
         repair_time=args.repair,
         policy_options=dict(args.param),
+        timing=TimingModel.deterministic() if args.mean_times else TimingModel(),
     )
     POLICIES.spec(args.policy).parse(params.policy_options)  # fail before any run
     require_station_policy(instance, args.policy)  # several stations: exit 2 before any run
+    if args.plan:  # the plan checked against the simulated instance, before any run
+        from ..sim import effective_instance
+        from ..sim.fixed import load_plan
+
+        load_plan(args.plan, effective_instance(instance, params))
     cells = [
         ReplicationCell(instance, args.policy, params, s)
         for s in range(args.seed, args.seed + args.reps)
@@ -130,7 +148,8 @@ def run(args: argparse.Namespace) -> int:
     if not records:
         return sweep_exit(session, EXIT_OK)
     _print_summary(instance.name, args, records)
-    _say_sampled(instance, records)
+    if not args.mean_times:
+        _say_sampled(instance, records)
     if args.csv:
         from ..experiments import write_csv
 
@@ -145,6 +164,21 @@ def run(args: argparse.Namespace) -> int:
         ]
         write_csv(args.csv, rows)
     return sweep_exit(session, EXIT_OK)
+
+
+def _resolve_plan(args: argparse.Namespace) -> str:
+    """The policy: ``--plan FILE`` is ``fixed-plan`` with ``plan=FILE`` (docs/simulation.md)."""
+    from ..errors import UsageError
+
+    policy = args.policy or ("fixed-plan" if args.plan else "optimized")
+    if args.plan is None:
+        return str(policy)
+    if policy != "fixed-plan":
+        raise UsageError(f"--plan runs the fixed-plan policy, not {policy!r}: drop --policy")
+    if any(k.replace("-", "_") == "plan" for k, _ in args.param):
+        raise UsageError("give the plan once: --plan FILE or -p plan=FILE")
+    args.param = [*args.param, ("plan", args.plan)]
+    return "fixed-plan"
 
 
 def _say_sampled(instance: Instance, records: list[dict[str, Any]]) -> None:

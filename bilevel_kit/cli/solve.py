@@ -299,7 +299,7 @@ def prepare(needed: Iterable[str], stream: IO[str] | None = None) -> None:
     steps: list[str] = []
     for name in needed:
         step = REGISTRY[name].prepare if name in REGISTRY else None
-        if name.startswith("optimized"):  # the simulation's greedy-ce policies
+        if name.startswith("optimized") or name == "fixed-plan":  # greedy-ce in the simulation
             step = COMPILE_KERNELS
         if step is not None and step not in steps:
             steps.append(step)

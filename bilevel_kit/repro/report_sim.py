@@ -14,6 +14,7 @@ from .fig6_stats import BETTER, WORSE
 from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
 from .robust import ROBUST_TABLES
+from .robust_sim import ROBUST_SIM_TABLES
 from .stations_tables import STATION_TABLES
 
 Row = Mapping[str, Any]
@@ -223,6 +224,7 @@ SIM_TABLES: Tables = {
     "adaptive_shares": ("adaptive.csv", adaptive_shares_markdown),
     **STATION_TABLES,
     **ROBUST_TABLES,
+    **ROBUST_SIM_TABLES,
     "timing": ("timing.csv", timing_markdown),
 }
 

@@ -114,6 +114,12 @@ POLICIES.register(
     "cpsat-rolling, planning with the participant's true speed factor (a reference)",
     options="bilevel_kit.sim.cpsat_rolling:CPSATRollingOptions",
 )
+POLICIES.register(
+    "fixed-plan",
+    "bilevel_kit.sim.fixed:FixedPlanPolicy",
+    "a plan fixed before the run (a solution file, or greedy-ce's offline plan), not re-planned",
+    options="bilevel_kit.sim.fixed:FixedPlanOptions",
+)
 
 
 def make_policy(

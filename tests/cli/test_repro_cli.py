@@ -53,6 +53,7 @@ def test_each_study_lists_its_own_options_only(capsys):
         "adaptive": {"--reps", "--calibration"},
         "stations": {"--lines", "--stations", "--units", "--supply", "--reps"},
         "robust": set(),
+        "robust-sim": {"--reps"},
     }
     every = set().union(*own.values())
     for study, flags in own.items():

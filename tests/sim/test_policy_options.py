@@ -21,6 +21,7 @@ def test_registry_is_lazy_and_ordered():
         "optimized-oracle",
         "cpsat-rolling-adaptive",
         "cpsat-rolling-oracle",
+        "fixed-plan",
     ]
     assert "optimized" in POLICIES and "magic" not in POLICIES
     assert POLICIES.spec("single-task").options_class() is NoOptions

@@ -1,0 +1,433 @@
+"""``bilevel-kit repro robust-sim``: the robust study's plans in the shop-floor simulation, and
+the online policies beside them (issue 41; docs/robust.md#in-the-shop-floor-simulation).
+
+For each cell (instance, trays, cv) of the robust study (:mod:`.robust`):
+
+1. the **mean-value plan** and the **SAA plan** are recomputed exactly as the study computes
+   them (the same model, scenarios, deterministic time limits and one worker: a pure function
+   of the cell and its seed) and judged again on the study's 1,000 evaluation scenarios; the
+   CSV says whether that reproduces the committed ``robust.csv`` (``reproduced``);
+2. both plans run in the simulator as the ``fixed-plan`` policy (:mod:`bilevel_kit.sim.fixed`:
+   the kits in their order, never re-planned), and the online policies ``cpsat-rolling`` and
+   ``optimized-adaptive`` run beside them, all on the same replication seeds ``0 .. R-1``
+   (common random numbers: every policy meets the same human times), without feeders (every
+   part in stock, as in the timeline) and with deterministic robot times;
+3. human times come from the simulator's own human model (:class:`~bilevel_kit.sim.TimingModel`,
+   ``mean_i * s * e_i``) at the cell's CV, under two laws:
+
+   * ``task``: independent per-task noise ``e_i`` of CV ``cv``, no participant factor
+     (``participant_cv = 0, task_cv = cv``): the timeline study's own law, so the simulated
+     VSS must agree with the timeline's within the intervals (a check of the whole chain);
+   * ``participant``: one speed factor ``s`` of CV ``cv`` for every task of the unit, no
+     per-task noise (``participant_cv = cv, task_cv = 0``): the shape of the simulator's
+     default model (the paper's per-table SD comes from participants), which the SAA plan
+     was not optimised for.
+
+The simulated VSS is E[mean-value plan] - E[SAA plan] over the R replications, with its 95 %
+paired interval; each online policy's gain over the mean-value plan likewise.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import atomic
+from ..errors import UsageError
+from ..experiments.cells import run_cells_counted, split_failed, write_json
+from ..experiments.tables import markdown_lines, write_csv
+from ..instance import Instance
+from ..plan import Kit, Plan
+from ..stochastic import EVALUATE, OPTIMISE, estimate, makespans, paired, sample
+from .robust import (
+    CVS,
+    DET_MEAN,
+    DET_SAA,
+    EVALUATION,
+    INSTANCES,
+    ROOT,
+    SAFETY_S,
+    SCENARIOS,
+    study_instance,
+    tray_label,
+)
+
+#: The cells run by default: the table with one tray at every cv of the study (the timeline's
+#: VSS is not zero at 0.3 and 0.5).
+CELLS: tuple[tuple[str, int | None, float], ...] = tuple(("table", 1, c) for c in CVS)
+QUICK_CELLS: tuple[tuple[str, int | None, float], ...] = (("table", 1, 0.5),)
+#: Replications per cell and law (``--reps``); 5 with ``--quick``.
+REPS, QUICK_REPS = 30, 5
+#: The human-time laws (module docstring).
+LAWS = ("task", "participant")
+#: The policies, in the CSV's order: the two fixed plans, then the online ones.
+FIXED = ("mean-plan", "saa-plan")
+ONLINE = ("cpsat-rolling", "optimized-adaptive")
+#: The committed timeline study the recomputed plans are compared with.
+COMMITTED = ROOT / "paper_repro" / "results" / "robust.csv"
+
+
+@dataclass(frozen=True)
+class RobustSimCell:
+    """One (instance, trays, cv, seed) cell of the robust study, ``reps`` replications."""
+
+    instance: str
+    trays: int | None
+    cv: float
+    seed: int
+    reps: int = REPS
+    #: the instance file's digest (:func:`.common.file_digest`): a changed file is a new cell
+    digest: str = ""
+
+    def key(self) -> str:
+        blob = json.dumps(asdict(self), sort_keys=True).encode()
+        digest = hashlib.sha1(blob).hexdigest()[:10]
+        return f"{self.instance}_t{tray_label(self.trays)}_cv{self.cv}_{self.seed}__{digest}"
+
+
+def study_plans(instance: Instance, cv: float, seed: int) -> tuple[Plan, Plan]:
+    """The robust study's mean-value and SAA plans of a cell (docs/robust.md#the-study): the
+    same model, scenarios and deterministic limits as :func:`.robust.robust_cell`, each kit
+    with the packing oracle's layout (the simulator checks them; the timeline ignores them)."""
+    from ..models.cpsat.saa import solve_saa
+
+    def solve(scenarios: np.ndarray, det: float, start: Plan | None = None) -> Any:
+        return solve_saa(
+            instance,
+            scenarios,
+            time_limit=SAFETY_S,
+            start=start,
+            deterministic_time=det,
+            workers=1,
+        )
+
+    mean_out = solve(np.array([[t.human_mean for t in instance.tasks]]), DET_MEAN)
+    # the SAA solve is hinted with the task lists only, exactly as the study does
+    hint = Plan(tuple(Kit(k) for k in mean_out.kits))
+    opt = sample(instance, SCENARIOS, seed, cv=cv, stream=OPTIMISE)
+    saa_out = solve(opt, DET_SAA, start=hint)
+    return _laid_out(instance, mean_out), _laid_out(instance, saa_out)
+
+
+def _laid_out(instance: Instance, out: Any) -> Plan:
+    """A solve's kits with their layouts (the shelf packer's where the oracle kept none)."""
+    from ..heuristics.baselines import packed_kit
+
+    layouts = out.layouts or [None] * len(out.kits)
+    return Plan(
+        tuple(
+            Kit(tuple(k), lay) if lay is not None else packed_kit(instance, tuple(k), "kit")
+            for k, lay in zip(out.kits, layouts, strict=True)
+        )
+    )
+
+
+def timing_for(law: str, cv: float) -> Any:
+    """The simulator's human model at ``cv`` under ``law`` (module docstring)."""
+    from ..sim import TimingModel
+
+    if law == "task":
+        return TimingModel(participant_cv=0.0, task_cv=cv)
+    return TimingModel(participant_cv=cv, task_cv=0.0)
+
+
+def simulated(instance: Instance, plans: Mapping[str, Plan], law: str, cv: float, reps: int):
+    """Each policy's simulated makespans and kit counts on seeds ``0 .. reps - 1``."""
+    from ..sim import SimParams, effective_instance, replicate
+    from ..sim.fixed import FixedPlanPolicy
+
+    params = SimParams(timing=timing_for(law, cv), use_instance_supply=False)
+    eff = effective_instance(instance, params)
+    seeds = range(reps)
+    out: dict[str, dict[str, list[float]]] = {}
+    for name in (*FIXED, *ONLINE):
+        policy: Any = name
+        if name in plans:
+            policy = FixedPlanPolicy(eff, params=params, plan=plans[name])
+        recs = replicate(instance, policy, params, seeds=seeds)
+        out[name] = {
+            "makespan": [float(r["makespan"]) for r in recs],
+            "n_kits": [float(r["n_kits"]) for r in recs],
+        }
+    return out
+
+
+def robust_sim_cell(cell: RobustSimCell) -> dict[str, Any]:
+    """The cell's recomputed plans, their timeline estimates and the simulated runs."""
+    t0 = time.process_time()
+    inst = study_instance(cell.instance, cell.trays)
+    mean_plan, saa_plan = study_plans(inst, cell.cv, cell.seed)
+    ev = sample(inst, EVALUATION, cell.seed, cv=cell.cv, stream=EVALUATE)
+    a, b = makespans(inst, mean_plan, ev), makespans(inst, saa_plan, ev)
+    timeline = {"mean-plan": estimate(a), "saa-plan": estimate(b), "vss": paired(a, b)}
+    plans = {"mean-plan": mean_plan, "saa-plan": saa_plan}
+    opt = sample(inst, SCENARIOS, cell.seed, cv=cell.cv, stream=OPTIMISE)
+    return {
+        "key": cell.key(),
+        "cell": asdict(cell),
+        "timeline": {k: asdict(v) for k, v in timeline.items()},
+        # the SAA objective of each plan on the scenarios optimised on (robust.csv's
+        # ``*_in_sample``): which solve went further
+        "in_sample": {k: float(makespans(inst, p, opt).mean()) for k, p in plans.items()},
+        "plans": {k: [list(kit.tasks) for kit in p.kits] for k, p in plans.items()},
+        "runs": {law: simulated(inst, plans, law, cell.cv, cell.reps) for law in LAWS},
+        "cpu_s": time.process_time() - t0,
+    }
+
+
+#: The CSV's columns, in order.
+COLUMNS = (
+    "instance", "trays", "cv", "seed", "law", "policy", "reps", "makespan", "makespan_low",
+    "makespan_high", "gain", "gain_low", "gain_high", "n_kits", "timeline_makespan",
+    "timeline_vss", "timeline_vss_low", "timeline_vss_high", "committed_vss", "in_sample",
+    "committed_in_sample", "reproduced",
+)  # fmt: skip
+
+
+def _committed(cell: Mapping[str, Any], path: Path = COMMITTED) -> Mapping[str, Any] | None:
+    from .fmt import read_rows
+
+    if not path.exists():
+        return None
+    for r in read_rows(path):
+        if (str(r["instance"]), str(r["trays"]), float(r["cv"]), int(r["seed"])) == (
+            cell["instance"],
+            tray_label(cell["trays"]),
+            float(cell["cv"]),
+            int(cell["seed"]),
+        ):
+            return r
+    return None
+
+
+def _committed_in_sample(committed: Mapping[str, Any] | None, name: str) -> float | str:
+    """The committed study's in-sample SAA objective of a fixed plan ("" for the others)."""
+    column = {"mean-plan": "mean_plan_in_sample", "saa-plan": "saa_in_sample"}.get(name)
+    return "" if committed is None or column is None else float(committed[column])
+
+
+def _reproduced(rec: Mapping[str, Any], committed: Mapping[str, Any] | None) -> bool:
+    """The recomputed plans' estimates equal the committed row's (to its 0.01 s)."""
+    if committed is None:
+        return False
+    tl = rec["timeline"]
+    pairs = (("mean_plan", "mean-plan"), ("saa_plan", "saa-plan"), ("vss", "vss"))
+    return all(abs(round(tl[k]["mean"], 2) - float(committed[c])) < 0.005 for c, k in pairs)
+
+
+def rows_of(records: Sequence[Mapping[str, Any]], committed: Path = COMMITTED) -> list[dict]:
+    """One CSV row per cell, law and policy; numbers rounded to 0.01 s."""
+    out = []
+    for rec in records:
+        cell = rec["cell"]
+        vss = rec["timeline"]["vss"]
+        old = _committed(cell, committed)
+        ok = _reproduced(rec, old)
+        for law, runs in rec["runs"].items():
+            base = runs["mean-plan"]["makespan"]
+            for name, run in runs.items():
+                est, gain = estimate(run["makespan"]), paired(base, run["makespan"])
+                tl = rec["timeline"].get(name)
+                row = {
+                    **{k: cell[k] for k in ("instance", "cv", "seed", "reps")},
+                    "trays": tray_label(cell["trays"]),
+                    "law": law,
+                    "policy": name,
+                    "makespan": est.mean,
+                    "makespan_low": est.low,
+                    "makespan_high": est.high,
+                    "gain": gain.mean,
+                    "gain_low": gain.low,
+                    "gain_high": gain.high,
+                    "n_kits": float(np.mean(run["n_kits"])),
+                    "timeline_makespan": "" if tl is None else tl["mean"],
+                    "timeline_vss": vss["mean"],
+                    "timeline_vss_low": vss["mean"] - vss["half"],
+                    "timeline_vss_high": vss["mean"] + vss["half"],
+                    "committed_vss": "" if old is None else float(old["vss"]),
+                    "in_sample": rec.get("in_sample", {}).get(name, ""),
+                    "committed_in_sample": _committed_in_sample(old, name),
+                    "reproduced": ok,
+                }
+                out.append(
+                    {
+                        k: round(v, 2) if isinstance(v, float) and k != "cv" else v
+                        for k, v in ((k, row[k]) for k in COLUMNS)
+                    }
+                )
+    return out
+
+
+def _interval(r: Mapping[str, Any], name: str) -> str:
+    return f"{float(r[name]):.2f} [{float(r[f'{name}_low']):.2f}, {float(r[f'{name}_high']):.2f}]"
+
+
+def _pair(r: Mapping[str, Any], a: str, b: str) -> str:
+    return " / ".join("-" if r.get(k) in ("", None) else f"{float(r[k]):.2f}" for k in (a, b))
+
+
+def sim_vss_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
+    """Per cell: the timeline's VSS (committed study, and whether the recomputed plans
+    reproduce it) against the simulated VSS under each law, with 95 % paired intervals."""
+    cells = list(dict.fromkeys((str(r["instance"]), str(r["trays"]), str(r["cv"])) for r in rows))
+    laws = list(dict.fromkeys(str(r["law"]) for r in rows))
+    body = []
+    for key in cells:
+        mine = [r for r in rows if (str(r["instance"]), str(r["trays"]), str(r["cv"])) == key]
+        saa = {str(r["law"]): r for r in mine if r["policy"] == "saa-plan"}
+        first = mine[0]
+        body.append(
+            [
+                *key,
+                _interval(first, "timeline_vss"),
+                "-"
+                if first["committed_vss"] in ("", None)
+                else f"{float(first['committed_vss']):.2f}",
+                "yes" if str(first["reproduced"]) in ("True", "true") else "no",
+                _pair(saa[laws[0]], "in_sample", "committed_in_sample"),
+                *(_interval(saa[law], "gain") for law in laws),
+                str(first["reps"]),
+            ]
+        )
+    head = ["instance", "trays", "cv", "timeline VSS (s)", "committed (s)", "plans reproduced"]
+    head += ["SAA plan in sample, recomputed / committed (s)"]
+    head += [f"simulated VSS, {law} law (s)" for law in laws] + ["R"]
+    return "\n".join(markdown_lines(head, body))
+
+
+#: How the rendered tables name the policies.
+LABELS = {
+    "mean-plan": "mean-value plan",
+    "saa-plan": "SAA plan",
+    "cpsat-rolling": "cpsat-rolling",
+    "optimized-adaptive": "optimized-adaptive",
+}
+
+
+def sim_detail_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
+    """Per cell, law and policy: the simulated mean makespan (95 % interval), the paired gain
+    over the mean-value plan and the kits per run."""
+    body = [
+        [
+            str(r["instance"]),
+            str(r["trays"]),
+            str(r["cv"]),
+            str(r["law"]),
+            LABELS.get(str(r["policy"]), str(r["policy"])),
+            _interval(r, "makespan"),
+            "-" if r["policy"] == "mean-plan" else _interval(r, "gain"),
+            f"{float(r['n_kits']):.1f}",
+        ]
+        for r in rows
+    ]
+    head = ["instance", "trays", "cv", "law", "policy", "E makespan (s)"]
+    head += ["gain over the mean-value plan (s)", "kits"]
+    return "\n".join(markdown_lines(head, body))
+
+
+def _range(values: Sequence[float]) -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:.2f} s" if round(lo, 2) == round(hi, 2) else f"{lo:.2f} to {hi:.2f} s"
+
+
+def sim_summary_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The answer in sentences, computed from the CSV: does the simulated VSS agree with the
+    timeline's (task law), is the SAA plan still better (participant law), and where do the
+    online policies stand against the mean-value plan."""
+    saa = [r for r in rows if r["policy"] == "saa-plan"]
+    out = []
+    for law in dict.fromkeys(str(r["law"]) for r in saa):
+        mine = [r for r in saa if r["law"] == law]
+        meets = sum(
+            float(r["gain_low"]) <= float(r["timeline_vss_high"])
+            and float(r["gain_high"]) >= float(r["timeline_vss_low"])
+            for r in mine
+        )
+        above = sum(float(r["gain_low"]) > 0 for r in mine)
+        out.append(
+            f"Under the {law} law the simulated VSS is "
+            f"{_range([float(r['gain']) for r in mine])}, its interval meets the timeline's in "
+            f"{meets} of {len(mine)} cells and lies above 0 in {above}."
+        )
+    for name in ONLINE:
+        gains = [float(r["gain"]) for r in rows if r["policy"] == name]
+        above = sum(float(r["gain_low"]) > 0 for r in rows if r["policy"] == name)
+        below = sum(float(r["gain_high"]) < 0 for r in rows if r["policy"] == name)
+        out.append(
+            f"`{name}` gains {_range(gains)} over the mean-value plan (better in {above}, "
+            f"worse in {below} of {len(gains)} cell x law pairs)."
+        )
+    return " ".join(out)
+
+
+#: Table name -> (its CSV file, its renderer), merged into :data:`.report_sim.SIM_TABLES`.
+ROBUST_SIM_TABLES = {
+    "robust_sim_summary": ("robust_sim.csv", sim_summary_markdown),
+    "robust_sim_vss": ("robust_sim.csv", sim_vss_markdown),
+    "robust_sim_detail": ("robust_sim.csv", sim_detail_markdown),
+}
+
+
+def run_robust_sim(
+    out_dir: str | Path = "out/repro/robust_sim",
+    quick: bool = False,
+    jobs: int = 1,
+    seed: int = 0,
+    *,
+    reps: int | None = None,
+    cells: Sequence[tuple[str, int | None, float]] | None = None,
+    progress: bool | None = None,
+    **_: Any,
+) -> dict[str, Any]:
+    """The study (module docstring); ``quick``: the table at cv 0.5, 5 replications. Cells are
+    saved under ``out_dir/cells/`` (a rerun computes only the missing ones)."""
+    t0 = time.perf_counter()
+    grid = tuple(cells) if cells else (QUICK_CELLS if quick else CELLS)
+    r = reps or (QUICK_REPS if quick else REPS)
+    bad = [c for c in grid if c[0] not in INSTANCES or c[2] < 0]
+    if bad or r < 2:
+        raise UsageError(f"bad robust-sim options {bad or r}: instances from "
+                         f"{', '.join(INSTANCES)}, cv >= 0, at least 2 replications")  # fmt: skip
+    from .common import file_digest
+
+    todo = [
+        RobustSimCell(n, t, c, seed, r, digest=file_digest(ROOT / INSTANCES[n])) for n, t, c in grid
+    ]
+    out = Path(out_dir)
+    records, computed = run_cells_counted(
+        todo, robust_sim_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
+        desc="robust-sim cells",
+    )  # fmt: skip
+    ok, failed = split_failed(records)
+    rows = rows_of(ok)
+    head = (
+        f"Robust plans in the simulator{' (QUICK: a reduced run)' if quick else ''}: the "
+        "timeline's VSS against the simulated VSS (s), mean [95 % paired interval].\n\n"
+    )
+    files = {
+        "csv": write_csv(out / "robust_sim.csv", rows, exclude=(), line_end="\n"),
+        "markdown": out / "robust_sim.md",
+    }
+    atomic.write_text(
+        files["markdown"], head + sim_vss_markdown(rows) + "\n\n" + sim_detail_markdown(rows) + "\n"
+    )
+    result = {
+        "quick": quick,
+        "seed": seed,
+        "cells": len(todo),
+        "computed": computed,
+        "failed": failed,
+        "rows": rows,
+        "cpu_s": sum(float(x.get("cpu_s", 0.0)) for x in ok),
+        "wall_s": time.perf_counter() - t0,
+    }
+    result["files"] = {k: str(v) for k, v in {**files, "json": out / "robust_sim.json"}.items()}
+    write_json(out / "robust_sim.json", result)
+    return result

@@ -1,0 +1,119 @@
+"""``bilevel-kit repro robust-sim`` (docs/robust.md#in-the-shop-floor-simulation-the-method):
+the committed CSV's consistency, its rows from a cell record, and the page's drift test."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bilevel_kit.repro.report import read_rows
+from bilevel_kit.repro.robust_sim import (
+    FIXED,
+    LAWS,
+    ONLINE,
+    REPS,
+    ROBUST_SIM_TABLES,
+    rows_of,
+    run_robust_sim,
+    sim_vss_markdown,
+)
+from bilevel_kit.repro.template import ROOT, check
+
+CSV = ROOT / "paper_repro" / "results" / "robust_sim.csv"
+ROBUST = ROOT / "paper_repro" / "results" / "robust.csv"
+
+
+def _by_cell(rows):
+    out: dict[tuple[str, str, str, str], dict[str, dict]] = {}
+    for r in rows:
+        key = (r["instance"], r["trays"], r["cv"], r["law"])
+        out.setdefault(key, {})[r["policy"]] = r
+    return out
+
+
+def test_committed_rows_are_paired_and_complete() -> None:
+    rows = read_rows(CSV)
+    cells = _by_cell(rows)
+    assert {k[3] for k in cells} == set(LAWS) and len(cells) >= 4
+    for key, pols in cells.items():
+        assert list(pols) == [*FIXED, *ONLINE], key
+        base = float(pols["mean-plan"]["makespan"])
+        assert float(pols["mean-plan"]["gain"]) == 0.0
+        for r in pols.values():
+            assert int(r["reps"]) == REPS
+            assert float(r["gain_low"]) <= float(r["gain"]) <= float(r["gain_high"])
+            # the gain is the difference of the means on the same seeds (paired)
+            assert float(r["gain"]) == pytest.approx(base - float(r["makespan"]), abs=0.02)
+            assert float(r["makespan_low"]) <= float(r["makespan"]) <= float(r["makespan_high"])
+        # the SAA solve is hinted with the mean-value plan: never worse on its own scenarios
+        assert float(pols["saa-plan"]["in_sample"]) <= float(pols["mean-plan"]["in_sample"])
+        assert float(pols["saa-plan"]["committed_in_sample"]) > 0
+    # a fixed plan runs its own kits under either law (never re-planned)
+    for key, pols in cells.items():
+        other = cells[(*key[:3], LAWS[1] if key[3] == LAWS[0] else LAWS[0])]
+        for name in FIXED:
+            assert pols[name]["n_kits"] == other[name]["n_kits"], (key, name)
+
+
+def test_the_task_law_agrees_with_the_timeline() -> None:
+    """Under the timeline's own law the simulated VSS interval meets the timeline's."""
+    for (_, _, _, law), pols in _by_cell(read_rows(CSV)).items():
+        if law != "task":
+            continue
+        saa = pols["saa-plan"]
+        assert float(saa["gain_low"]) <= float(saa["timeline_vss_high"])
+        assert float(saa["gain_high"]) >= float(saa["timeline_vss_low"])
+
+
+def test_rows_of_a_record_say_whether_the_committed_plans_were_reproduced() -> None:
+    committed = next(r for r in read_rows(ROBUST) if r["instance"] == "table")
+    est = {
+        "mean-plan": {"mean": float(committed["mean_plan"]), "half": 1.0, "n": 1000},
+        "saa-plan": {"mean": float(committed["saa_plan"]), "half": 1.0, "n": 1000},
+        "vss": {"mean": float(committed["vss"]), "half": 0.5, "n": 1000},
+    }
+    runs = {name: {"makespan": [400.0, 410.0, 420.0], "n_kits": [5, 5, 6]} for name in FIXED}
+    runs["saa-plan"]["makespan"] = [398.0, 409.0, 417.0]
+    cell = {"instance": "table", "trays": int(committed["trays"]), "cv": float(committed["cv"])}
+    rec = {"cell": {**cell, "seed": 0, "reps": 3}, "timeline": est, "runs": {"task": runs}}
+    rows = rows_of([rec], ROBUST)
+    assert [r["policy"] for r in rows] == list(FIXED)
+    assert rows[1]["gain"] == pytest.approx(2.0) and rows[0]["n_kits"] == pytest.approx(5.33)
+    assert all(r["reproduced"] is True for r in rows)
+    assert rows[0]["committed_vss"] == float(committed["vss"])
+    est["vss"]["mean"] += 0.5
+    assert rows_of([rec], ROBUST)[0]["reproduced"] is False
+    assert "| table | 1 |" in sim_vss_markdown(rows)
+    assert set(ROBUST_SIM_TABLES) == {"robust_sim_summary", "robust_sim_vss", "robust_sim_detail"}
+
+
+def test_the_page_is_rendered_from_the_csv(tmp_path: Path) -> None:
+    """docs/robust.md's simulation tables match robust_sim.csv; an edited number is caught."""
+    assert not [d for d in check(ROOT) if "robust.md" in d]
+    shutil.copytree(ROOT / "paper_repro", tmp_path / "paper_repro")
+    (tmp_path / "docs").mkdir()
+    for name in ("robust.md", "simulation.md", "stations.md", "reproduction.md"):
+        shutil.copyfile(ROOT / "docs" / name, tmp_path / "docs" / name)
+    csv = tmp_path / "paper_repro" / "results" / "robust_sim.csv"
+    lines = csv.read_text().splitlines()
+    head = lines[0].split(",")
+    i = next(k for k, line in enumerate(lines) if ",saa-plan," in line)
+    cells = lines[i].split(",")
+    cells[head.index("gain")] = "98.76"
+    lines[i] = ",".join(cells)
+    csv.write_text("\n".join(lines) + "\n")
+    diffs = [d for d in check(tmp_path) if "robust.md (committed)" in d]
+    assert diffs and "98.76" in diffs[0]
+
+
+@pytest.mark.slow
+def test_a_two_replication_cell_writes_its_outputs_and_resumes(tmp_path: Path) -> None:
+    pytest.importorskip("ortools")
+    res = run_robust_sim(tmp_path, quick=True, reps=2)
+    assert res["failed"] == [] and res["computed"] == res["cells"] == 1
+    assert len(res["rows"]) == len(LAWS) * (len(FIXED) + len(ONLINE))
+    assert "simulated VSS" in (tmp_path / "robust_sim.md").read_text()
+    again = run_robust_sim(tmp_path, quick=True, reps=2)
+    assert again["computed"] == 0 and again["rows"] == res["rows"]
