@@ -88,11 +88,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--grasp-check",
-        choices=("strict", "warn", "off"),
-        default="warn",
-        help="the gripper's feasibility pass (docs/execution.md#the-gripper): warn (default) "
-        "reports in one line the parts no grasp holds or whose open fingers leave the tray or "
-        "overlap a placed part; strict exits 2, writing nothing, on the first; off skips it",
+        choices=("auto", "strict", "warn", "off"),
+        default="auto",
+        help="the gripper's feasibility pass (docs/execution.md#the-gripper): warn reports in "
+        "one line the parts no grasp holds or whose open fingers leave the tray or overlap a "
+        "placed part; strict exits 2, writing nothing, on the first; off skips it; auto "
+        "(default): strict when a work cell declares the gripper (--work-cell or recorded in "
+        "the solution), warn when the URDF's fingers are only assumed",
     )
     p.add_argument(
         "--work-cell",
@@ -239,7 +241,7 @@ def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...], 
     params = MotionParams(
         speed_scale=args.speed_scale, tool_speed=args.tool_speed, limits=args.limits
     )
-    checks = _check_grasps(args, instance, sol.plan, kits)
+    checks = _check_grasps(args, instance, sol.plan, kits, declared=cell is not None)
     ex = plan_execution(instance, sol.plan, kits=kits, params=params)
     return ex, checks, None if cell is None else cell.source
 
@@ -268,10 +270,17 @@ def _work_cell(args: argparse.Namespace, sol: LoadedSolution) -> WorkCell | None
 
 
 def _check_grasps(
-    args: argparse.Namespace, instance: Instance, plan: Plan, kits: list[int] | None
+    args: argparse.Namespace,
+    instance: Instance,
+    plan: Plan,
+    kits: list[int] | None,
+    *,
+    declared: bool,
 ) -> tuple[GraspCheck, ...]:
     """The gripper's feasibility pass (none with ``--grasp-check off``); with ``strict``,
-    exit 2 on the first part that fails it."""
+    exit 2 on the first part that fails it. ``auto`` is ``strict`` when a work cell declares
+    the gripper (a plan its declared gripper cannot place is an error) and ``warn`` when the
+    URDF's fingers are only assumed (docs/execution.md#the-gripper)."""
     from ..errors import UsageError
     from ..sawyer.gripper import check_grasps
 
@@ -279,7 +288,8 @@ def _check_grasps(
         return ()
     checks = check_grasps(instance, plan, kits)
     bad = [c for c in checks if c.problem]
-    if bad and args.grasp_check == "strict":
+    strict = args.grasp_check == "strict" or (args.grasp_check == "auto" and declared)
+    if bad and strict:
         raise UsageError(
             f"{args.solution}: {bad[0].problem} ({len(bad)} of {len(checks)} part(s) fail "
             "the gripper check; nothing written)"

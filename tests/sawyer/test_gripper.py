@@ -306,3 +306,21 @@ def test_the_documented_clearances(cell, plans):
         for part_type, (_, tray, near) in verdicts(check_grasps(cell, plans[method].plan)).items():
             mine[part_type] += [round(tray, 2) + 0.0, round(near, 2)]
     assert mine == rows  # greedy-ce, cpsat, greedy-ce with finger room: tray, placed parts
+
+
+def test_auto_grasp_check_is_strict_only_with_a_declared_gripper(capsys, tmp_path, plans):
+    """``--grasp-check auto`` (the default): with a work cell (given or recorded) a plan the
+    declared gripper cannot place is exit 2 writing nothing; without one the URDF's fingers are
+    only assumed and the same plan is reported and written (docs/execution.md#the-gripper)."""
+    sol = tmp_path / "plain.json"
+    solution_io.write(sol, plans["greedy-ce"])
+    out = tmp_path / "cell"
+    run = ["execute", str(TABLE), str(sol), "--format", "ros1"]
+    code = main([*run, "--work-cell", str(CELL), "--bag", str(out)])
+    text, err = capsys.readouterr()
+    assert code == 2 and text == "" and not out.exists()
+    assert "(12 of 28 part(s) fail the gripper check; nothing written)" in err
+    assert main([*run, "--work-cell", str(CELL), "--bag", str(out), "--grasp-check", "warn"]) == 0
+    assert "gripper: 12 of 28 part(s) fail the check" in capsys.readouterr()[0]
+    assert main([*run, "--bag", str(tmp_path / "assumed")]) == 0
+    assert "gripper: 20 of 28 part(s) fail the check" in capsys.readouterr()[0]
