@@ -67,10 +67,6 @@ def _product_doc(file: str = "hrc_table.json") -> dict[str, Any]:
     raise UsageError(f"generate: this family needs {path}")
 
 
-def _table_doc() -> dict[str, Any]:
-    return _product_doc("hrc_table.json")
-
-
 def command_line(
     family: str,
     size: int,
@@ -107,31 +103,29 @@ def command_line(
     return " ".join(words)
 
 
-def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
-    """``size`` units of the paper's table."""
-    doc = _table_doc()
-    doc["name"] = f"table_u{size}"
+def _units_of(
+    family: str, file: str, what: str, size: int, delivery_time: float | None
+) -> dict[str, Any]:
+    """``size`` units of the product in ``instances/<file>``: the table and the stool differ
+    only in their file and in the words describing them."""
+    doc = _product_doc(file)
+    doc["name"] = f"{family}_u{size}"
     doc["units"] = size
     if delivery_time is not None:
         doc["delivery_time"] = float(delivery_time)
-    doc["description"] = (
-        f"{size} units of the paper's table (bilevel-kit generate table --size {size})."
-    )
+    doc["description"] = f"{size} units of {what} (bilevel-kit generate {family} --size {size})."
     return doc
+
+
+def table(size: int, delivery_time: float | None = None) -> dict[str, Any]:
+    """``size`` units of the paper's table."""
+    return _units_of("table", "hrc_table.json", "the paper's table", size, delivery_time)
 
 
 def stool(size: int, delivery_time: float | None = None) -> dict[str, Any]:
     """``size`` units of the stool of Fig. 2."""
-    doc = _product_doc("stool.json")
-    doc["name"] = f"stool_u{size}"
-    doc["units"] = size
-    if delivery_time is not None:
-        doc["delivery_time"] = float(delivery_time)
-    doc["description"] = (
-        f"{size} units of the stool of the paper's Fig. 2: a1 'insert screws to top' precedes "
-        f"a2 and a3, the legs (bilevel-kit generate stool --size {size})."
-    )
-    return doc
+    what = "the stool of the paper's Fig. 2: a1 'insert screws to top' precedes a2 and a3, the legs"
+    return _units_of("stool", "stool.json", what, size, delivery_time)
 
 
 def _task(tid: str, name: str, product: str, parts: dict[str, int], human: float) -> dict[str, Any]:
@@ -146,7 +140,7 @@ def _task(tid: str, name: str, product: str, parts: dict[str, int], human: float
 
 def mixed(size: int, delivery_time: float | None = None) -> dict[str, Any]:
     """A mixed-model line: table + stool + chair per unit, sharing the model-set part types."""
-    base = _table_doc()
+    base = _product_doc("hrc_table.json")
     part_types = copy.deepcopy(base["part_types"])
     part_types += [
         {

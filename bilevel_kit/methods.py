@@ -552,6 +552,14 @@ def result_claims(result: Result) -> Any:
     )
 
 
+#: What both exact models (``cpsat``, ``milp``) declare: several stations, and every objective
+#: with a model expression, a plugin's too (docs/extending.md).
+_EXACT_MODEL: dict[str, Any] = {
+    "supports_stations": True,
+    "objectives": MODEL_OBJECTIVES,
+    "modelled_objectives": True,
+}
+
 register(
     "single-task",
     "bilevel_kit.heuristics.baselines:single_task",
@@ -580,9 +588,7 @@ register(
     "exact: CP-SAT over all segmentations and orders, tray packing embedded or by Benders",
     "bilevel_kit.models.cpsat.method:CpsatOptions",
     prepare=COMPILE_KERNELS,  # its warm start runs greedy-ce
-    supports_stations=True,
-    objectives=MODEL_OBJECTIVES,
-    modelled_objectives=True,  # and a plugin's objective, by its model expression
+    **_EXACT_MODEL,
 )
 register(
     "milp",
@@ -590,9 +596,7 @@ register(
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
     "bilevel_kit.models.milp.method:MilpOptions",
     prepare=COMPILE_KERNELS,  # its hint and its lns fallback may run greedy-ce
-    supports_stations=True,
-    objectives=MODEL_OBJECTIVES,
-    modelled_objectives=True,  # and a plugin's objective, by its model expression
+    **_EXACT_MODEL,
 )
 register(
     "bilevel-milp",

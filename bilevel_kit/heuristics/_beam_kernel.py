@@ -228,9 +228,4 @@ _HELPERS = ("_rest_sum", "_bits", "_above", "_sift_down", "_offer", "_starts")
 
 def kernel() -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, bool]] | None:
     """The compiled :func:`beam_scores`, or None when numba is disabled or missing."""
-    global _JITTED
-    if _kernels.disabled():
-        return None
-    if _JITTED is None:
-        _JITTED = _kernels.compile_in(globals(), _HELPERS, "beam_scores")
-    return _JITTED
+    return _kernels.compiled_once(globals(), _HELPERS, "beam_scores")

@@ -235,12 +235,7 @@ _HELPERS = ("_score", "_leaf_score", "_lower", "_unlocked", "_children")
 
 def kernel() -> Callable[..., tuple[float, np.ndarray, bool]] | None:
     """The compiled :func:`depth_first`, or None when numba is disabled or missing."""
-    global _JITTED
-    if _kernels.disabled():
-        return None
-    if _JITTED is None:
-        _JITTED = _kernels.compile_in(globals(), _HELPERS, "depth_first")
-    return _JITTED
+    return _kernels.compiled_once(globals(), _HELPERS, "depth_first")
 
 
 def search() -> Callable[..., tuple[float, np.ndarray, bool]]:

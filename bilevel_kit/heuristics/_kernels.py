@@ -544,15 +544,20 @@ def njit() -> Callable[[Callable[..., Any]], Any] | None:
     return numba.njit(cache=True, nogil=True)
 
 
-def compile_in(namespace: dict[str, Any], helpers: Sequence[str], entry: str) -> Any | None:
-    """Compile a kernel module's ``helpers`` in place, then its ``entry`` (so that the
-    compiled entry calls compiled code); None when numba is disabled or missing."""
-    jit = njit()
-    if jit is None:
+def compiled_once(namespace: dict[str, Any], helpers: Sequence[str], entry: str) -> Any | None:
+    """A kernel module's compiled ``entry``, kept in its ``_JITTED`` once built: its
+    ``helpers`` are compiled in place first (so that the compiled entry calls compiled code);
+    None when numba is disabled (read at every call) or missing."""
+    if disabled():
         return None
-    for name in helpers:
-        namespace[name] = jit(namespace[name])
-    return jit(namespace[entry])
+    if namespace["_JITTED"] is None:
+        jit = njit()
+        if jit is None:
+            return None
+        for name in helpers:
+            namespace[name] = jit(namespace[name])
+        namespace["_JITTED"] = jit(namespace[entry])
+    return namespace["_JITTED"]
 
 
 def cache_missing() -> bool:

@@ -303,12 +303,7 @@ def kernel() -> Callable[..., tuple[int, bool, np.ndarray, np.ndarray, np.ndarra
     """The compiled :func:`best_cores`, or None when numba is disabled or missing. The
     module's helpers are replaced by their compiled versions first, so that the compiled
     kernel calls compiled code."""
-    global _JITTED
-    if _kernels.disabled():
-        return None
-    if _JITTED is None:
-        _JITTED = _kernels.compile_in(globals(), _HELPERS, "best_cores")
-    return _JITTED
+    return _kernels.compiled_once(globals(), _HELPERS, "best_cores")
 
 
 #: The compiled :func:`best_rest` once built.

@@ -42,11 +42,6 @@ Choices that apply to the user study and Figure 6 (why, in short):
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from pathlib import Path
-from typing import Any
-
-from ..experiments.cells import run_cells_counted
 from ..sim import TimingModel
 from .calibrated import Calibration, load_calibration, run_calibration
 from .calibration import Cohort, calibrate, condition_means, draw_cohort, study_params, study_runs
@@ -66,21 +61,6 @@ from .plots import plot_fig6, plot_fig6_panel, plot_horizon, plot_user_study
 from .predictions import inside_count, paper_numbers, prediction_table
 from .stats import anova_rm, stars, tukey_pairs
 from .user_study import format_study_markdown, run_user_study, summarize_study
-
-
-def run_cells_parallel(
-    cells: Sequence[Any],
-    fn: Callable[[Any], dict[str, Any]],
-    cell_dir: str | Path,
-    *,
-    jobs: int = 1,
-    progress: bool | None = None,
-    desc: str = "cells",
-) -> tuple[list[dict[str, Any]], int]:
-    """The records of every cell and how many were computed now: the one cell runner
-    (:func:`bilevel_kit.experiments.cells.run_cells_counted`) under its former name."""
-    return run_cells_counted(cells, fn, cell_dir=cell_dir, jobs=jobs, progress=progress, desc=desc)
-
 
 __all__ = [
     *common_names,
@@ -107,7 +87,6 @@ __all__ = [
     "plot_user_study",
     "prediction_table",
     "run_calibration",
-    "run_cells_parallel",
     "run_fig6",
     "run_horizon",
     "run_user_study",

@@ -37,7 +37,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import run_cells_counted, split_failed, write_json
+from ..experiments.cells import write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import load
 from ..sim import SimParams, TimingModel, effective_instance, make_policy, simulate
@@ -50,6 +50,7 @@ from .common import (
     config_digest,
     load_instance,
     paper_idle,
+    run_study_cells,
 )
 from .stats import t_interval
 from .verdict import GAP, side, verdict
@@ -296,11 +297,9 @@ def run_adaptive(
     tm = {"participant_cv": 0.0, **calibrated(calibration, path), **(timing or {})}
     cells = _cells(path, reps, 3 * reps, units, seed, tm)
     out = Path(out_dir)
-    records, computed = run_cells_counted(
-        cells, adaptive_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
-        desc="adaptive cells",
-    )  # fmt: skip
-    ok, failed = split_failed(records)
+    ok, failed, computed = run_study_cells(
+        cells, adaptive_cell, out, jobs=jobs, progress=progress, desc="adaptive cells"
+    )
     rows = [row for r in ok for row in summarize(r)]
     files = {"csv": write_csv(out / "adaptive.csv", rows, exclude=(), line_end="\n")}
     head = (

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import UsageError
-from ..experiments.cells import is_failed
+from ..experiments.cells import Record, is_failed, run_cells_counted, split_failed
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
 from ..sim import SimulationError
@@ -174,6 +174,25 @@ def succeeded(records: Sequence[dict[str, Any]], what: str) -> Sequence[dict[str
     if failed:
         raise SimulationError(f"{len(failed)} {what} failed: {failed[0]['error']}")
     return records
+
+
+def run_study_cells(
+    cells: Sequence[Any],
+    fn: Any,
+    out: Path,
+    *,
+    jobs: int,
+    progress: bool | None,
+    desc: str,
+) -> tuple[list[Record], list[Record], int]:
+    """A study's cells run (resumable under ``out/cells``): the records that ran, the key and
+    error of each failed one, and how many cells ran now: a study lists its failed cells
+    beside its numbers (docs/cluster.md, exit codes)."""
+    records, computed = run_cells_counted(
+        cells, fn, cell_dir=out / "cells", jobs=jobs, progress=progress, desc=desc
+    )
+    ok, failed = split_failed(records)
+    return ok, failed, computed
 
 
 def announce(what: str, cells: Sequence[Any], cell_dir: Path, detail: str) -> None:

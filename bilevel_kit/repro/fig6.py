@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import run_cells_counted, split_failed, write_json
+from ..experiments.cells import write_json
 from ..experiments.tables import write_csv
 from ..heuristics.cross_entropy import CEParams
 from ..instance import Instance, load
@@ -49,6 +49,7 @@ from .common import (
     load_instance,
     paper_idle,
     participant_seeds,
+    run_study_cells,
 )
 from .fig6_stats import add_directions, pooled_sd, reps_for_power, trends, verdicts
 from .stats import oneway, paired_p, stars, tukey_pairs
@@ -423,10 +424,9 @@ def run_fig6(
     cells += [Fig6Cell(mat=float(a), mttf=float(b), **common) for a in mats for b in mttfs]
     if progress is not False:
         announce("fig6", cells, out / "cells", f"R = {reps}, {len(policies)} policies")
-    records, computed = run_cells_counted(
-        cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress, desc="fig6 cells"
+    records, failed, computed = run_study_cells(
+        cells, fig6_cell, out, jobs=jobs, progress=progress, desc="fig6 cells"
     )
-    records, failed = split_failed(records)
     rows = [{"quick": quick, **summarize_cell(r)} for r in records]
     result = {
         "instance": inst.name,

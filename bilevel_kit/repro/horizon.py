@@ -41,11 +41,18 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import Record, is_failed, run_cells_counted, split_failed, write_json
+from ..experiments.cells import Record, is_failed, run_cells_counted, write_json
 from ..experiments.compare import CompareCell, compare_cell
 from ..experiments.tables import write_csv
 from ..sim import POLICIES, TimingModel
-from .common import DEFAULT_INSTANCE, FIG6_UNITS, OPT, load_instance, participant_seeds
+from .common import (
+    DEFAULT_INSTANCE,
+    FIG6_UNITS,
+    OPT,
+    load_instance,
+    participant_seeds,
+    run_study_cells,
+)
 from .fig6 import Fig6Cell, calibrated_timing, fig6_cell
 from .horizon_tables import (
     horizon_summary,
@@ -541,11 +548,9 @@ def _run_simulation(
             )
             for w in grid.windows
         ]
-    sim_recs, computed = run_cells_counted(
-        sim_cells, fig6_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
-        desc="horizon sim",
-    )  # fmt: skip
-    ok, failed = split_failed(sim_recs)
+    ok, failed, computed = run_study_cells(
+        sim_cells, fig6_cell, out, jobs=jobs, progress=progress, desc="horizon sim"
+    )
     rows = window_rows(ok, quick)
     return _Part(rows, len(sim_cells), computed, failed), timing, cal
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import atomic, style
 from ..errors import UsageError
-from ..experiments.cells import run_cells_counted, split_failed, write_json
+from ..experiments.cells import write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance, from_dict
 from ..plan import Kit, Plan
@@ -299,18 +299,16 @@ def run_robust(
     if bad or min(grid) < 0:
         raise UsageError(f"bad robust study options {bad or grid}: instances from "
                          f"{', '.join(INSTANCES)}, cv >= 0")  # fmt: skip
-    from .common import file_digest
+    from .common import file_digest, run_study_cells
 
     digests = {n: file_digest(ROOT / INSTANCES[n]) for n in names}
     cells = [
         RobustCell(n, t, c, seed, digest=digests[n]) for n in names for t in tray_grid for c in grid
     ]
     out = Path(out_dir)
-    records, computed = run_cells_counted(
-        cells, robust_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
-        desc="robust cells",
-    )  # fmt: skip
-    ok, failed = split_failed(records)
+    ok, failed, computed = run_study_cells(
+        cells, robust_cell, out, jobs=jobs, progress=progress, desc="robust cells"
+    )
     rows = rows_of(ok)
     files = _write_outputs(out, rows, quick)
     result = {

@@ -106,10 +106,6 @@ class TimingModel:
         """No randomness at all: humans take the mean times, picks the instance's times."""
         return cls(**{"participant_cv": 0.0, "task_cv": 0.0, "robot_cv": 0.0, **changes})
 
-    @property
-    def is_deterministic(self) -> bool:
-        return self.participant_cv == 0 and self.task_cv == 0 and self.robot_cv == 0
-
     def cv_for(self, instance: Instance) -> float:
         """The participant factor's SD for this instance (resolves ``participant_cv=None``)."""
         if self.participant_cv is not None:

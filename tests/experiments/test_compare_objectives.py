@@ -96,18 +96,20 @@ class IdleOptions:
     status: str = field(default="optimal", metadata={"help": "unused"})
 
 
-def test_compare_exits_1_on_a_false_optimum_of_another_objective(tiny, capsys):
+def _register_once(name: str, function: str, summary: str) -> None:
+    """Register this module's ``function`` as method ``name`` (with :class:`IdleOptions`)
+    unless an earlier test did: the registry is process-wide."""
     from bilevel_kit import methods
+
+    module = sys.modules[__name__].__name__
+    if name not in methods.REGISTRY:
+        methods.register(name, f"{module}:{function}", summary, f"{module}:IdleOptions")
+
+
+def test_compare_exits_1_on_a_false_optimum_of_another_objective(tiny, capsys):
     from bilevel_kit.cli import main
 
-    module = sys.modules[__name__]
-    if "idle-boaster-test" not in methods.REGISTRY:
-        methods.register(
-            "idle-boaster-test",
-            f"{module.__name__}:idle_boaster",
-            "claims an idle optimum",
-            f"{module.__name__}:IdleOptions",
-        )
+    _register_once("idle-boaster-test", "idle_boaster", "claims an idle optimum")
     code = main(["compare", str(tiny.source), "--methods", "single-task,idle-boaster-test"])
     out, err = capsys.readouterr()
     assert code == 1
@@ -132,17 +134,9 @@ def test_compare_reports_the_makespan_by_name_whatever_was_minimised(tiny, tmp_p
     are the makespan's (25.5 s over the bound 24.5 s), its status names the idle (issue 36)."""
     import csv
 
-    from bilevel_kit import methods
     from bilevel_kit.cli import main
 
-    module = sys.modules[__name__]
-    if "idle-optimum-test" not in methods.REGISTRY:
-        methods.register(
-            "idle-optimum-test",
-            f"{module.__name__}:idle_optimum",
-            "claims the idle optimum",
-            f"{module.__name__}:IdleOptions",
-        )
+    _register_once("idle-optimum-test", "idle_optimum", "claims the idle optimum")
     out = tmp_path / "c.csv"
     code = main(
         [

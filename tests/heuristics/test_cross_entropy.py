@@ -231,27 +231,33 @@ def test_standard_normals_float32() -> None:
     assert 0.0035 < float((np.abs(z) > 2.9).mean()) < 0.0040  # two-sided tail 0.00373
 
 
-def test_a_kit_above_max_ce_parts_gets_the_shelf_layout_without_ce():
-    """CE's covariance grows with the square of the parts (4,000 parts asked for 6 GiB):
-    beyond MAX_CE_PARTS the kit gets the shelf packer's layout, checked like any other."""
+def _one_task_of_squares(n: int, tray: float):
+    """One task of ``n`` 10 mm squares on a square tray of side ``tray`` mm: a kit as large
+    as a test of CE's size limits wants."""
     from bilevel_kit import instance as inst_mod
-    from bilevel_kit.heuristics import cross_entropy
 
-    n = cross_entropy.MAX_CE_PARTS + 1
     doc = inst_mod.document(
         "many",
         [{"id": "p", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
         [{"id": "t", "parts": [{"type": "p", "count": n}], "human_time": {"mean": 2.0}}],
-        tray=(300.0, 300.0),
+        tray=(tray, tray),
     )
-    arr = cross_entropy.arrange(inst_mod.from_dict(doc), {"p": n})
+    return inst_mod.from_dict(doc)
+
+
+def test_a_kit_above_max_ce_parts_gets_the_shelf_layout_without_ce():
+    """CE's covariance grows with the square of the parts (4,000 parts asked for 6 GiB):
+    beyond MAX_CE_PARTS the kit gets the shelf packer's layout, checked like any other."""
+    from bilevel_kit.heuristics import cross_entropy
+
+    n = cross_entropy.MAX_CE_PARTS + 1
+    arr = cross_entropy.arrange(_one_task_of_squares(n, 300.0), {"p": n})
     assert arr.fits and arr.source == "packer" and len(arr.layout) == n and arr.iterations == 0
 
 
 def test_a_kit_too_large_for_ce_never_builds_the_pair_table(monkeypatch):
     """The pair table is quadratic (a 4,000-part task used 1.2 GB and 21 s at a 2 s limit):
     a kit above MAX_CE_PARTS is scored by blocks and the grid hash, with the same terms."""
-    from bilevel_kit import instance as inst_mod
     from bilevel_kit.fitness import layout_terms
     from bilevel_kit.heuristics import cross_entropy
     from bilevel_kit.heuristics.ce import kit as kit_mod
@@ -260,13 +266,7 @@ def test_a_kit_too_large_for_ce_never_builds_the_pair_table(monkeypatch):
     real = kit_mod.PairTable.build
     monkeypatch.setattr(kit_mod.PairTable, "build", lambda *a: built.append(1) or real(*a))
     n = 1500
-    doc = inst_mod.document(
-        "many",
-        [{"id": "p", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-        [{"id": "t", "parts": [{"type": "p", "count": n}], "human_time": {"mean": 2.0}}],
-        tray=(500.0, 500.0),
-    )
-    arr = cross_entropy.arrange(inst_mod.from_dict(doc), {"p": n})
+    arr = cross_entropy.arrange(_one_task_of_squares(n, 500.0), {"p": n})
     assert built == [] and arr.fits and len(arr.layout) == n and arr.z == 0.0
     assert (arr.d_same, arr.d_diff) == pytest.approx(layout_terms(arr.layout)[:2])
     assert arr.d_same > 0.0 and arr.d_diff == 0.0  # one type: every pair is "same"
