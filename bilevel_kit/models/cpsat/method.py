@@ -86,7 +86,7 @@ from ..common import (
 from ..exact import keys
 from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
-from ..exact.nomodel import improve
+from ..exact.nomodel import WHOLE, HandOff, improve
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .context import MARGIN, Context, Model, State
@@ -405,7 +405,7 @@ class _Cpsat:
         pairs = sum(K * (K - 1) // 2 for t in sc.st_trays if t is not None and t >= 2)
         return assignment_cells(self.instance, K) + len(sc.st_d) * K + pairs
 
-    def hand_off(self, state: State, seconds: float = float("inf")) -> State:
+    def hand_off(self, state: State, limit: HandOff = WHOLE) -> State:
         """``state``, or the better plan the LNS finds from it in the time left (makespan
         objective without release times, which the LNS does not model; with stations, which
         it does not model either, greedy-ce's plan in the time left when better:
@@ -425,9 +425,9 @@ class _Cpsat:
             return State(kits, scaled_objective(ctx.sc, kits, ctx.objective), layouts=layouts)
         if not ctx.minimised.is_makespan or any(ctx.sc.rel):
             return state
-        bound, left = known_bound(ctx), min(ctx.left(), seconds)
+        bound, within = known_bound(ctx), limit.within(ctx.left())
         better = improve(
-            ctx.instance, plan, bound=bound, seed=self.seed, time_limit=left, extra=self.extra
+            ctx.instance, plan, bound=bound, seed=self.seed, limit=within, extra=self.extra
         )
         if better is None:
             return state

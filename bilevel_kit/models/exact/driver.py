@@ -19,7 +19,6 @@ backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
@@ -31,7 +30,7 @@ from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from . import lns_first
-from .nomodel import NoModelSpec, buildable
+from .nomodel import WHOLE, HandOff, NoModelSpec, buildable
 
 if TYPE_CHECKING:
     from ...plan import Plan
@@ -84,9 +83,9 @@ class Backend(Protocol[Inc]):
         """The model's task x kit variables with K kits (its size)."""
         ...
 
-    def hand_off(self, inc: Inc, seconds: float = math.inf) -> Inc:
-        """``inc`` or the better incumbent the LNS finds from it in the time left (at most
-        ``seconds``)."""
+    def hand_off(self, inc: Inc, limit: HandOff = WHOLE) -> Inc:
+        """``inc`` or the better incumbent the LNS finds from it in the time left (within
+        ``limit``)."""
         ...
 
     def conclude(self, inc: Inc) -> MethodOutput:

@@ -9,6 +9,11 @@ libraries and benchmark records keep the old names).
   HiGHS's model status or Pyomo's termination condition; None when no model was solved).
 - ``master_solves``: how many times the model (the embedded model, or a Benders master) was
   solved.
+- ``lns_first``: the LNS run before the model (:mod:`.lns_first`): the LNS's report
+  (``time_s`` the seconds given at most, ``windows``, ``improvements``, ``makespan_before``,
+  ``makespan_after``), ``used_s`` the seconds it ran, ``stop`` why it stopped (one of
+  :data:`LNS_STOPS`), its limits ``stall_windows`` and ``max_windows`` (None: no cap),
+  ``share`` and ``model_s``; or ``skipped`` (why it did not run).
 """
 
 from __future__ import annotations
@@ -31,6 +36,16 @@ NOT_BUILT = "not_built"
 NO_SOLVE = (CLOSED_FORM_BOUND, PROVEN_BOUND, RELEASE_BOUND, TOO_LARGE, NOT_BUILT)
 #: The last model solve's outcome (a Benders master's "optimal" is the master's own optimum).
 SOLVE_OUTCOMES = ("optimal", "feasible", "infeasible", "unknown")
+
+#: The LNS first's report, and its keys: seconds it ran, why it stopped, its limits.
+LNS_FIRST = "lns_first"
+LNS_USED_S = "used_s"
+LNS_STOP = "stop"
+LNS_STALL = "stall_windows"
+LNS_MAX_WINDOWS = "max_windows"
+#: Why the LNS first stopped: its plan met the bound, a local optimum, ``stall_windows``
+#: windows without improvement, ``max_windows`` windows solved (0: a small instance), the cap.
+LNS_STOPS = ("optimal", "local_optimum", "stall", "iterations", "time_limit")
 
 #: The names ``cpsat`` and ``milp`` wrote before (read back by :func:`read`).
 OLD_NAMES: dict[str, tuple[str, ...]] = {

@@ -1,16 +1,22 @@
 """The LNS inside an exact model's budget (docs/formulations.md, "The LNS first"): before
 ``cpsat`` or ``milp`` build their model, the large-neighbourhood search improves their warm
-start for at most :data:`SHARE` of the time left, so that their plan at a time limit is never
-worse than the LNS's. The model then searches from the better incumbent (a tighter C <= U and
-a better hint) in the rest of the time.
+start, so that their plan at a time limit is never worse than the LNS's. The model then
+searches from the better incumbent (a tighter C <= U and a better hint) in the rest of the time.
 
-The LNS ends early at a local optimum or when its plan meets the proven bound; then the model
-is not built (the plan is optimal by the bound computed before the model, as in the driver's
-shortcut). Otherwise the status stays the model's: a plan the LNS found is ``optimal`` only
-when the model proves it or it meets that bound. Skipped (``extra["lns_first"]["skipped"]``)
-with option ``fallback=none``, several stations, other objectives and release times (which the
-LNS does not model), and in a reproducible run (``deterministic``): the LNS's start is
-clock-bound, as for the no-model hand-off (:mod:`.nomodel`).
+The hand-off is adaptive, and counted in windows (so deterministic for a seed up to the cap):
+the LNS stops after :data:`STALL_WINDOWS` windows in a row without improvement, at a local
+optimum, or when its plan meets the proven bound; :data:`SHARE` of the time left is only its
+cap. On an instance of at most :data:`SMALL_TASKS` tasks a window frees (nearly) the whole
+plan, which is the model's own search with a bound: the LNS runs its start plans only
+(``max_windows`` 0). ``extra["lns_first"]`` reports the rule and how it ran (:mod:`.keys`).
+
+When the LNS's plan meets the proven bound the model is not built (the plan is optimal by the
+bound computed before the model, as in the driver's shortcut). Otherwise the status stays the
+model's: a plan the LNS found is ``optimal`` only when the model proves it or it meets that
+bound. Skipped (``extra["lns_first"]["skipped"]``) with option ``fallback=none``, several
+stations, other objectives and release times (which the LNS does not model), and in a
+reproducible run (``deterministic``): the LNS's start is clock-bound, as for the no-model
+hand-off (:mod:`.nomodel`).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from ...plan import evaluate
 from . import keys
+from .nomodel import HandOff
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
@@ -27,32 +34,44 @@ if TYPE_CHECKING:
 # module, and an import cycle is refused even for type checking (tests/core/test_imports.py).
 
 Inc = TypeVar("Inc")
-#: The share of the time left (after the warm start and the proven bound) the LNS may use
+#: The most of the time left (after the warm start and the proven bound) the LNS may use
 #: before the model; measured in docs/formulations.md, "The LNS first".
 SHARE = 0.5
+#: Windows in a row without improvement that end the LNS first.
+STALL_WINDOWS = 4
+#: Up to this many tasks (the LNS's first window size, option ``window``; not imported: the
+#: LNS imports the cpsat package, which imports the driver) the LNS first solves no window.
+SMALL_TASKS = 24
 #: The ``extra`` key the backends' :meth:`~.driver.Backend.hand_off` reports the LNS under.
 HAND_OFF_KEY = "fallback"
 #: Tolerance (s) of "the same makespan".
 TOL = 1e-6
 
 
+def limits(n_tasks: int, seconds: float) -> HandOff:
+    """The LNS first's limits on an instance of ``n_tasks`` tasks with ``seconds`` at most
+    (module docstring)."""
+    return HandOff(seconds, STALL_WINDOWS, 0 if n_tasks <= SMALL_TASKS else None)
+
+
 def before_model(backend: Any, inc: Inc, fallback: str) -> tuple[Inc, bool]:
-    """The incumbent after the LNS from ``inc`` within :data:`SHARE` of the time left, and
-    whether it meets the bound known before the model (then no model is needed).
-    ``extra["lns_first"]`` gets the LNS's report and the time split."""
+    """The incumbent after the LNS from ``inc`` within :func:`limits`, and whether it meets
+    the bound known before the model (then no model is needed). ``extra["lns_first"]`` gets
+    the LNS's report, its limits and the time split."""
     extra, budget = backend.extra, backend.budget
     skipped = _skipped(backend, fallback)
     if skipped is not None:
-        extra["lns_first"] = {"skipped": skipped}
+        extra[keys.LNS_FIRST] = {"skipped": skipped}
         return inc, False
     t0, saved = budget.elapsed(), extra.pop(HAND_OFF_KEY, None)
-    seconds = SHARE * max(0.0, budget.remaining(backend.margin))
-    inc = backend.hand_off(inc, seconds)
+    limit = limits(backend.instance.n_tasks, SHARE * max(0.0, budget.remaining(backend.margin)))
+    inc = backend.hand_off(inc, limit)
     info: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
     if saved is not None:
         extra[HAND_OFF_KEY] = saved
-    info.update(share=SHARE, used_s=round(budget.elapsed() - t0, 3))
-    extra["lns_first"] = info
+    info.update({"share": SHARE, keys.LNS_USED_S: round(budget.elapsed() - t0, 3)})
+    info.update({keys.LNS_STALL: limit.stall, keys.LNS_MAX_WINDOWS: limit.windows})
+    extra[keys.LNS_FIRST] = info
     after = info.get("makespan_after")
     met = after is not None and after <= backend.known_bound() + TOL
     if met and extra.get("improved_by") == "lns":  # the driver's shortcut, after the LNS
@@ -65,7 +84,7 @@ def after_model(backend: Any, out: MethodOutput, t_model: float) -> MethodOutput
     """``out`` with the model's share of the time and ``improved_by``: ``lns`` when the plan is
     the LNS's, ``model`` when the model improved on the LNS's plan (None: the LNS did not
     improve the warm start)."""
-    info = backend.extra.get("lns_first")
+    info = backend.extra.get(keys.LNS_FIRST)
     if info is None or "skipped" in info:
         return out
     info["model_s"] = round(backend.budget.elapsed() - t_model, 3)

@@ -6,7 +6,8 @@ both (:mod:`.keys`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from typing import Any
 
 from ...instance import Instance
@@ -61,21 +62,48 @@ def buildable(
     return False
 
 
+@dataclass(frozen=True)
+class HandOff:
+    """How long the LNS of :meth:`.driver.Backend.hand_off` may run: at most ``seconds``, and
+    (the LNS first, :mod:`.lns_first`) ``stall`` windows in a row without improvement and
+    ``windows`` windows in all (None: no such limit)."""
+
+    seconds: float = math.inf
+    stall: int | None = None
+    windows: int | None = None
+
+    def within(self, left: float) -> HandOff:
+        """These limits with at most ``left`` seconds (the backend's time left)."""
+        return replace(self, seconds=min(self.seconds, left))
+
+
+#: The no-model hand-off: the whole time left, to a local optimum.
+WHOLE = HandOff()
+
+
 def improve(
     instance: Instance,
     plan: Plan,
     *,
     bound: float,
     seed: int,
-    time_limit: float,
+    limit: HandOff,
     extra: dict[str, Any],
 ) -> Plan | None:
-    """The better plan the LNS finds from ``plan`` (the incumbent) within ``time_limit`` s
-    (:func:`..lns.fallback.improve`), or None. ``extra`` gets ``improved_by`` (``lns`` or
-    None) and ``fallback`` (what happened)."""
+    """The better plan the LNS finds from ``plan`` (the incumbent) within ``limit`` (its
+    seconds already the backend's time left at most; :func:`..lns.fallback.improve`), or None.
+    ``extra`` gets ``improved_by`` (``lns`` or None) and ``fallback`` (what happened)."""
     from ..lns.fallback import improve as lns_improve
 
-    better, info = lns_improve(instance, plan, bound=bound, seed=seed, time_limit=time_limit)
+    better, info = lns_improve(
+        instance,
+        plan,
+        bound=bound,
+        seed=seed,
+        time_limit=limit.seconds,
+        stall=limit.stall,
+        iterations=limit.windows,
+    )
     extra.update(improved_by=None, fallback=info)
     if better is not None:
         extra["improved_by"] = "lns"

@@ -32,12 +32,15 @@ def improve(
     bound: float | None,
     seed: int,
     time_limit: float,
+    stall: int | None = None,
+    iterations: int | None = None,
 ) -> tuple[Plan | None, dict[str, Any]]:
-    """The LNS's plan from ``plan`` within ``time_limit`` s when it is strictly better (else
-    None), and what happened (``extra['fallback']`` of the caller): ``method``, ``time_s``
-    (the time given), ``makespan_before``, ``makespan_after``, ``windows`` (windows solved),
-    ``start_method``, ``stop``, ``skipped`` (why the LNS did not run) when it did not, and
-    ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
+    """The LNS's plan from ``plan`` within ``time_limit`` s (and its options ``stall`` and
+    ``iterations``) when it is strictly better (else None), and what happened
+    (``extra['fallback']`` of the caller): ``method``, ``time_s`` (the time given),
+    ``makespan_before``, ``makespan_after``, ``windows`` (windows solved), ``improvements``,
+    ``start_method``, ``start_time_s``, ``stop``, ``skipped`` (why the LNS did not run) when it
+    did not, and ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
     from .method import LnsOptions, lns
 
     before = evaluate(instance, plan).makespan
@@ -49,14 +52,17 @@ def improve(
     if bound is not None and before <= bound + 1e-6:
         info["skipped"] = "the incumbent meets the bound"
         return None, info
-    options = LnsOptions(start="quick")  # the callers' warm starts ran greedy-ce already
+    # the callers' warm starts ran greedy-ce already
+    options = LnsOptions(start="quick", stall=stall, iterations=iterations)
     out = lns(
         instance, options, seed=seed, time_limit=time_limit, start_plan=plan, known_bound=bound
     )
     extra = out.extra
     info.update(
         windows=extra.get("iterations", 0),
+        improvements=extra.get("improvements", 0),
         start_method=extra.get("start_method"),
+        start_time_s=round(extra.get("start_time_s", 0.0), 3),
         stop=extra.get("stop"),
     )
     after = None if out.plan is None else evaluate(instance, out.plan).makespan

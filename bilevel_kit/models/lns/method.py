@@ -16,6 +16,8 @@ A matheuristic (docs/formulations.md, "Large-neighbourhood search"):
    (:func:`.start.exact_cut`) when the sweep improved it; a sweep without improvement makes
    the windows half as large again, up to
    ``max_window``; a sweep without improvement at that size is a local optimum and ends the run.
+   With option ``stall``, ``stall`` windows in a row without improvement end it earlier
+   (counted in windows, so deterministic; the exact models' LNS first, :mod:`..exact.lns_first`).
 
 **From a given plan** (``lns(..., start_plan=, known_bound=)``, what ``cpsat`` and ``milp``
 hand over when their model is not built, :mod:`.fallback`): the given plan is the first start
@@ -34,8 +36,8 @@ by the clock is discarded.
 **Result.** ``status`` ``optimal`` only when the plan meets the proven bound, else ``feasible``;
 ``bound`` the proven bound; ``extra``: ``start_method``, ``start_makespan``, ``iterations``
 (windows solved), ``improvements``, ``windows_optimal`` (windows CP-SAT proved), ``sweeps``,
-``window`` (the last window size), ``stop`` (``optimal``, ``local_optimum``, ``iterations``,
-``time_limit``), ``bound_source`` and ``bound_sources`` (every bound computed, s),
+``window`` (the last window size), ``stop`` (``optimal``, ``local_optimum``, ``stall``,
+``iterations``, ``time_limit``), ``bound_source`` and ``bound_sources`` (every bound computed, s),
 ``bound_time_s``, ``start_time_s``, ``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
 """
 
@@ -73,6 +75,14 @@ class LnsOptions:
     iterations: int | None = field(
         default=None,
         metadata={"help": "windows to solve (none: until the time limit or a local optimum)"},
+    )
+    stall: int | None = field(
+        default=None,
+        metadata={
+            "help": "windows in a row without improvement that end the run (none: sweeps to a "
+            "local optimum)",
+            "min": 1,
+        },
     )
     window: int = field(default=24, metadata={"help": "tasks freed per window at first", "min": 2})
     max_window: int = field(
@@ -183,6 +193,7 @@ class _Run:
     layouts: dict[tuple[int, ...], tuple[Placement, ...]] = field(default_factory=dict)
     bound: float | None = None
     fit: Any = None  # the run's FastFit (start)
+    stalled: int = 0  # windows since the last improvement (option ``stall``)
 
     # -- 1. start --------------------------------------------------------------------------
     def start(self, given: Plan | None = None) -> None:
@@ -284,6 +295,8 @@ class _Run:
                 return gained, "iterations"
             if self.stop_at.remaining() <= 0.05:
                 return gained, "time_limit"
+            if self.options.stall is not None and self.stalled >= self.options.stall:
+                return gained, "stall"
             if k0 >= len(self.kits) - 1 and len(self.kits) > 1:
                 continue  # a window of one last kit: covered by the windows before it
             k1 = _window_end(self.kits, k0, size)
@@ -294,9 +307,10 @@ class _Run:
                 return gained, "time_limit"
             counts["iterations"] += 1
             counts["windows_optimal"] += out.optimal
+            self.stalled += 1
             if out.kits is not None and self._improve(self.kits[:k0] + out.kits + self.kits[k1:]):
                 counts["improvements"] += 1
-                gained = True
+                gained, self.stalled = True, 0
         if gained and self._recut():
             counts["improvements"] += 1
         return gained, "local_optimum"

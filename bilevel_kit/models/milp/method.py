@@ -76,7 +76,7 @@ from ..exact.driver import (
 )
 from ..exact.keys import CLOSED_FORM_BOUND, PROVEN_BOUND, no_solve, solve_outcome, solved
 from ..exact.nomodel import MILP as MILP_NO_MODEL
-from ..exact.nomodel import NoModelSpec, improve
+from ..exact.nomodel import WHOLE, HandOff, NoModelSpec, improve
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from ..packing_oracle import WHY_TIME, Fit
@@ -298,7 +298,7 @@ class _Run:
     def cells(self) -> int:
         return model_cells(self.instance, self.K)
 
-    def hand_off(self, inc: list[list[str]], seconds: float = float("inf")) -> list[list[str]]:
+    def hand_off(self, inc: list[list[str]], limit: HandOff = WHOLE) -> list[list[str]]:
         """The incumbent, or the LNS's better plan from it (makespan objective, one station,
         as the LNS's); its layouts taught to the packer, which lays the result out."""
         self.extra["improved_by"] = None
@@ -308,9 +308,9 @@ class _Run:
         plan = _with_layouts(self.instance, inc, self.packer, {})
         if plan is None or not self.minimised.is_makespan:
             return inc
-        left = min(self.budget.remaining(MARGIN), seconds)
+        within = limit.within(self.budget.remaining(MARGIN))
         better = improve(
-            self.instance, plan, bound=self.best, seed=self.seed, time_limit=left, extra=self.extra
+            self.instance, plan, bound=self.best, seed=self.seed, limit=within, extra=self.extra
         )
         if better is None:
             return inc
