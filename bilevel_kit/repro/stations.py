@@ -41,14 +41,13 @@ import numpy as np
 
 from .. import atomic, style
 from ..errors import UsageError
-from ..experiments.cells import write_json
+from ..experiments.cells import is_failed, run_cells_counted, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..generate import mixed
 from ..instance import Instance, from_dict
 from ..plan import Kit, Timeline
 from ..sim import SimParams, TimingModel, simulate
 from ..sim.stations import station_policies
-from .common import run_study_cells
 from .stations_stats import capacity, idle_floor, per_unit, served_rows
 from .stats import t_interval
 
@@ -504,9 +503,16 @@ def run_stations(
     seeds = [seed * 1_000_000 + i for i in range(reps)]
     cells = _cells(lines, grid, delays, policies, seeds, units)
     out = Path(out_dir)
-    ok, failed, computed = run_study_cells(
-        cells, stations_cell, out, jobs=jobs, progress=progress, desc="stations cells"
+    records, computed = run_cells_counted(
+        cells,
+        stations_cell,
+        cell_dir=out / "cells",
+        jobs=jobs,
+        progress=progress,
+        desc="stations cells",
     )
+    failed = [{"key": r["key"], "error": r["error"]} for r in records if is_failed(r)]
+    ok = [r for r in records if not is_failed(r)]
     rows, best = summarize(ok), served(ok)
     head = (
         f"Stations per robot{' (QUICK: a reduced run)' if quick else ''}: {units} unit(s) per "
