@@ -58,7 +58,7 @@ def tray_waits(
     """``(k, start, end)`` (k 1-based) of each wait of the robot for a returned tray: the gap
     between kit k-1's arrival and kit k's robot start, which the timeline rule
     (docs/timeline.md, "Trays in circulation") opens only for k > ``trays``."""
-    limit = 1 if instance.stations else instance.params_of().tray_limit  # stations: trays only
+    limit = 1 if instance.stations else instance.tray_limit  # stations: only trays delay
     if limit is None:
         return []
     kits = timeline.kits
@@ -215,7 +215,7 @@ def _draw_kits(
         color = colors[k]
         gid = f"robot:kit:{k + 1}"
         _bar(ax, ROBOT_Y, kt.robot_start, kt.robot_end, gid, color=color, **edge)
-        y, o_h = ys[where[k]], instance.params_of(where[k]).kit_overhead_human
+        y, o_h = ys[where[k]], instance.station_params[where[k]].kit_overhead_human
         _draw_delivery_and_pickup(ax, k, kt, (y, o_h), edge)
         light = style.lighten(color)
         for t in kit.tasks:

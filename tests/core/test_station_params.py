@@ -48,12 +48,14 @@ def test_one_declared_station_becomes_the_one_station_instance():
 
 #: Modules that may read the instance's own ``delivery_time``, ``kit_overhead_human``,
 #: ``trays`` or ``tray_limit``: they record the file's fields (a solution's timeline
-#: parameters, a study's or a benchmark record's metadata), they compute no time.
+#: parameters, a study's or a benchmark record's metadata) and compute no time, or (the Gantt
+#: chart's tray waits) read ``tray_limit`` only without ``stations``.
 RECORDS = {
     "bilevel_kit/instance/model.py",
     "bilevel_kit/validate.py",
     "bilevel_kit/repro/fig6.py",
     "bilevel_kit/experiments/kitbench/verify.py",
+    "bilevel_kit/plots/gantt.py",
 }
 
 
