@@ -92,8 +92,9 @@ def min_kits(instance: Instance) -> int:
 
 def tray_wait(instance: Instance) -> float:
     """The robot's least wait per kit after the first for the tray: o_H with one tray (the
-    one-tray robot bound of the module docstring), else 0."""
-    return instance.kit_overhead_human if instance.tray_limit == 1 else 0.0
+    one-tray robot bound of the module docstring), else 0 (one station: :meth:`params_of`)."""
+    params = instance.params_of()
+    return params.kit_overhead_human if params.tray_limit == 1 else 0.0
 
 
 def end_tasks(instance: Instance) -> tuple[list[int], list[int]]:
@@ -146,7 +147,8 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
     """All closed-form bounds (seconds), keyed ``human``, ``robot``, ``min_kits`` (a count)."""
     ids = [t.id for t in instance.tasks]
     m = min_kits(instance)
-    o_r, o_h, d = instance.kit_overhead_robot, instance.kit_overhead_human, instance.delivery_time
+    params = instance.params_of()  # one station (best_bound: several, per station)
+    o_r, o_h, d = instance.kit_overhead_robot, params.kit_overhead_human, params.delivery_time
     times = ([instance.robot_time(i) for i in ids], [instance.human_time(i) for i in ids])
     kit = (o_r, d, o_h, tray_wait(instance))
     human, robot = human_robot(times, kit, end_tasks(instance), m)
@@ -156,6 +158,7 @@ def lower_bounds(instance: Instance) -> dict[str, float]:
 def best_bound(instance: Instance) -> float:
     """The largest of the closed-form makespan bounds (seconds); with several stations, the
     largest over the stations of their own (:func:`bilevel_kit.stations.station_instance`)."""
+    instance = instance.as_one_station()  # one declared station: the S = 1 bounds
     if instance.stations:
         return stations_bound(instance)
     lb = lower_bounds(instance)
@@ -173,10 +176,11 @@ def stations_bound(instance: Instance) -> float:
     robot = sum(instance.robot_time(t.id) for t in instance.tasks)
     last = math.inf
     for sub, _ in subs:
-        robot += min_kits(sub) * (instance.kit_overhead_robot + sub.delivery_time)
+        params = sub.params_of()  # the station's own (station_instance)
+        robot += min_kits(sub) * (instance.kit_overhead_robot + params.delivery_time)
         has_succ = {a for a, _ in sub.precedence}
         sink = min(sub.human_time(t.id) for t in sub.tasks if t.id not in has_succ)
-        last = min(last, sub.kit_overhead_human + sink)
+        last = min(last, params.kit_overhead_human + sink)
     return max(robot + last, *(lb for _, lb in subs))
 
 
@@ -186,8 +190,9 @@ def flow_bound(instance: Instance, m: int | None = None) -> float:
     ids = [t.id for t in instance.tasks]
     a = [instance.robot_time(i) for i in ids]
     b = [instance.human_time(i) for i in ids]
-    a0 = instance.kit_overhead_robot + instance.delivery_time
-    b0 = instance.kit_overhead_human
+    params = instance.params_of()
+    a0 = instance.kit_overhead_robot + params.delivery_time
+    b0 = params.kit_overhead_human
     return lines_value(johnson_lines(a, b, a0, b0), min_kits(instance) if m is None else m)
 
 

@@ -456,8 +456,9 @@ def solve(
     prepare_s = spec.run_prepare()  # e.g. a compile: never charged to the time limit
     checkpoint()  # a signal whose interrupt the prepare step lost: no run (docs/cli.md)
     t0 = time.perf_counter()
-    with contextlib.nullcontext() if progress is None else reporting(progress):
-        out = fn(instance, options, seed=seed, time_limit=time_limit)
+    with contextlib.nullcontext() if progress is None else reporting(progress):  # one
+        # declared station is the S = 1 case (docs/timeline.md#several-stations)
+        out = fn(instance.as_one_station(), options, seed=seed, time_limit=time_limit)
     wall = time.perf_counter() - t0
     out = fold_kitless_output(instance, out)
     timeline = evaluate(instance, out.plan) if out.plan is not None else None

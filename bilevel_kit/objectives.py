@@ -238,8 +238,9 @@ class HumanIdle(Objective):
         ``W_s = sum h_i + o_H,s n_s`` (one task per kit)."""
         total = 0.0
         for one, lb in stations(instance):
-            work = sum(human_times(one)) + one.kit_overhead_human * one.n_tasks
-            total += max(instance.kit_overhead_robot + one.delivery_time, lb - work)
+            params = one.params_of()  # the station's own (station_instance)
+            work = sum(human_times(one)) + params.kit_overhead_human * one.n_tasks
+            total += max(instance.kit_overhead_robot + params.delivery_time, lb - work)
         return total
 
     def horizon(self, instance: Instance, timeline: Timeline) -> float:
@@ -255,8 +256,9 @@ class HumanIdle(Objective):
         return sum(human)
 
     def makespan_bound(self, instance: Instance, bound: float, kits: int) -> float | None:
-        """``C = idle + sum_i h_i + o_H m`` with ``m >= kits``."""
-        return bound + sum(human_times(instance)) + instance.kit_overhead_human * kits
+        """``C = idle + sum_i h_i + o_H m`` with ``m >= kits`` (one station)."""
+        o_h = instance.params_of().kit_overhead_human
+        return bound + sum(human_times(instance)) + o_h * kits
 
 
 def human_times(instance: Instance) -> list[float]:

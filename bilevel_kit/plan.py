@@ -145,7 +145,7 @@ def tray_back(instance: Instance, kits: Sequence[KitTimes], station: str = "") -
     """When a tray of ``station`` is free for its next kit, given that station's ``kits`` so
     far: 0 while fewer than ``T_s`` kits are out, else ``human_start + o_H`` of the kit
     ``T_s`` back (docs/timeline.md)."""
-    params = instance.station_params[station]
+    params = instance.params_of(station)
     trays = params.tray_limit
     if trays is None or len(kits) < trays:
         return 0.0
@@ -167,7 +167,7 @@ def kit_durations(
 ) -> tuple[float, float]:
     """(R_k, H_k) of a kit holding ``tasks``: overheads plus the tasks' robot/human times."""
     r = instance.kit_overhead_robot
-    h = instance.station_params[kit_station(instance, tasks)].kit_overhead_human
+    h = instance.params_of(kit_station(instance, tasks)).kit_overhead_human
     for t in tasks:
         r += robot_times[t] if robot_times is not None else instance.robot_time(t)
         h += human_times[t] if human_times is not None else instance.human_time(t)
@@ -231,7 +231,7 @@ class TimelineBuilder:
         """Add the next kit in delivery order and return its times (the module docstring)."""
         inst, human_times = self.instance, self.human_times
         station = kit_station(inst, kit.tasks)
-        params = inst.station_params[station]
+        params = inst.params_of(station)
         r, h = kit_durations(inst, kit.tasks, self.robot_times, human_times)
         robot_start = self.next_start(station)
         robot_end = robot_start + r

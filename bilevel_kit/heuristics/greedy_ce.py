@@ -150,6 +150,9 @@ class GreedyCEPolicy:
         #: for the decision's hot path)
         self._fit_memo: dict[bytes, tuple[float, bool]] = {}
         inst = self.instance
+        #: its one station's d, o_H and trays: a policy plans one station's kits, several
+        #: stations have one policy each (:mod:`.greedy_stations`), so several are refused here
+        self.station = inst.params_of()
         self._ids = [t.id for t in inst.tasks]
         self._r = np.array([inst.robot_time(t) for t in self._ids])
         self._h_mean = np.array([inst.human_time(t) for t in self._ids])
@@ -289,10 +292,10 @@ class GreedyCEPolicy:
         diff5, diff6 = upper_level.window_balance(
             self._r[seqs],
             self._h[seqs],
-            delivery=inst.delivery_time,
+            delivery=self.station.delivery_time,
             human_remaining=state.human_remaining,
             overhead_robot=inst.kit_overhead_robot,
-            overhead_human=inst.kit_overhead_human,
+            overhead_human=self.station.kit_overhead_human,
             signed=self.params.signed,
         )
         counts = np.cumsum(self._part_matrix[seqs], axis=1).reshape(-1, len(self._types))

@@ -184,6 +184,7 @@ class PrefixSearch:
         limits: SearchLimits,
     ) -> None:
         self.instance = instance
+        self.station = instance.params_of()  # one station's d and o_H (GreedyCEPolicy)
         self.r = robot
         self._h = human
         #: what a decision computes from ``done`` alone (:class:`_EpochData`), by (done, N,
@@ -321,7 +322,7 @@ class PrefixSearch:
             return None
         p_tasks, p_unl, p_robot, p_human, p_counts = parents
         inst, w, m = self.instance, self.instance.weights, length - i
-        d, o_r = inst.delivery_time, inst.kit_overhead_robot
+        d, o_r = self.station.delivery_time, inst.kit_overhead_robot
         p_keys, p_key = unique_rows(p_counts)
         c_key = self._task_keys[1]
         table = self._bound_table(p_keys)
@@ -335,7 +336,7 @@ class PrefixSearch:
                 d,
                 d + o_r,
                 o_r,
-                inst.kit_overhead_human,
+                self.station.kit_overhead_human,
                 ctx.human_remaining,
                 float(ctx.signed),
                 self.r[low[:m]].sum() if m else 0.0,
@@ -473,8 +474,8 @@ class PrefixSearch:
             return float(_dfs_kernel._score(terms, diff6 if signed else abs(diff6))), li, k, (), fit
         rests = dc.ep.rests
         if rests is not None:
-            inst = self.instance
-            d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+            d, o_r = self.station.delivery_time, self.instance.kit_overhead_robot
+            o_h = self.station.kit_overhead_human
             target = -math.inf if signed else o_h + float(lv.human[k]) - d - o_r
             floor = -math.inf
             if self._prune and not signed:  # F with term (6) zero
@@ -495,12 +496,12 @@ class PrefixSearch:
         :func:`.upper_level.objective` forms it."""
         inst, ctx, w = self.instance, dc.ctx, self.instance.weights
         lv, i = dc.levels[li], li + 1
-        diff5 = inst.delivery_time + inst.kit_overhead_robot + float(lv.robot[k])
+        diff5 = self.station.delivery_time + inst.kit_overhead_robot + float(lv.robot[k])
         diff5 = diff5 - ctx.human_remaining
         diff5 = diff5 if ctx.signed else abs(diff5)
         unav = ctx.unavailable(lv.counts[k][None, :])
         u = 0.0 if unav is None else float(unav[0])
-        human = inst.kit_overhead_human + float(lv.human[k])
+        human = self.station.kit_overhead_human + float(lv.human[k])
         return np.array(
             [
                 -w["W2"] * float(i),
@@ -509,7 +510,7 @@ class PrefixSearch:
                 w["W5"] * fit,
                 float(unav is not None),
                 w["W7"] * u,
-                inst.delivery_time,
+                self.station.delivery_time,
                 inst.kit_overhead_robot,
                 human,
                 float(ctx.signed),

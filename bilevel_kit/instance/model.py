@@ -240,7 +240,9 @@ class Instance:
     @cached_property
     def station_params(self) -> dict[str, StationParams]:
         """Each station's ``d_s``, ``o_H`` and binding tray count (docs/timeline.md); without
-        ``stations`` the one station "" has the instance's own."""
+        ``stations`` the one station "" has the instance's own. The one source of these
+        numbers: every timeline, bound and model reads them here, through :meth:`params_of`
+        (docs/formats.md, "Stations")."""
         if not self.stations:
             return {"": StationParams(self.delivery_time, self.kit_overhead_human, self.tray_limit)}
         count = Counter(t.station for t in self.tasks)
@@ -253,6 +255,38 @@ class Instance:
                 None if trays is None or trays >= count[s.id] else trays,
             )
         return out
+
+    def params_of(self, station: str | None = None) -> StationParams:
+        """The ``d_s``, ``o_H,s`` and binding trays of ``station`` (:attr:`station_params`).
+        ``None``: the one station's, for code that models one station (a station's own
+        instance, :func:`station_instance`, or :meth:`as_one_station`); refused with several,
+        whose fields may differ per station (docs/timeline.md#several-stations)."""
+        if station is not None:
+            return self.station_params[station]
+        if len(self.station_ids) > 1:
+            raise ValueError(
+                f"{self.source}: {len(self.station_ids)} stations have parameters of their own: "
+                "read one station's (Instance.params_of(station))"
+            )
+        return self.station_params[self.station_ids[0]]
+
+    def as_one_station(self) -> Instance:
+        """With exactly one declared station, the same instance without ``stations`` and with
+        that station's ``d``, ``o_H`` and trays as its own: the S = 1 case, which every method
+        solves in its place (same tasks, ids and graph; docs/timeline.md#several-stations).
+        Otherwise the instance itself."""
+        if len(self.stations) != 1:
+            return self
+        spec = self.stations[0]
+        params = self.station_params[spec.id]
+        return replace(
+            self,
+            base_tasks=tuple(replace(t, station="") for t in self.base_tasks),
+            delivery_time=params.delivery_time,
+            kit_overhead_human=params.kit_overhead_human,
+            trays=spec.trays if spec.trays is not None else self.trays,
+            stations=(),
+        )
 
     @cached_property
     def precedence(self) -> tuple[tuple[str, str], ...]:

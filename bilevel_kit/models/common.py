@@ -487,7 +487,7 @@ def quick_plan(
         if best is None or ms < best[0] - 1e-9:
             best = (ms, kits)
 
-    one_tray = instance.tray_limit == 1
+    one_tray = instance.params_of().tray_limit == 1  # (one station: quick_plan's callers)
     if one_tray and (cut := best_cut(instance, order, packer)) is not None:
         consider(cut)
     clock = not packer.deterministic  # (reproducible: every size, each call limited by work)

@@ -76,7 +76,8 @@ def one_tray_cut(
     where the segment [b, c) may be a kit iff ``c <= ext[b]``. Ties go to the first minimiser
     in (a, c) order, so the cut is deterministic."""
     n = len(order)
-    o_r, o_h, d = instance.kit_overhead_robot, instance.kit_overhead_human, instance.delivery_time
+    one = instance.params_of()  # one station (the exact cut: one tray)
+    o_r, o_h, d = instance.kit_overhead_robot, one.kit_overhead_human, one.delivery_time
     pr = np.concatenate(([0.0], np.cumsum([instance.robot_time(t) for t in order])))
     ph = np.concatenate(([0.0], np.cumsum([instance.human_time(t) for t in order])))
     span = max(c - b for b, c in enumerate(ext))

@@ -134,10 +134,10 @@ def per_unit(inst: Any, kits: Sequence[Sequence[str]]) -> dict[str, float]:
     kit) and the task time alone."""
     task = sum(inst.human_time(t.id) for t in inst.tasks)
     robot = sum(inst.robot_time(t.id) for t in inst.tasks)
-    n = len(kits)
+    n, one = len(kits), inst.params_of()  # one station (docstring)
     return {
-        "robot": robot + n * (inst.kit_overhead_robot + inst.delivery_time),
-        "human": task + n * inst.kit_overhead_human,
+        "robot": robot + n * (inst.kit_overhead_robot + one.delivery_time),
+        "human": task + n * one.kit_overhead_human,
         "task": task,
     }
 

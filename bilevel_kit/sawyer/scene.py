@@ -297,7 +297,7 @@ def _animate_kits(scene: _Scene, ex: Execution, tool: dict[float, np.ndarray]) -
         node = f"bk/kits/k{k}"
         scene.solid(f"{node}/tray", Box([w, h, 0.012]), TRAY_COLOR, _tf((w / 2, h / 2, -0.006)))
         scene.place(node, home)
-        gone = times.human_start + ex.kit_overhead_human
+        gone = times.human_start + ex.kit_overhead_human[k - 1]
         if times.robot_start > scene.t0:
             scene.visible(node, scene.t0, False)
         scene.visible(node, times.robot_start, True)
@@ -354,7 +354,7 @@ def _overlay_data(ex: Execution, t0: float, t1: float, speed: float) -> dict[str
     for k in range(1, len(ex.timeline.kits) + 1):
         times = ex.timeline.kits[k - 1]
         human.append(
-            [times.human_start, times.human_start + ex.kit_overhead_human, f"takes kit {k}"]
+            [times.human_start, times.human_start + ex.kit_overhead_human[k - 1], f"takes kit {k}"]
         )
     human += [
         [ex.timeline.task_start[t], ex.timeline.task_end[t], f"task {t}"]

@@ -161,7 +161,8 @@ class Execution:
     timeline: Timeline
     #: Number of kits of the whole plan (``kits`` may hold one of them).
     n_plan_kits: int
-    kit_overhead_human: float
+    #: Per kit of the plan: ``o_H`` of its station (docs/timeline.md#several-stations).
+    kit_overhead_human: tuple[float, ...]
     #: Part type ids in the instance's order (for colours).
     part_types: tuple[str, ...]
     #: Per kit number: its placements (id, type, x, y, theta, w, h), for drawing.
@@ -371,7 +372,7 @@ def plan_execution(
     """The execution of ``plan`` (all kits, or the kit numbers ``kits``) at the instance's
     station. Raises :class:`UnreachableError` naming the kit and part of a bin or slot out of
     reach. The plan is not checked here: see :func:`bilevel_kit.validate.check`."""
-    from ..plan import evaluate
+    from ..plan import evaluate, kit_station
 
     timeline = evaluate(instance, plan)
     station = instance.station or DEFAULT_STATION
@@ -400,7 +401,9 @@ def plan_execution(
         timeline_events(timeline, chosen, trajectories),
         timeline,
         len(plan.kits),
-        instance.kit_overhead_human,
+        tuple(
+            instance.params_of(kit_station(instance, k.tasks)).kit_overhead_human for k in plan.kits
+        ),
         tuple(instance.part_types),
         {k: plan.kits[k - 1].layout for k in chosen},
     )

@@ -120,6 +120,9 @@ class CPSATRollingPolicy:
         options: CPSATRollingOptions | None = None,
     ) -> None:
         self.instance = instance
+        #: its one station's d, o_H and trays (several: a policy per station,
+        #: :mod:`.stations`, so several are refused here)
+        self.station = instance.params_of()
         self.seed = seed
         self.options = options if options is not None else CPSATRollingOptions()
         self._order = topological_order(instance)
@@ -198,13 +201,14 @@ class CPSATRollingPolicy:
         inst = self.instance
         if self._busy(h0) <= 0 or inst.reachability:
             return 0.0
-        tray = inst.kit_overhead_human if inst.tray_limit == 1 else 0.0
-        return inst.kit_overhead_robot + inst.delivery_time + tray
+        st = self.station
+        tray = st.kit_overhead_human if st.tray_limit == 1 else 0.0
+        return inst.kit_overhead_robot + st.delivery_time + tray
 
     def _busy(self, h0: float) -> float:
         """The dummy task's human time (module docstring)."""
-        inst = self.instance
-        return h0 if inst.tray_limit == 1 else h0 - inst.kit_overhead_human
+        st = self.station
+        return h0 if st.tray_limit == 1 else h0 - st.kit_overhead_human
 
     def _sub_instance(self, window: list[str], times: dict[str, float], h0: float) -> Instance:
         inst = self.instance
@@ -255,12 +259,12 @@ class CPSATRollingPolicy:
             types,
             tasks,
             tray=(inst.tray.width, inst.tray.height),
-            delivery_time=inst.delivery_time,
-            overhead=(inst.kit_overhead_robot, inst.kit_overhead_human),
+            delivery_time=self.station.delivery_time,
+            overhead=(inst.kit_overhead_robot, self.station.kit_overhead_human),
             precedence=edges,
         )
-        if inst.tray_limit is not None:
-            doc["trays"] = inst.tray_limit
+        if self.station.tray_limit is not None:
+            doc["trays"] = self.station.tray_limit
         doc.update(inst.station_fields())
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 

@@ -106,7 +106,7 @@ class ShopFloor:
         self._tray_back: simpy.Event | None = None
         self.robot_blocked = 0.0
         #: one human per station ("" alone without ``stations``), docs/timeline.md
-        self.humans = {s: _Human(s, inst.station_params[s]) for s in inst.station_ids}
+        self.humans = {s: _Human(s, inst.params_of(s)) for s in inst.station_ids}
         self.left = Counter(t.station for t in inst.tasks)  # tasks not kitted, per station
         self.task_start: dict[str, float] = {}
         self.task_end: dict[str, float] = {}

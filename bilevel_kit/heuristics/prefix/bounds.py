@@ -206,6 +206,7 @@ class OptimisticScore:
         self, instance: Instance, robot: np.ndarray, types: Sequence[str], prune: bool
     ) -> None:
         self.instance = instance
+        self.station = instance.params_of()  # one station's d and o_H (GreedyCEPolicy)
         self.r = robot
         self.prune = prune
         self.fitness_bound = FitnessBound(instance, types)
@@ -229,8 +230,8 @@ class OptimisticScore:
         if not self.prune:
             return np.full(len(robot), -math.inf)
         lo, hi, bound = parts or self.parts(i, length, tasks, counts, ctx)
-        inst = self.instance
-        d, o_r, o_h = inst.delivery_time, inst.kit_overhead_robot, inst.kit_overhead_human
+        d, o_r = self.station.delivery_time, self.instance.kit_overhead_robot
+        o_h = self.station.kit_overhead_human
         diff5 = d + o_r + robot - ctx.human_remaining
         h_kit = o_h + human
         if lo is None or hi is None:  # i == length: no rest
@@ -246,7 +247,7 @@ class OptimisticScore:
         if fitness is not None:
             bound = np.where(np.isnan(fitness), bound, fitness)
         return upper_level.objective(
-            inst.weights,
+            self.instance.weights,
             n_tasks=float(i),
             diff5=diff5,
             diff6=diff6,

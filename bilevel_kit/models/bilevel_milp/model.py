@@ -49,12 +49,13 @@ def build_model(
     n = len(ids)
     K = n
     idx = instance.index
-    d = instance.delivery_time
+    one = instance.params_of()  # the paper's problem: one station
+    d = one.delivery_time
     big_m = (
         d
         + instance.kit_overhead_robot
         + sum(instance.robot_time(t) for t in ids)
-        + n * instance.kit_overhead_human
+        + n * one.kit_overhead_human
         + sum(instance.human_time(t) for t in ids)
     )
     keys = [(c, k) for c, col in enumerate(cols) for k in range(col.lo, col.hi + 1)]
@@ -132,8 +133,8 @@ def _tray_waits(m: Any, instance: Instance, K: int, used: Any, robot: Any) -> An
     on used positions; 0 with unlimited trays."""
     import pyomo.environ as pyo
 
-    T = instance.tray_limit
-    o_h, d = instance.kit_overhead_human, instance.delivery_time
+    one = instance.params_of()  # the paper's problem: one station
+    T, o_h, d = one.tray_limit, one.kit_overhead_human, one.delivery_time
     if T is None:
         return lambda k: 0.0
     if T == 1:  # the human has started kit k - 1 when it arrived: w_k = q5_{k-1} + o_H

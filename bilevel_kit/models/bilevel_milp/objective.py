@@ -33,7 +33,7 @@ def paper_terms(
         prev.human_end - nxt.robot_start for prev, nxt in zip(tl.kits, tl.kits[1:], strict=False)
     ]
     diff5, diff6 = upper_level.plan_balance(
-        r, h, np.array(backlog), delivery=instance.delivery_time, signed=signed
+        r, h, np.array(backlog), delivery=instance.params_of().delivery_time, signed=signed
     )
     fit = np.array([float(fitness_of(k)) for k in plan.kits])
     n_tasks = np.array([len(k.tasks) for k in plan.kits], dtype=float)

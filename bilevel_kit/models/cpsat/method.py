@@ -206,9 +206,10 @@ def cpsat(
     check_station_options(instance, "cpsat", options, STATION_OPTIONS)
     if options.finger_room:  # the grasp footprints packed (docs/execution.md#finger-room)
         return with_room(cpsat, instance, options, seed=seed, time_limit=time_limit)
-    one = len(instance.station_ids) == 1
     if not instance.stations and get_objective(options.objective).makespan_with_one_station:
         options = replace(options, objective="makespan")  # e.g. sum_completion, as milp
+    instance = instance.as_one_station()  # one declared station: the S = 1 model
+    one = not instance.stations
     objective = get_objective(options.objective)
     budget = Budget(time_limit)
     plan: Plan | None = None
@@ -308,7 +309,8 @@ def run(
     """Minimise makespan (or human idle) over all segmentations and orders (module
     docstring); ``time_limit`` (None: 60 s) covers everything, packing included. Several
     stations: :mod:`.station_model` and :mod:`.station_run`, without release times."""
-    if len(instance.station_ids) > 1 and releases:
+    instance = instance.as_one_station()  # one declared station: the S = 1 model
+    if instance.stations and releases:
         raise UsageError(
             f"{instance.source}: cpsat models release times with one assembly station only "
             "(docs/timeline.md#several-stations)"

@@ -75,14 +75,15 @@ def scale_times(
     floored at ``resolution``); ``releases`` (task id -> s, missing: 0) are scaled on that grid
     (``exact`` also needs them on it); see the module docstring."""
     ids = [t.id for t in instance.tasks]
+    # the delivery times and overheads the timeline uses, each station's (Instance.params_of):
+    # with stations the instance's own are only their defaults, and need not be on the grid
+    params = [instance.params_of(s) for s in instance.station_ids]
     values = (
         [instance.robot_time(i) for i in ids]
         + [instance.human_time(i) for i in ids]
-        + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
+        + [instance.kit_overhead_robot]
+        + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
     )
-    params = [instance.station_params[s] for s in instance.station_ids]
-    if instance.stations:  # their own delivery times and overheads are on the grid too
-        values += [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
     res, exact = resolution, False
     for q in REFINE if refine else (1,):
         cand = resolution / q

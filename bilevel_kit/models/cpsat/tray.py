@@ -139,8 +139,9 @@ def tray_mode(instance: Instance, tray: str, K: int, scope: str | None) -> str:
     small = n_rects <= AUTO_EMBEDDED_MAX_RECTS and not instance.reachability
     small = small and scope == ANY_ANGLE
     # with a tray limit Benders proved the one-tray table 2-2.5x faster than embedded
-    # (bench/results/cpsat_trays.csv)
-    return "embedded" if small and instance.tray_limit is None else "benders"
+    # (bench/results/cpsat_trays.csv); with stations, a limit of any station (their own)
+    limits = [instance.params_of(s).tray_limit for s in instance.station_ids]
+    return "embedded" if small and all(t is None for t in limits) else "benders"
 
 
 def add_cut(mdl: Model, counts: dict[str, int]) -> None:

@@ -333,7 +333,7 @@ class _Run:
         from .start import exact_cut
 
         assert self.kits is not None
-        if self.instance.tray_limit != 1:
+        if self.instance.params_of().tray_limit != 1:  # (lns: one station)
             return False
         ids = [self.instance.tasks[i].id for k in self.kits for i in k]
         cut = exact_cut(self.instance, ids, self.fit, self.stop_at.next(RECUT_SHARE))

@@ -204,6 +204,7 @@ def run(
     warm.check_station_hint(instance, options.hint)
     if not instance.stations and get_objective(options.objective).makespan_with_one_station:
         options = replace(options, objective="makespan")  # e.g. sum_completion
+    instance = instance.as_one_station()  # one declared station: the S = 1 model, no z[s,k]
     budget = Budget(time_limit)
     ensure_ortools(options.solver)
     opt = make_solver(options.solver)
@@ -225,8 +226,7 @@ def run(
     return drive(r, options.fallback)
 
 
-#: The registered method ``milp`` (module docstring) is :func:`run`.
-milp = run
+milp = run  # the registered method ``milp`` (module docstring)
 
 
 @dataclass

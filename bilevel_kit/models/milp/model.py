@@ -135,7 +135,8 @@ def objective_value(instance: Instance, kits: Sequence[Sequence[str]], objective
     tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
     if instance.stations:
         return model_objective(instance, tl, objective)
-    terms = ModelTerms.one_station(tl.makespan, lambda: instance.kit_overhead_human * len(kits))
+    o_h = instance.params_of().kit_overhead_human
+    terms = ModelTerms.one_station(tl.makespan, lambda: o_h * len(kits))
     return get_objective(objective).expression(terms)
 
 
@@ -171,9 +172,7 @@ class _Data:
     idx: dict[str, int]
     r: list[float]
     h: list[float]
-    d: float
     o_r: float
-    o_h: float
     ub: list[int]
     keys: list[tuple[int, int]]
     at_k: list[list[int]]
@@ -191,9 +190,7 @@ class _Data:
             idx=instance.index,
             r=[instance.robot_time(t) for t in ids],
             h=[instance.human_time(t) for t in ids],
-            d=instance.delivery_time,
             o_r=instance.kit_overhead_robot,
-            o_h=instance.kit_overhead_human,
             ub=ub,
             keys=keys,
             at_k=at_k,
@@ -225,7 +222,10 @@ def build(
         hz = upper * (1 + 1e-9) + 1e-6
         _station_variables(m, instance, K, hz, lower or 0.0)
     else:
-        big_m = sum(data.r) + sum(data.h) + K * (data.o_r + data.o_h + data.d)  # no overlap
+        one = instance.params_of()  # one station: d and o_H (several: per station, below)
+        big_m = (
+            sum(data.r) + sum(data.h) + K * (data.o_r + one.kit_overhead_human + one.delivery_time)
+        )
         m.E = pyo.Var(range(K), bounds=(0.0, big_m))
     m.u[0].fix(1)
     m.cons = pyo.ConstraintList()
@@ -302,8 +302,9 @@ def _timeline(
     import pyomo.environ as pyo
 
     add = m.cons.add
-    r, h, d, o_r, o_h = data.r, data.h, data.d, data.o_r, data.o_h
-    trays = instance.tray_limit
+    one = instance.params_of()  # one station (several: :func:`_station_timeline`)
+    r, h, o_r = data.r, data.h, data.o_r
+    d, o_h, trays = one.delivery_time, one.kit_overhead_human, one.tray_limit
     if trays is not None and trays < K:
         m.S = pyo.Var(range(trays, K), bounds=(0.0, m.E[0].ub))  # robot starts (tray rule)
     arrive: Any = 0.0
@@ -358,7 +359,7 @@ def _station_objective(m: Any, instance: Instance, K: int, objective: str) -> An
     """The registry's expression of ``objective`` on C, the completions ``F[s,K-1]`` and the
     overheads ``sum_s o_H,s m_s``."""
     ids = range(len(instance.station_ids))
-    prm = [instance.station_params[s] for s in instance.station_ids]
+    prm = [instance.params_of(s) for s in instance.station_ids]
     terms = ModelTerms(
         m.C,
         lambda: sum(m.F[s, K - 1] for s in ids),
@@ -370,7 +371,7 @@ def _station_objective(m: Any, instance: Instance, K: int, objective: str) -> An
 def _station_timeline(m: Any, instance: Instance, data: _Data, K: int, hz: float) -> None:
     """The shared robot, each station's human and trays (module docstring)."""
     add = m.cons.add
-    prm = [instance.station_params[s] for s in instance.station_ids]
+    prm = [instance.params_of(s) for s in instance.station_ids]
     ids = range(len(prm))
     big = hz + sum(data.h) + max(p.kit_overhead_human for p in prm)
     H: list[Any] = []
@@ -497,7 +498,7 @@ def set_start(master: Master, instance: Instance, kits: Sequence[Sequence[str]])
     tl = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits)))
     end = arrive = 0.0
     starts: list[float] = []  # human starts (of an unused kit: its end)
-    trays = instance.tray_limit
+    trays = instance.params_of().tray_limit
     for k in range(master.K):
         if k < len(kits):
             kt = tl.kits[k]
@@ -532,7 +533,7 @@ def _set_station_start(master: Master, instance: Instance, kits: Sequence[Sequen
         for s in range(len(instance.station_ids)):
             m.z[s, k].set_value(float(k < len(kits) and station[k] == s), skip_validation=True)
     for s, sid in enumerate(instance.station_ids):
-        trays = instance.station_params[sid].tray_limit
+        trays = instance.params_of(sid).tray_limit
         if trays is None or trays < 2:
             continue
         for k in range(1, master.K):
@@ -579,10 +580,11 @@ def kit_cap(instance: Instance, upper: float) -> int:
     """
     ids = [t.id for t in instance.tasks]
     times = ([instance.robot_time(t) for t in ids], [instance.human_time(t) for t in ids])
+    one = instance.params_of()  # one station (several: no kit cap, K = n)
     kit = (
         instance.kit_overhead_robot,
-        instance.delivery_time,
-        instance.kit_overhead_human,
+        one.delivery_time,
+        one.kit_overhead_human,
         tray_wait(instance),
     )
     cap = len(ids)

@@ -57,8 +57,9 @@ def closed_at(instance: Instance) -> Callable[[int], float]:
     the one-tray wait and (d), each with m in place of m_min (each is non-decreasing in m)."""
     lb = lower_bounds(instance)
     m0 = int(lb["min_kits"])
-    o_h = instance.kit_overhead_human
-    a0 = instance.kit_overhead_robot + instance.delivery_time
+    one = instance.params_of()  # one station's bound
+    o_h = one.kit_overhead_human
+    a0 = instance.kit_overhead_robot + one.delivery_time
     w = tray_wait(instance)
     ids = [t.id for t in instance.tasks]
     lines = johnson_lines(
@@ -79,10 +80,12 @@ def time_grid(instance: Instance, resolution: float = 0.1) -> float | None:
     from ..packing import is_grid_exact
 
     ids = [t.id for t in instance.tasks]
+    params = [instance.params_of(s) for s in instance.station_ids]  # each station's d, o_H
     values = (
         [instance.robot_time(i) for i in ids]
         + [instance.human_time(i) for i in ids]
-        + [instance.delivery_time, instance.kit_overhead_robot, instance.kit_overhead_human]
+        + [instance.kit_overhead_robot]
+        + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
     )
     for q in _REFINE:
         if is_grid_exact(values, resolution / q):

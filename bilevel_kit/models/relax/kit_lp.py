@@ -86,6 +86,7 @@ class _Data:
         edges = np.array([(idx[a], idx[b]) for a, b in reduced_edges(instance)], dtype=np.int64)
         has_pred = set(edges[:, 1].tolist()) if len(edges) else set()
         has_succ = set(edges[:, 0].tolist()) if len(edges) else set()
+        one = instance.params_of()  # one station's bound (several: each station's own)
         return cls(
             n=len(ids),
             r=np.array([instance.robot_time(i) for i in ids], dtype=np.float64),
@@ -99,9 +100,9 @@ class _Data:
             snk=np.array([i for i in range(len(ids)) if i not in has_succ], dtype=np.int64),
             edges=edges.reshape(-1, 2),
             o_r=instance.kit_overhead_robot,
-            o_h=instance.kit_overhead_human,
-            d=instance.delivery_time,
-            trays=instance.tray_limit,
+            o_h=one.kit_overhead_human,
+            d=one.delivery_time,
+            trays=one.tray_limit,
             tray_area=instance.tray.area,
         )
 

@@ -46,8 +46,9 @@ def head_tail_bounds(instance: Instance) -> dict[str, float]:
         [sum(instance.part_types[p].area * c for p, c in t.parts) for t in instance.tasks]
     )
     tray = instance.tray.area
-    a0 = instance.kit_overhead_robot + instance.delivery_time
-    b0 = instance.kit_overhead_human
+    one = instance.params_of()  # one station's bound
+    a0 = instance.kit_overhead_robot + one.delivery_time
+    b0 = one.kit_overhead_human
     w = tray_wait(instance)
     anc = [np.array([idx[a] for a in instance.ancestors[i]], dtype=np.int64) for i in ids]
     desc_lists: list[list[int]] = [[] for _ in range(n)]
