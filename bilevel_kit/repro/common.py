@@ -195,6 +195,41 @@ def run_study_cells(
     return ok, failed, computed
 
 
+def study_summary(
+    out: Path,
+    name: str,
+    ran: tuple[list[Record], list[Record], int],
+    rows: list[dict[str, Any]],
+    files: Mapping[str, Path],
+    *,
+    t0: float,
+    quick: bool,
+    seed: int,
+    cells: int,
+) -> dict[str, Any]:
+    """A study's summary, written to ``out/NAME.json`` and returned: its settings, the cells
+    that ran (:func:`run_study_cells`'s ``ran``), its rows, the CPU time summed over the cells
+    (each records its own ``cpu_s``), the wall time since ``t0`` and every file it wrote."""
+    import time
+
+    from ..experiments.cells import write_json
+
+    ok, failed, computed = ran
+    result: dict[str, Any] = {
+        "quick": quick,
+        "seed": seed,
+        "cells": cells,
+        "computed": computed,
+        "failed": failed,
+        "rows": rows,
+        "cpu_s": sum(float(r.get("cpu_s", 0.0)) for r in ok),
+        "wall_s": time.perf_counter() - t0,
+    }
+    result["files"] = {k: str(v) for k, v in {**files, "json": out / f"{name}.json"}.items()}
+    write_json(out / f"{name}.json", result)
+    return result
+
+
 def announce(what: str, cells: Sequence[Any], cell_dir: Path, detail: str) -> None:
     """One line on stderr before a sweep: how many cells there are and how many must be
     computed (the rest are read back), so a long run is never silent before its bar."""

@@ -41,7 +41,6 @@ import numpy as np
 
 from .. import atomic, style
 from ..errors import UsageError
-from ..experiments.cells import write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance, from_dict
 from ..plan import Kit, Plan
@@ -299,31 +298,21 @@ def run_robust(
     if bad or min(grid) < 0:
         raise UsageError(f"bad robust study options {bad or grid}: instances from "
                          f"{', '.join(INSTANCES)}, cv >= 0")  # fmt: skip
-    from .common import file_digest, run_study_cells
+    from .common import file_digest, run_study_cells, study_summary
 
     digests = {n: file_digest(ROOT / INSTANCES[n]) for n in names}
     cells = [
         RobustCell(n, t, c, seed, digest=digests[n]) for n in names for t in tray_grid for c in grid
     ]
     out = Path(out_dir)
-    ok, failed, computed = run_study_cells(
+    ran = run_study_cells(
         cells, robust_cell, out, jobs=jobs, progress=progress, desc="robust cells"
     )
-    rows = rows_of(ok)
+    rows = rows_of(ran[0])
     files = _write_outputs(out, rows, quick)
-    result = {
-        "quick": quick,
-        "seed": seed,
-        "cells": len(cells),
-        "computed": computed,
-        "failed": failed,
-        "rows": rows,
-        "cpu_s": sum(float(r.get("cpu_s", 0.0)) for r in ok),
-        "wall_s": time.perf_counter() - t0,
-    }
-    result["files"] = {k: str(v) for k, v in {**files, "json": out / "robust.json"}.items()}
-    write_json(out / "robust.json", result)
-    return result
+    return study_summary(
+        out, "robust", ran, rows, files, t0=t0, quick=quick, seed=seed, cells=len(cells)
+    )
 
 
 def _write_outputs(out: Path, rows: Sequence[Mapping[str, Any]], quick: bool) -> dict[str, Path]:

@@ -41,7 +41,6 @@ import numpy as np
 
 from .. import atomic
 from ..errors import UsageError
-from ..experiments.cells import run_cells_counted, split_failed, write_json
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance
 from ..plan import Kit, Plan
@@ -395,18 +394,16 @@ def run_robust_sim(
     if bad or r < 2:
         raise UsageError(f"bad robust-sim options {bad or r}: instances from "
                          f"{', '.join(INSTANCES)}, cv >= 0, at least 2 replications")  # fmt: skip
-    from .common import file_digest
+    from .common import file_digest, run_study_cells, study_summary
 
     todo = [
         RobustSimCell(n, t, c, seed, r, digest=file_digest(ROOT / INSTANCES[n])) for n, t, c in grid
     ]
     out = Path(out_dir)
-    records, computed = run_cells_counted(
-        todo, robust_sim_cell, cell_dir=out / "cells", jobs=jobs, progress=progress,
-        desc="robust-sim cells",
-    )  # fmt: skip
-    ok, failed = split_failed(records)
-    rows = rows_of(ok)
+    ran = run_study_cells(
+        todo, robust_sim_cell, out, jobs=jobs, progress=progress, desc="robust-sim cells"
+    )
+    rows = rows_of(ran[0])
     head = (
         f"Robust plans in the simulator{' (QUICK: a reduced run)' if quick else ''}: the "
         "timeline's VSS against the simulated VSS (s), mean [95 % paired interval].\n\n"
@@ -418,16 +415,6 @@ def run_robust_sim(
     atomic.write_text(
         files["markdown"], head + sim_vss_markdown(rows) + "\n\n" + sim_detail_markdown(rows) + "\n"
     )
-    result = {
-        "quick": quick,
-        "seed": seed,
-        "cells": len(todo),
-        "computed": computed,
-        "failed": failed,
-        "rows": rows,
-        "cpu_s": sum(float(x.get("cpu_s", 0.0)) for x in ok),
-        "wall_s": time.perf_counter() - t0,
-    }
-    result["files"] = {k: str(v) for k, v in {**files, "json": out / "robust_sim.json"}.items()}
-    write_json(out / "robust_sim.json", result)
-    return result
+    return study_summary(
+        out, "robust_sim", ran, rows, files, t0=t0, quick=quick, seed=seed, cells=len(todo)
+    )

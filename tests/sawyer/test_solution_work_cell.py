@@ -12,14 +12,7 @@ import pytest
 from bilevel_kit import solution as solution_io
 from bilevel_kit.cli import main
 from bilevel_kit.errors import SolutionError
-from bilevel_kit.sawyer.workcell import (
-    WorkCellError,
-    cell_digest,
-    cell_record,
-    load_work_cell,
-    parse_work_cell,
-    recorded_cell,
-)
+from bilevel_kit.sawyer import workcell as wc
 
 ROOT = Path(__file__).resolve().parents[2]
 TABLE = ROOT / "instances" / "hrc_table.json"
@@ -27,20 +20,20 @@ CELL = ROOT / "examples" / "hrc_table_cell.json"
 
 
 def test_the_record_round_trips_and_its_digest_ignores_layout(tmp_path):
-    cell = load_work_cell(CELL)
+    cell = wc.load_work_cell(CELL)
     doc = json.loads(CELL.read_text())
     shuffled = tmp_path / "shuffled.json"
     shuffled.write_text(json.dumps(dict(reversed(list(doc.items())))))  # one line, keys reversed
-    assert cell_digest(load_work_cell(shuffled)) == cell_digest(cell)
-    record = cell_record(cell)
+    assert wc.cell_digest(wc.load_work_cell(shuffled)) == wc.cell_digest(cell)
+    record = wc.cell_record(cell)
     assert record["path"] == str(CELL) and len(record["sha256"]) == 64
     assert record["cell"] == doc
-    again = recorded_cell(record, "sol.json")
+    again = wc.recorded_cell(record, "sol.json")
     assert (again.station, again.grasp_widths) == (cell.station, cell.grasp_widths)
-    other = parse_work_cell({**doc, "grasp_widths": {"foot": 4.0}})
-    assert cell_digest(other) != record["sha256"]
-    with pytest.raises(WorkCellError, match=r"sol.json: \$.work_cell.sha256: does not match"):
-        recorded_cell({**record, "cell": {**doc, "grasp_widths": {"foot": 4.0}}}, "sol.json")
+    other = wc.parse_work_cell({**doc, "grasp_widths": {"foot": 4.0}})
+    assert wc.cell_digest(other) != record["sha256"]
+    with pytest.raises(wc.WorkCellError, match=r"sol.json: \$.work_cell.sha256: does not match"):
+        wc.recorded_cell({**record, "cell": {**doc, "grasp_widths": {"foot": 4.0}}}, "sol.json")
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +50,7 @@ def solved(tmp_path_factory):
 def test_solve_records_the_cell_and_old_files_have_none(solved):
     with_cell, without = solved
     record = solution_io.read(with_cell).work_cell
-    assert record == cell_record(load_work_cell(CELL))
+    assert record == wc.cell_record(wc.load_work_cell(CELL))
     assert solution_io.read(without).work_cell is None
     assert "work_cell" not in json.loads(without.read_text())
 
