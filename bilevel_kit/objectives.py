@@ -34,7 +34,10 @@ recomputed, and its bound and gap are checked against that stated value; and
 objective=expected_makespan``), stated like J because it is a function of the plan *and* its
 scenarios: the checker holds its bound and gap against the stated value, and the mean-time
 makespan optimum bounds the true expectation of every plan from below (Jensen), which
-:mod:`bilevel_kit.stochastic` and the SAA brute-force test use.
+:mod:`bilevel_kit.stochastic` and the SAA brute-force test use; and ``cvar_makespan``, the
+CVaR at level alpha of the makespan over the same scenarios
+(docs/formulations.md#cvar-of-the-makespan, ``lns -p objective=cvar_makespan -p alpha=A``),
+stated and checked like ``expected_makespan``.
 """
 
 from __future__ import annotations
@@ -334,6 +337,18 @@ _BUILTINS = (
         modelled=False,
         rel_tol=1e-6,
         meaning=J_MEANING,
+    ),
+    Objective(
+        "cvar_makespan",
+        "the CVaR of the makespan over the scenarios of the human times",
+        None,  # like expected_makespan: a function of the plan, its scenarios and alpha
+        ("cvar_makespan",),
+        ("cvar_makespan_bound",),
+        ("cvar_makespan_gap",),
+        bound_holds_for_every_plan=False,
+        modelled=False,
+        rel_tol=1e-4,  # the same 1 ms grid as expected_makespan (docs/formulations.md)
+        scenarios=True,
     ),
 )
 for _builtin in _BUILTINS:

@@ -176,6 +176,9 @@ def _check_range(value: float, meta: Mapping[str, Any], where: str) -> None:
         raise UsageError(f"{where}: must be >= {lo}, got {value!r}")
     if hi is not None and value > hi:
         raise UsageError(f"{where}: must be <= {hi}, got {value!r}")
+    below = meta.get("below")  # an open upper end, e.g. a CVaR level alpha in [0, 1)
+    if below is not None and not value < below:
+        raise UsageError(f"{where}: must be < {below}, got {value!r}")
 
 
 def field_names(cls: type) -> list[str]:

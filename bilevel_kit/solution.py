@@ -297,7 +297,8 @@ def _claims_2() -> dict[str, Any]:
         "objective": {
             **block(True),
             "description": "the objective the method minimised (status refers to it): its "
-            "name (makespan, sum_completion, human_idle, J, expected_makespan), value, bound, gap",
+            "name (makespan, sum_completion, human_idle, J, expected_makespan, cvar_makespan), "
+            "value, bound, gap",
         },
         "makespan": {**block(False), "description": "the plan's makespan, its bound and gap (s)"},
     }

@@ -16,6 +16,10 @@ each evaluated by the one timeline evaluator :func:`bilevel_kit.plan.evaluate` w
 scenario's ``human_times`` (docs/timeline.md). In-sample values of a plan optimised on the
 same scenarios are biased low; :func:`estimate` on the :data:`EVALUATE` stream is the honest
 number, :func:`paired` the interval of a difference on common random numbers.
+
+**The CVaR of the makespan** at level ``alpha`` (:func:`cvar`, the objective ``cvar_makespan``)
+is the mean of the worst ``(1 - alpha)`` share of the scenarios' makespans, the boundary
+scenario counted fractionally (docs/formulations.md#cvar-of-the-makespan).
 """
 
 from __future__ import annotations
@@ -81,6 +85,34 @@ def makespans(instance: Instance, plan: Plan, scenarios: np.ndarray) -> np.ndarr
 def expected_makespan(instance: Instance, plan: Plan, scenarios: np.ndarray) -> float:
     """The sample average of the makespan of ``plan`` under ``scenarios``."""
     return float(makespans(instance, plan, scenarios).mean())
+
+
+def cvar(values: Sequence[float] | np.ndarray, alpha: float) -> float:
+    r"""CVaR at level ``alpha`` of equally weighted ``values``
+    (docs/formulations.md#cvar-of-the-makespan), Rockafellar-Uryasev's
+
+    .. math:: \min_\eta\; \eta + \frac{1}{(1-\alpha) S} \sum_s \max(0, C_s - \eta),
+
+    in closed form: with the values sorted worst first and ``m = (1 - alpha) S``, value ``j``
+    (0-based) has weight ``min(1, max(0, m - j))`` and CVaR is the weighted sum over ``m``:
+    the mean of the worst ``m`` values, exact also when ``m`` is not an integer. ``alpha = 0``
+    returns the plain mean (the same float as ``np.mean``, so it equals the sample average)."""
+    if not (math.isfinite(alpha) and 0 <= alpha < 1):
+        raise ValueError(f"alpha must be in [0, 1), got {alpha!r}")
+    v = np.asarray(values, dtype=float)
+    if len(v) == 0:
+        raise ValueError("CVaR of no values")
+    if alpha == 0:
+        return float(v.mean())
+    worst = np.sort(v)[::-1]
+    mass = (1 - alpha) * len(v)
+    weights = np.clip(mass - np.arange(len(v)), 0.0, 1.0)
+    return float(weights @ worst / weights.sum())
+
+
+def cvar_makespan(instance: Instance, plan: Plan, scenarios: np.ndarray, alpha: float) -> float:
+    """The CVaR at level ``alpha`` of the makespan of ``plan`` under ``scenarios``."""
+    return cvar(makespans(instance, plan, scenarios), alpha)
 
 
 def mean_times(scenarios: np.ndarray, instance: Instance) -> dict[str, float]:

@@ -10,6 +10,15 @@ least solution is that scenario's true timeline (docs/timeline.md), as in the on
 model. Not added: the symmetry breaking of interchangeable chains (chains with the same mean
 times differ per scenario) and the closed-form bounds of the mean times.
 
+**CVaR** (``alpha`` given, docs/formulations.md#cvar-of-the-makespan): Rockafellar-Uryasev's
+linear form, :math:`\min\, p S \eta + q \sum_s z_s` with :math:`z_s \ge C^s - \eta`,
+:math:`z_s \ge 0` and :math:`1 - \alpha' = p / q`, i.e. :math:`p S` times
+:math:`\eta + \frac{1}{(1-\alpha')S}\sum_s z_s`. :math:`\alpha'` is ``alpha`` as a fraction of
+denominator at most :data:`ALPHA_DENOMINATOR`, never above it (CVaR is non-decreasing in the
+level, so the bound stays a lower bound; a decimal ``alpha`` such as 0.9 is exact). An integer
+:math:`\eta` loses nothing: for fixed kits the minimum is attained at an order statistic
+of the (integer) :math:`C^s`.
+
 **Tray.** The area relaxation and the part counts of :mod:`.model`; the kits of each master
 solution are checked by the packing oracle and a kit that does not fit is cut for every kit
 position (:func:`.tray.add_cut`), as in ``cpsat``'s logic-based Benders. A cut the oracle
@@ -26,13 +35,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
 from ...instance import Instance
 from ...plan import Kit, Placement, Plan
-from ...stochastic import expected_makespan
+from ...stochastic import cvar_makespan, expected_makespan
 from ..budget import Budget
 from ..common import Packer, kit_order, pack_time_limit
 from .context import Model
@@ -42,6 +52,16 @@ from .tray import add_cut
 
 #: The time grid of the scaled scenario times (s).
 RESOLUTION = 0.001
+#: The largest denominator of the model's CVaR level (module docstring).
+ALPHA_DENOMINATOR = 1000
+
+
+def model_alpha(alpha: float) -> Fraction:
+    """``alpha`` as a fraction of denominator <= :data:`ALPHA_DENOMINATOR`, never above it."""
+    frac = Fraction(alpha).limit_denominator(ALPHA_DENOMINATOR)
+    if frac > Fraction(alpha):
+        frac = Fraction(math.floor(alpha * ALPHA_DENOMINATOR), ALPHA_DENOMINATOR)
+    return frac
 
 
 @dataclass
@@ -59,8 +79,12 @@ class SaaOutcome:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def _build(instance: Instance, scenarios: np.ndarray, resolution: float) -> Model:
-    """The model of the module docstring (K = n kit positions: every plan)."""
+def _build(
+    instance: Instance, scenarios: np.ndarray, resolution: float, alpha: float | None = None
+) -> tuple[Model, int]:
+    """The model of the module docstring (K = n kit positions: every plan) and the divisor of
+    its objective: the scaled objective over it is the sample average (``alpha`` None) or the
+    CVaR at level :func:`model_alpha` (s / resolution)."""
     from ortools.sat.python import cp_model
 
     m = cp_model.CpModel()
@@ -72,13 +96,23 @@ def _build(instance: Instance, scenarios: np.ndarray, resolution: float) -> Mode
         _timeline(m, replace(sc, h=[math.floor(v / sc.res + 1e-9) for v in row]), x, used, K, None)
         for row in scenarios.tolist()
     ]
-    total = sum(end[-1] for _, _, end in timelines)
+    ends = [end[-1] for _, _, end in timelines]
+    total, divisor = sum(ends), len(ends)
+    if alpha is not None:  # Rockafellar-Uryasev (module docstring)
+        tail = 1 - model_alpha(alpha)
+        top = max(max(e.proto.domain) for e in ends)  # the horizon of each C^s
+        eta = m.new_int_var(0, top, "eta")
+        zs = [m.new_int_var(0, top, f"z{s}") for s in range(len(ends))]
+        for z, e in zip(zs, ends, strict=True):
+            m.add(z >= e - eta)
+        divisor = tail.numerator * len(ends)
+        total = divisor * eta + tail.denominator * sum(zs)
     m.minimize(total)
     _, arrive, end = timelines[0]
     mdl = Model(m, K, x, used, arrive, end, total)
     _tray(instance, mdl, False, 1.0)
     mdl.obj_const = 0
-    return mdl
+    return mdl, divisor
 
 
 def _hint(mdl: Model, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
@@ -100,9 +134,11 @@ def solve_saa(
     workers: int = 1,
     resolution: float = RESOLUTION,
     deterministic_time: float | None = None,
+    alpha: float | None = None,
 ) -> SaaOutcome:
-    """Minimise the sample average of the makespan over every plan (module docstring) within
-    ``time_limit`` s, hinted with ``start``; the better of ``start`` and the model's plan.
+    """Minimise the sample average of the makespan (``alpha`` None) or its CVaR at level
+    ``alpha`` over every plan (module docstring) within ``time_limit`` s, hinted with
+    ``start``; the better of ``start`` and the model's plan.
     ``deterministic_time``: CP-SAT's deterministic time over all its solves (one worker: a
     reproducible run, docs/simulation.md#determinism), the time limit its safety net."""
     from ortools.sat.python import cp_model
@@ -110,7 +146,13 @@ def solve_saa(
     budget = Budget(time_limit)
     if instance.stations:
         raise ValueError("the SAA model covers one assembly station")
-    mdl = _build(instance, scenarios, resolution)
+    mdl, divisor = _build(instance, scenarios, resolution, alpha)
+
+    def value_of(plan: Plan) -> float:  # the one evaluator (bilevel_kit/stochastic.py)
+        if alpha is None:
+            return expected_makespan(instance, plan, scenarios)
+        return cvar_makespan(instance, plan, scenarios, alpha)
+
     packer = Packer(
         instance, pack_time_limit(budget), budget, deterministic=deterministic_time is not None
     )
@@ -120,7 +162,7 @@ def solve_saa(
         for kit in start.kits:
             if kit.layout:
                 packer.learn(instance.kit_parts(kit.tasks), kit.layout)
-        best = (expected_makespan(instance, start, scenarios), kits0)
+        best = (value_of(start), kits0)
         _hint(mdl, instance, kits0)
     ids = [t.id for t in instance.tasks]
     info: dict[str, Any] = {
@@ -152,12 +194,12 @@ def solve_saa(
         misfits = [k for k in kits if packer.fits(k) is not True]
         if not misfits:
             plan = Plan(tuple(Kit(k) for k in kits))
-            found = expected_makespan(instance, plan, scenarios)
+            found = value_of(plan)
             if found < best[0]:
                 best = (found, kits)
             if bound_valid:
                 scaled = solver.best_objective_bound
-                bound = scaled * resolution / len(scenarios)  # not refined: the grid is it
+                bound = scaled * resolution / divisor  # not refined: the grid is it
             proven = status == cp_model.OPTIMAL and bound_valid
             break
         for k in misfits:

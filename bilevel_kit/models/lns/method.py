@@ -106,11 +106,21 @@ class LnsOptions:
         default=0.1,
         metadata={"help": "share of the time limit for the kit-count LP bound", "min": 0.0},
     )
-    objective: Literal["makespan", "expected_makespan"] = field(
+    objective: Literal["makespan", "expected_makespan", "cvar_makespan"] = field(
         default="makespan",
         metadata={
-            "help": "makespan (mean times) or expected_makespan (sample average over "
-            "scenarios of the human times, docs/formulations.md)"
+            "help": "makespan (mean times), expected_makespan (sample average over "
+            "scenarios of the human times) or cvar_makespan (their CVaR at level alpha), "
+            "docs/formulations.md"
+        },
+    )
+    alpha: float = field(
+        default=0.9,
+        metadata={
+            "help": "CVaR level of cvar_makespan: the mean of the worst (1 - alpha) share "
+            "of the scenarios (0: their average)",
+            "min": 0.0,
+            "below": 1.0,
         },
     )
     scenarios: int = field(
@@ -140,7 +150,7 @@ def lns(
 ) -> MethodOutput:
     """Registered method ``lns`` (module docstring); ``start_plan`` a valid plan to start from,
     ``known_bound`` a proven makespan bound (then none is computed). ``objective=
-    "expected_makespan"``: :func:`.saa.lns_saa`."""
+    "expected_makespan"`` or ``"cvar_makespan"``: :func:`.saa.lns_saa`."""
     if get_objective(options.objective).scenarios:  # the sample average (docs/formulations.md)
         from .saa import lns_saa
 
