@@ -287,7 +287,7 @@ def _hinted(
 ) -> tuple[list[list[str]] | None, float | None]:
     """The plan of the ``hint`` method within :data:`HINT_SHARE` of the time limit when its
     kits pack and it beats ``inc`` (``extra['hint_method']`` names it), else ``inc``."""
-    from ..cpsat.warm import best_heuristic_plan, hint_methods
+    from ..exact.warm import best_heuristic_plan, hint_methods
 
     left = min(HINT_SHARE * r.budget.time_limit, r.budget.remaining(MARGIN))
     methods = hint_methods(r.options.hint)
