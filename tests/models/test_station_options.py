@@ -169,7 +169,7 @@ def test_cpsat_workers_and_tray_benders_are_honoured(inst, monkeypatch):
 def test_milp_solver_tray_and_fallback_are_honoured(inst, monkeypatch):
     """``solver`` solves the model with its station variables; ``tray`` and ``fallback`` are
     accepted (``auto`` and ``lns`` act as ``benders`` and ``none`` there: the option help)."""
-    from bilevel_kit.models.milp import method
+    from bilevel_kit.models.milp import benders
 
     used = []
 
@@ -177,8 +177,8 @@ def test_milp_solver_tray_and_fallback_are_honoured(inst, monkeypatch):
         used.append((model.name, solver))
         return run_solver(model, opt, solver, **kw)
 
-    run_solver = method.run_solver
-    monkeypatch.setattr(method, "run_solver", recording)
+    run_solver = benders.run_solver
+    monkeypatch.setattr(benders, "run_solver", recording)
     res = solve(inst, "milp", time_limit=20, solver="appsi_highs", tray="benders", fallback="none")
     assert res.status == "optimal" and res.objective == 31.0
     assert res.extra["solver"] == "appsi_highs" and res.extra["tray_mode"] == "benders"

@@ -3,7 +3,8 @@
 One module per step: :mod:`.scaling` (integer time grid), :mod:`.model` (the schedule model),
 :mod:`.tray` (embedded rectangles, Benders cuts, the tray mode), :mod:`.embedded` and
 :mod:`.benders` (the two ways to solve it), :mod:`.warm` (the warm start), :mod:`.method` (the
-registered entry, its options and the Python :func:`solve`). The formulation is in
+registered entry, its options and the Python :func:`solve`), :mod:`.conclude` (the result and
+the claims a run may make). The formulation is in
 docs/formulations.md; the steps of a run are :mod:`..exact.driver`'s, the result's ``extra``
 keys are listed in docs/formulations.md, "One driver for cpsat and milp".
 Importing this package loads no OR-Tools.

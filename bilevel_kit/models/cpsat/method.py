@@ -57,18 +57,18 @@ driver for cpsat and milp".
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
-from ...bounds import best_bound, min_kits, objective_extra
+from ...bounds import best_bound
 from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
-from ...methods import MethodOutput, Status, gap, require_stations_support
+from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
 from ...objectives import model_objectives
-from ...plan import Kit, Placement, Plan, evaluate
+from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
 from ..common import (
@@ -76,12 +76,9 @@ from ..common import (
     assignment_cells,
     chain_groups_idx,
     closed_form_plan,
-    kit_order,
     pack_time_limit,
-    plan_extra,
     quick_plan,
     reduced_edges,
-    scope_claims,
 )
 from ..exact import keys
 from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
@@ -89,12 +86,13 @@ from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, improve
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
+from .conclude import Report, conclude, plan_of
 from .context import MARGIN, Context, Model, State
 from .finger_room import finger_room_field, with_room
 from .model import build, canonical, release_bound
-from .proven import bound_source, kit_cap, known_bound, scaled_kit_bounds, strong_bound
+from .proven import kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
-from .station_run import station_baselines, station_claims, station_hand_off
+from .station_run import station_baselines, station_hand_off
 from .tray import embed_scope, tray_mode
 from .warm import MIN_RUN, best_heuristic_plan, closed_bound, closed_form_optimal
 
@@ -276,25 +274,6 @@ def solve(
 # ---------------------------------------------------------------------------------------------
 
 
-class _Report:
-    """The run's ``extra`` and how the run ends (packing solves and wall time added)."""
-
-    def __init__(self, budget: Budget, extra: dict[str, Any]) -> None:
-        self.budget = budget
-        self.extra = extra
-        self.solves_before = packing_oracle.pack_solves()
-        self.nets_before = packing_oracle.safety_nets()
-
-    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
-        extra = self.extra
-        extra["pack_solves"] = packing_oracle.pack_solves() - self.solves_before
-        extra["wall_time_s"] = self.budget.elapsed()
-        if self.budget.deterministic:  # did a wall-clock safety net fire (not reproducible)?
-            nets = packing_oracle.safety_nets() - self.nets_before
-            extra["safety_net"] = self.budget.net or nets > 0
-        return MethodOutput(plan, status, bound, extra, status_objective=extra["objective"])
-
-
 def run(
     instance: Instance,
     options: ScheduleOptions,
@@ -325,7 +304,7 @@ def run(
     packer = Packer(
         instance, pack_tl, budget.cut(MARGIN), options.pack_resolution, deterministic=deterministic
     )
-    report = _Report(
+    report = Report(
         budget,
         {
             "time_resolution": sc.res,
@@ -354,7 +333,7 @@ class _Cpsat:
         options: ScheduleOptions,
         sc: Scaled,
         packer: Packer,
-        report: _Report,
+        report: Report,
         hint: Plan | None,
         seed: int,
         cpsat_params: dict[str, Any] | None,
@@ -383,7 +362,7 @@ class _Cpsat:
         upper = None
         if incumbent is not None and ctx.minimised.is_makespan:
             upper = scaled_makespan(self.sc, incumbent)  # C <= U and the kit cap need makespan
-        start = None if incumbent is None else evaluate(instance, _plan_of(ctx, incumbent, None))
+        start = None if incumbent is None else evaluate(instance, plan_of(ctx, incumbent, None))
         self.start_ms = None if start is None else start.makespan
         strong_bound(ctx, self.start_ms, extra)
         self.K = max(kit_cap(ctx, upper), len(incumbent) if incumbent is not None else 1)
@@ -418,7 +397,7 @@ class _Cpsat:
         self.extra["improved_by"] = None
         if ctx.budget.stretch != 1.0:  # deterministic (budget.py): the LNS's start is clock-bound
             return state
-        plan = _plan_of(ctx, state.kits, None, ctx.packer)
+        plan = plan_of(ctx, state.kits, None, ctx.packer)
         if ctx.instance.stations:
             found = station_hand_off(ctx, plan, self.seed, self.extra)
             if found is None:
@@ -439,7 +418,7 @@ class _Cpsat:
         return State(kits, scaled_makespan(ctx.sc, kits), layouts=layouts)
 
     def conclude(self, state: State) -> MethodOutput:
-        return _conclude(self.ctx, None, state, self.report)
+        return conclude(self.ctx, None, state, self.report)
 
     def solve(self, state: State | None) -> MethodOutput:
         incumbent = None if state is None else state.kits
@@ -483,7 +462,7 @@ def _start_live(ctx: Context, incumbent: list[list[int]] | None) -> LiveProgress
 
 
 def _proven_without_model(
-    ctx: Context, start: State, report: _Report, start_ms: float
+    ctx: Context, start: State, report: Report, start_ms: float
 ) -> MethodOutput | None:
     """The result when the incumbent ``start`` attains a closed-form bound or the release bound
     (then it is optimal and no model is built); None otherwise."""
@@ -494,16 +473,16 @@ def _proven_without_model(
         # the incumbent attains a closed-form bound (e.g. Johnson's makespan): optimal
         # without a model (bilevel_kit/bounds.py, (d))
         keys.no_solve(extra, keys.CLOSED_FORM_BOUND)
-        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+        return conclude(ctx, None, State(incumbent, upper, proven=True), report)
     if ctx.proven is not None and start_ms <= ctx.proven.value + 1e-9:
         # the incumbent attains the proven bound of models.relax: optimal without a model
         keys.no_solve(extra, keys.PROVEN_BOUND)
-        return _conclude(ctx, None, State(incumbent, upper, proven=True), report)
+        return conclude(ctx, None, State(incumbent, upper, proven=True), report)
     if upper is not None and sc.rel and upper <= release_bound(instance, sc):
         # the incumbent attains the release bound (:func:`.model.release_bound`): optimal
         keys.no_solve(extra, keys.RELEASE_BOUND)
         state = State(incumbent, upper, upper, proven=True, lower_any=upper)
-        return _conclude(ctx, None, state, report)
+        return conclude(ctx, None, state, report)
     return None
 
 
@@ -543,7 +522,7 @@ def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | No
     extra["cuts"] = mdl.n_cuts
     if state.kits is None:
         return without_plan(run, state.infeasible, state.scope)
-    return _conclude(ctx, mdl, state, report)
+    return conclude(ctx, mdl, state, report)
 
 
 def _edges(instance: Instance) -> list[tuple[int, int]]:
@@ -601,100 +580,3 @@ def _incumbent(
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
     extra["hint_used"] = best is hk  # the hint's plan is the incumbent (ties: the hint)
     return canonical(best, ctx.groups)
-
-
-def _objective_claims(
-    ctx: Context, mdl: Model | None, state: State, closed: float, extra: dict[str, Any]
-) -> tuple[float, bool, float | None, float | None]:
-    """One station, an objective besides the makespan: the makespan bound its model bound
-    implies (:meth:`~bilevel_kit.objectives.Objective.makespan_bound`), whether the plan is
-    optimal, and the model's bounds on the objective (s; every plan, 0/90 degrees)."""
-    sc, instance = ctx.sc, ctx.instance
-    obj_bound = obj_axis = None
-    if sc.exact and mdl is not None:  # the model's bounds on its objective, in s
-        if state.lower is not None:
-            obj_axis = round((state.lower + mdl.obj_const) * sc.res, 9)
-        if state.lower_any is not None:
-            obj_bound = round((state.lower_any + mdl.obj_const) * sc.res, 9)
-    implied = (
-        None
-        if obj_bound is None
-        else ctx.minimised.makespan_bound(instance, obj_bound, min_kits(instance))
-    )
-    bound_s = closed if implied is None else max(closed, implied)
-    optimal_axis = state.proven and sc.exact and state.scope is not None
-    extra["optimal_axis_aligned"] = optimal_axis
-    return bound_s, optimal_axis and state.scope == ANY_ANGLE, obj_bound, obj_axis
-
-
-def _conclude(ctx: Context, mdl: Model | None, state: State, report: _Report) -> MethodOutput:
-    """The plan of the run's best kits with its status and makespan bound in seconds."""
-    instance, sc, extra = ctx.instance, ctx.sc, report.extra
-    assert state.kits is not None
-    plan = _plan_of(ctx, state.kits, state.layouts, ctx.packer)
-    real = evaluate(instance, plan)
-    closed = best_bound(instance)
-    lower_s = None if state.lower is None else round(state.lower * sc.res, 9)  # >= 1e-4
-    any_s = None if state.lower_any is None else round(state.lower_any * sc.res, 9)
-    obj_bound = obj_axis = None  # another objective's model bounds (s), every plan / 0-90
-    if ctx.minimised.is_makespan:
-        strong = known_bound(ctx)  # the closed forms and models.relax: every plan
-        bound_s = strong if any_s is None else max(strong, any_s)  # every plan (module doc)
-        bound_axis = strong if lower_s is None else max(strong, lower_s)
-        extra["bound_source"] = bound_source(ctx, any_s)
-        exact = sc.exact or (real.makespan <= bound_axis + 1e-6 and not sc.rel)
-        optimal_axis = state.proven and state.scope is not None and exact
-        optimal = (optimal_axis and state.scope == ANY_ANGLE) or (
-            real.makespan <= bound_s + 1e-6 and not sc.rel
-        )
-        extra.update(bound_axis_aligned=bound_axis, optimal_axis_aligned=optimal_axis)
-    elif sc.station:  # several stations: the objective's own bound (docs/formulations.md)
-        bound_s, optimal = closed, station_claims(ctx, plan, state, extra)
-        obj_bound, lower_s = extra["objective_bound"], None  # (lower: not on the makespan)
-    else:
-        bound_s, optimal, obj_bound, obj_axis = _objective_claims(ctx, mdl, state, closed, extra)
-    extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
-    missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
-    if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
-        extra["reason"] = "no layout for some kit within the time limit"
-        return report.finish(None, Status.UNKNOWN, bound_s)
-    if not ctx.minimised.is_makespan and not sc.station:  # the registry's keys
-        lows = (obj_bound, obj_axis)
-        proofs = (optimal, bool(extra["optimal_axis_aligned"]))
-        extra.update(objective_extra(instance, plan, ctx.objective, lows, proofs))
-    if ctx.live is not None:  # the final numbers, as the result reports them
-        makespan = ctx.minimised.is_makespan
-        ctx.live.tracker.report(
-            incumbent=ctx.minimised.value(real), bound=bound_s if makespan else obj_bound
-        )
-    extra.update(plan_extra(plan, real, bound_s, closed, lower_s), scaled_optimal=state.proven)
-    if sc.rel:  # the model's makespan is the released one (module docstring)
-        released = round(scaled_makespan(sc, state.kits) * sc.res, 9)
-        extra.update(release_makespan=released, gap=gap(released, bound_s) or 0.0)
-    return report.finish(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound_s)
-
-
-def _plan_of(
-    ctx: Context,
-    kits: Sequence[Sequence[int]],
-    layouts: Sequence[tuple[Placement, ...]] | None,
-    packer: Packer | None = None,
-) -> Plan:
-    """Kits of task indices -> a Plan (human order = topological order inside each kit; with
-    release times, sorted by release: the robot picks in that order, module docstring)."""
-    instance, rel = ctx.instance, ctx.sc.rel
-    out = []
-    for kk, kit in enumerate(kits):
-        tasks = kit_order(instance, [instance.tasks[i].id for i in kit])
-        if rel:
-            idx = instance.index
-            tasks = tuple(sorted(tasks, key=lambda t: rel[idx[t]]))  # stable: topological
-        layout: tuple[Placement, ...] = ()
-        if layouts is not None:
-            layout = layouts[kk]
-        elif packer is not None:
-            ok, typed = packer.counts(dict(instance.kit_parts(tasks)))
-            if ok and typed is not None:
-                layout = packing_oracle.typed_to_placements(instance, tasks, typed)
-        out.append(Kit(tasks, layout))
-    return Plan(tuple(out))

@@ -1,6 +1,6 @@
 """One driver for the exact whole-horizon methods ``cpsat`` and ``milp`` (docs/formulations.md,
 "CP-SAT schedule", "MILP schedule"): the steps every run takes, in one order, over a small
-backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
+backend protocol (:class:`.backend.Backend`) that builds, solves and cuts its own model.
 
 1. A task whose parts alone do not fit ends the run (:func:`..common.unfit_outcome`).
 2. The backend's incumbent, kit cap K and proven bound (:meth:`Backend.start`;
@@ -20,7 +20,7 @@ backend protocol (:class:`Backend`) that builds, solves and cuts its own model.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ...bounds import best_bound
 from ...instance import Instance
@@ -30,71 +30,15 @@ from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from . import lns_first
-from .nomodel import WHOLE, HandOff, NoModelSpec, buildable
+from .backend import Backend, Inc
+from .nomodel import buildable
 
 if TYPE_CHECKING:
-    from ...plan import Plan
-    from ..common import Packer
     from ..relax import ProvenBound
 
-Inc = TypeVar("Inc")
 T = TypeVar("T")
 #: The share of the time limit the warm start (option ``hint``) may use.
 HINT_SHARE = 0.3
-
-
-class Backend(Protocol[Inc]):
-    """One exact model as the driver sees it (its run's seed and options are its own);
-    ``Inc`` is its incumbent (kits, or a state)."""
-
-    instance: Instance
-    budget: Budget
-    packer: Packer
-    extra: dict[str, Any]
-    K: int  # the kit cap, set by :meth:`start`
-
-    @property
-    def spec(self) -> NoModelSpec:
-        """Its no-model costs and ``extra`` keys."""
-        ...
-
-    @property
-    def margin(self) -> float:
-        """Seconds kept back from the time limit."""
-        ...
-
-    def finish(self, plan: Plan | None, status: Status, bound: float | None) -> MethodOutput:
-        """The result (wall time and the backend's own counters added)."""
-        ...
-
-    def known_bound(self) -> float:
-        """The best makespan bound known before the model (s), for every plan."""
-        ...
-
-    def start(self) -> Inc | None:
-        """The incumbent (None: none), with K and the proven bound computed."""
-        ...
-
-    def shortcut(self, inc: Inc | None) -> MethodOutput | None:
-        """The result when ``inc`` attains a bound known before the model, else None."""
-        ...
-
-    def cells(self) -> int:
-        """The model's task x kit variables with K kits (its size)."""
-        ...
-
-    def hand_off(self, inc: Inc, limit: HandOff = WHOLE) -> Inc:
-        """``inc`` or the better incumbent the LNS finds from it in the time left (within
-        ``limit``)."""
-        ...
-
-    def conclude(self, inc: Inc) -> MethodOutput:
-        """The result of ``inc`` without a model (the bound known before the model)."""
-        ...
-
-    def solve(self, inc: Inc | None) -> MethodOutput:
-        """Build the model with K kits, search from ``inc`` (cutting kits that do not fit)."""
-        ...
 
 
 def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:

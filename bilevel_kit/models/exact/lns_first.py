@@ -21,19 +21,16 @@ hand-off (:mod:`.nomodel`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 from ...plan import evaluate
 from . import keys
+from .backend import Backend, Inc
 from .nomodel import HandOff
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
 
-# ``backend`` below is the driver's ``.driver.Backend``, not imported: the driver imports this
-# module, and an import cycle is refused even for type checking (tests/core/test_imports.py).
-
-Inc = TypeVar("Inc")
 #: The most of the time left (after the warm start and the proven bound) the LNS may use
 #: before the model; measured in docs/formulations.md, "The LNS first".
 SHARE = 0.5
@@ -42,7 +39,7 @@ STALL_WINDOWS = 4
 #: Up to this many tasks (the LNS's first window size, option ``window``; not imported: the
 #: LNS imports the cpsat package, which imports the driver) the LNS first solves no window.
 SMALL_TASKS = 24
-#: The ``extra`` key the backends' :meth:`~.driver.Backend.hand_off` reports the LNS under.
+#: The ``extra`` key the backends' :meth:`~.backend.Backend.hand_off` reports the LNS under.
 HAND_OFF_KEY = "fallback"
 #: Tolerance (s) of "the same makespan".
 TOL = 1e-6
@@ -54,7 +51,7 @@ def limits(n_tasks: int, seconds: float) -> HandOff:
     return HandOff(seconds, STALL_WINDOWS, 0 if n_tasks <= SMALL_TASKS else None)
 
 
-def before_model(backend: Any, inc: Inc, fallback: str) -> tuple[Inc, bool]:
+def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
     """The incumbent after the LNS from ``inc`` within :func:`limits`, and whether it meets
     the bound known before the model (then no model is needed). ``extra["lns_first"]`` gets
     the LNS's report, its limits and the time split."""
@@ -80,7 +77,7 @@ def before_model(backend: Any, inc: Inc, fallback: str) -> tuple[Inc, bool]:
     return inc, False
 
 
-def after_model(backend: Any, out: MethodOutput, t_model: float) -> MethodOutput:
+def after_model(backend: Backend[Any], out: MethodOutput, t_model: float) -> MethodOutput:
     """``out`` with the model's share of the time and ``improved_by``: ``lns`` when the plan is
     the LNS's, ``model`` when the model improved on the LNS's plan (None: the LNS did not
     improve the warm start)."""
@@ -95,7 +92,7 @@ def after_model(backend: Any, out: MethodOutput, t_model: float) -> MethodOutput
     return out
 
 
-def _skipped(backend: Any, fallback: str) -> str | None:
+def _skipped(backend: Backend[Any], fallback: str) -> str | None:
     """Why the LNS does not run first (None: it does)."""
     if fallback != "lns":
         return "option fallback=none"

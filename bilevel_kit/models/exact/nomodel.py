@@ -64,7 +64,7 @@ def buildable(
 
 @dataclass(frozen=True)
 class HandOff:
-    """How long the LNS of :meth:`.driver.Backend.hand_off` may run: at most ``seconds``, and
+    """How long the LNS of :meth:`.backend.Backend.hand_off` may run: at most ``seconds``, and
     (the LNS first, :mod:`.lns_first`) ``stall`` windows in a row without improvement and
     ``windows`` windows in all (None: no such limit)."""
 

@@ -41,22 +41,19 @@ needed 45-110 s against 33 s for CP-SAT on a 2-core machine (bench/bench_milp.py
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar
 
 from ... import progress
 from ...bounds import best_bound, min_kits
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
-from ...objectives import Objective, human_times, model_objectives
+from ...objectives import Objective, human_times
 from ...objectives import get as get_objective
 from ...plan import Kit, Plan, evaluate
-from ...stations import objective_of
 from ..budget import Budget
 from ..common import (
-    NoGoodCuts,
     Packer,
     closed_form_plan,
     pack_time_limit,
@@ -67,7 +64,6 @@ from ..common import (
 from ..exact.driver import (
     HINT_SHARE,
     bound_source,
-    check_hint,
     drive,
     keyword_options,
     known_bound,
@@ -77,92 +73,20 @@ from ..exact.driver import (
 from ..exact.keys import CLOSED_FORM_BOUND, PROVEN_BOUND, no_solve, solve_outcome, solved
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, NoModelSpec, improve
-from ..exact.station_options import HONOURED, check_station_options, declare
+from ..exact.station_options import check_station_options
 from ..packing import ANY_ANGLE
-from ..packing_oracle import WHY_TIME, Fit
 from . import warm
+from .benders import Benders, Live
 from .model import (
-    Master,
-    add_cut,
     build,
-    extract,
     human_order,
     kit_cap,
     model_cells,
     objective_extra,
     objective_value,
-    set_start,
 )
-from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver, run_solver
-
-TRAY_MODES: tuple[str, ...] = ("auto", "benders")
-#: Seconds kept back from the time limit for extraction and the final layouts.
-MARGIN = 0.2
-
-
-@dataclass(frozen=True)
-class MilpOptions:
-    """Options of the registered method ``milp``."""
-
-    solver: str = field(
-        default="highs",
-        metadata={
-            "help": "highs (HiGHS in a child process) or any Pyomo solver name "
-            "(cbc, glpk, gurobi, scip ...)"
-        },
-    )
-    objective: str = field(
-        default="makespan",
-        metadata={  # the registry's modelled objectives, a plugin's too (checked when parsed)
-            "help": "minimise makespan, (stations) sum of completions, human idle, or a "
-            "plugin's objective",
-            "choices": model_objectives,
-        },
-    )
-    tray: Literal["auto", "benders"] = field(
-        default="auto",
-        metadata={
-            "help": "auto (milp has no embedded tray: benders) or benders: Benders cuts, seeded "
-            "for the task pairs that do not fit (one station)"
-        },
-    )
-    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
-    hint: str = field(
-        default="auto",
-        metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
-            "method name, or none; its plan is the incumbent when better than the quick plan"
-        },
-    )
-
-    fallback: Literal["lns", "none"] = field(
-        default="lns",
-        metadata={
-            "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: the incumbent, the LNS does not model them; extra['fallback'])"
-        },
-    )
-
-    def __post_init__(self) -> None:
-        check_hint(self.hint, ("auto", "none"))
-
-
-#: What the model with several stations (:mod:`.model`) does with each option
-#: (docs/formulations.md, "Options with several stations"); every option is declared
-#: (:func:`declare`). ``tray=auto`` and ``fallback=lns`` act as ``benders`` and ``none``
-#: there, said in ``extra["tray_mode"]`` and ``extra["fallback"]``; a ``hint`` method that
-#: does not support stations is refused (:func:`.warm.check_station_hint`).
-STATION_OPTIONS = declare(
-    MilpOptions,
-    {
-        "solver": HONOURED,
-        "objective": HONOURED,
-        "tray": HONOURED,
-        "log": HONOURED,
-        "fallback": HONOURED,
-        "hint": HONOURED,
-    },
-)
+from .options import MARGIN, STATION_OPTIONS, MilpOptions
+from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver
 
 
 def solve(
@@ -211,7 +135,7 @@ def run(
     closed = best_bound(instance)
     pack_tl = pack_time_limit(budget)
     packer = Packer(instance, pack_tl, budget.cut(MARGIN))
-    live = _Live(progress.tracker(options.objective), instance, get_objective(options.objective))
+    live = Live(progress.tracker(options.objective), instance, get_objective(options.objective))
     r = _Run(instance, options, budget, packer, closed, live, seed, opt, solver_options)
     r.extra.update(
         solver=options.solver,
@@ -240,7 +164,7 @@ class _Run:
     budget: Budget
     packer: Packer
     closed: float  # the closed-form makespan bound
-    live: _Live
+    live: Live
     seed: int
     opt: Any  # the solver
     solver_options: Mapping[str, Any] | None
@@ -363,7 +287,7 @@ def _hinted(
 ) -> tuple[list[list[str]] | None, float | None]:
     """The plan of the ``hint`` method within :data:`HINT_SHARE` of the time limit when its
     kits pack and it beats ``inc`` (``extra['hint_method']`` names it), else ``inc``."""
-    from ..cpsat.warm import best_heuristic_plan, hint_methods
+    from ..exact.warm import best_heuristic_plan, hint_methods
 
     left = min(HINT_SHARE * r.budget.time_limit, r.budget.remaining(MARGIN))
     methods = hint_methods(r.options.hint)
@@ -405,7 +329,7 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
         lower = r.closed
     master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
-    loop = _Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)
+    loop = Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)
     if not r.instance.stations:  # (stations: docs/formulations.md, "Options with several stations")
         loop.cuts.seed_pairs()  # tray=auto or benders: pair cuts seeded, as cpsat's Benders
     info = loop.run(r.opt, r.seed, r.solver_options)
@@ -511,189 +435,3 @@ def _makespan_bound(
         bound = real.makespan
     extra.update(plan_extra(plan, real, bound, closed, lower))
     return bound
-
-
-class _Live:
-    """The run's live progress (:mod:`bilevel_kit.progress`) in seconds of its objective: the
-    master's objective is the makespan, or ``C - o_H m`` = human idle + ``sum h``."""
-
-    def __init__(self, tracker: progress.Tracker, instance: Instance, objective: Objective) -> None:
-        self.tracker = tracker
-        self.instance = instance
-        self.objective = objective
-        self.offset = float(objective.dropped(human_times(instance)))
-
-    def seconds(self, value: float | None) -> float | None:
-        return None if value is None else value - self.offset
-
-    def bound(self, dual: float | None) -> float | None:
-        """A solver's dual bound in seconds, less :data:`.solver.TOL` (it holds up to the
-        solver's tolerances: 39.0000000000025 for an optimum of 39)."""
-        return None if dual is None else self.seconds(dual - TOL * max(1.0, abs(dual)))
-
-    def model_values(
-        self, inc_obj: float | None, lower: float | None, stage: str | None = None
-    ) -> None:
-        """The incumbent's model objective and a master's proven bound (None: not known)."""
-        self.tracker.report(self.seconds(inc_obj), self.bound(lower), stage)
-
-    def on_bounds(self, primal: float | None, dual: float | None) -> None:
-        """A master's bounds while it runs: only the dual one counts (see the caller)."""
-        self.tracker.report(bound=self.bound(dual))
-
-    def final(self, plan: Plan, bound: float | None, extra: dict[str, Any]) -> None:
-        """The result's own numbers (the last report)."""
-        if not self.tracker.active:
-            return
-        tl = evaluate(self.instance, plan)
-        # the result's own bound (the makespan) or the one in extra (objectives.py)
-        _, lower, _, _ = self.objective.stated({"bound": bound}, extra)
-        self.tracker.report(objective_of(tl, self.objective.name), lower)
-
-
-class _Benders:
-    """The master <-> packing loop (module docstring): the incumbent ``inc`` (objective
-    ``inc_obj``), the master's proven bound ``lower`` and the cuts seen so far."""
-
-    def __init__(
-        self,
-        instance: Instance,
-        master: Master,
-        packer: Packer,
-        budget: Budget,
-        options: MilpOptions,
-        inc: list[list[str]] | None,
-        inc_obj: float | None,
-        live: _Live,
-    ) -> None:
-        self.live = live
-        self.instance = instance
-        self.master = master
-        self.packer = packer
-        self.budget = budget
-        self.options = options
-        self.inc = inc
-        self.inc_obj = inc_obj
-        self.cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
-        self.lower: float | None = None
-        self.lower_any: float | None = None
-        self.proven = False
-        self.infeasible = False
-        self.iterations = 0
-
-    def left(self) -> float:
-        return self.budget.remaining(MARGIN)
-
-    def run(
-        self, opt: Any, seed: int, solver_options: Mapping[str, Any] | None
-    ) -> SolveInfo | None:
-        """Solve the master until its solution packs, it is proven or the time is up; the
-        last solve's info."""
-        info: SolveInfo | None = None
-        while self.left() > 0.05:
-            self.iterations += 1
-            if self.inc is not None:
-                set_start(self.master, self.instance, self.inc)
-            # the master's bound holds for every plan only while every cut does (its scope);
-            # its solutions are no plans
-            proof = self.cuts.scope == ANY_ANGLE
-            stage = f"MILP ({self.options.solver}), {self.master.n_cuts} cuts"
-            self.live.model_values(None, None, stage)
-            info = run_solver(
-                self.master.model,
-                opt,
-                self.options.solver,
-                budget=self.budget.cut(MARGIN),
-                seed=seed,
-                log=self.options.log,
-                objective=self.master.model.obj,
-                options=solver_options,
-                warmstart=self.inc is not None,
-                on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
-            )
-            go_on = self.step(info)
-            self.live.model_values(self.inc_obj, self.lower_any)
-            if not go_on:
-                break
-        return info
-
-    def step(self, info: SolveInfo) -> bool:
-        """Use one master solution; False when the loop is done."""
-        instance, objective = self.instance, self.options.objective
-        if info.infeasible:
-            # the master holds C <= U: without unproven cuts the incumbent is optimal
-            if self.cuts.unproven == 0:
-                if self.inc is not None:
-                    self.proved()
-                else:
-                    self.infeasible = True
-            return False
-        if info.bound is not None:
-            self.record_bound(info.bound)
-        if not info.has_solution:
-            return False
-        kits = extract(self.master)
-        verdicts = self.verdicts(kits)
-        if all(v.fits is True for v in verdicts):
-            obj = objective_value(instance, kits, objective)
-            if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
-                self.inc, self.inc_obj = kits, obj
-            self.proven = info.optimal and self.cuts.unproven == 0
-            if self.proven and self.cuts.scope == ANY_ANGLE:
-                self.lower_any = self.lower
-            return False  # optimal, or the master ran out of time on a packable incumbent
-        if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
-            return False
-        new = self.cuts.cut_kits(map(instance.kit_parts, kits), verdicts)
-        if self.left() > 0:
-            self.repair(kits)
-        inc_obj, lower = self.inc_obj, self.lower
-        if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
-            self.proved()
-            return False
-        return bool(new)  # nothing new to cut: only possible with unknown packings
-
-    def record_bound(self, bound: float) -> None:
-        """A master's bound: a proof for 0/90-degree plans while every cut is proven, and for
-        every plan while every cut holds at any angle (:attr:`..common.NoGoodCuts.scope`)."""
-        scope = self.cuts.scope
-        if scope is None:  # after an unproven cut the master bound is no proof
-            return
-        self.lower = bound if self.lower is None else max(self.lower, bound)
-        if scope == ANY_ANGLE:
-            self.lower_any = bound if self.lower_any is None else max(self.lower_any, bound)
-
-    def proved(self) -> None:
-        """The incumbent is optimal for the plans the cuts' scope covers."""
-        self.proven, self.lower = True, self.inc_obj
-        if self.cuts.scope == ANY_ANGLE:
-            self.lower_any = self.inc_obj
-
-    def verdicts(self, kits: list[list[str]]) -> list[Fit]:
-        """Does each kit fit (the oracle's answer; unknown past the time limit)?"""
-        out: list[Fit] = []
-        pack_tl = self.packer.pack_tl
-        for kit in kits:
-            if self.left() <= 0:  # out of time: the rest stays unknown
-                out.append(Fit(None, why=WHY_TIME))
-                continue
-            counts = self.instance.kit_parts(kit)
-            fit = self.packer.verdict(counts)
-            if fit.fits is None:  # a hard packing: one more try with a longer limit
-                fit = self.packer.verdict(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))
-            out.append(fit)
-        return out
-
-    def repair(self, kits: list[list[str]]) -> None:
-        """Split the kits that do not fit; keep the result if it beats the incumbent."""
-        repaired: list[list[str]] = []
-        for kit in kits:
-            parts = self.packer.split(human_order(self.instance, kit))
-            if parts is None:
-                repaired = []
-                break
-            repaired += parts
-        if repaired:
-            obj = objective_value(self.instance, repaired, self.options.objective)
-            if self.inc_obj is None or obj < self.inc_obj - TOL * max(1.0, abs(obj)):
-                self.inc, self.inc_obj = repaired, obj
