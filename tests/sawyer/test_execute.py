@@ -451,9 +451,13 @@ def test_the_documented_table_run(instance):
         plan_robot = kt.plan.robot_end - kt.plan.robot_start - (kt.start - kt.plan.robot_start)
         mine = [kt.kit, len(kt.parts), kt.plan.robot_start, kt.start, kt.duration, kt.modelled]
         mine += [plan_robot, kt.plan.robot_end - kt.end]
-        assert row == [round(v, 3) for v in mine]
+        # kit, parts and plan times exactly; the arm's times depend on greedy-ce's layouts,
+        # which another CPU's float32 search can move by millimetres (docs/scaling.md#portability)
+        assert row[:4] == [round(v, 3) for v in mine[:4]]
+        assert row[4:] == pytest.approx(mine[4:], abs=0.1)
     late = max(kt.overrun for kt in ex.kits)
-    assert f"arms end {late:.3f} s after" in section
+    (doc_late,) = re.findall(r"arms end ([0-9.]+) s after", section)
+    assert float(doc_late) == pytest.approx(late, abs=0.1)
     v = verify(ex)
     assert f"peaks at the cap, {v.tool_speed:.3f} m/s" in section and v.speed_share < 1.0
     assert v.place_error <= 1e-6 and v.grasp_error <= 1e-6
