@@ -80,13 +80,10 @@ def checked_plan(plan: Plan, instance: Instance, source: str = "the plan") -> Pl
 
 
 def _offline_plan(instance: Instance, seed: int, params: SimParams | None) -> Plan:
-    from ..heuristics.cross_entropy import CEParams
-    from ..heuristics.greedy_ce import GreedyParams
     from ..heuristics.greedy_ce import plan as greedy_plan
+    from .policies import greedy_params
 
-    ce = params.ce if params is not None and params.ce is not None else CEParams()
-    signed = bool(params.signed) if params is not None else False
-    return greedy_plan(instance, GreedyParams(signed=signed, ce=ce), seed)
+    return greedy_plan(instance, greedy_params(params), seed)
 
 
 class FixedPlanPolicy:

@@ -23,6 +23,14 @@ if TYPE_CHECKING:
     from .params import SimParams
 
 
+def greedy_params(params: SimParams | None) -> GreedyParams:
+    """greedy-ce's parameters in the simulation: ``SimParams``'s ``ce`` and ``signed`` (horizon
+    and weights are already on the effective instance), the defaults without params."""
+    ce = params.ce if params is not None and params.ce is not None else CEParams()
+    signed = bool(params.signed) if params is not None else False
+    return GreedyParams(signed=signed, ce=ce)
+
+
 class LayoutCache:
     """Shelf-packer layouts memoised by part multiset (the baselines' layout)."""
 
@@ -120,9 +128,7 @@ class OptimizedPolicy(_NoOptionsPolicy):
     name: ClassVar[str] = "optimized"
 
     def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
-        ce = params.ce if params is not None and params.ce is not None else CEParams()
-        signed = bool(params.signed) if params is not None else False
-        self.greedy = GreedyCEPolicy(instance, GreedyParams(signed=signed, ce=ce), seed)
+        self.greedy = GreedyCEPolicy(instance, greedy_params(params), seed)
 
     def reset(self) -> None:
         self.greedy.stats = GreedyStats()
