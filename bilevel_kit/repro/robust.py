@@ -96,9 +96,15 @@ class RobustCell:
     digest: str = ""
 
     def key(self) -> str:
-        blob = json.dumps(asdict(self), sort_keys=True).encode()
-        digest = hashlib.sha1(blob).hexdigest()[:10]
-        return f"{self.instance}_t{tray_label(self.trays)}_cv{self.cv}_{self.seed}__{digest}"
+        return cell_key(self)
+
+
+def cell_key(cell: Any) -> str:
+    """A robust (or robust-sim) cell's file key: its coordinates and a digest of every field,
+    so a changed setting is a new cell."""
+    blob = json.dumps(asdict(cell), sort_keys=True).encode()
+    digest = hashlib.sha1(blob).hexdigest()[:10]
+    return f"{cell.instance}_t{tray_label(cell.trays)}_cv{cell.cv}_{cell.seed}__{digest}"
 
 
 def _solve(inst: Instance, scenarios: np.ndarray, det: float, start: Plan | None = None) -> Any:
@@ -113,16 +119,24 @@ def _plan(out: Any) -> Plan:
     return Plan(tuple(Kit(k) for k in out.kits))
 
 
+def study_solves(
+    inst: Instance, cv: float, seed: int, scenarios: int = SCENARIOS
+) -> tuple[Any, Any, np.ndarray]:
+    """A cell's mean-value and SAA solves (module docstring, steps 1-2) and the SAA's
+    ``OPTIMISE`` scenarios; the SAA solve is hinted with the mean-value plan's task lists."""
+    means = np.array([[t.human_mean for t in inst.tasks]])
+    mean_out = _solve(inst, means, DET_MEAN)
+    opt = sample(inst, scenarios, seed, cv=cv, stream=OPTIMISE)
+    saa_out = _solve(inst, opt, DET_SAA, start=_plan(mean_out))
+    return mean_out, saa_out, opt
+
+
 def robust_cell(cell: RobustCell) -> dict[str, Any]:
     """The cell's plans and estimates (module docstring)."""
     t0 = time.process_time()
     inst = study_instance(cell.instance, cell.trays)
-    means = np.array([[t.human_mean for t in inst.tasks]])
-    mean_out = _solve(inst, means, DET_MEAN)
-    mean_plan = _plan(mean_out)
-    opt = sample(inst, cell.scenarios, cell.seed, cv=cell.cv, stream=OPTIMISE)
-    saa_out = _solve(inst, opt, DET_SAA, start=mean_plan)
-    saa_plan = _plan(saa_out)
+    mean_out, saa_out, opt = study_solves(inst, cell.cv, cell.seed, cell.scenarios)
+    mean_plan, saa_plan = _plan(mean_out), _plan(saa_out)
     ev = sample(inst, cell.evaluation, cell.seed, cv=cell.cv, stream=EVALUATE)
     a, b = makespans(inst, mean_plan, ev), makespans(inst, saa_plan, ev)
     ws = sample(inst, cell.wait_and_see, cell.seed, cv=cell.cv, stream=WAIT_AND_SEE)

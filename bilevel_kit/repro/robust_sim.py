@@ -29,8 +29,6 @@ paired interval; each online policy's gain over the mean-value plan likewise.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -47,14 +45,13 @@ from ..plan import Kit, Plan
 from ..stochastic import EVALUATE, OPTIMISE, estimate, makespans, paired, sample
 from .robust import (
     CVS,
-    DET_MEAN,
-    DET_SAA,
     EVALUATION,
     INSTANCES,
     ROOT,
-    SAFETY_S,
     SCENARIOS,
+    cell_key,
     study_instance,
+    study_solves,
     tray_label,
 )
 
@@ -86,32 +83,14 @@ class RobustSimCell:
     digest: str = ""
 
     def key(self) -> str:
-        blob = json.dumps(asdict(self), sort_keys=True).encode()
-        digest = hashlib.sha1(blob).hexdigest()[:10]
-        return f"{self.instance}_t{tray_label(self.trays)}_cv{self.cv}_{self.seed}__{digest}"
+        return cell_key(self)
 
 
 def study_plans(instance: Instance, cv: float, seed: int) -> tuple[Plan, Plan]:
     """The robust study's mean-value and SAA plans of a cell (docs/robust.md#the-study): the
     same model, scenarios and deterministic limits as :func:`.robust.robust_cell`, each kit
     with the packing oracle's layout (the simulator checks them; the timeline ignores them)."""
-    from ..models.cpsat.saa import solve_saa
-
-    def solve(scenarios: np.ndarray, det: float, start: Plan | None = None) -> Any:
-        return solve_saa(
-            instance,
-            scenarios,
-            time_limit=SAFETY_S,
-            start=start,
-            deterministic_time=det,
-            workers=1,
-        )
-
-    mean_out = solve(np.array([[t.human_mean for t in instance.tasks]]), DET_MEAN)
-    # the SAA solve is hinted with the task lists only, exactly as the study does
-    hint = Plan(tuple(Kit(k) for k in mean_out.kits))
-    opt = sample(instance, SCENARIOS, seed, cv=cv, stream=OPTIMISE)
-    saa_out = solve(opt, DET_SAA, start=hint)
+    mean_out, saa_out, _ = study_solves(instance, cv, seed)
     return _laid_out(instance, mean_out), _laid_out(instance, saa_out)
 
 
