@@ -612,6 +612,15 @@ register(
     objectives=("J",),
 )
 register(
+    "bbr",
+    "bilevel_kit.models.bbr.method:bbr",
+    "exact: branch, bound and remember over the precedence ideals (one station, makespan)",
+    "bilevel_kit.models.bbr.method:BbrOptions",
+    prepare=COMPILE_KERNELS,  # its start is lns's, which runs greedy-ce
+    # a new exact method beside cpsat and milp: named, not in the main job's default set
+    in_default=False,
+)
+register(
     "lns",
     "bilevel_kit.models.lns.method:lns",
     "matheuristic: large-neighbourhood search, windows of kits re-optimised exactly by CP-SAT",

@@ -1,0 +1,199 @@
+"""The registered method ``bbr``: branch, bound and remember over the precedence ideals.
+
+1. **Start**: ``lns`` within ``start_share`` of the time limit (``start="lns"``), or the
+   quick plans alone (``start="quick"``): its plan is the incumbent, its makespan the first
+   upper bound of the search.
+2. **Search** (:mod:`.search`) with the rest of the time: best-first over (ideal, timeline
+   state) nodes, pruned by the state's lower bound (:mod:`.space`) and by dominance, the tray
+   asked lazily (the packing oracle, memoised, limited by deterministic time so its verdicts
+   do not depend on the load, docs/simulation.md#determinism).
+3. **Result**: the best plan (the start's, or a better one the search found, with the
+   oracle's layouts); ``optimal`` when the search was exhausted and every kit it ruled out was
+   ruled out for every layout; ``bound`` the search's bound (the least lower bound of the
+   open nodes) under the same condition, else the start's bound.
+
+One station, the makespan, one or more trays (docs/timeline.md). ``extra``: ``start_method``,
+``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
+``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
+``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
+``optimal_axis_aligned`` (what the search proved for 0/90-degree plans), ``proof_scope``,
+``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ...instance import Instance
+from ...methods import MethodOutput, Status, gap
+from ...plan import Kit, Plan, evaluate
+from ..budget import Budget
+from ..common import Packer, scope_claims, unfit_outcome
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from .search import Outcome, search
+from .space import Space
+
+#: Seconds kept back at the end for the layouts of a new plan, plus this share of the limit.
+MARGIN_S, MARGIN_SHARE = 0.2, 0.02
+
+
+@dataclass(frozen=True)
+class BbrOptions:
+    """Options of the registered method ``bbr``."""
+
+    start: Literal["lns", "quick"] = field(
+        default="lns",
+        metadata={
+            "help": "first incumbent: lns within start_share, or the quick plans alone "
+            "(reproducible: with expansions, the whole run is)"
+        },
+    )
+    start_share: float = field(
+        default=0.25,
+        metadata={"help": "share of the time limit for the lns start", "min": 0.0, "max": 1.0},
+    )
+    expansions: int | None = field(
+        default=None,
+        metadata={"help": "nodes to expand (none: until exhausted or the time limit)", "min": 1},
+    )
+    max_nodes: int = field(
+        default=1_000_000,
+        metadata={
+            "help": "nodes kept in memory before the search stops (about 0.5 kB each)",
+            "min": 1,
+        },
+    )
+    pack_time: float = field(
+        default=2.0,
+        metadata={"help": "deterministic time per packing call (about seconds)", "min": 0.01},
+    )
+
+
+def bbr(
+    instance: Instance,
+    options: BbrOptions,
+    *,
+    seed: int = 0,
+    time_limit: float | None = None,
+) -> MethodOutput:
+    """Registered method ``bbr`` (module docstring)."""
+    budget = Budget(time_limit)
+    packer = Packer(instance, options.pack_time, budget, deterministic=True)
+    extra: dict[str, Any] = {}
+    unfit = packer.task_not_fitting()
+    if unfit is not None:
+        return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
+    start, start_bound = _start(instance, options, seed, budget, packer, extra)
+    upper = evaluate(instance, start).makespan if start is not None else float("inf")
+    space = Space(instance)
+
+    def fits(counts: dict[str, int]) -> tuple[bool, str | None]:
+        verdict = packer.verdict(counts)
+        if verdict.fits:
+            return True, None
+        return False, (verdict.scope or AXIS_ALIGNED) if verdict.fits is False else None
+
+    stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
+    out = search(
+        space,
+        fits,
+        upper=upper,
+        deadline=stop_at,
+        max_expansions=options.expansions,
+        max_nodes=options.max_nodes,
+    )
+    extra.update(out.counters, stop=out.stop)
+    plan = start
+    if out.kits is not None:
+        plan = _with_layouts(instance, packer, out.kits) or start
+    return _conclude(instance, plan, out, start_bound, extra, budget)
+
+
+def _start(
+    instance: Instance,
+    options: BbrOptions,
+    seed: int,
+    budget: Budget,
+    packer: Packer,
+    extra: dict[str, Any],
+) -> tuple[Plan | None, float | None]:
+    """The first incumbent and its proven bound (module docstring, step 1): ``lns``'s plan
+    and bound, or the quick plans' best (:func:`..common.quick_plan`, every packing call
+    limited by deterministic time, so the start does not depend on the load) and no bound."""
+    if options.start == "quick":
+        from ..common import quick_plan
+
+        kits = quick_plan(instance, packer)
+        plan = None if kits is None else _with_layouts(instance, packer, kits)
+        extra.update(start_method="quick", start_makespan=_makespan(instance, plan))
+        return plan, None
+    from ..lns.method import LnsOptions, lns
+
+    limit = min(max(0.5, options.start_share * budget.time_limit), budget.remaining())
+    got = lns(instance, LnsOptions(), seed=seed, time_limit=limit)
+    extra.update(
+        start_method="lns",
+        start_makespan=got.extra.get("makespan"),
+        start_bound_source=got.extra.get("bound_source"),
+    )
+    return got.plan, got.bound
+
+
+def _makespan(instance: Instance, plan: Plan | None) -> float | None:
+    return evaluate(instance, plan).makespan if plan is not None else None
+
+
+def _with_layouts(instance: Instance, packer: Packer, kits: list[list[str]]) -> Plan | None:
+    """The search's plan with the oracle's layout of every kit (None: a layout is missing)."""
+    from ..packing_oracle import typed_to_placements
+
+    out = []
+    for kit in kits:
+        counts = dict(instance.kit_parts(kit))
+        if not counts:
+            out.append(Kit(tuple(kit)))
+            continue
+        verdict = packer.verdict(counts)
+        if not verdict.fits or verdict.layout is None:
+            return None
+        out.append(Kit(tuple(kit), typed_to_placements(instance, kit, verdict.layout)))
+    return Plan(tuple(out))
+
+
+def _conclude(
+    instance: Instance,
+    plan: Plan | None,
+    out: Outcome,
+    start_bound: float | None,
+    extra: dict[str, Any],
+    budget: Budget,
+) -> MethodOutput:
+    """Status, bound and ``extra`` (module docstring, step 3)."""
+    real = evaluate(instance, plan).makespan if plan is not None else None
+    bound_axis = out.bound if out.scope is not None else None
+    every = out.scope == ANY_ANGLE
+    bound = start_bound
+    if every and (bound is None or out.bound > bound):
+        bound = out.bound
+        extra["bound_source"] = "bbr"
+    else:
+        extra["bound_source"] = extra.get("start_bound_source")
+    if real is not None and bound is not None:
+        bound = min(bound, real)  # the search's float sums against the evaluator's
+    extra.update(
+        bound_axis_aligned=bound_axis,
+        optimal_axis_aligned=bool(out.exhausted and out.scope is not None and plan is not None),
+        wall_time_s=budget.elapsed(),
+    )
+    extra.update(scope_claims(out.scope))
+    if plan is None:
+        if out.exhausted and every:
+            extra["reason"] = "no plan: every kit order was ruled out"
+            return MethodOutput(None, Status.INFEASIBLE, None, extra)
+        extra.setdefault("reason", "no plan within the time limit")
+        return MethodOutput(None, Status.UNKNOWN, bound, extra)
+    assert real is not None
+    optimal = (out.exhausted and every) or (bound is not None and real <= bound + 1e-9)
+    extra.update(makespan=real, n_kits=len(plan.kits), gap=gap(real, bound))
+    return MethodOutput(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound, extra)

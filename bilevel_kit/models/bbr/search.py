@@ -1,0 +1,219 @@
+r"""Branch, bound and remember over the ideals of the precedence graph (docs/formulations.md,
+"Branch, bound and remember"; Sewell & Jacobson 2012, Morrison, Sewell & Jacobson 2014).
+
+A node is an ideal ``J`` (the tasks of the kits so far, a bit mask) with the timeline's state
+after them (:mod:`.space`). The search is best-first on the node's lower bound ``f``
+(:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
+
+* **branch**: a node's children are its kits (:meth:`.space.Space.kits`), each the node's
+  ideal plus a down-set extension whose parts fit the tray;
+* **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
+* **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
+  componentwise at most); a dominated child is dropped, a dominating one retires the nodes it
+  dominates.
+
+The tray's geometry enters lazily: a kit is enumerated by its area alone, and the packing
+oracle (memoised by part multiset) is asked only when a node is expanded (or completes a
+plan); only nodes whose kits were found to fit dominate others. A kit the oracle rules out
+with a 0/90-degree proof only, or does not decide, narrows what the search proves
+(``scope``, docs/formulations.md#what-optimal-means).
+
+**Claims.** When the heap's least ``f`` reaches the incumbent's makespan, no plan is better:
+the incumbent is optimal (within ``scope``). At any stop the least ``f`` of the open nodes (or
+the incumbent's makespan, when smaller) is a lower bound on every plan's makespan, within
+``scope``. Work is counted in expanded nodes, so a run to a node limit is deterministic; the
+wall clock is checked between expansions, and the number of nodes kept is capped (memory).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from ..packing import ANY_ANGLE, AXIS_ALIGNED
+from .space import Space
+
+#: Answer of the fit test for a part multiset: True, or the scope of a "no" (None: undecided).
+FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
+
+
+@dataclass
+class Node:
+    """A node of the search: ideal, state, parent and the kit that led here."""
+
+    done: int
+    state: tuple[float, ...]
+    parent: Node | None
+    kit: int
+    alive: bool = True
+    #: the oracle said its last kit fits (asked when the node is expanded, module docstring)
+    verified: bool = False
+
+
+@dataclass
+class Outcome:
+    """What a search proved: the best plan's kits (task-id lists, None: none better than the
+    given incumbent), its makespan, the lower bound, whether the search was exhausted, the
+    proof's ``scope`` and its counters."""
+
+    kits: list[list[str]] | None
+    value: float
+    bound: float
+    exhausted: bool
+    scope: str | None
+    stop: str
+    counters: dict[str, int] = field(default_factory=dict)
+
+
+def _narrow(scope: str | None, by: str | None) -> str | None:
+    """The scope a proof keeps after a "no" of scope ``by`` (None: undecided)."""
+    if scope is None or by is None:
+        return None
+    return AXIS_ALIGNED if AXIS_ALIGNED in (scope, by) else ANY_ANGLE
+
+
+def search(
+    space: Space,
+    fits: FitTest,
+    *,
+    upper: float = math.inf,
+    deadline: float | None = None,
+    max_expansions: int | None = None,
+    max_nodes: int = 2_000_000,
+) -> Outcome:
+    """Best-first branch, bound and remember (module docstring) below ``upper`` (a known
+    plan's makespan; inf: none), until exhausted, ``deadline`` (a ``perf_counter`` time),
+    ``max_expansions`` nodes expanded or ``max_nodes`` nodes kept."""
+    run = _Search(space, fits, upper, deadline)
+    while run.heap and run.stop == "exhausted":
+        f, _, _, node = run.heap[0]
+        if f >= run.upper - run.tol:
+            break
+        if deadline is not None and time.perf_counter() >= deadline:
+            run.stop = "time_limit"
+        elif max_expansions is not None and run.counts["expanded"] >= max_expansions:
+            run.stop = "expansions"
+        elif run.counts["kept"] >= max_nodes:
+            run.stop = "memory"
+        else:
+            heapq.heappop(run.heap)
+            if node.alive and run.verify(node):
+                run.expand(node, f)
+    return run.outcome()
+
+
+class _Search:
+    """One search's heap, memory, incumbent, fit memo and counters (:func:`search`)."""
+
+    def __init__(self, space: Space, fits: FitTest, upper: float, deadline: float | None) -> None:
+        self.space, self.fits, self.deadline = space, fits, deadline
+        self.upper = upper
+        self.tol = 1e-9 * max(1.0, abs(upper)) if upper < math.inf else 0.0
+        root = Node(0, space.root(), None, 0, verified=True)
+        self.tick = itertools.count(1)
+        self.heap: list[tuple[float, int, int, Node]] = [
+            (space.lower_bound(0, root.state), 0, 0, root)
+        ]
+        self.memory: dict[int, list[Node]] = {0: [root]}
+        self.fit_memo: dict[frozenset[tuple[str, int]], tuple[bool, str | None]] = {}
+        self.scope: str | None = ANY_ANGLE
+        self.best: Node | None = None
+        self.counts = {"expanded": 0, "generated": 0, "kept": 1, "dominated": 0, "oracle": 0}
+        self.stop = "exhausted"
+
+    def fit(self, mask: int) -> bool:
+        """Does the kit fit the tray (the oracle, memoised by part multiset)? A "no" narrows
+        the proof's scope by its own."""
+        multiset: dict[str, int] = {}
+        for i in range(self.space.n):
+            if mask >> i & 1:
+                for p, k in self.space.parts[i]:
+                    multiset[p] = multiset.get(p, 0) + k
+        key = frozenset(multiset.items())
+        verdict = self.fit_memo.get(key)
+        if verdict is None:
+            self.counts["oracle"] += 1
+            verdict = self.fits(multiset) if multiset else (True, None)
+            self.fit_memo[key] = verdict
+        if not verdict[0]:
+            self.scope = _narrow(self.scope, verdict[1])
+        return verdict[0]
+
+    def verify(self, node: Node) -> bool:
+        """The lazy fit test of a node about to be expanded; a node that passes retires the
+        nodes of its ideal it dominates."""
+        if node.verified:
+            return True
+        if not self.fit(node.kit):
+            node.alive = False
+            return False
+        node.verified = True
+        mine = self.memory[node.done]
+        for o in mine:
+            if o is not node and o.alive and _leq(node.state, o.state):
+                o.alive = False
+                self.counts["dominated"] += 1
+        mine[:] = [o for o in mine if o.alive]
+        return True
+
+    def expand(self, node: Node, f: float) -> None:
+        """Push the node's children that survive the bound and the dominance test."""
+        space, counts = self.space, self.counts
+        counts["expanded"] += 1
+        cap = space.robot_cap(node.done, node.state, self.upper - self.tol)
+        for mask, r, h, _ in space.kits(node.done, cap):
+            counts["generated"] += 1
+            if not counts["generated"] & 4095 and self._late():
+                self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
+                heapq.heappush(self.heap, (f, 0, next(self.tick), node))
+                return
+            done = node.done | mask
+            state = space.step(node.state, r, h)
+            bound = space.lower_bound(done, state)
+            if bound >= self.upper - self.tol:
+                continue
+            kept = self.memory.get(done)
+            if kept is not None and any(o.verified and _leq(o.state, state) for o in kept):
+                counts["dominated"] += 1
+                continue
+            child = Node(done, state, node, mask)
+            if done == space.full:  # a plan better than the incumbent (if its last kit fits)
+                if self.fit(mask):
+                    self.upper, self.best = state[0], child
+                    self.tol = 1e-9 * max(1.0, abs(self.upper))
+                continue
+            self.memory.setdefault(done, []).append(child)
+            counts["kept"] += 1
+            depth = -bin(done).count("1")
+            heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
+
+    def _late(self) -> bool:
+        return self.deadline is not None and time.perf_counter() >= self.deadline
+
+    def outcome(self) -> Outcome:
+        """The incumbent found, the bound, the scope and the counters (module docstring)."""
+        open_f = min((f for f, _, _, n in self.heap if n.alive), default=math.inf)
+        exhausted = self.stop == "exhausted"
+        bound = self.upper if exhausted else min(self.upper, open_f)
+        kits = None if self.best is None else _kits_of(self.space, self.best)
+        self.counts["ideals"] = len(self.memory)
+        return Outcome(kits, self.upper, bound, exhausted, self.scope, self.stop, self.counts)
+
+
+def _leq(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """Componentwise ``a <= b`` (``a``'s node dominates ``b``'s, same ideal)."""
+    return all(x <= y for x, y in zip(a, b, strict=True))
+
+
+def _kits_of(space: Space, node: Node) -> list[list[str]]:
+    """The kits on the path to ``node``, first kit first."""
+    out: list[list[str]] = []
+    cur: Node | None = node
+    while cur is not None and cur.parent is not None:
+        out.append(space.order(cur.kit))
+        cur = cur.parent
+    return out[::-1]

@@ -1,0 +1,243 @@
+r"""The search space of :mod:`.search`: ideals of the precedence graph as bit masks, kits as
+down-set extensions, the timeline as a transition on a small state vector, and the state's
+lower bound (docs/formulations.md, "Branch, bound and remember").
+
+**Tasks** are renumbered in a topological order, so a kit's tasks in increasing number are a
+valid human order and a set ``S`` of tasks outside the ideal ``J`` is a kit exactly when every
+predecessor of a task of ``S`` lies in ``J`` or ``S`` (then ``J | S`` is an ideal again).
+
+**State.** After the kits that complete ``J`` (docs/timeline.md), the future depends only on
+
+* ``E``, the human's end of the last kit, and
+* ``nxt = max(arrive_k, ret_{k+1-T})``, the earliest robot start of the next kit (the last
+  arrival, or the return of the tray it needs, ``human_start_j + o_H``), and
+* with ``T >= 2`` trays, the returns of the last ``T - 1`` kits after it (oldest first).
+
+A kit ``S`` moves the state by the timeline's rule: ``arrive = nxt + o_R + r(S) + d``,
+``hs = max(arrive, E)``, ``E' = hs + o_H + h(S)``, and the tray of this kit returns at
+``hs + o_H``. Every later time is a max-plus expression, non-decreasing in each component, so a
+state whose vector is componentwise at most another's with the same ``J`` dominates it.
+
+**Lower bound** of a state with ``U`` the tasks left and ``k0`` the area bound on their kits
+(:func:`bilevel_kit.bounds.min_kits` on ``U``), ``a = nxt``, ``b = E``:
+
+.. math::
+
+   LB = \max\Bigl(b + B_U,\ a + P_U,\
+        \max(b,\ a + o_R + d + \min_{i\ \mathrm{ready}} r_i) + B_U,\
+        [T = 1]\ a + r(U) + k_0 (o_R + d + o_H) + \min_{i \in U\ \mathrm{sink}} h_i\Bigr)
+
+with :math:`B_U = h(U) + k_0 o_H` and :math:`P_U = \max_j (\sum_{i \le j} a_i +
+\sum_{i \ge j} b_i)` over Johnson's order of the jobs :math:`(r_i, h_i)_{i \in U}` and
+``k0`` overhead jobs :math:`(o_R + d, o_H)`: the two-machine flow-shop bound (d) of
+:mod:`bilevel_kit.bounds` with machines free at ``a`` and ``b`` (Johnson's order minimises
+the second term, the first does not depend on the order), the first kit's arrival (it holds a
+ready task) and the one-tray robot bound (b) of the same module from ``a``. Every term depends
+on the state only through ``a`` and ``b`` plus a per-``U`` constant, cached per ideal.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from ...bounds import johnson_order
+from ...instance import Instance
+from ...instance.model import topological_order
+
+#: Relative slack of the area bound (as :data:`bilevel_kit.bounds._AREA_EPS`).
+_AREA_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class Constants:
+    """The per-ideal constants of the lower bound (module docstring)."""
+
+    human: float  # B_U
+    flow: float  # P_U
+    robot_one: float  # r(U) + k0 (o_R + d + o_H) + min sink h (one tray), else -inf
+    first: float  # o_R + d + min ready r
+
+
+@dataclass
+class Space:
+    """One station's instance, indexed for the search (module docstring)."""
+
+    instance: Instance
+    ids: list[str] = field(init=False)
+    pred: list[int] = field(init=False)
+    r: list[float] = field(init=False)
+    h: list[float] = field(init=False)
+    area: list[float] = field(init=False)
+    #: trays in circulation that bind (None: unlimited, or at least as many as tasks)
+    trays: int | None = field(init=False)
+    _consts: dict[int, Constants] = field(init=False, default_factory=dict)
+
+    def __post_init__(self) -> None:
+        inst = self.instance
+        self.ids = topological_order(inst)
+        pos = {t: i for i, t in enumerate(self.ids)}
+        self.n = len(self.ids)
+        self.full = (1 << self.n) - 1
+        self.pred = [0] * self.n
+        self.succ = [0] * self.n
+        for a, b in inst.precedence:
+            self.pred[pos[b]] |= 1 << pos[a]
+            self.succ[pos[a]] |= 1 << pos[b]
+        self.r = [inst.robot_time(t) for t in self.ids]
+        self.h = [inst.human_time(t) for t in self.ids]
+        types = inst.part_types
+        self.parts = [tuple(inst.task_by_id[t].parts) for t in self.ids]
+        self.area = [sum(types[p].area * n for p, n in ps) for ps in self.parts]
+        # part-less tasks ride in a neighbouring kit (docs/timeline.md#part-less-tasks)
+        self.needs = [inst.needs_kit(t) for t in self.ids]
+        self.tray_area = inst.tray.area
+        params = inst.params_of()
+        self.o_r, self.o_h, self.d = (
+            inst.kit_overhead_robot,
+            params.kit_overhead_human,
+            params.delivery_time,
+        )
+        limit = params.tray_limit
+        self.trays = limit if limit is not None and limit < self.n else None
+        # Johnson's order of the task jobs (r_i, h_i), and the rank in it where the overhead
+        # jobs (o_R + d, o_H) go: after every task job Johnson's rule puts first
+        self.johnson = johnson_order(self.r, self.h)
+        key0 = _johnson_key(self.o_r + self.d, self.o_h)
+        keys = [_johnson_key(self.r[i], self.h[i]) for i in self.johnson]
+        self.overhead_at = sum(1 for k in keys if k <= key0)
+        self.rank = [0] * self.n
+        for j, i in enumerate(self.johnson):
+            self.rank[i] = j
+
+    # -- the timeline --------------------------------------------------------------------
+    def root(self) -> tuple[float, ...]:
+        """The state before the first kit: human and robot free at 0, every tray home."""
+        return (0.0, 0.0) + (0.0,) * max(0, (self.trays or 1) - 1)
+
+    def step(self, state: tuple[float, ...], r: float, h: float) -> tuple[float, ...]:
+        """The state after one more kit of robot time ``r`` and human time ``h`` (tasks only;
+        the overheads are added here): the timeline's rule (module docstring)."""
+        end, nxt = state[0], state[1]
+        arrive = nxt + self.o_r + r + self.d
+        hs = arrive if arrive > end else end
+        new_end = hs + self.o_h + h
+        if self.trays is None:
+            return (new_end, arrive)
+        rets = (*state[2:], hs + self.o_h)  # the last T kits' returns, oldest first
+        return (new_end, max(arrive, rets[0]), *rets[1:])
+
+    # -- kits ------------------------------------------------------------------------------
+    def kits(self, done: int, max_r: float = math.inf) -> Iterator[tuple[int, float, float, float]]:
+        """Every kit from the ideal ``done`` whose parts' area fits the tray and that holds a
+        task needing a kit: ``(mask, r(S), h(S), area(S))``, each set once (tasks added in
+        increasing number). ``max_r``: a kit's robot time above it cuts that kit and every
+        larger one (:meth:`robot_cap`)."""
+        n, pred, cap = self.n, self.pred, self.tray_area * (1 + 1e-12)
+        r, h, area, needs = self.r, self.h, self.area, self.needs
+        free = [i for i in range(n) if not done >> i & 1]
+        stack: list[tuple[int, int, float, float, float, bool]] = [(0, 0, 0.0, 0.0, 0.0, False)]
+        while stack:
+            start, mask, rs, hs, ar, real = stack.pop()
+            have = done | mask
+            for j in range(start, len(free)):
+                i = free[j]
+                if pred[i] & ~have:
+                    continue
+                a2, r2 = ar + area[i], rs + r[i]
+                if a2 > cap or r2 > max_r:
+                    continue
+                m2, real2 = mask | 1 << i, real or needs[i]
+                if real2:  # a kit of part-less tasks alone is never needed
+                    yield m2, r2, hs + h[i], a2
+                stack.append((j + 1, m2, r2, hs + h[i], a2, real2))
+
+    def robot_cap(self, done: int, state: tuple[float, ...], below: float) -> float:
+        r"""The most robot time a kit from this node may have for a plan below ``below``: after
+        a kit ``S`` the human ends at least at ``max(nxt + o_R + d + r(S), E) + o_H + h(S)``
+        and then still needs ``h(U \ S)`` and ``o_H`` for each of at least ``k0(U) - 1``
+        kits (the kit takes at most a tray's area), so
+
+        .. math:: \max(nxt + o_R + d + r(S), E) + h(U) + \max(1, k_0(U))\, o_H < below
+
+        is needed; it binds only ``r(S)`` and grows with it, so a kit above the cap and every
+        larger one are cut (inf: no cap from this bound)."""
+        c = self.constants(done)
+        slack = below - c.human  # c.human = h(U) + k0(U) o_H
+        if state[0] >= slack:
+            return -math.inf
+        return slack - state[1] - self.o_r - self.d
+
+    def order(self, mask: int) -> list[str]:
+        """A kit's task ids in the human's order (increasing number: topological)."""
+        return [self.ids[i] for i in range(self.n) if mask >> i & 1]
+
+    # -- the bound -----------------------------------------------------------------------
+    def constants(self, done: int) -> Constants:
+        """The per-ideal constants of the lower bound (cached)."""
+        hit = self._consts.get(done)
+        if hit is not None:
+            return hit
+        left = [i for i in self.johnson if not done >> i & 1]
+        r_u = sum(self.r[i] for i in left)
+        h_u = sum(self.h[i] for i in left)
+        area_u = sum(self.area[i] for i in left)
+        k0 = max(1, math.ceil(area_u / self.tray_area - _AREA_EPS))
+        a0, b0 = self.o_r + self.d, self.o_h
+        human = h_u + k0 * b0
+        flow = _johnson_value(
+            [(self.r[i], self.h[i]) for i in left], (a0, b0), k0, self._overhead_pos(left)
+        )
+        robot_one = -math.inf
+        if self.trays == 1:
+            sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
+            robot_one = r_u + k0 * (a0 + b0) + sink
+        have = done
+        ready = min(self.r[i] for i in left if not self.pred[i] & ~have)
+        out = Constants(human, flow, robot_one, a0 + ready)
+        self._consts[done] = out
+        return out
+
+    def _overhead_pos(self, left: list[int]) -> int:
+        """Where the overhead jobs go among ``left`` (Johnson's order)."""
+        return sum(1 for i in left if self.rank[i] < self.overhead_at)
+
+    def lower_bound(self, done: int, state: tuple[float, ...]) -> float:
+        """The state's lower bound on the makespan (module docstring); its makespan when
+        ``done`` is every task."""
+        if done == self.full:
+            return state[0]
+        c = self.constants(done)
+        b, a = state[0], state[1]
+        first = a + c.first
+        return max(
+            b + c.human,
+            a + c.flow,
+            (first if first > b else b) + c.human,
+            a + c.robot_one,
+        )
+
+
+def _johnson_key(a: float, b: float) -> tuple[int, float]:
+    """Johnson's rule as a sort key (:func:`bilevel_kit.bounds.johnson_order`): jobs with
+    a <= b first by a, then the others by -b."""
+    return (0, a) if a <= b else (1, -b)
+
+
+def _johnson_value(
+    jobs: list[tuple[float, float]], overhead: tuple[float, float], k: int, at: int
+) -> float:
+    """``max_j (sum_{i<=j} a_i + sum_{i>=j} b_i)`` over ``jobs`` in order with ``k`` copies of
+    ``overhead`` inserted before position ``at``: the flow-shop makespan with both machines
+    free at 0 (the module docstring's P_U)."""
+    seq = jobs[:at] + [overhead] * k + jobs[at:]
+    total_b = sum(b for _, b in seq)
+    best, pre_a, suf_b = 0.0, 0.0, total_b
+    for a, b in seq:
+        pre_a += a
+        value = pre_a + suf_b
+        if value > best:
+            best = value
+        suf_b -= b
+    return best

@@ -1,0 +1,195 @@
+"""Branch, bound and remember (``bbr``, docs/formulations.md): its state transition against the
+independent reference timeline, its lower bound against every plan of small instances, its
+optimum against the brute force with 1, 2 and unlimited trays, and the method's claims."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from brute import best_makespan, fits, segmentations
+from reference_timeline import reference
+from strategies import random_doc
+from timing import PROOF_LIMIT
+
+from bilevel_kit.errors import UsageError
+from bilevel_kit.instance import from_dict, load
+from bilevel_kit.methods import solve
+from bilevel_kit.models.bbr.search import search
+from bilevel_kit.models.bbr.space import Space
+from bilevel_kit.models.packing import ANY_ANGLE
+
+pytest.importorskip("ortools")
+
+INSTANCES = Path(__file__).resolve().parents[2] / "instances"
+
+#: 12 seeds x {unlimited, 1, 2 trays} = 36 brute-force cases of 4-7 tasks; every third seed
+#: makes its first task part-less (docs/timeline.md#part-less-tasks), odd seeds have a fast
+#: robot (robot times of 0.5-2 s on every task), so that two trays bind
+SEEDS = range(12)
+TRAYS = (None, 1, 2)
+
+
+def case(seed: int, trays: int | None, tray: tuple[float, float] | None = None):
+    fast = seed % 2 == 1
+    doc = random_doc(
+        seed,
+        4 + seed % 4,
+        robot_share=1.0 if fast else 0.4,
+        robot_halves=(1, 4) if fast else (1, 30),
+    )
+    if trays is not None:
+        doc["trays"] = trays
+    if tray is not None:  # a larger tray: more plans fit
+        doc["tray"] = {"width": tray[0], "height": tray[1]}
+    if seed % 3 == 0:
+        doc["tasks"][0]["parts"] = []
+        doc["tasks"][0].pop("robot_time", None)
+    return from_dict(doc)
+
+
+def brute_fits(inst):
+    """The brute force's fit test (exact 0/90-degree packing on the 1 mm grid) on the part
+    multiset the search asks about; a "no" stands for every layout here, as the brute force
+    is the optimum over 0/90-degree plans."""
+
+    def test(counts):
+        ok = _pack(inst, counts)
+        return ok, None if ok else ANY_ANGLE
+
+    return test
+
+
+def _pack(inst, counts) -> bool:
+    from bilevel_kit.models import packing as pk
+
+    if sum(inst.part_types[p].area * c for p, c in counts.items()) > inst.tray.area:
+        return False
+    items = [(f"{p}{j}", inst.part_types[p]) for p, c in counts.items() for j in range(c)]
+    return pk.pack(inst.tray, items, time_limit=10.0).status == "feasible"
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", SEEDS)
+def test_search_equals_the_brute_force(seed, trays):
+    inst = case(seed, trays)
+    opt, _ = best_makespan(inst)
+    out = search(Space(inst), brute_fits(inst))
+    assert out.exhausted and out.stop == "exhausted"
+    assert out.value == pytest.approx(opt, abs=1e-9)
+    assert out.bound == pytest.approx(opt, abs=1e-9)
+    assert out.kits is not None
+    ref = reference(inst, out.kits)
+    assert ref.makespan == pytest.approx(opt, abs=1e-9)
+    assert all(fits(inst, k) for k in out.kits)
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", SEEDS[:6])
+def test_early_stop_bound_is_below_the_optimum(seed, trays):
+    inst = case(seed, trays)
+    opt, _ = best_makespan(inst)
+    bounds = []
+    for k in (1, 2, 3, 5):
+        out = search(Space(inst), brute_fits(inst), max_expansions=k)
+        assert out.bound <= opt + 1e-9
+        bounds.append(out.bound)
+    assert bounds == sorted(bounds)  # best-first: the bound only rises with the work
+
+
+@pytest.mark.parametrize("trays", (None, 1, 2, 3))
+@pytest.mark.parametrize("seed", range(6))
+def test_transition_and_bound_on_every_plan(seed, trays):
+    """For every plan whose kits fit (tests/brute.py) and each of its prefixes: the state the
+    transition gives after the prefix ends the human's work where the reference timeline
+    does, and the lower bound there is at most the plan's makespan (the bound holds for every
+    completion)."""
+    inst = case(seed, trays, tray=(200.0, 120.0))
+    sp = Space(inst)
+    pos = {t: i for i, t in enumerate(sp.ids)}
+    seen = 0
+    for kits in segmentations(inst):
+        if not all(fits(inst, k) for k in kits):  # the bound speaks of plans that fit
+            continue
+        ref = reference(inst, kits)
+        state, done = sp.root(), 0
+        for k, kit in enumerate(kits):
+            mask = sum(1 << pos[t] for t in kit)
+            r = sum(sp.r[pos[t]] for t in kit)
+            h = sum(sp.h[pos[t]] for t in kit)
+            assert sp.lower_bound(done, state) <= ref.makespan + 1e-9
+            state, done = sp.step(state, r, h), done | mask
+            assert state[0] == pytest.approx(ref.kits[k].human_end, abs=1e-9)
+        assert sp.lower_bound(done, state) == pytest.approx(ref.makespan, abs=1e-9)
+        seen += 1
+    assert seen >= 4  # every case has a few plans that fit the larger tray
+
+
+def test_kits_are_every_down_set_extension_once():
+    inst = case(7, None)  # 7 tasks with precedence
+    sp = Space(inst)
+    got = [m for m, *_ in sp.kits(0)]
+    assert len(got) == len(set(got))
+    for mask in got:
+        ids = sp.order(mask)
+        for a, b in inst.precedence:  # a kit of the first ideal holds its ancestors
+            assert not (b in ids and a not in ids)
+    # brute: every subset that is a down-set, fits the area and holds a task with parts
+    area_cap = inst.tray.area
+    want = set()
+    for mask in range(1, 1 << sp.n):
+        ids = set(sp.order(mask))
+        if any(b in ids and a not in ids for a, b in inst.precedence):
+            continue
+        if sum(sp.area[i] for i in range(sp.n) if mask >> i & 1) > area_cap * (1 + 1e-12):
+            continue
+        if any(sp.needs[i] for i in range(sp.n) if mask >> i & 1):
+            want.add(mask)
+    assert set(got) == want
+
+
+def test_method_on_the_table_is_optimal_and_checked():
+    inst = load(INSTANCES / "hrc_table.json")
+    res = solve(inst, "bbr", time_limit=PROOF_LIMIT, check=True, start="quick")
+    assert res.status == "optimal"
+    assert res.objective == pytest.approx(435.085, abs=1e-6)
+    assert res.bound == pytest.approx(435.085, abs=1e-6)
+    assert res.extra["violations"] == []
+    assert res.extra["bound_source"] == "bbr"
+    assert res.extra["stop"] == "exhausted"
+    assert res.extra["proof_scope"] == ANY_ANGLE
+    assert res.extra["expanded"] > 0
+
+
+@pytest.mark.parametrize("seed", (1, 4, 5))
+def test_method_claims_are_checked(seed):
+    inst = case(seed, 1)
+    opt, _ = best_makespan(inst)
+    res = solve(inst, "bbr", time_limit=PROOF_LIMIT, check=True, start="quick")
+    assert res.extra["violations"] == []
+    assert res.makespan == pytest.approx(opt, abs=1e-9)
+    assert res.status in ("optimal", "feasible")
+    if res.status == "optimal":
+        assert res.bound == pytest.approx(opt, abs=1e-9)
+    assert res.bound <= opt + 1e-9
+
+
+def test_expansion_limit_is_deterministic_and_honest():
+    inst = load(INSTANCES / "kitbench" / "table_u5_t1_tight_d10.json")
+    runs = [
+        solve(inst, "bbr", time_limit=PROOF_LIMIT, start="quick", expansions=20) for _ in range(2)
+    ]
+    a, b = runs
+    assert a.extra["stop"] == b.extra["stop"] == "expansions"
+    assert a.extra["expanded"] == b.extra["expanded"] == 20
+    assert a.bound == b.bound and a.makespan == b.makespan
+    assert a.status == "feasible" and a.bound < a.makespan
+
+
+def test_refusals():
+    inst = load(INSTANCES / "hrc_table.json")
+    with pytest.raises(UsageError, match="objective"):
+        solve(inst, "bbr", time_limit=5, objective="sum_completion")
+    stations = next((INSTANCES / "stations").glob("*.json"))
+    with pytest.raises(UsageError, match="several assembly stations"):
+        solve(load(stations), "bbr", time_limit=5)
