@@ -4,7 +4,7 @@ Run from the repository root: ``python bench/bench_reach.py [--repeats N] [--tar
 Prints a table and writes ``bench/results/reach.csv`` (metric, value, unit, note).
 
 * map build time (wall and CPU: CPU time does not grow with the machine's load): 600 x 400 mm
-  tray at 10 mm = 60 x 40 cells, default station (goal < 2 s),
+  tray at 10 mm = 60 x 40 cells, default work cell (goal < 2 s),
   and the same tray 900 mm ahead (partly reachable, the slow case: cells near the edge of the
   reach fail every seed);
 * IK success rate over random *reachable* top-down targets: draw a uniform configuration,
@@ -43,11 +43,11 @@ def main(argv: list[str] | None = None) -> int:
 
     rows: list[tuple[str, float, str, str]] = []
 
-    def timed_maps(station: sawyer.Station, label: str) -> None:
+    def timed_maps(work_cell: sawyer.WorkCell, label: str) -> None:
         times, cpu, fraction = [], [], 0.0
         for _ in range(args.repeats):
             start = time.process_time()
-            m = sawyer.build_reach_map(station, 600.0, 400.0, 10.0)
+            m = sawyer.build_reach_map(work_cell, 600.0, 400.0, 10.0)
             cpu.append(time.process_time() - start)
             times.append(m.build_time)
             fraction = m.fraction
@@ -59,11 +59,11 @@ def main(argv: list[str] | None = None) -> int:
         rows.append((f"map_build_cpu_median_{label}", statistics.median(cpu), "s", note))
         rows.append((f"map_reachable_fraction_{label}", fraction, "", note))
 
-    sawyer.build_reach_map(sawyer.DEFAULT_STATION, 60.0, 40.0, 10.0)  # import / warm-up
-    timed_maps(sawyer.DEFAULT_STATION, "default")
-    timed_maps(sawyer.Station(tray_x=900.0), "tray_900mm_ahead")
+    sawyer.build_reach_map(sawyer.DEFAULT_WORK_CELL, 60.0, 40.0, 10.0)  # import / warm-up
+    timed_maps(sawyer.DEFAULT_WORK_CELL, "default")
+    timed_maps(sawyer.WorkCell(tray_x=900.0), "tray_900mm_ahead")
 
-    arm = sawyer.Arm(sawyer.DEFAULT_STATION.tool_offset_m)
+    arm = sawyer.Arm(sawyer.DEFAULT_WORK_CELL.tool_offset_m)
     rng = np.random.default_rng(args.seed)
     targets: list[np.ndarray] = []
     while len(targets) < args.targets:
@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
 
     slots = rng.uniform((0.0, 0.0), (600.0, 400.0), size=(200, 2))
     start = time.perf_counter()
-    cycle = [sawyer.pick_place_time(sawyer.DEFAULT_STATION, "part", s) for s in slots]
+    cycle = [sawyer.pick_place_time(sawyer.DEFAULT_WORK_CELL, "part", s) for s in slots]
     elapsed = time.perf_counter() - start
     note = "200 random slots on the default 600 x 400 mm tray, default bin"
     rows.append(("pick_place_time_call", 1000.0 * elapsed / len(slots), "ms", note))

@@ -29,6 +29,10 @@ serving the k-th block of units, with the instance's delivery time, trays and ov
 tray so small that some task's parts do not fit it on their own is an error: no method
 could solve that instance.
 
+Names (docs/formats.md#names-of-generated-instances): ``FAMILY_uU`` for the products,
+``FAMILY_nN_sS`` (seed S) for the random families, then ``_dD`` when the delivery time is not the
+family's own and ``_stK`` on K stations (``table_u2_d5_st3``); ``name`` replaces the whole.
+
 :func:`command_line` is the command that makes a document; the description quotes it and
 ``bilevel-kit generate`` stores it as the instance's ``generated_by`` (docs/formats.md), so
 every generated file says how to make it again.
@@ -350,9 +354,8 @@ def generate(
         t = DEFAULT_TIGHTNESS if tightness is None else tightness
         d = DEFAULT_DELIVERY if delivery_time is None else delivery_time
         doc = random_graph(family, size, seed, t, d)
-    if delivery_time is not None and family in PRODUCTS:
-        # two --d variants of a product are two instances: their names differ (reports,
-        # figures, cells); a random family's name keeps its committed form (its seed)
+    if delivery_time is not None and delivery_time != default_delivery(family):
+        # two --d variants are two instances: their names differ (reports, figures, cells)
         doc["name"] = f"{doc['name']}_d{delivery_time:g}"
     _apply_options(doc, trays, tray, name)
     if stations is not None:
@@ -372,6 +375,15 @@ def generate(
     if family not in PRODUCTS or tray is not None:
         _check_solvable(doc, tightness, tray)
     return doc
+
+
+def default_delivery(family: str) -> float:
+    """The delivery time (s) a family gets without ``--d``: a product's file's, else
+    :data:`DEFAULT_DELIVERY`; a name shows ``_d`` only for another one (docs/formats.md)."""
+    if family not in PRODUCTS:
+        return DEFAULT_DELIVERY
+    file = "stool.json" if family == "stool" else "hrc_table.json"  # mixed: the table's d
+    return float(_product_doc(file)["delivery_time"])
 
 
 def tasks_per_unit(family: str, size: int) -> int:
@@ -455,7 +467,7 @@ def _apply_stations(doc: dict[str, Any], n: int) -> None:
         }
         for k in range(1, n + 1)
     ]
-    doc["name"] = f"{doc['name']}_s{n}"
+    doc["name"] = f"{doc['name']}_st{n}"
     doc["description"] = doc["description"].replace(
         " (bilevel-kit generate",
         f", on {n} assembly station(s) served by one robot (bilevel-kit generate",

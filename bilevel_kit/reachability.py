@@ -3,7 +3,7 @@
 Definition (one for the whole toolkit): a part placement is *reachable* when the cell of the
 instance's reach map that contains its footprint centre is reachable, i.e. the Sawyer has a
 top-down grasp there and the approach pose above it (:mod:`bilevel_kit.sawyer.reach`). The map
-is built once per (station, tray, resolution) and cached; Pinocchio is imported only when an
+is built once per (work cell, tray, resolution) and cached; Pinocchio is imported only when an
 instance enables reachability.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 if TYPE_CHECKING:
     from .instance import Instance
     from .plan import Placement
-    from .sawyer import ReachMap, Station
+    from .sawyer import ReachMap, WorkCell
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,10 +49,10 @@ class ReachGrid:
 
 
 @lru_cache(maxsize=16)
-def _grid(station: Station, width: float, height: float, resolution: float) -> ReachGrid:
+def _grid(work_cell: WorkCell, width: float, height: float, resolution: float) -> ReachGrid:
     from .sawyer import build_reach_map
 
-    m = build_reach_map(station, width, height, resolution)
+    m = build_reach_map(work_cell, width, height, resolution)
     return ReachGrid(m.reachable.copy(), width, height, m)
 
 
@@ -60,10 +60,10 @@ def reach_grid(instance: Instance) -> ReachGrid | None:
     """The instance's reach grid, or None when the instance does not enforce reachability."""
     if not instance.reachability:
         return None
-    from .sawyer import DEFAULT_STATION
+    from .sawyer import DEFAULT_WORK_CELL
 
-    station = instance.station or DEFAULT_STATION
-    return _grid(station, instance.tray.width, instance.tray.height, instance.reach_resolution)
+    work_cell = instance.work_cell or DEFAULT_WORK_CELL
+    return _grid(work_cell, instance.tray.width, instance.tray.height, instance.reach_resolution)
 
 
 def ensure_kit_placeable(instance: Instance, what: str = "a kit") -> None:

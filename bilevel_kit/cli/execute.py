@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ..sawyer.bags import BagInfo
     from ..sawyer.gripper import GraspCheck
     from ..sawyer.trajectory import Execution
-    from ..sawyer.workcell import WorkCell
+    from ..sawyer.workcell import WorkCellFile
     from ..solution import LoadedSolution
 
 HELP = "write a plan's Sawyer trajectories as ROS bags and an animated 3-D view"
@@ -44,9 +44,9 @@ DESCRIPTION = (
     "animating the arm, the trays and the parts. Prints per kit the trajectory's duration "
     "against the modelled time. Exit 2, writing nothing, when the solution does not fit the "
     "instance, a bin or slot is out of the arm's reach, or (--grasp-check strict) a part fails "
-    "the gripper's feasibility pass, whose verdict is one line of the report. The station, its "
-    "gripper and the parts' grasp widths may come from a work-cell file (--work-cell). See "
-    "docs/execution.md."
+    "the gripper's feasibility pass, whose verdict is one line of the report. The work cell's "
+    "geometry, its gripper and the parts' grasp widths may come from a work-cell file "
+    "(--work-cell). See docs/execution.md."
 )
 
 
@@ -99,7 +99,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--work-cell",
         metavar="FILE",
-        help="work-cell JSON (docs/execution.md#the-work-cell): station keys, the gripper and "
+        help="work-cell JSON (docs/execution.md#the-work-cell): work_cell keys, the gripper and "
         "grasp_widths {part type: mm} that override the instance's, e.g. "
         "examples/hrc_table_cell.json (default: the cell the solution file records, if any)",
     )
@@ -246,7 +246,7 @@ def _load(args: argparse.Namespace) -> tuple[Execution, tuple[GraspCheck, ...], 
     return ex, checks, None if cell is None else cell.source
 
 
-def _work_cell(args: argparse.Namespace, sol: LoadedSolution) -> WorkCell | None:
+def _work_cell(args: argparse.Namespace, sol: LoadedSolution) -> WorkCellFile | None:
     """``--work-cell``'s cell, else the one the solution file records (docs/formats.md): a
     plan runs in the cell it was solved in unless told otherwise, and a different cell given
     on the command line is a warning (its timing and grasps are not the plan's)."""

@@ -11,9 +11,9 @@ HELP = "Sawyer reachability map of the tray (Pinocchio)"
 DESCRIPTION = (
     "Discretise the tray, solve a top-down grasp (and its approach pose) per cell with the "
     "project's own Sawyer model, and print/draw the map: reachable cells coloured by "
-    "manipulability. The instance's 'station' section places the tray (default station "
-    "otherwise). With --solution, kit K's layout is drawn on top and its unreachable parts are "
-    "listed."
+    "manipulability. The instance's 'work_cell' section (the work cell's geometry) places the "
+    "tray (the default work cell otherwise). With --solution, kit K's layout is drawn on top "
+    "and its unreachable parts are listed."
 )
 
 
@@ -52,15 +52,15 @@ def run(args: argparse.Namespace) -> int:
         if args.kit > len(sol.plan.kits):
             raise UsageError(f"--kit {args.kit}: the solution has {len(sol.plan.kits)} kits")
         layout = sol.plan.kits[args.kit - 1].layout
-    from ..sawyer import DEFAULT_STATION, build_reach_map, ensure_placeable
+    from ..sawyer import DEFAULT_WORK_CELL, build_reach_map, ensure_placeable
 
-    station = instance.station or DEFAULT_STATION
-    m = build_reach_map(station, instance.tray.width, instance.tray.height, resolution)
+    work_cell = instance.work_cell or DEFAULT_WORK_CELL
+    m = build_reach_map(work_cell, instance.tray.width, instance.tray.height, resolution)
     ny, nx = m.shape
     print(
         f"{instance.name}: tray {instance.tray.width:g} x {instance.tray.height:g} mm at "
-        f"({station.tray_x:g}, {station.tray_y:g}, {station.tray_z:g}) mm, yaw "
-        f"{station.tray_yaw:g} deg; {nx} x {ny} cells of {m.cell_size[0]:.1f} x "
+        f"({work_cell.tray_x:g}, {work_cell.tray_y:g}, {work_cell.tray_z:g}) mm, yaw "
+        f"{work_cell.tray_yaw:g} deg; {nx} x {ny} cells of {m.cell_size[0]:.1f} x "
         f"{m.cell_size[1]:.1f} mm; reachable {100 * m.fraction:.1f}%; built in "
         f"{m.build_time:.3f} s"
     )

@@ -87,7 +87,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--work-cell",
         metavar="FILE",
-        help="work-cell JSON whose station, gripper and grasp widths replace the instance's "
+        help="work-cell JSON whose geometry, gripper and grasp widths replace the instance's "
         "(docs/execution.md#the-work-cell), e.g. for greedy-ce's -p finger_room=true",
     )
 

@@ -127,6 +127,13 @@ class InstanceBuilder:
         self._doc.setdefault("stations", []).append(entry)
         return self
 
+    def work_cell(self, **keys: Any) -> InstanceBuilder:
+        """The Sawyer work cell's geometry, the ``work_cell`` section (docs/formats.md): the
+        keys given (``tray_pose``, ``bins``, ``gripper`` ...) over those set before. Not an
+        assembly station: that is :meth:`station`."""
+        self._doc["work_cell"] = {**self._doc.get("work_cell", {}), **keys}
+        return self
+
     def document(self) -> dict[str, Any]:
         """The ``bilevel-kit/1`` document built so far (a copy)."""
         return copy.deepcopy(self._doc)

@@ -68,7 +68,7 @@ def schema() -> dict[str, Any]:
             "stations": _stations_schema(),
             "supply": _supply_schema(),
             "units": {"type": "integer", "minimum": 1, "maximum": MAX_TASKS, "default": 1},
-            "station": _station_schema(),
+            "work_cell": _work_cell_schema(),
             **_robot_schema(),
         },
     }
@@ -249,10 +249,10 @@ def _supply_schema() -> dict[str, Any]:
     }
 
 
-def _station_schema() -> dict[str, Any]:
-    from ..sawyer.station import station_schema
+def _work_cell_schema() -> dict[str, Any]:
+    from ..sawyer.cell import work_cell_schema
 
-    return station_schema()
+    return work_cell_schema()
 
 
 def _robot_schema() -> dict[str, Any]:
@@ -261,8 +261,8 @@ def _robot_schema() -> dict[str, Any]:
         "reachability": {
             "type": "boolean",
             "default": False,
-            "description": "enforce Sawyer reachability of every placement (uses 'station', "
-            "or the default station)",
+            "description": "enforce Sawyer reachability of every placement (uses 'work_cell', "
+            "or the default work cell)",
         },
         "reach_resolution": {**_LENGTH, "default": 10.0, "description": "reach map cell (mm)"},
         "robot_times": {

@@ -177,8 +177,9 @@ class Instance:
     assumptions: tuple[str, ...] = ()
     #: The command that made a generated instance (``bilevel-kit generate ...``), else "".
     generated_by: str = ""
-    #: Sawyer station geometry (:class:`bilevel_kit.sawyer.Station`), None if not given.
-    station: Any = None
+    #: The Sawyer work cell's geometry (:class:`bilevel_kit.sawyer.WorkCell`, the file's
+    #: ``work_cell`` section), None if not given; the assembly stations are ``stations``.
+    work_cell: Any = None
     #: Enforce Sawyer reachability of every placement (packers, CE and the checker).
     reachability: bool = False
     #: Cell size (mm) of the reach map that defines reachability.
@@ -466,12 +467,12 @@ class Instance:
             return None
         return self.trays
 
-    def station_fields(self) -> dict[str, Any]:
-        """The document fields of the robot's station and of the reachability rule
+    def work_cell_fields(self) -> dict[str, Any]:
+        """The document fields of the robot's work cell and of the reachability rule
         (docs/formats.md), those that are set: shared by every writer of instance documents."""
         doc: dict[str, Any] = {}
-        if self.station is not None:
-            doc["station"] = self.station.to_dict()
+        if self.work_cell is not None:
+            doc["work_cell"] = self.work_cell.to_dict()
         if self.reachability:
             doc["reachability"] = True
             doc["reach_resolution"] = self.reach_resolution
@@ -531,7 +532,7 @@ class Instance:
                 for k, s in self.supply.items()
             }
         doc["units"] = self.units
-        doc.update(self.station_fields())
+        doc.update(self.work_cell_fields())
         if self.robot_times != "pick_time":
             doc["robot_times"] = self.robot_times
         return doc

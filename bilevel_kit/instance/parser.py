@@ -9,6 +9,7 @@ whose message names the file and the JSON path.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -31,6 +32,11 @@ from .model import (
     Tray,
 )
 from .ranges import check_lengths, check_reach_cells, check_size, parse_trays
+
+#: The former name of the ``work_cell`` section, still read with a notice (docs/formats.md).
+OLD_WORK_CELL_KEY = "station"
+#: Sources whose old ``station`` section was announced already (one notice per file a run).
+_ANNOUNCED: set[str] = set()
 
 
 def read_json(path: str | Path, error: ErrorType = InstanceError) -> Any:
@@ -77,7 +83,8 @@ def document(
 
 def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     """Validate a parsed JSON document and build the :class:`Instance`."""
-    _check_structure(doc, source)
+    doc, old = _renamed_work_cell(doc, source)
+    _check_structure(doc, source, old)
     tray = Tray(float(doc["tray"]["width"]), float(doc["tray"]["height"]))
     check_lengths(doc["tray"], "$.tray", source)
     check_lengths(doc, "$", source, ("reach_resolution",))
@@ -87,12 +94,12 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
     check_size(len(tasks), int(doc.get("units", 1)), source)
     edges = _precedence(doc.get("precedence", []), [t.id for t in tasks], source)
     supply = _supply(doc.get("supply", {}), part_types, source)
-    station = _station(doc, source, part_types)
+    work_cell = _work_cell(doc, source, part_types, old)
     if doc.get("reachability", False):  # the reach map is built: its size is checked first
         check_reach_cells(tray.width, tray.height, float(doc.get("reach_resolution", 10.0)), source)
     robot_times = doc.get("robot_times", "pick_time")
     if robot_times == "motion":
-        part_types = _motion_pick_times(part_types, station, tray, source)
+        part_types = _motion_pick_times(part_types, work_cell, tray, source)
     overhead = doc.get("kit_overhead", {})
     stations = _stations(doc, tasks, source)
     inst = Instance(
@@ -111,7 +118,7 @@ def from_dict(doc: Any, source: str = "<memory>") -> Instance:
         description=doc.get("description", ""),
         assumptions=tuple(doc.get("assumptions", ())),
         generated_by=doc.get("generated_by", ""),
-        station=station,
+        work_cell=work_cell,
         reachability=bool(doc.get("reachability", False)),
         reach_resolution=float(doc.get("reach_resolution", 10.0)),
         robot_times=robot_times,
@@ -140,16 +147,46 @@ def _check_some_task_needs_a_kit(inst: Instance, source: str) -> None:
             )
 
 
-def _check_structure(doc: Any, source: str) -> None:
+def _renamed_work_cell(doc: Any, source: str) -> tuple[Any, bool]:
+    """``doc`` with an old ``station`` section (the work cell's geometry, not an assembly
+    station) renamed ``work_cell`` in place, and whether it was: a one-line notice on stderr,
+    once per file. Both keys at once is an :class:`InstanceError`."""
+    if not isinstance(doc, dict) or OLD_WORK_CELL_KEY not in doc:
+        return doc, False
+    if "work_cell" in doc:
+        raise InstanceError(
+            source,
+            f"$.{OLD_WORK_CELL_KEY}",
+            "the work cell is given twice: 'station' is the former name of 'work_cell' "
+            "(docs/formats.md#the-work-cell-section); keep 'work_cell' only",
+        )
+    if source not in _ANNOUNCED:
+        _ANNOUNCED.add(source)
+        print(
+            f"bilevel-kit: notice: {source}: the 'station' section (the work cell's geometry) "
+            "is now named 'work_cell'; read as 'work_cell' (docs/formats.md#the-work-cell-section)",
+            file=sys.stderr,
+            flush=True,
+        )
+    return {("work_cell" if k == OLD_WORK_CELL_KEY else k): v for k, v in doc.items()}, True
+
+
+def _check_structure(doc: Any, source: str, old: bool = False) -> None:
     """The format tag first (a clearer message than the schema's for a newer file), then the
-    JSON Schema."""
+    JSON Schema; ``old``: the work cell came as ``station``, which the errors name."""
     if isinstance(doc, dict) and "format" in doc and doc["format"] != FORMAT:
         raise InstanceError(
             source,
             "$.format",
             f"unsupported format {doc['format']!r}; this version reads {FORMAT!r}",
         )
-    validate_document(doc, source, schema(), InstanceError)
+    try:
+        validate_document(doc, source, schema(), InstanceError)
+    except InstanceError as exc:
+        if not (old and exc.path.startswith("$.work_cell")):
+            raise
+        path = f"$.{OLD_WORK_CELL_KEY}" + exc.path.removeprefix("$.work_cell")
+        raise InstanceError(source, path, exc.detail) from None
 
 
 def _part_types(entries: list[dict[str, Any]], tray: Tray, source: str) -> dict[str, PartType]:
@@ -391,31 +428,37 @@ def _supply(
     return supply
 
 
-def _station(doc: Mapping[str, Any], source: str, part_types: Mapping[str, PartType]) -> Any:
-    """The Sawyer station of the document (:class:`bilevel_kit.sawyer.Station`), None if the
-    document gives none; its bins must be of known part types."""
-    if "station" not in doc:
+def _work_cell(
+    doc: Mapping[str, Any], source: str, part_types: Mapping[str, PartType], old: bool
+) -> Any:
+    """The Sawyer work cell of the document (:class:`bilevel_kit.sawyer.WorkCell`), None if
+    the document gives none; its bins must be of known part types. Errors name the file's own
+    key (``old``: ``station``)."""
+    if "work_cell" not in doc:
         return None
-    from ..sawyer.station import Station, StationError
+    from ..sawyer.cell import WorkCell, error_path
+    from ..sawyer.errors import WorkCellError
 
+    key = OLD_WORK_CELL_KEY if old else "work_cell"
     try:
-        station = Station.from_dict(doc["station"])
-    except StationError as exc:
-        raise InstanceError(source, "$.station", str(exc)) from None
-    for name, _ in station.bins:
+        cell = WorkCell.from_dict(doc["work_cell"])
+    except WorkCellError as exc:
+        field, detail = error_path(exc)
+        raise InstanceError(source, f"$.{key}{field}", detail) from None
+    for name, _ in cell.bins:
         if name not in part_types:
-            raise InstanceError(source, f"$.station.bins.{name}", f"unknown part type {name!r}")
-    return station
+            raise InstanceError(source, f"$.{key}.bins.{name}", f"unknown part type {name!r}")
+    return cell
 
 
 def _motion_pick_times(
-    part_types: dict[str, PartType], station: Any, tray: Tray, source: str
+    part_types: dict[str, PartType], work_cell: Any, tray: Tray, source: str
 ) -> dict[str, PartType]:
     """Pick times from the Sawyer motion model: the mean pick-and-place time of each type over
     the reachable cells of the tray (the layout is not known when times are planned)."""
-    from ..sawyer import DEFAULT_STATION, UnreachableError, tray_average_time
+    from ..sawyer import DEFAULT_WORK_CELL, UnreachableError, tray_average_time
 
-    st = station or DEFAULT_STATION
+    st = work_cell or DEFAULT_WORK_CELL
     out = {}
     for pid, pt in part_types.items():
         try:

@@ -9,8 +9,8 @@ from __future__ import annotations
 from ..errors import BilevelKitError
 
 
-class StationError(BilevelKitError, ValueError):
-    """A station description is malformed."""
+class WorkCellError(BilevelKitError, ValueError):
+    """A work cell's geometry (an instance's ``work_cell`` section) is malformed."""
 
 
 class UnreachableError(BilevelKitError, ValueError):

@@ -1,4 +1,4 @@
-"""The station's parallel gripper and the feasibility pass of every grasp and release
+"""The work cell's parallel gripper and the feasibility pass of every grasp and release
 (docs/execution.md#the-gripper).
 
 A parallel gripper closes two fingers across one width of a part: across the footprint's y
@@ -17,7 +17,7 @@ The pass, per kit and part in layout order (the order the arm places them):
 - **placed parts**: the pads do not overlap the footprint of any part placed before it in
   the same kit (touching is allowed: the clearance found is reported).
 
-Lengths in mm, angles in degrees, in the tray frame of :mod:`.station`.
+Lengths in mm, angles in degrees, in the tray frame of :mod:`.cell`.
 """
 
 from __future__ import annotations
@@ -167,10 +167,10 @@ def check_grasps(
     instance: Instance, plan: Plan, kits: Sequence[int] | None = None
 ) -> tuple[GraspCheck, ...]:
     """The gripper's feasibility pass over every part of ``plan`` (all kits, or the kit
-    numbers ``kits``) with the instance's station gripper (the URDF's fingers by default)."""
-    from .station import DEFAULT_STATION
+    numbers ``kits``) with the instance's work-cell gripper (the URDF's fingers by default)."""
+    from .cell import DEFAULT_WORK_CELL
 
-    gripper = (instance.station or DEFAULT_STATION).gripper
+    gripper = (instance.work_cell or DEFAULT_WORK_CELL).gripper
     chosen = range(1, len(plan.kits) + 1) if kits is None else kits
     out = []
     for k in chosen:
@@ -217,14 +217,14 @@ def grasp_footprint(pt: PartType, gripper: Gripper) -> tuple[float, float]:
 
 def with_finger_room(instance: Instance) -> Instance:
     """A copy of ``instance`` whose part types are their :func:`grasp_footprint` with the
-    station's gripper: a layout of the copy, given back its true sizes by
+    work cell's gripper: a layout of the copy, given back its true sizes by
     :func:`true_sizes`, keeps the open fingers within the tray and off every other part."""
     from dataclasses import replace
 
     from ..errors import UsageError
-    from .station import DEFAULT_STATION
+    from .cell import DEFAULT_WORK_CELL
 
-    gripper = (instance.station or DEFAULT_STATION).gripper
+    gripper = (instance.work_cell or DEFAULT_WORK_CELL).gripper
     tw, th = instance.tray.width, instance.tray.height
     grown = {}
     for name, pt in instance.part_types.items():

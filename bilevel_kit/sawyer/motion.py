@@ -27,7 +27,7 @@ grasp point) and is, in order:
 6. release (:data:`RELEASE_TIME`); 7. retreat up; 8. return to above the bin (optional).
 
 The vertical approach / retreat moves are timed as joint-space lines too (over 100 mm the
-Cartesian deviation is small). At the slot, the gripper yaw among the station's allowed yaws
+Cartesian deviation is small). At the slot, the gripper yaw among the work cell's allowed yaws
 is the one that needs the least ``right_j6`` travel from the pose above the bin; the allowed
 yaws are measured from the part's x axis, which lies at the placement's angle ``theta`` from
 the tray x axis (0 by default, the layout-free case). The IK at the slot is warm-started from
@@ -44,10 +44,10 @@ from typing import Any
 
 import numpy as np
 
+from .cell import WorkCell
 from .errors import UnreachableError
 from .ik import IKSolution, solve_top_down
 from .model import ELECTRIC_GRIPPER_TIP, LIMIT_PROFILES, V_MAX, Arm, tool_arm
-from .station import Station
 
 #: Seconds for a joint to reach its velocity limit from rest (defines the assumed accels).
 ACCEL_RAMP = 0.5
@@ -78,7 +78,7 @@ class MotionParams:
     #: Cap on the tool tip's Cartesian speed [m/s]; None: no cap.
     tool_speed: float | None = TOOL_SPEED
     #: Tool tip distance beyond the flange [m] at which ``tool_speed`` applies (the
-    #: station's ``tool_offset``: :meth:`for_station`).
+    #: work cell's ``tool_offset``: :meth:`for_work_cell`).
     tool_offset: float = ELECTRIC_GRIPPER_TIP
     #: Joint-limit profile the IK keeps to (:data:`.model.LIMIT_PROFILES`).
     limits: str = "robot"
@@ -111,11 +111,11 @@ class MotionParams:
         low, high = self.q_limits
         return float(low[6]), float(high[6])
 
-    def for_station(self, station: Station) -> MotionParams:
-        """These parameters with the station's tool tip."""
-        if self.tool_offset == station.tool_offset_m:
+    def for_work_cell(self, work_cell: WorkCell) -> MotionParams:
+        """These parameters with the work cell's tool tip."""
+        if self.tool_offset == work_cell.tool_offset_m:
             return self
-        return replace(self, tool_offset=station.tool_offset_m)
+        return replace(self, tool_offset=work_cell.tool_offset_m)
 
 
 DEFAULT_PARAMS = MotionParams()
@@ -209,7 +209,7 @@ class PickPlace:
     q_slot_above: np.ndarray
     q_slot: np.ndarray
     #: Gripper yaw at the slot, degrees from the tray x axis: the part's angle ``theta`` plus
-    #: one of ``station.grasp_yaws``.
+    #: one of ``work_cell.grasp_yaws``.
     slot_yaw: float
     steps: dict[str, float] = field(default_factory=dict)
 
@@ -238,20 +238,20 @@ def _solve(
 
 @lru_cache(maxsize=256)
 def _bin_configs(
-    station: Station, part_type: str, q6_bounds: tuple[float, float]
+    work_cell: WorkCell, part_type: str, q6_bounds: tuple[float, float]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """IK above and at the bin of ``part_type`` (cached per station, part type and limits)."""
-    arm = Arm(station.tool_offset_m)
-    grasp = station.bin_point(part_type)
-    above = grasp + np.array([0.0, 0.0, station.approach_height / 1000.0])
-    where = f"the bin of part type {part_type!r} at {station.bin_xyz(part_type)} mm"
-    sol = _solve(arm, above, station.grasp_yaws, None, f"the pose above {where}", q6_bounds)
+    """IK above and at the bin of ``part_type`` (cached per work cell, part type and limits)."""
+    arm = Arm(work_cell.tool_offset_m)
+    grasp = work_cell.bin_point(part_type)
+    above = grasp + np.array([0.0, 0.0, work_cell.approach_height / 1000.0])
+    where = f"the bin of part type {part_type!r} at {work_cell.bin_xyz(part_type)} mm"
+    sol = _solve(arm, above, work_cell.grasp_yaws, None, f"the pose above {where}", q6_bounds)
     q_grasp = _solve(arm, grasp, (sol.yaw_deg,), sol.q, f"the grasp pose in {where}", q6_bounds).q
     return sol.q, q_grasp
 
 
 def pick_place(
-    station: Station,
+    work_cell: WorkCell,
     part_type: str,
     slot_xy_mm: tuple[float, float] | np.ndarray,
     params: MotionParams = DEFAULT_PARAMS,
@@ -260,15 +260,15 @@ def pick_place(
     """Plan one cycle (see the module docstring) for a part laid at angle ``theta`` (deg, from
     the tray x axis); raises :class:`UnreachableError` when the bin or the slot (release or
     approach pose) cannot be reached."""
-    arm = Arm(station.tool_offset_m)
-    params = params.for_station(station)
+    arm = Arm(work_cell.tool_offset_m)
+    params = params.for_work_cell(work_cell)
     bounds = params.q6_bounds
-    q_ba, q_bg = (q.copy() for q in _bin_configs(station, part_type, bounds))
+    q_ba, q_bg = (q.copy() for q in _bin_configs(work_cell, part_type, bounds))
     x, y = float(slot_xy_mm[0]), float(slot_xy_mm[1])
-    place = station.tray_to_base(x, y, station.place_height_of(part_type))
-    above = place + np.array([0.0, 0.0, station.approach_height / 1000.0])
+    place = work_cell.tray_to_base(x, y, work_cell.place_height_of(part_type))
+    above = place + np.array([0.0, 0.0, work_cell.approach_height / 1000.0])
     where = f"tray slot ({x:g}, {y:g}) mm"
-    yaws = tuple(a + float(theta) for a in station.slot_yaws())
+    yaws = tuple(a + float(theta) for a in work_cell.slot_yaws())
     sol = _solve(arm, above, yaws, q_ba, f"the approach pose above {where}", bounds)
     q_sa, yaw = sol.q, sol.yaw_deg
     q_sp = _solve(arm, place, (yaw,), q_sa, where, bounds).q
@@ -285,12 +285,12 @@ def pick_place(
     }
     if params.return_to_bin:
         steps["return"] = move_time(q_sa, q_ba, params)
-    slot_yaw = float(theta) + station.grasp_yaws[yaws.index(yaw)]
+    slot_yaw = float(theta) + work_cell.grasp_yaws[yaws.index(yaw)]
     return PickPlace(q_ba, q_bg, q_sa, q_sp, slot_yaw, steps)
 
 
 def pick_place_time(
-    station: Station,
+    work_cell: WorkCell,
     part_type: str,
     slot_xy_mm: tuple[float, float] | np.ndarray,
     params: MotionParams = DEFAULT_PARAMS,
@@ -298,11 +298,11 @@ def pick_place_time(
 ) -> float:
     """Seconds for one pick at the bin of ``part_type`` and place at tray point (x, y) mm,
     the part at angle ``theta`` (deg)."""
-    return pick_place(station, part_type, slot_xy_mm, params, theta).total
+    return pick_place(work_cell, part_type, slot_xy_mm, params, theta).total
 
 
 def layout_time(
-    station: Station, layout: Iterable[Any], params: MotionParams = DEFAULT_PARAMS
+    work_cell: WorkCell, layout: Iterable[Any], params: MotionParams = DEFAULT_PARAMS
 ) -> float:
     """Robot seconds to kit a layout: the sum of :func:`pick_place_time` over its placements
     (objects with ``type``, ``x``, ``y`` and optionally ``theta``, e.g.
@@ -310,7 +310,7 @@ def layout_time(
     return float(
         sum(
             pick_place_time(
-                station, str(p.type), (float(p.x), float(p.y)), params, getattr(p, "theta", 0.0)
+                work_cell, str(p.type), (float(p.x), float(p.y)), params, getattr(p, "theta", 0.0)
             )
             for p in layout
         )
@@ -318,7 +318,7 @@ def layout_time(
 
 
 def tray_average_time(
-    station: Station,
+    work_cell: WorkCell,
     part_type: str,
     width: float,
     height: float,
@@ -331,11 +331,11 @@ def tray_average_time(
     from .reach import build_reach_map, ensure_placeable
 
     reach_map = ensure_placeable(
-        build_reach_map(station, width, height, resolution), f"a part of type {part_type!r}"
+        build_reach_map(work_cell, width, height, resolution), f"a part of type {part_type!r}"
     )
     times = [
         pick_place_time(
-            station, part_type, (float(reach_map.xs[c]), float(reach_map.ys[r])), params
+            work_cell, part_type, (float(reach_map.xs[c]), float(reach_map.ys[r])), params
         )
         for r, c in np.argwhere(reach_map.reachable)
     ]

@@ -1,8 +1,8 @@
 """Reachability of tray points: maps over the whole tray and exact checks of given points.
 
 A tray point (x, y) in mm is *reachable* when a top-down grasp IK (:mod:`.ik`) converges for
-the tool tip at the release pose, ``station.place_height`` above the tray surface, with one of
-the station's allowed gripper yaws, and (by default) the approach pose ``approach_height``
+the tool tip at the release pose, ``work_cell.place_height`` above the tray surface, with one of
+the work cell's allowed gripper yaws, and (by default) the approach pose ``approach_height``
 above it is reachable too. Because the tool lies on the last joint's axis and that joint
 spans 540 deg, the answer does not depend on which yaws are allowed (see :mod:`.ik`).
 
@@ -22,10 +22,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .cell import WorkCell
 from .errors import UnreachableError
 from .ik import N_SEEDS, IKSolution, solve_top_down
 from .model import Arm
-from .station import Station
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
@@ -44,7 +44,7 @@ class ReachMap:
     NaN configurations and NaN yaw.
     """
 
-    station: Station
+    work_cell: WorkCell
     width: float
     height: float
     xs: np.ndarray
@@ -126,7 +126,7 @@ def _approach(
 
 
 def build_reach_map(
-    station: Station,
+    work_cell: WorkCell,
     width: float,
     height: float,
     resolution: float = 10.0,
@@ -146,14 +146,14 @@ def build_reach_map(
     start = time.perf_counter()
     xs, ys = _grid(float(width), float(height), float(resolution))
     nx, ny = len(xs), len(ys)
-    arm = Arm(station.tool_offset_m)
-    base_yaws = station.slot_yaws()
-    rise = station.approach_height / 1000.0
+    arm = Arm(work_cell.tool_offset_m)
+    base_yaws = work_cell.slot_yaws()
+    rise = work_cell.approach_height / 1000.0
     reachable = np.zeros((ny, nx), dtype=bool)
     manip = np.zeros((ny, nx))
     configs = np.full((ny, nx, 7), np.nan)
     yaws = np.full((ny, nx), np.nan)
-    points = station.tray_to_base(xs[None, :], ys[:, None], station.place_height)
+    points = work_cell.tray_to_base(xs[None, :], ys[:, None], work_cell.place_height)
     q_prev: np.ndarray | None = None
     q_prev_up: np.ndarray | None = None
     for row in range(ny):
@@ -170,11 +170,11 @@ def build_reach_map(
                 q_prev_up = q_up
             reachable[row, col] = True
             configs[row, col] = sol.q
-            yaws[row, col] = station.grasp_yaws[base_yaws.index(sol.yaw_deg)]
+            yaws[row, col] = work_cell.grasp_yaws[base_yaws.index(sol.yaw_deg)]
             manip[row, col] = arm.manipulability(sol.q)
             q_prev = sol.q
     return ReachMap(
-        station,
+        work_cell,
         float(width),
         float(height),
         xs,
@@ -188,7 +188,7 @@ def build_reach_map(
 
 
 def check_points(
-    station: Station,
+    work_cell: WorkCell,
     points: Iterable[Sequence[float]],
     *,
     approach: bool = True,
@@ -201,12 +201,12 @@ def check_points(
     for a point does not depend on the other points or their order: this is the test for the
     checker and the packers. ``approach=True`` also requires the approach pose above it.
     """
-    arm = Arm(station.tool_offset_m)
-    yaws = station.slot_yaws()
-    rise = station.approach_height / 1000.0
+    arm = Arm(work_cell.tool_offset_m)
+    yaws = work_cell.slot_yaws()
+    rise = work_cell.approach_height / 1000.0
     out = []
     for pt in points:
-        p = station.tray_to_base(float(pt[0]), float(pt[1]), station.place_height)
+        p = work_cell.tray_to_base(float(pt[0]), float(pt[1]), work_cell.place_height)
         sol = solve_top_down(arm, p, yaws, n_seeds=n_seeds, seed=seed)
         out.append(sol is not None and (not approach or _approach(arm, sol, p, rise) is not None))
     return np.array(out, dtype=bool)
@@ -216,7 +216,7 @@ def ensure_placeable(reach_map: ReachMap, what: str = "a kit") -> ReachMap:
     """Return the map, or raise :class:`UnreachableError` when no cell is reachable, i.e.
     when ``what`` cannot be placed anywhere on the tray."""
     if reach_map.is_empty:
-        s = reach_map.station
+        s = reach_map.work_cell
         raise UnreachableError(
             f"cannot place {what}: no point of the {reach_map.width:g} x {reach_map.height:g} "
             f"mm tray is reachable by the Sawyer (tray corner at ({s.tray_x:g}, {s.tray_y:g}, "
@@ -227,10 +227,10 @@ def ensure_placeable(reach_map: ReachMap, what: str = "a kit") -> ReachMap:
 
 
 def ensure_points_reachable(
-    station: Station, points: Sequence[Sequence[float]], labels: Sequence[str] | None = None
+    work_cell: WorkCell, points: Sequence[Sequence[float]], labels: Sequence[str] | None = None
 ) -> None:
     """Raise :class:`UnreachableError` listing the points (x, y mm) the robot cannot reach."""
-    ok = check_points(station, points)
+    ok = check_points(work_cell, points)
     if ok.all():
         return
     names = labels if labels is not None else [f"({p[0]:g}, {p[1]:g})" for p in points]

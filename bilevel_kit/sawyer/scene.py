@@ -183,11 +183,13 @@ class _Scene:
                     track.set_property(end, track.values[-1])
 
 
-def _station(scene: _Scene, ex: Execution) -> None:
+def _work_cell(scene: _Scene, ex: Execution) -> None:
     """Pedestal, table, human's table and bins (static)."""
     from meshcat.geometry import Box, Cylinder
 
-    s = ex.station
+    s = ex.work_cell
+    # the nodes keep their "bk/station/" paths (the page's scene tree, which the tests and a
+    # viewer's controls address): the rename to work cell changes no page
     floor = _tf((0.4, 0.0, FLOOR_Z - FLOOR_SIZE[2] / 2))
     scene.solid("bk/station/floor", Box(list(FLOOR_SIZE)), FLOOR_COLOR, floor)
     pedestal = _tf((-0.02, 0.0, 0.0)) @ _along([0.0, 0.0, FLOOR_Z])
@@ -285,7 +287,7 @@ def _animate_kits(scene: _Scene, ex: Execution, tool: dict[float, np.ndarray]) -
     """Trays (appear, slide to the human, vanish) and parts (appear, ride, stay)."""
     from meshcat.geometry import Box
 
-    s = ex.station
+    s = ex.work_cell
     home = _tf(np.array([s.tray_x, s.tray_y, s.tray_z]) / 1000.0, _rz(s.tray_yaw))
     away = _tf([PUSH, 0, 0]) @ home
     colors = {t: _hex(style.PALETTE[i % len(style.PALETTE)]) for i, t in enumerate(ex.part_types)}
@@ -385,8 +387,8 @@ def scene_commands(execution: Execution) -> tuple[list[dict[str, Any]], dict[str
     t0 = ex.timeline.kits[first - 1].robot_start if one else 0.0
     t1 = ex.timeline.kits[first - 1].arrive + 1.0 if one else ex.timeline.makespan
     scene = _Scene(t0, t1)
-    arm = Arm(ex.station.tool_offset_m)
-    _station(scene, ex)
+    arm = Arm(ex.work_cell.tool_offset_m)
+    _work_cell(scene, ex)
     _arm_geometry(scene)
     tool = _animate_arm(scene, ex, arm)
     _animate_kits(scene, ex, tool)

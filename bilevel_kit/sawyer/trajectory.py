@@ -24,10 +24,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .cell import DEFAULT_WORK_CELL, WorkCell
 from .errors import UnreachableError
 from .model import JOINT_NAMES, Arm
 from .motion import DEFAULT_PARAMS, MotionParams, _path_limits, move_profile, move_time, pick_place
-from .station import DEFAULT_STATION, Station
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from ..instance import Instance
@@ -154,7 +154,7 @@ class Execution:
     """Everything a plan's execution writes: trajectories, events and the scene geometry."""
 
     instance: str
-    station: Station
+    work_cell: WorkCell
     tray: tuple[float, float]
     kits: tuple[KitTrajectory, ...]
     events: tuple[Event, ...]
@@ -226,7 +226,7 @@ def _cycle_segments(
 
 
 def _plan_parts(
-    station: Station,
+    work_cell: WorkCell,
     layout: Sequence[Placement],
     kit: int,
     params: MotionParams,
@@ -239,7 +239,7 @@ def _plan_parts(
     clock = 0.0
     for p in layout:
         try:
-            cycle = pick_place(station, p.type, (p.x, p.y), params, p.theta)
+            cycle = pick_place(work_cell, p.type, (p.x, p.y), params, p.theta)
         except UnreachableError as exc:
             raise UnreachableError(f"kit {kit}, part {p.part} (type {p.type}): {exc}") from None
         if q_prev is not None and np.abs(q_prev - cycle.q_bin_above).max() > 1e-12:
@@ -307,7 +307,7 @@ def _sample(
 
 
 def kit_trajectory(
-    station: Station,
+    work_cell: WorkCell,
     layout: Sequence[Placement],
     kit: int,
     times: KitTimes,
@@ -321,8 +321,8 @@ def kit_trajectory(
     is (the previous kit's end); None: above the first part's bin."""
     if not layout:
         return None
-    params = params.for_station(station)
-    steps, parts, extra = _plan_parts(station, layout, kit, params, q_start)
+    params = params.for_work_cell(work_cell)
+    steps, parts, extra = _plan_parts(work_cell, layout, kit, params, q_start)
     segments, t, q, qd, qdd = _sample(steps, params, dt)
     return KitTrajectory(
         kit,
@@ -369,19 +369,19 @@ def plan_execution(
     params: MotionParams = DEFAULT_PARAMS,
     dt: float = SAMPLE_DT,
 ) -> Execution:
-    """The execution of ``plan`` (all kits, or the kit numbers ``kits``) at the instance's
-    station. Raises :class:`UnreachableError` naming the kit and part of a bin or slot out of
+    """The execution of ``plan`` (all kits, or the kit numbers ``kits``) in the instance's
+    work cell. Raises :class:`UnreachableError` naming the kit and part of a bin or slot out of
     reach. The plan is not checked here: see :func:`bilevel_kit.validate.check`."""
     from ..plan import evaluate, kit_station
 
     timeline = evaluate(instance, plan)
-    station = instance.station or DEFAULT_STATION
+    work_cell = instance.work_cell or DEFAULT_WORK_CELL
     chosen = list(range(1, len(plan.kits) + 1)) if kits is None else list(kits)
     trajectories: dict[int, KitTrajectory] = {}
     q_prev: np.ndarray | None = None
     for k in chosen:
         traj = kit_trajectory(
-            station,
+            work_cell,
             plan.kits[k - 1].layout,
             k,
             timeline.kits[k - 1],
@@ -395,7 +395,7 @@ def plan_execution(
             q_prev = traj.positions[-1]
     return Execution(
         instance.name,
-        station,
+        work_cell,
         (instance.tray.width, instance.tray.height),
         tuple(trajectories[k] for k in chosen if k in trajectories),
         timeline_events(timeline, chosen, trajectories),
@@ -430,8 +430,8 @@ class Verification:
 
 def verify(execution: Execution) -> Verification:
     """Measure the execution against the joint limits and the slot and bin positions."""
-    station = execution.station
-    arm = Arm(station.tool_offset_m)
+    work_cell = execution.work_cell
+    arm = Arm(work_cell.tool_offset_m)
     margin, joint, share, fd_share = math.inf, JOINT_NAMES[0], 0.0, 0.0
     place_err = grasp_err = dur_err = tool = 0.0
     for kt in execution.kits:
@@ -450,9 +450,9 @@ def verify(execution: Execution) -> Verification:
         tool = max(tool, *speeds)
         for p in kt.parts:
             q_place = kt.positions_at(p.release_at)
-            target = station.tray_to_base(p.x, p.y, station.place_height_of(p.type))
+            target = work_cell.tray_to_base(p.x, p.y, work_cell.place_height_of(p.type))
             place_err = max(place_err, float(np.linalg.norm(arm.position(q_place) - target)))
             q_grasp = kt.positions_at(p.grasp_at)
-            bin_point = station.bin_point(p.type)
+            bin_point = work_cell.bin_point(p.type)
             grasp_err = max(grasp_err, float(np.linalg.norm(arm.position(q_grasp) - bin_point)))
     return Verification(margin, joint, share, fd_share, place_err, grasp_err, dur_err, tool)

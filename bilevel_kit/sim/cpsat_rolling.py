@@ -265,7 +265,7 @@ class CPSATRollingPolicy:
         )
         if self.station.tray_limit is not None:
             doc["trays"] = self.station.tray_limit
-        doc.update(inst.station_fields())
+        doc.update(inst.work_cell_fields())
         return from_dict(doc, f"<{inst.name} cpsat-rolling window>")
 
     def _solve(

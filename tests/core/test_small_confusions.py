@@ -51,7 +51,36 @@ def test_two_delivery_time_variants_of_a_product_get_two_names() -> None:
 
     assert generate("table", 2)["name"] == "table_u2"
     names = {generate("table", 2, delivery_time=d)["name"] for d in (2, 5, 2.5)}
-    assert names == {"table_u2_d2", "table_u2_d5", "table_u2_d2.5"}
+    assert names == {"table_u2", "table_u2_d5", "table_u2_d2.5"}  # 2 s is the table's own d
     assert generate("stool", 1, delivery_time=0)["name"] == "stool_u1_d0"
     assert generate("table", 2, delivery_time=5, name="mine")["name"] == "mine"  # --name wins
     assert generate("intree", 8, seed=0)["name"] == "intree_n8_s0"  # committed names kept
+
+
+def test_seed_stations_and_delivery_time_have_their_own_tokens() -> None:
+    """``_s`` was both the seed and the stations: ``intree_n8_s2`` could be either (issue 40,
+    item 10); the random families' ``--d`` variants shared one name."""
+    from bilevel_kit.generate import generate
+
+    names = {
+        "seed 2": generate("intree", 8, seed=2)["name"],
+        "seed 0, 2 stations": generate("intree", 8, seed=0, stations=2)["name"],
+        "seed 2, d 10": generate("intree", 8, seed=2, delivery_time=10)["name"],
+        "seed 2, d 5 (the default)": generate("intree", 8, seed=2, delivery_time=5)["name"],
+        "seed 2, d 10, 3 stations": generate("intree", 8, 2, None, 10, stations=3)["name"],
+        "table, 2 stations": generate("table", 1, stations=2)["name"],
+        "table, d 5, 3 stations": generate("table", 2, delivery_time=5, stations=3)["name"],
+        "mixed, d 0": generate("mixed", 1, delivery_time=0)["name"],
+    }
+    assert names == {
+        "seed 2": "intree_n8_s2",
+        "seed 0, 2 stations": "intree_n8_s0_st2",
+        "seed 2, d 10": "intree_n8_s2_d10",
+        "seed 2, d 5 (the default)": "intree_n8_s2",
+        "seed 2, d 10, 3 stations": "intree_n8_s2_d10_st3",
+        "table, 2 stations": "table_u1_st2",
+        "table, d 5, 3 stations": "table_u2_d5_st3",
+        "mixed, d 0": "mixed_u1_d0",
+    }
+    with_d = {generate("sparse", 12, seed=1, delivery_time=d)["name"] for d in (0, 10, 30)}
+    assert with_d == {"sparse_n12_s1_d0", "sparse_n12_s1_d10", "sparse_n12_s1_d30"}

@@ -677,7 +677,7 @@ def argv_row(argv: list[str], code: int, *words: str, **files: Any) -> Row:
 
 SOLVE_TO = "solve {i} -m single-task -o {o}/s.json"
 SURROGATE_NAME = tiny_text().replace('"name": "tiny"', '"name": "tiny\\ud800"')
-STATION = {"bins": {"block": [0.6, 0.3, 0.0], "wheel": [0.6, -0.3, 0.0]}}
+WORK_CELL = {"bins": {"block": [0.6, 0.3, 0.0], "wheel": [0.6, -0.3, 0.0]}}
 
 ISSUE_23B_ROWS: dict[str, Row] = {
     # item 3: outputs never clobber, checked before any work
@@ -735,8 +735,8 @@ ISSUE_23B_ROWS: dict[str, Row] = {
     "400-digit integer in trays": bad_instance(
         _set("trays", int("9" * 400)), "$.trays", "400 digits"
     ),
-    "400-digit station coordinate": bad_instance(
-        _set("station", {"tray_pose": {"x": -int("9" * 400)}}), "$.station.tray_pose.x", "400"
+    "400-digit work cell coordinate": bad_instance(
+        _set("work_cell", {"tray_pose": {"x": -int("9" * 400)}}), "$.work_cell.tray_pose.x", "400"
     ),
     "name with a lone surrogate": raw_instance(SURROGATE_NAME, "$.name", "not valid Unicode"),
     "key with a lone surrogate": raw_instance(
@@ -773,8 +773,8 @@ ISSUE_23B_ROWS: dict[str, Row] = {
     ),
     "task id with a trailing newline": bad_instance(_set("tasks.0.id", "t1\n"), "$.tasks[0].id"),
     "pack item id with a trailing newline": bad_pack(_set("items.0.id", "sq\n"), "$.items[0].id"),
-    "station bin of an unknown part type": bad_instance(
-        _set("station", STATION), "$.station.bins.wheel", "unknown part type 'wheel'"
+    "work cell bin of an unknown part type": bad_instance(
+        _set("work_cell", WORK_CELL), "$.work_cell.bins.wheel", "unknown part type 'wheel'"
     ),
     **{
         f"greedy-ce {opt}=-1": row(f"solve {{i}} -m greedy-ce -p {opt}=-1", 2, f"'{opt}'", ">= 0")

@@ -298,7 +298,7 @@ def test_plans_respect_the_reach_map(root):
     from bilevel_kit.reachability import reach_grid
 
     doc = json.loads((root / "instances/hrc_table.json").read_text())
-    doc["station"] = {"tray_pose": {"x": 900, "y": 150, "z": -150, "yaw": -90}}
+    doc["work_cell"] = {"tray_pose": {"x": 900, "y": 150, "z": -150, "yaw": -90}}
     doc["reachability"] = True
     inst = from_dict(doc)
     grid = reach_grid(inst)

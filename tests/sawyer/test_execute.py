@@ -26,7 +26,7 @@ from bilevel_kit.sawyer.trajectory import plan_execution, verify  # noqa: E402
 ROOT = Path(__file__).resolve().parents[2]
 TABLE = ROOT / "instances" / "hrc_table.json"
 REFERENCE = ROOT.parent / "shared" / "reference" / "sawyer"
-ST = S.DEFAULT_STATION
+ST = S.DEFAULT_WORK_CELL
 
 
 def run(capsys, *argv):
@@ -219,9 +219,9 @@ def test_one_kit_and_one_format(capsys, solution_file, tmp_path, instance, plan)
     assert code == 0 and [p.name for p in tmp_path.iterdir()] == ["hrc_table_kit3.bag"]
 
 
-def _far_instance(tmp_path: Path, station: dict) -> tuple[Path, Path]:
+def _far_instance(tmp_path: Path, work_cell: dict) -> tuple[Path, Path]:
     doc = json.loads(TABLE.read_text())
-    doc["station"] = station
+    doc["work_cell"] = work_cell
     inst_path = tmp_path / "far.json"
     inst_path.write_text(json.dumps(doc))
     sol_path = tmp_path / "far_solution.json"
@@ -230,14 +230,14 @@ def _far_instance(tmp_path: Path, station: dict) -> tuple[Path, Path]:
 
 
 @pytest.mark.parametrize(
-    ("station", "message"),
+    ("work_cell", "message"),
     [
         ({"tray_pose": {"x": 1400.0}}, r"kit 1, part foot-1 \(type foot\): .*tray slot"),
         ({"bins": {"leg": [0.0, 1600.0, 0.0]}}, r"kit 1, part leg-1 \(type leg\): .*bin of part"),
     ],
 )
-def test_out_of_reach_is_exit_2_naming_kit_and_part(capsys, tmp_path, station, message):
-    inst_path, sol_path = _far_instance(tmp_path, station)
+def test_out_of_reach_is_exit_2_naming_kit_and_part(capsys, tmp_path, work_cell, message):
+    inst_path, sol_path = _far_instance(tmp_path, work_cell)
     out = tmp_path / "out"
     code, text, err = run(
         capsys, "execute", inst_path, sol_path, "--bag", out, "--html", out / "v.html"
@@ -303,15 +303,15 @@ def test_a_failed_write_leaves_nothing(capsys, tmp_path, solution_file, monkeypa
 
 def test_bin_changes_are_timed_apart_from_the_model(instance, plan):
     doc = instance.to_dict()
-    doc["station"] = {"bins": {"leg": [350.0, 450.0, -100.0], "foot": [250.0, 600.0, -80.0]}}
+    doc["work_cell"] = {"bins": {"leg": [350.0, 450.0, -100.0], "foot": [250.0, 600.0, -80.0]}}
     from bilevel_kit.instance import from_dict
 
     other = from_dict(doc)
     ex = plan_execution(other, plan.plan)
-    station = other.station
+    work_cell = other.work_cell
     assert any(kt.extra > 0 for kt in ex.kits)
     for kt, kit in zip(ex.kits, plan.plan.kits, strict=True):
-        assert kt.modelled == pytest.approx(S.layout_time(station, kit.layout), abs=1e-9)
+        assert kt.modelled == pytest.approx(S.layout_time(work_cell, kit.layout), abs=1e-9)
         assert kt.duration == pytest.approx(kt.modelled + kt.extra, abs=1e-9)
         assert ("to_bin" in [s.name for s in kt.segments]) == (kt.extra > 0)
     v = verify(ex)

@@ -20,7 +20,7 @@ from bilevel_kit import load, solve
 from bilevel_kit import solution as solution_io
 from bilevel_kit.cli import main
 from bilevel_kit.plan import evaluate
-from bilevel_kit.sawyer import DEFAULT_STATION
+from bilevel_kit.sawyer import DEFAULT_WORK_CELL
 
 BROWSER = find_chromium()
 pytestmark = pytest.mark.skipif(
@@ -107,7 +107,7 @@ def _visible_parts(browser, k: int, n: int) -> list[bool]:
 
 def test_parts_appear_on_their_slots(browser, loaded, plan):
     data = browser.evaluate("bilevelKit.data")
-    station = DEFAULT_STATION
+    work_cell = DEFAULT_WORK_CELL
     for kit, layout in zip(data["kits"], (k.layout for k in plan.plan.kits), strict=True):
         k = kit["kit"]
         arm_start, arm_end = data["arm"][str(k)]
@@ -123,7 +123,7 @@ def test_parts_appear_on_their_slots(browser, loaded, plan):
             "return bk.worldToLocal(o.getWorldPosition(o.position.clone())).toArray(); }); })()"
         )
         for p, xyz in zip(layout, base, strict=True):
-            slot = station.tray_to_base(p.x, p.y)
+            slot = work_cell.tray_to_base(p.x, p.y)
             assert np.linalg.norm(np.array(xyz[:2]) - slot[:2]) <= 1e-3
             assert slot[2] < xyz[2] < slot[2] + 0.02  # lying on the tray
 

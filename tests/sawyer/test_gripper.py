@@ -1,4 +1,4 @@
-"""The station's gripper, the work-cell file and ``execute``'s feasibility pass
+"""The work cell's gripper, the work-cell file and ``execute``'s feasibility pass
 (docs/execution.md#the-gripper, #the-work-cell, #finger-room)."""
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from bilevel_kit import solution as solution_io
 from bilevel_kit.cli import main
 from bilevel_kit.errors import InstanceError, UsageError
 from bilevel_kit.plan import Kit, Placement, Plan
+from bilevel_kit.sawyer.cell import WorkCell, WorkCellError
 from bilevel_kit.sawyer.gripper import (
     DEFAULT_GRIPPER,
     Gripper,
@@ -23,9 +24,8 @@ from bilevel_kit.sawyer.gripper import (
     verdicts,
     with_finger_room,
 )
-from bilevel_kit.sawyer.station import Station, StationError
 from bilevel_kit.sawyer.workcell import (
-    WorkCellError,
+    WorkCellFileError,
     apply_work_cell,
     load_work_cell,
     parse_work_cell,
@@ -67,26 +67,26 @@ def _screw(part: str, x: float, y: float, theta: float = 0.0) -> Placement:
 
 def test_the_default_gripper_is_the_urdfs_fingers():
     assert DEFAULT_GRIPPER.stroke_max == pytest.approx(2 * 20.833)
-    assert Station().gripper == DEFAULT_GRIPPER
-    assert "gripper" not in Station().to_dict()
-    g = Station.from_dict({"gripper": {"stroke_min": 19.0, "stroke_max": 60.0}}).gripper
+    assert WorkCell().gripper == DEFAULT_GRIPPER
+    assert "gripper" not in WorkCell().to_dict()
+    g = WorkCell.from_dict({"gripper": {"stroke_min": 19.0, "stroke_max": 60.0}}).gripper
     assert (g.stroke_min, g.stroke_max, g.finger_width) == (19.0, 60.0, 12.0)
-    assert Station.from_dict(Station(gripper=g).to_dict()).gripper == g
+    assert WorkCell.from_dict(WorkCell(gripper=g).to_dict()).gripper == g
 
 
 @pytest.mark.parametrize(
     ("gripper", "message"),
     [
-        ({"stroke": 3}, "station.gripper: unknown key(s) stroke"),
-        ({"stroke_max": -1}, "station.gripper.stroke_max: expected a finite number >= 0"),
-        ({"stroke_min": 50}, "station.gripper.stroke_max: 41.666 mm must exceed stroke_min"),
-        ({"finger_width": 0}, "station.gripper.finger_width: expected a number > 0"),
-        ([1, 2], "station.gripper: expected an object"),
+        ({"stroke": 3}, "work_cell.gripper: unknown key(s) stroke"),
+        ({"stroke_max": -1}, "work_cell.gripper.stroke_max: expected a finite number >= 0"),
+        ({"stroke_min": 50}, "work_cell.gripper.stroke_max: 41.666 mm must exceed stroke_min"),
+        ({"finger_width": 0}, "work_cell.gripper.finger_width: expected a number > 0"),
+        ([1, 2], "work_cell.gripper: expected an object"),
     ],
 )
 def test_a_bad_gripper_is_named(gripper, message):
-    with pytest.raises(StationError) as exc:
-        Station.from_dict({"gripper": gripper})
+    with pytest.raises(WorkCellError) as exc:
+        WorkCell.from_dict({"gripper": gripper})
     assert str(exc.value).startswith(message), exc.value
 
 
@@ -106,9 +106,9 @@ def test_a_grasp_width_in_the_instance_is_still_read(tmp_path):
 
 def test_the_example_work_cell(table, cell):
     """examples/hrc_table_cell.json: the URDF's fingers, both brackets by a 3 mm wall, the
-    default station's geometry; the product file is untouched."""
-    assert table.station is None and table.part_types["foot"].grasp_width is None
-    assert cell.station.gripper == Gripper(stroke_max=41.666)
+    default work cell's geometry; the product file is untouched."""
+    assert table.work_cell is None and table.part_types["foot"].grasp_width is None
+    assert cell.work_cell.gripper == Gripper(stroke_max=41.666)
     assert {k: p.grasp_width for k, p in cell.part_types.items()} == {
         "leg": None,
         "foot": 3.0,
@@ -116,15 +116,15 @@ def test_the_example_work_cell(table, cell):
         "screw_long": None,
         "screw_short": None,
     }
-    assert cell.station == Station()  # spelled out in the file, equal to the default
+    assert cell.work_cell == WorkCell()  # spelled out in the file, equal to the default
     assert cell.tasks == table.tasks and cell.part_types["leg"] == table.part_types["leg"]
 
 
-def test_a_work_cell_merges_station_keys(table):
+def test_a_work_cell_merges_geometry_keys(table):
     moved = apply_work_cell(table, parse_work_cell({"place_height": 30.0, "tray_pose": {"x": 700}}))
-    assert moved.station.place_height == 30.0 and moved.station.tray_x == 700.0
-    assert moved.station.approach_height == Station().approach_height
-    assert moved.station.gripper == DEFAULT_GRIPPER
+    assert moved.work_cell.place_height == 30.0 and moved.work_cell.tray_x == 700.0
+    assert moved.work_cell.approach_height == WorkCell().approach_height
+    assert moved.work_cell.gripper == DEFAULT_GRIPPER
 
 
 @pytest.mark.parametrize(
@@ -148,7 +148,7 @@ def test_a_bad_work_cell_is_one_line_naming_file_and_field(
 ):
     path = tmp_path / "cell.json"
     path.write_text(json.dumps(doc))
-    with pytest.raises(WorkCellError) as exc:
+    with pytest.raises(WorkCellFileError) as exc:
         apply_work_cell(table, load_work_cell(path))
     assert exc.value.path == field and message in exc.value.detail, exc.value
     sol = tmp_path / "s.json"
@@ -220,7 +220,7 @@ def test_execute_warns_in_one_line_by_default_and_strict_exits_2(capsys, tmp_pat
 def test_grasp_footprints(cell):
     """The rectangle a packer keeps for a part and its open fingers (12 mm pads, 2 mm
     clearance): grasp width + 26 mm across the grasp, at least a pad along it."""
-    g = cell.station.gripper
+    g = cell.work_cell.gripper
     sizes = {k: grasp_footprint(p, g) for k, p in cell.part_types.items()}
     assert sizes["screw_short"] == (12.0, pytest.approx(32.0))
     assert sizes["screw_long"] == (14.0, pytest.approx(32.0))

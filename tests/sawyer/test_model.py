@@ -1,4 +1,4 @@
-"""Sawyer model, forward kinematics, inverse kinematics and station geometry."""
+"""Sawyer model, forward kinematics, inverse kinematics and work cell geometry."""
 
 from __future__ import annotations
 
@@ -259,11 +259,11 @@ def test_with_yaw_turns_only_the_last_joint() -> None:
     np.testing.assert_allclose(arm.position(q2), arm.position(sol.q), atol=1e-9)
 
 
-# --- station ----------------------------------------------------------------------------
+# --- work cell --------------------------------------------------------------------------
 
 
-def test_default_station_and_tray_frame() -> None:
-    st = S.DEFAULT_STATION
+def test_default_work_cell_and_tray_frame() -> None:
+    st = S.DEFAULT_WORK_CELL
     assert st.tray_yaw == -90.0
     np.testing.assert_allclose(st.tray_to_base(0, 0), [0.45, 0.30, -0.15])
     # tray x runs to the robot's right (-y), tray y away from the robot (+x)
@@ -275,9 +275,9 @@ def test_default_station_and_tray_frame() -> None:
     assert st.bin_xyz("anything") == st.default_bin
 
 
-def test_station_dict_round_trip_and_schema() -> None:
+def test_work_cell_dict_round_trip_and_schema() -> None:
     jsonschema = pytest.importorskip("jsonschema")
-    st = S.Station(
+    st = S.WorkCell(
         tray_x=400,
         tray_y=250,
         tray_z=-120,
@@ -288,17 +288,17 @@ def test_station_dict_round_trip_and_schema() -> None:
         tool_offset=0,
     )
     doc = st.to_dict()
-    jsonschema.validate(doc, S.station_schema())
-    jsonschema.validate({}, S.station_schema())
-    back = S.Station.from_dict(doc)
+    jsonschema.validate(doc, S.work_cell_schema())
+    jsonschema.validate({}, S.work_cell_schema())
+    back = S.WorkCell.from_dict(doc)
     assert back == st
     assert hash(back) == hash(st)
     assert back.bin_xyz("nut") == (200.0, 550.0, -90.0)
-    assert S.Station.from_dict({}) == S.DEFAULT_STATION
-    assert S.Station.from_dict(None) == S.DEFAULT_STATION
-    assert S.Station.from_dict({"tray_pose": {"x": 500}}).tray_x == 500.0
+    assert S.WorkCell.from_dict({}) == S.DEFAULT_WORK_CELL
+    assert S.WorkCell.from_dict(None) == S.DEFAULT_WORK_CELL
+    assert S.WorkCell.from_dict({"tray_pose": {"x": 500}}).tray_x == 500.0
     with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate({"tray_pose": {"x": "far"}}, S.station_schema())
+        jsonschema.validate({"tray_pose": {"x": "far"}}, S.work_cell_schema())
 
 
 @pytest.mark.parametrize(
@@ -316,9 +316,9 @@ def test_station_dict_round_trip_and_schema() -> None:
         [1, 2],
     ],
 )
-def test_station_from_dict_rejects_bad_input(doc: object) -> None:
-    with pytest.raises(S.StationError) as info:
-        S.Station.from_dict(doc)  # type: ignore[arg-type]
+def test_work_cell_from_dict_rejects_bad_input(doc: object) -> None:
+    with pytest.raises(S.WorkCellError) as info:
+        S.WorkCell.from_dict(doc)  # type: ignore[arg-type]
     assert isinstance(info.value, ValueError)
     assert isinstance(info.value, BilevelKitError)
 

@@ -12,7 +12,7 @@ pytest.importorskip("pinocchio")
 
 import bilevel_kit.sawyer as S  # noqa: N812
 
-ST = S.DEFAULT_STATION
+ST = S.DEFAULT_WORK_CELL
 
 
 def test_trapezoid_time_triangle_and_trapezoid() -> None:
@@ -96,15 +96,15 @@ def test_farther_slots_are_not_faster() -> None:
 def test_slower_robot_takes_longer_and_bins_per_part_type() -> None:
     slow = S.MotionParams(speed_scale=0.5)
     assert S.pick_place_time(ST, "a", (300, 200), slow) > S.pick_place_time(ST, "a", (300, 200))
-    st = S.Station(bins={"near": (450.0, 200.0, -100.0), "far": (200.0, 700.0, -100.0)})
+    st = S.WorkCell(bins={"near": (450.0, 200.0, -100.0), "far": (200.0, 700.0, -100.0)})
     assert S.pick_place_time(st, "near", (100, 100)) < S.pick_place_time(st, "far", (100, 100))
 
 
 def test_unreachable_slot_or_bin_raises() -> None:
-    far_tray = S.Station(tray_x=1400.0)
+    far_tray = S.WorkCell(tray_x=1400.0)
     with pytest.raises(S.UnreachableError, match="tray slot"):
         S.pick_place_time(far_tray, "a", (100.0, 100.0))
-    far_bin = S.Station(bins={"x": (0.0, 1600.0, 0.0)})
+    far_bin = S.WorkCell(bins={"x": (0.0, 1600.0, 0.0)})
     with pytest.raises(S.UnreachableError, match="bin of part type 'x'"):
         S.pick_place_time(far_bin, "x", (100.0, 100.0))
 
@@ -135,7 +135,7 @@ def test_tray_average_time_lies_between_extremes() -> None:
     corners = [S.pick_place_time(ST, "a", xy) for xy in ((0, 0), (600, 400), (600, 0))]
     assert min(corners) - 1.0 < avg < max(corners) + 1.0
     with pytest.raises(S.UnreachableError):
-        S.tray_average_time(S.Station(tray_x=1400.0), "a", 600.0, 400.0, resolution=200.0)
+        S.tray_average_time(S.WorkCell(tray_x=1400.0), "a", 600.0, 400.0, resolution=200.0)
 
 
 def test_speed_scale_scales_time_velocities_and_accelerations() -> None:
@@ -175,13 +175,13 @@ def test_the_tool_speed_cap_holds_along_a_pick_and_place(cap) -> None:
 
 
 def test_place_height_per_part_type() -> None:
-    st = S.Station.from_dict({"place_heights": {"foot": 35.0}})
+    st = S.WorkCell.from_dict({"place_heights": {"foot": 35.0}})
     assert st.place_height_of("foot") == 35.0 and st.place_height_of("leg") == st.place_height
-    assert S.Station.from_dict(st.to_dict()) == st
+    assert S.WorkCell.from_dict(st.to_dict()) == st
     arm = S.Arm(st.tool_offset_m)
     for part_type, height in (("foot", 35.0), ("leg", 20.0)):
         q = S.pick_place(st, part_type, (150.0, 100.0)).q_slot
         z = arm.position(q)[2]
         assert z == pytest.approx((st.tray_z + height) / 1000.0, abs=1e-3)
-    with pytest.raises(S.StationError, match="place_heights"):
-        S.Station.from_dict({"place_heights": {"foot": "high"}})
+    with pytest.raises(S.WorkCellError, match="place_heights"):
+        S.WorkCell.from_dict({"place_heights": {"foot": "high"}})

@@ -13,13 +13,13 @@ pytest.importorskip("pinocchio")
 import bilevel_kit.sawyer as S  # noqa: N812
 from bilevel_kit.errors import BilevelKitError
 
-FAR = S.Station(tray_x=1400.0, tray_y=300.0)  # tray corner 1.4 m ahead: beyond the reach
-EDGE = S.Station(tray_x=900.0, tray_y=300.0)  # near edge reachable, far part not
+FAR = S.WorkCell(tray_x=1400.0, tray_y=300.0)  # tray corner 1.4 m ahead: beyond the reach
+EDGE = S.WorkCell(tray_x=900.0, tray_y=300.0)  # near edge reachable, far part not
 
 
 @pytest.fixture(scope="module")
 def default_map() -> S.ReachMap:
-    return S.build_reach_map(S.DEFAULT_STATION, 600.0, 400.0, 10.0)
+    return S.build_reach_map(S.DEFAULT_WORK_CELL, 600.0, 400.0, 10.0)
 
 
 def test_default_map_is_60_by_40_and_fully_reachable(default_map: S.ReachMap) -> None:
@@ -32,13 +32,13 @@ def test_default_map_is_60_by_40_and_fully_reachable(default_map: S.ReachMap) ->
     assert (m.manipulability > 0).all()
     assert np.isfinite(m.configs).all() and m.configs.shape == (40, 60, 7)
     assert np.all(m.configs >= S.Q_LOWER) and np.all(m.configs <= S.Q_UPPER)
-    assert set(np.unique(m.yaws)) <= set(S.DEFAULT_STATION.grasp_yaws)
+    assert set(np.unique(m.yaws)) <= set(S.DEFAULT_WORK_CELL.grasp_yaws)
     # The goal is < 2 s on the 2-core machine; the bound here only guards regressions.
     assert m.build_time < 10.0
 
 
 def test_map_configurations_put_the_tool_on_the_cell_centres(default_map: S.ReachMap) -> None:
-    st = default_map.station
+    st = default_map.work_cell
     arm = S.Arm(st.tool_offset_m)
     for row, col in [(0, 0), (39, 59), (20, 30), (7, 51)]:
         p = st.tray_to_base(default_map.xs[col], default_map.ys[row], st.place_height)
@@ -63,7 +63,7 @@ def test_lookup_uses_the_cell_containing_the_point() -> None:
 
 
 def test_cells_tile_the_tray_when_the_resolution_does_not_divide_it() -> None:
-    m = S.build_reach_map(S.DEFAULT_STATION, 250.0, 130.0, 40.0)
+    m = S.build_reach_map(S.DEFAULT_WORK_CELL, 250.0, 130.0, 40.0)
     assert m.shape == (4, 7)
     assert m.cell_size[0] <= 40.0 and m.cell_size[1] <= 40.0
     assert m.cell_size[0] * 7 == pytest.approx(250.0)
@@ -102,16 +102,16 @@ def test_far_tray_gives_an_empty_map_and_a_clear_error() -> None:
 
 
 def test_ensure_points_reachable_names_the_bad_points() -> None:
-    S.ensure_points_reachable(S.DEFAULT_STATION, [(100.0, 100.0), (500.0, 300.0)])
+    S.ensure_points_reachable(S.DEFAULT_WORK_CELL, [(100.0, 100.0), (500.0, 300.0)])
     with pytest.raises(S.UnreachableError, match="p2"):
         S.ensure_points_reachable(EDGE, [(300.0, 20.0), (300.0, 390.0)], labels=["p1", "p2"])
 
 
 def test_bad_grid_arguments() -> None:
     with pytest.raises(ValueError):
-        S.build_reach_map(S.DEFAULT_STATION, 600, 400, 0)
+        S.build_reach_map(S.DEFAULT_WORK_CELL, 600, 400, 0)
     with pytest.raises(ValueError):
-        S.build_reach_map(S.DEFAULT_STATION, -1, 400, 10)
+        S.build_reach_map(S.DEFAULT_WORK_CELL, -1, 400, 10)
 
 
 @dataclass

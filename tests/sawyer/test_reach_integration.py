@@ -15,7 +15,7 @@ from bilevel_kit.reachability import reach_grid
 
 def _doc(root, tray_x: float, **extra):
     doc = json.loads((root / "instances/hrc_table.json").read_text())
-    doc["station"] = {"tray_pose": {"x": tray_x, "y": 150, "z": -150, "yaw": -90}}
+    doc["work_cell"] = {"tray_pose": {"x": tray_x, "y": 150, "z": -150, "yaw": -90}}
     doc["reachability"] = True
     doc.update(extra)
     return doc
@@ -75,26 +75,26 @@ def test_tray_out_of_reach_is_a_clear_error(root, tmp_path, capsys):
     assert "reachable 0.0%" in capsys.readouterr().out
 
 
-def test_bad_station_names_the_field(root, tmp_path, capsys):
+def test_bad_work_cell_names_the_field(root, tmp_path, capsys):
     doc = _doc(root, 900)
-    doc["station"]["grasp_yaws"] = []
+    doc["work_cell"]["grasp_yaws"] = []
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(doc))
     assert main(["solve", str(path), "-m", "single-task"]) == 2
-    assert "$.station.grasp_yaws: [] should be non-empty" in capsys.readouterr().err
+    assert "$.work_cell.grasp_yaws: [] should be non-empty" in capsys.readouterr().err
 
 
 def test_motion_robot_times(root):
-    from bilevel_kit.sawyer import DEFAULT_STATION, tray_average_time
+    from bilevel_kit.sawyer import DEFAULT_WORK_CELL, tray_average_time
 
     inst = from_dict(_doc(root, 450, robot_times="motion", reachability=False))
-    station = inst.station
-    want = tray_average_time(station, "leg", 300, 200)
+    work_cell = inst.work_cell
+    want = tray_average_time(work_cell, "leg", 300, 200)
     assert inst.part_types["leg"].pick_time == pytest.approx(want)
     assert inst.part_types["leg"].nominal_pick_time == 12.0
     assert inst.robot_time("top1") == pytest.approx(2 * inst.part_types["screw_long"].pick_time)
     assert 3.0 < want < 8.0  # a Sawyer pick-and-place cycle takes seconds
-    assert station != DEFAULT_STATION
+    assert work_cell != DEFAULT_WORK_CELL
     again = from_dict(json.loads(json.dumps(inst.to_dict())))
     assert again == inst  # the file keeps the nominal pick times, loading recomputes
 
@@ -126,16 +126,16 @@ def test_reach_cli_draws_a_kit(root, tmp_path, capsys, monkeypatch):
     assert "kit 1 of s.json: " in title and "0 unreachable" in title
 
 
-def test_reachability_needs_no_station_section(root):
+def test_reachability_needs_no_work_cell_section(root):
     doc = json.loads((root / "instances/hrc_table.json").read_text())
     doc["reachability"] = True
     inst = from_dict(doc)
-    assert inst.station is None and reach_grid(inst).reachable.all()
+    assert inst.work_cell is None and reach_grid(inst).reachable.all()
     with pytest.raises(InstanceError, match=r"\$\.robot_times"):
         from_dict(
             {
                 **doc,
                 "robot_times": "motion",
-                "station": {"tray_pose": {"x": 2000, "y": 0, "z": 0, "yaw": 0}},
+                "work_cell": {"tray_pose": {"x": 2000, "y": 0, "z": 0, "yaw": 0}},
             }
         )

@@ -29,10 +29,12 @@ def test_the_record_round_trips_and_its_digest_ignores_layout(tmp_path):
     assert record["path"] == str(CELL) and len(record["sha256"]) == 64
     assert record["cell"] == doc
     again = wc.recorded_cell(record, "sol.json")
-    assert (again.station, again.grasp_widths) == (cell.station, cell.grasp_widths)
+    assert (again.geometry, again.grasp_widths) == (cell.geometry, cell.grasp_widths)
     other = wc.parse_work_cell({**doc, "grasp_widths": {"foot": 4.0}})
     assert wc.cell_digest(other) != record["sha256"]
-    with pytest.raises(wc.WorkCellError, match=r"sol.json: \$.work_cell.sha256: does not match"):
+    with pytest.raises(
+        wc.WorkCellFileError, match=r"sol.json: \$.work_cell.sha256: does not match"
+    ):
         wc.recorded_cell({**record, "cell": {**doc, "grasp_widths": {"foot": 4.0}}}, "sol.json")
 
 

@@ -1,4 +1,7 @@
-"""Station geometry: where the tray and the part bins are, relative to the Sawyer.
+"""The work cell's geometry: where the tray and the part bins are, relative to the Sawyer.
+
+An instance's ``work_cell`` section (docs/formats.md#the-work-cell-section); not to be confused
+with the assembly *stations* a robot serves (``stations``, docs/stations.md).
 
 Units follow the instance format: lengths in **millimetres**, angles in **degrees**. All poses
 are in the robot ``base`` frame (x forward, y to the robot's left, z up; origin on the
@@ -9,7 +12,7 @@ runs along the tray width and its y axis along the tray height (the directions o
 instance's ``tray.width`` / ``tray.height`` and of every placement's ``x`` / ``y``); its z axis
 is the base z axis. ``tray_yaw`` is the heading of the tray x axis in the base frame.
 
-The default station (:data:`DEFAULT_STATION`): a tray lying flat on a table 150 mm below the
+The default work cell (:data:`DEFAULT_WORK_CELL`): a tray lying flat on a table 150 mm below the
 base (a 0.76 m table next to the standard pedestal), with yaw -90 deg, so that from the robot's
 point of view the tray x axis runs to the right and the y axis away from the robot. Its
 lower-left corner is at (450, 300) mm, so a 600 x 400 mm tray covers x in [450, 850] mm and y
@@ -28,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import StationError
+from .errors import WorkCellError
 from .fingers import DEFAULT_GRIPPER, Gripper, gripper_schema
 
 Vec3 = tuple[float, float, float]
@@ -38,18 +41,18 @@ def _vec3(value: Any, where: str) -> Vec3:
     try:
         x, y, z = (float(v) for v in value)
     except (TypeError, ValueError) as exc:
-        raise StationError(f"{where}: expected [x, y, z] in mm, got {value!r}") from exc
+        raise WorkCellError(f"{where}: expected [x, y, z] in mm, got {value!r}") from exc
     if not all(math.isfinite(v) for v in (x, y, z)):
-        raise StationError(f"{where}: coordinates must be finite, got {value!r}")
+        raise WorkCellError(f"{where}: coordinates must be finite, got {value!r}")
     return (x, y, z)
 
 
 @dataclass(frozen=True)
-class Station:
-    """Tray pose, bins and gripper settings of one kitting station (mm, degrees).
+class WorkCell:
+    """Tray pose, bins and gripper settings of the robot's work cell (mm, degrees).
 
     ``bins`` may be given as a mapping part type -> (x, y, z); it is stored as a sorted tuple
-    of pairs so that stations are hashable. ``grasp_yaws`` are the allowed headings of the
+    of pairs so that work cells are hashable. ``grasp_yaws`` are the allowed headings of the
     gripper's x axis: measured from the tray x axis at the tray, from the base x axis at a bin.
     """
 
@@ -96,16 +99,16 @@ class Station:
         ):
             value = float(getattr(self, name))
             if not math.isfinite(value):
-                raise StationError(f"{name} must be finite, got {value!r}")
+                raise WorkCellError(f"{name} must be finite, got {value!r}")
             object.__setattr__(self, name, value)
         if not isinstance(self.gripper, Gripper):
-            raise StationError(f"gripper: expected a Gripper, got {self.gripper!r}")
+            raise WorkCellError(f"gripper: expected a Gripper, got {self.gripper!r}")
         if not self.grasp_yaws:
-            raise StationError("grasp_yaws: at least one allowed gripper yaw is needed")
+            raise WorkCellError("grasp_yaws: at least one allowed gripper yaw is needed")
         if self.approach_height < 0 or self.tool_offset < 0:
-            raise StationError("approach_height and tool_offset must be >= 0")
+            raise WorkCellError("approach_height and tool_offset must be >= 0")
         if len(set(self.grasp_yaws)) != len(self.grasp_yaws):
-            raise StationError("grasp_yaws: angles must be distinct")
+            raise WorkCellError("grasp_yaws: angles must be distinct")
 
     # --- geometry -------------------------------------------------------------------------
 
@@ -151,7 +154,7 @@ class Station:
     # --- serialisation --------------------------------------------------------------------
 
     def to_dict(self) -> dict[str, Any]:
-        """The ``station`` section of an instance file (see :func:`station_schema`)."""
+        """The ``work_cell`` section of an instance file (see :func:`work_cell_schema`)."""
         doc: dict[str, Any] = {
             "tray_pose": {
                 "x": self.tray_x,
@@ -174,66 +177,78 @@ class Station:
         return doc
 
     @classmethod
-    def from_dict(cls, doc: Mapping[str, Any] | None) -> Station:
-        """Build from a ``station`` section; missing keys take the default station's values.
+    def from_dict(cls, doc: Mapping[str, Any] | None) -> WorkCell:
+        """Build from a ``work_cell`` section; missing keys take the default work cell's values.
 
-        Raises :class:`StationError` (a ``ValueError``) naming the bad key.
+        Raises :class:`WorkCellError` (a ``ValueError``) naming the bad key.
         """
         if doc is None:
             return cls()
         if not isinstance(doc, Mapping):
-            raise StationError(f"station: expected an object, got {type(doc).__name__}")
-        known = set(station_schema()["properties"])
+            raise WorkCellError(f"work_cell: expected an object, got {type(doc).__name__}")
+        known = set(work_cell_schema()["properties"])
         unknown = sorted(set(doc) - known)
         if unknown:
-            raise StationError(f"station: unknown key(s) {', '.join(unknown)}")
+            raise WorkCellError(f"work_cell: unknown key(s) {', '.join(unknown)}")
         kwargs: dict[str, Any] = {}
         pose = doc.get("tray_pose", {})
         if not isinstance(pose, Mapping):
-            raise StationError("station.tray_pose: expected an object with x, y, z, yaw")
+            raise WorkCellError("work_cell.tray_pose: expected an object with x, y, z, yaw")
         for key in pose:
             if key not in ("x", "y", "z", "yaw"):
-                raise StationError(f"station.tray_pose: unknown key {key!r}")
+                raise WorkCellError(f"work_cell.tray_pose: unknown key {key!r}")
         for key in ("x", "y", "z", "yaw"):
             if key in pose:
-                kwargs[f"tray_{key}"] = _number(pose[key], f"station.tray_pose.{key}")
+                kwargs[f"tray_{key}"] = _number(pose[key], f"work_cell.tray_pose.{key}")
         if "bins" in doc:
             if not isinstance(doc["bins"], Mapping):
-                raise StationError("station.bins: expected an object part type -> [x, y, z]")
-            kwargs["bins"] = {k: _vec3(v, f"station.bins.{k}") for k, v in doc["bins"].items()}
+                raise WorkCellError("work_cell.bins: expected an object part type -> [x, y, z]")
+            kwargs["bins"] = {k: _vec3(v, f"work_cell.bins.{k}") for k, v in doc["bins"].items()}
         if "place_heights" in doc:
             if not isinstance(doc["place_heights"], Mapping):
-                raise StationError("station.place_heights: expected an object part type -> mm")
+                raise WorkCellError("work_cell.place_heights: expected an object part type -> mm")
             kwargs["place_heights"] = {
-                k: _number(v, f"station.place_heights.{k}") for k, v in doc["place_heights"].items()
+                k: _number(v, f"work_cell.place_heights.{k}")
+                for k, v in doc["place_heights"].items()
             }
         if "gripper" in doc:
             kwargs["gripper"] = Gripper.from_dict(doc["gripper"])
         if "default_bin" in doc:
-            kwargs["default_bin"] = _vec3(doc["default_bin"], "station.default_bin")
+            kwargs["default_bin"] = _vec3(doc["default_bin"], "work_cell.default_bin")
         for key in ("approach_height", "place_height", "tool_offset"):
             if key in doc:
-                kwargs[key] = _number(doc[key], f"station.{key}")
+                kwargs[key] = _number(doc[key], f"work_cell.{key}")
         if "grasp_yaws" in doc:
             yaws = doc["grasp_yaws"]
             if isinstance(yaws, str | bytes) or not isinstance(yaws, Iterable):
-                raise StationError("station.grasp_yaws: expected a list of angles in degrees")
-            kwargs["grasp_yaws"] = tuple(_number(a, "station.grasp_yaws[]") for a in yaws)
+                raise WorkCellError("work_cell.grasp_yaws: expected a list of angles in degrees")
+            kwargs["grasp_yaws"] = tuple(_number(a, "work_cell.grasp_yaws[]") for a in yaws)
         return cls(**kwargs)
+
+
+def error_path(exc: WorkCellError) -> tuple[str, str]:
+    """``(path inside the section, detail)`` of a geometry error, so that a file's error names
+    its own key (``work_cell`` or the old ``station``): ``"work_cell.tray_pose.x: bad"`` gives
+    ``(".tray_pose.x", "bad")``; a message without a field gives ``("", message)``."""
+    field, sep, detail = str(exc).partition(": ")
+    if not sep or " " in field:
+        return "", str(exc)
+    field = field.removeprefix("work_cell")
+    return (field if not field or field.startswith(".") else "." + field), detail
 
 
 def _number(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise StationError(f"{where}: expected a finite number, got {value!r}")
+        raise WorkCellError(f"{where}: expected a finite number, got {value!r}")
     return float(value)
 
 
-#: The documented default station (see the module docstring).
-DEFAULT_STATION = Station()
+#: The documented default work cell (see the module docstring).
+DEFAULT_WORK_CELL = WorkCell()
 
 
-def station_schema() -> dict[str, Any]:
-    """JSON-schema fragment (draft 2020-12) of the optional ``station`` section."""
+def work_cell_schema() -> dict[str, Any]:
+    """JSON-schema fragment (draft 2020-12) of the optional ``work_cell`` section."""
     num = {"type": "number"}
     xyz = {
         "type": "array",
@@ -242,10 +257,10 @@ def station_schema() -> dict[str, Any]:
         "maxItems": 3,
         "description": "[x, y, z] in mm, robot base frame",
     }
-    d = DEFAULT_STATION
+    d = DEFAULT_WORK_CELL
     return {
         "type": "object",
-        "description": "Sawyer station geometry (mm, degrees, robot base frame: x forward, "
+        "description": "Sawyer work cell geometry (mm, degrees, robot base frame: x forward, "
         "y left, z up). Every key is optional; defaults describe a tray 650 mm in front of "
         "the robot on a table 150 mm below the base.",
         "additionalProperties": False,
