@@ -181,6 +181,18 @@ def _check_range(value: float, meta: Mapping[str, Any], where: str) -> None:
         raise UsageError(f"{where}: must be < {below}, got {value!r}")
 
 
+def finger_room_field() -> bool:
+    """The ``finger_room`` option (off by default) of every method that has it (greedy-ce,
+    cpsat): one declaration, so its default, meaning and check are the same for each."""
+    return dataclasses.field(
+        default=False,
+        metadata={
+            "help": "pack every part with room for the station gripper's open fingers "
+            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
+        },
+    )
+
+
 def field_names(cls: type) -> list[str]:
     return [f.name for f in dataclasses.fields(cls)]
 

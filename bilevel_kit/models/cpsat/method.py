@@ -68,6 +68,7 @@ from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
 from ...objectives import model_objectives
+from ...options import finger_room_field
 from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -88,7 +89,7 @@ from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .conclude import Report, conclude, plan_of
 from .context import MARGIN, Context, Model, State
-from .finger_room import finger_room_field, with_room
+from .finger_room import with_room
 from .model import build, canonical, release_bound
 from .proven import kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
