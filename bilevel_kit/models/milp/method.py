@@ -334,17 +334,12 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
         loop.cuts.seed_pairs()  # tray=auto or benders: pair cuts seeded, as cpsat's Benders
     info = loop.run(r.opt, r.seed, r.solver_options)
     scope = loop.cuts.scope
-    r.extra.update(
-        master_solves=loop.iterations,
-        cuts=master.n_cuts,
-        unproven_cuts=loop.cuts.unproven,
-        axis_aligned_cuts=loop.cuts.axis_only,
-        master_time_s=None if info is None else info.wall_time_s,
-    )
+    r.extra.update(master_solves=loop.iterations, cuts=master.n_cuts, **loop.cut_counts())
+    r.extra["master_time_s"] = None if info is None else info.wall_time_s
     solved(r.extra, *_outcome(info))
-    if loop.inc is None:  # (an infeasible master has every cut proven: scope not None)
+    if loop.kits is None:  # (an infeasible master has every cut proven: scope not None)
         return without_plan(r, loop.infeasible, scope)
-    return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
+    return _conclude(r, loop.kits, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
 def _outcome(info: SolveInfo | None) -> tuple[str, str | None]:
