@@ -43,7 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ... import progress
 from ...bounds import best_bound, min_kits
@@ -87,6 +87,9 @@ from .model import (
 )
 from .options import MARGIN, STATION_OPTIONS, MilpOptions
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver
+
+if TYPE_CHECKING:  # (annotations only: models.relax loads when a bound is computed)
+    from ..relax import ProvenBound
 
 
 def solve(
@@ -169,7 +172,7 @@ class _Run:
     opt: Any  # the solver
     solver_options: Mapping[str, Any] | None
     extra: dict[str, Any] = field(default_factory=dict)
-    proven: Any = None  # the proven bound of models.relax (None: not computed)
+    proven: ProvenBound | None = None  # the proven bound of models.relax (None: not computed)
     K: int = 1
     upper: float | None = None  # the incumbent's makespan (makespan objective)
     inc_obj: float | None = None  # the incumbent's objective
