@@ -197,6 +197,12 @@ def field_names(cls: type) -> list[str]:
     return [f.name for f in dataclasses.fields(cls)]
 
 
+def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
+    """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
+    ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
+    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
+
+
 def parse_options(cls: type[T], params: Mapping[str, Any], owner: str) -> T:
     """Validate ``params`` against the options dataclass ``cls`` of ``owner``.
 

@@ -67,7 +67,7 @@ from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
-from ...options import finger_room_field
+from ...options import finger_room_field, keyword_options
 from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -81,7 +81,7 @@ from ..common import (
     reduced_edges,
 )
 from ..exact import keys
-from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
+from ..exact.driver import HINT_SHARE, check_hint, drive, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, improve
 from ..exact.options import Fallback, fallback_field, hint_field, objective_field

@@ -51,6 +51,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import Objective, human_times
 from ...objectives import get as get_objective
+from ...options import keyword_options
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import (
@@ -65,7 +66,6 @@ from ..exact.driver import (
     HINT_SHARE,
     bound_source,
     drive,
-    keyword_options,
     known_bound,
     proven_bound,
     without_plan,
