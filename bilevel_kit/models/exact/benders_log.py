@@ -1,13 +1,8 @@
-"""The bookkeeping the logic-based Benders loops of ``cpsat`` (:mod:`..cpsat.benders`) and
-``milp`` (:mod:`..milp.benders`) share (docs/formulations.md, "One driver for cpsat and
-milp"): the incumbent, the master's bounds proven for 0/90-degree plans (``lower``) and for
-every plan (``lower_any``), the proof, the packing verdicts of a master solution's kits, their
-cuts and the repair of the kits that do not fit.
-
-The loops differ in the master's solver and in the objective's unit: CP-SAT's integer time
-grid, compared exactly (``tol`` 0), or MILP's seconds, compared within the solver's relative
-tolerance ``tol``.
-"""
+"""What the logic-based Benders loops of ``cpsat`` and ``milp`` share (docs/formulations.md,
+"One driver for cpsat and milp"): the incumbent, the master's bounds proven for 0/90-degree
+plans (``lower``) and every plan (``lower_any``), the proof, the kits' packing verdicts, cuts
+and repair. They differ in the master's solver and the objective's unit: CP-SAT's integer
+grid, compared exactly (``tol`` 0), or MILP's seconds, within the relative tolerance ``tol``."""
 
 from __future__ import annotations
 
@@ -26,9 +21,8 @@ N = TypeVar("N", int, float)
 
 
 class BendersLog(Generic[T, N]):
-    """The incumbent ``kits`` (objective ``obj``), the proven bounds and the cuts of one loop;
-    ``left()`` the seconds the loop may still use. A backend says how its kits name tasks
-    (:meth:`task_ids`) and scores repaired kits (:meth:`scored`)."""
+    """One loop's incumbent ``kits`` (objective ``obj``), proven bounds and cuts; ``left()``
+    its seconds left. A backend names its kits' tasks and scores repaired kits."""
 
     def __init__(
         self,
@@ -52,19 +46,15 @@ class BendersLog(Generic[T, N]):
         self.iterations = 0
 
     def task_ids(self, kit: Sequence[T]) -> list[str]:
-        """The task ids of one of the master's kits."""
-        raise NotImplementedError
+        raise NotImplementedError  # the task ids of one of the master's kits
 
     def scored(self, kits: list[list[str]]) -> tuple[list[list[T]], N]:
-        """Kits of task ids as the master's kits, with their objective."""
-        raise NotImplementedError
+        raise NotImplementedError  # kits of task ids as the master's, with their objective
 
     def improve(self, kits: list[list[T]], obj: N) -> None:
-        """A new incumbent: packable kits of objective ``obj``."""
         self.kits, self.obj = kits, obj
 
     def counts(self, kit: Sequence[T]) -> dict[str, int]:
-        """The part multiset of one of the master's kits."""
         return dict(self.instance.kit_parts(self.task_ids(kit)))
 
     def accepts(self, obj: N) -> bool:
@@ -97,8 +87,8 @@ class BendersLog(Generic[T, N]):
             self.lower_any = self.obj
 
     def master_infeasible(self) -> None:
-        """The master, which holds C <= U, has no solution: without an unproven cut the
-        incumbent is optimal (no incumbent: there is no plan)."""
+        """The master (C <= U) has no solution: without an unproven cut the incumbent is
+        optimal (none: there is no plan)."""
         if self.cuts.unproven == 0:
             if self.kits is not None:
                 self.proved()
