@@ -181,8 +181,26 @@ def _check_range(value: float, meta: Mapping[str, Any], where: str) -> None:
         raise UsageError(f"{where}: must be < {below}, got {value!r}")
 
 
+def finger_room_field() -> bool:
+    """The ``finger_room`` option (off by default) of every method that has it (greedy-ce,
+    cpsat): one declaration, so its default, meaning and check are the same for each."""
+    return dataclasses.field(
+        default=False,
+        metadata={
+            "help": "pack every part with room for the station gripper's open fingers "
+            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
+        },
+    )
+
+
 def field_names(cls: type) -> list[str]:
     return [f.name for f in dataclasses.fields(cls)]
+
+
+def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
+    """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
+    ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
+    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
 
 
 def parse_options(cls: type[T], params: Mapping[str, Any], owner: str) -> T:

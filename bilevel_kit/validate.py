@@ -33,6 +33,15 @@ from .plan import Kit, KitTimes, Placement, Plan, Timeline, evaluate, kitless
 #: Absolute tolerance (s) when comparing reported times with the evaluator's.
 TIME_TOL = 1e-6
 
+#: The kinds that concern what a result claims about its plan (not the plan itself).
+CLAIM_KINDS = (
+    "objective_mismatch",
+    "bound_above_makespan",
+    "bound_above_objective",
+    "gap_mismatch",
+    "status_mismatch",
+)
+
 KINDS = (
     "empty_kit",
     "kit_without_parts",
@@ -51,22 +60,9 @@ KINDS = (
     "unreachable",
     "times_inconsistent",
     "tray_not_returned",
-    "objective_mismatch",
-    "bound_above_makespan",
-    "bound_above_objective",
-    "gap_mismatch",
-    "status_mismatch",
+    *CLAIM_KINDS,
     "instance_mismatch",
     "bad_number",
-)
-
-#: The kinds that concern what a result claims about its plan (not the plan itself).
-CLAIM_KINDS = (
-    "objective_mismatch",
-    "bound_above_makespan",
-    "bound_above_objective",
-    "gap_mismatch",
-    "status_mismatch",
 )
 
 #: Overlapping pairs listed per kit; more are summarised in one violation (a tampered file with

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, fields
 from typing import Literal
 
 from ..errors import UsageError
+from ..options import finger_room_field
 from .ce.params import CEParams
 from .greedy_search import SearchLimits
 
@@ -170,14 +171,7 @@ class GreedyCEOptions:
             "valid and its fitness does not drop"
         },
     )
-
-    finger_room: bool = field(
-        default=False,
-        metadata={
-            "help": "lay every part out with room for the station gripper's open fingers "
-            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
-        },
-    )
+    finger_room: bool = finger_room_field()
 
     def __post_init__(self) -> None:
         try:

@@ -286,20 +286,7 @@ class Packer:
     def split(self, kit: Sequence[str]) -> list[list[str]] | None:
         """Cut a kit (in human order) greedily into consecutive sub-kits that fit; None if a
         single task does not fit (or is unknown)."""
-        out: list[list[str]] = []
-        cur: list[str] = []
-        for t in kit:
-            if cur and self.fits([*cur, t]):
-                cur.append(t)
-                continue
-            if cur:
-                out.append(cur)
-            if not self.fits([t]):
-                return None
-            cur = [t]
-        if cur:
-            out.append(cur)
-        return out
+        return split_greedily(kit, self.fits)
 
     def minimal_nofit(
         self,
@@ -442,6 +429,31 @@ def scope_claims(scope: str | None) -> dict[str, Any]:
         "status_reason": "a kit was excluded without a proof (a packing time limit, or no "
         "layout on an inexact packing grid); the bound is the last one proven",
     }
+
+
+def split_greedily(
+    kit: Sequence[str],
+    fits: Callable[[list[str]], bool | None],
+    alone: Callable[[list[str]], bool | None] | None = None,
+) -> list[list[str]] | None:
+    """``kit`` (in human order) cut greedily into consecutive sub-kits that ``fits``; None if
+    a single task does not fit ``alone`` (None: ``fits``) or is unknown. One rule for the
+    exact methods' packer and the LNS's start plans."""
+    alone = fits if alone is None else alone
+    out: list[list[str]] = []
+    cur: list[str] = []
+    for t in kit:
+        if cur and fits([*cur, t]):
+            cur.append(t)
+            continue
+        if cur:
+            out.append(cur)
+        if not alone([t]):
+            return None
+        cur = [t]
+    if cur:
+        out.append(cur)
+    return out
 
 
 def johnson_topological_order(instance: Instance) -> list[str]:

@@ -15,7 +15,7 @@ from ...bounds import best_bound
 from ...errors import UsageError
 from ...instance import Instance
 from ...methods import MethodOutput, Status
-from ...options import parse_options
+from ...options import keyword_options
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..milp.model import human_order
@@ -82,16 +82,7 @@ def solve(
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's) and the Python-only arguments of :func:`run`."""
-    params = {
-        "solver": solver,
-        "lower": lower,
-        "pack_time_limit": pack_time_limit,
-        "max_tasks": max_tasks,
-        "max_columns": max_columns,
-        "signed": signed,
-        "log": log,
-    }
-    options = parse_options(BilevelMilpOptions, params, "bilevel-milp")
+    options = keyword_options(BilevelMilpOptions, locals(), "bilevel-milp")
     return run(
         instance,
         options,

@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from typing import Any
 
 from .. import stoppable
-from ..common import NoGoodCuts, kit_order
+from ..common import NoGoodCuts
+from ..exact.benders_log import BendersLog
 from ..exact.keys import MASTER_SOLVES
 from ..packing import ANY_ANGLE
-from ..packing_oracle import WHY_TIME, Fit
 from .context import MARGIN, Context, Model, State
 from .model import canonical, extract_kits, hint
 from .scaling import scaled_objective
@@ -35,72 +36,46 @@ def run_benders(ctx: Context, mdl: Model, solver: Any, incumbent: list[list[int]
     loop = _Benders(ctx, mdl, incumbent)
     if not ctx.sc.station:  # with stations, as the MILP: pair cuts proven for 0/90-degree
         loop.cuts.seed_pairs()  # layouts only would limit every proof (docs/formulations.md)
-    it = 0
     while ctx.left() > 0.01:
-        it += 1
+        loop.iterations += 1
         if not loop.iterate(solver):
             break
-    loop.state.info = {
-        MASTER_SOLVES: it,
-        "unproven_cuts": loop.cuts.unproven,
-        "axis_aligned_cuts": loop.cuts.axis_only,
-    }
-    loop.state.scope = loop.cuts.scope
-    return loop.state
+    return State(
+        loop.kits,
+        loop.obj,
+        lower=loop.lower,
+        proven=loop.proven,
+        infeasible=loop.infeasible,
+        lower_any=loop.lower_any,
+        scope=loop.cuts.scope,
+        status_name=loop.status_name,
+        info={MASTER_SOLVES: loop.iterations, **loop.cut_counts()},
+    )
 
 
-class _Benders:
-    """The loop's state: the incumbent and the cuts (how many are unproven)."""
+class _Benders(BendersLog[int, int]):
+    """The loop over CP-SAT masters: the incumbent and the cuts (how many are unproven) in
+    :class:`..exact.benders_log.BendersLog`, on the scaled integer time grid."""
 
     def __init__(self, ctx: Context, mdl: Model, incumbent: list[list[int]] | None) -> None:
+        obj = None if incumbent is None else scaled_objective(ctx.sc, incumbent, ctx.objective)
+        cuts = NoGoodCuts(ctx.packer, ctx.budget, MARGIN, functools.partial(add_cut, mdl))
+        super().__init__(ctx.instance, cuts, ctx.left, incumbent, obj)
         self.ctx = ctx
         self.mdl = mdl
-        obj = None if incumbent is None else scaled_objective(ctx.sc, incumbent, ctx.objective)
-        self.state = State(incumbent, obj)
-        self.cuts = NoGoodCuts(ctx.packer, ctx.budget, MARGIN, functools.partial(add_cut, mdl))
+        self.status_name = "UNKNOWN"
 
-    def counts(self, kit: list[int]) -> dict[str, int]:
+    def task_ids(self, kit: Sequence[int]) -> list[str]:
         ids = self.ctx.ids
-        return dict(self.ctx.instance.kit_parts([ids[i] for i in kit]))
+        return [ids[i] for i in kit]
 
-    def verdicts(self, kits: list[list[int]]) -> list[Fit]:
-        """Does each kit fit (the oracle's answer; unknown past the time limit)?"""
-        packer = self.ctx.packer
-        out: list[Fit] = []
-        for kit in kits:
-            if self.ctx.left() <= 0:  # out of time: the rest stays unknown
-                out.append(Fit(None, why=WHY_TIME))
-                continue
-            counts = self.counts(kit)
-            fit = packer.verdict(counts)
-            if fit.fits is None:  # a hard packing: one more try with a longer limit
-                longer = 10 * packer.pack_tl  # (reproducible: not from the clock)
-                if not packer.deterministic:
-                    longer = max(packer.pack_tl, min(longer, self.ctx.left() / 3))
-                fit = packer.verdict(counts, longer)
-            out.append(fit)
-        return out
-
-    def repair(self, kits: list[list[int]]) -> None:
-        """Split the kits that do not fit; keep the result if it beats the incumbent."""
-        ctx, state = self.ctx, self.state
-        ids = ctx.ids
-        repaired: list[list[int]] = []
-        for kit in kits:
-            parts = ctx.packer.split(list(kit_order(ctx.instance, [ids[i] for i in kit])))
-            if parts is None:
-                repaired = []
-                break
-            repaired += [[ctx.instance.index[t] for t in q] for q in parts]
-        if repaired:
-            repaired = canonical(repaired, ctx.groups)
-            obj = scaled_objective(ctx.sc, repaired, ctx.objective)
-            if state.obj is None or obj < state.obj:
-                self.improve(repaired, obj)
+    def scored(self, kits: list[list[str]]) -> tuple[list[list[int]], int]:
+        idx = self.ctx.instance.index
+        out = canonical([[idx[t] for t in q] for q in kits], self.ctx.groups)
+        return out, scaled_objective(self.ctx.sc, out, self.ctx.objective)
 
     def improve(self, kits: list[list[int]], obj: int) -> None:
-        """A new incumbent (packable kits of scaled objective ``obj``)."""
-        self.state.kits, self.state.obj = kits, obj
+        super().improve(kits, obj)
         if self.ctx.live is not None:
             self.ctx.live.kits(kits, obj)
 
@@ -108,9 +83,9 @@ class _Benders:
         """One master solve and its packing checks; False when the loop is done."""
         from ortools.sat.python import cp_model
 
-        state, mdl = self.state, self.mdl
-        if state.kits is not None:
-            hint(mdl, self.ctx.sc, state.kits)
+        mdl = self.mdl
+        if self.kits is not None:
+            hint(mdl, self.ctx.sc, self.kits)
         left = self.ctx.left()
         if self.ctx.sc.station:  # keep time to pack the master's kits, else a master solution
             left *= 1 - STATION_PACK_SHARE  # found late is lost (docs/formulations.md)
@@ -121,12 +96,9 @@ class _Benders:
             live.tracker.report(stage=f"CP-SAT Benders, {self.mdl.n_cuts} cuts")
         st = stoppable.solve(solver, mdl.model, self.ctx.callback)
         self.ctx.left()  # (a reproducible run records a wall limit the solve ran into)
-        state.status_name = solver.status_name(st)
+        self.status_name = solver.status_name(st)
         if st == cp_model.INFEASIBLE:
-            # the master holds C <= U, so without an unproven cut the incumbent is optimal
-            state.infeasible = state.kits is None and self.cuts.unproven == 0
-            if state.kits is not None and self.cuts.unproven == 0:
-                self.proved()
+            self.master_infeasible()
             return False
         if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
             return False
@@ -135,37 +107,14 @@ class _Benders:
         verdicts = self.verdicts(kits)
         if all(v.fits is True for v in verdicts):
             obj = round(solver.objective_value)
-            if state.obj is None or obj <= state.obj:
+            if self.accepts(obj):
                 self.improve(kits, obj)
-            best = obj if state.obj is None else state.obj
+            best = obj if self.obj is None else self.obj
             if (st == cp_model.OPTIMAL and self.cuts.unproven == 0) or (
-                state.lower is not None and state.lower >= best
+                self.lower is not None and self.lower >= best
             ):
                 self.proved()
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.ctx.left() <= 0.01:  # no time for another master solve: no cuts, no repair
             return False
-        new = self.cuts.cut_kits(map(self.counts, kits), verdicts)
-        if self.ctx.left() > 0:
-            self.repair(kits)
-        if state.obj is not None and state.lower is not None and state.lower >= state.obj:
-            self.proved()
-            return False
-        return bool(new)  # nothing new to cut: only possible with unknown packings
-
-    def record_bound(self, bound: int) -> None:
-        """A master's bound: a proof for 0/90-degree plans while every cut is proven, and for
-        every plan while every cut holds at any angle (:attr:`.common.NoGoodCuts.scope`)."""
-        state, scope = self.state, self.cuts.scope
-        if scope is None:  # after an unproven cut the master bound is no proof
-            return
-        state.lower = bound if state.lower is None else max(state.lower, bound)
-        if scope == ANY_ANGLE:
-            state.lower_any = bound if state.lower_any is None else max(state.lower_any, bound)
-
-    def proved(self) -> None:
-        """The incumbent is optimal for the plans the cuts' scope covers."""
-        state = self.state
-        state.proven, state.lower = True, state.obj
-        if self.cuts.scope == ANY_ANGLE:
-            state.lower_any = state.obj
+        return self.cut(kits, verdicts)

@@ -13,23 +13,12 @@ strict`` by construction. The status and bound are those of the problem with the
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import field, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ...instance import Instance
     from ...methods import MethodOutput
-
-
-def finger_room_field() -> Any:
-    """The ``finger_room`` option of a method's options dataclass (off by default)."""
-    return field(
-        default=False,
-        metadata={
-            "help": "pack every part with room for the station gripper's open fingers "
-            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
-        },
-    )
 
 
 def with_room(

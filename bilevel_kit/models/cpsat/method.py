@@ -67,7 +67,7 @@ from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
-from ...objectives import model_objectives
+from ...options import finger_room_field, keyword_options
 from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -81,14 +81,15 @@ from ..common import (
     reduced_edges,
 )
 from ..exact import keys
-from ..exact.driver import HINT_SHARE, check_hint, drive, keyword_options, without_plan
+from ..exact.driver import HINT_SHARE, check_hint, drive, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, improve
+from ..exact.options import Fallback, fallback_field, hint_field, objective_field
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .conclude import Report, conclude, plan_of
 from .context import MARGIN, Context, Model, State
-from .finger_room import finger_room_field, with_room
+from .finger_room import with_room
 from .model import build, canonical, release_bound
 from .proven import kit_cap, known_bound, scaled_kit_bounds, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
@@ -100,7 +101,6 @@ if TYPE_CHECKING:
     from .live import Live as LiveProgress
 
 TrayMode = Literal["auto", "embedded", "benders"]
-Fallback = Literal["lns", "none"]
 TRAY_MODES: tuple[str, ...] = ("auto", "embedded", "benders")
 #: The share of the time limit kept back from CP-SAT (with :data:`.context.MARGIN`).
 KEEP_BACK = 0.01
@@ -124,13 +124,7 @@ class ScheduleOptions:
         default="auto",
         metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
     )
-    objective: str = field(
-        default="makespan",
-        metadata={  # the registry's modelled objectives, a plugin's too (checked when parsed)
-            "help": "makespan, (stations) sum_completion, human_idle, or a plugin's objective",
-            "choices": model_objectives,
-        },
-    )
+    objective: str = objective_field()
     time_resolution: float = field(
         default=0.1,
         metadata={
@@ -151,13 +145,7 @@ class ScheduleOptions:
         },
     )
     log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
-    fallback: Fallback = field(
-        default="lns",
-        metadata={
-            "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: lns returns the plan, it models one station)"
-        },
-    )
+    fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
 
     def __post_init__(self) -> None:
         _positive(self, "time_resolution", "pack_resolution")
@@ -167,13 +155,7 @@ class ScheduleOptions:
 class CpsatOptions(ScheduleOptions):
     """Options of the registered method ``cpsat``."""
 
-    hint: str = field(
-        default="auto",
-        metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), "
-            "a method name, or none"
-        },
-    )
+    hint: str = hint_field()
     finger_room: bool = finger_room_field()
 
     def __post_init__(self) -> None:

@@ -2,12 +2,13 @@
 
 CP-SAT works on integers, so times become multiples of ``time_resolution`` s (default 0.1 s).
 When the instance's times are not multiples of it, the grid is refined to the coarsest divisor
-``time_resolution / q`` (q in :data:`REFINE`, down to 1/1000) on which all of them are exact;
-if none exists the times are rounded *down*. Makespan is non-decreasing in every duration (a
-max-plus expression, docs/timeline.md), so with rounded-down times the model's optimum and bound
-are lower bounds for the real instance: the reported bound stays valid. The reported makespan is
-always recomputed by :func:`bilevel_kit.plan.evaluate` on the real times, and ``optimal`` is
-claimed only when the model is exact or that makespan meets the bound.
+``time_resolution / q`` (q in :data:`bilevel_kit.models.relax.REFINE`, down to 1/1000) on
+which all of them are exact; if none exists the times are rounded *down*. Makespan is
+non-decreasing in every duration (a max-plus expression, docs/timeline.md), so with
+rounded-down times the model's optimum and bound are lower bounds for the real instance: the
+reported bound stays valid. The reported makespan is always recomputed by
+:func:`bilevel_kit.plan.evaluate` on the real times, and ``optimal`` is claimed only when the
+model is exact or that makespan meets the bound.
 
 **Release times** (optional, docs/formulations.md): task i cannot be picked before
 ``rel_i``; releases are first raised to their ancestors' (the robot picks a kit's tasks in a
@@ -33,9 +34,6 @@ from ...objectives import ModelTerms
 from ...objectives import get as get_objective
 from ...plan import Plan, evaluate
 from .. import packing
-
-#: Divisors tried to make every time an exact multiple of the time grid.
-REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
 
 
 @dataclass
@@ -74,22 +72,14 @@ def scale_times(
     """Integer times on the coarsest exact grid ``resolution / q`` of the durations (else
     floored at ``resolution``); ``releases`` (task id -> s, missing: 0) are scaled on that grid
     (``exact`` also needs them on it); see the module docstring."""
+    from ..relax import REFINE, time_grid
+
     ids = [t.id for t in instance.tasks]
     # the delivery times and overheads the timeline uses, each station's (Instance.params_of):
     # with stations the instance's own are only their defaults, and need not be on the grid
     params = [instance.params_of(s) for s in instance.station_ids]
-    values = (
-        [instance.robot_time(i) for i in ids]
-        + [instance.human_time(i) for i in ids]
-        + [instance.kit_overhead_robot]
-        + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
-    )
-    res, exact = resolution, False
-    for q in REFINE if refine else (1,):
-        cand = resolution / q
-        if packing.is_grid_exact(values, cand):
-            res, exact = cand, True
-            break
+    grid = time_grid(instance, resolution, REFINE if refine else (1,))
+    res, exact = (resolution, False) if grid is None else (grid, True)
 
     rel = released(instance, releases)
     if any(rel):

@@ -19,13 +19,11 @@ backend protocol (:class:`.backend.Backend`) that builds, solves and cuts its ow
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 from ...bounds import best_bound
 from ...instance import Instance
 from ...methods import REGISTRY, MethodOutput, Status
-from ...options import field_names, parse_options
 from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
@@ -36,7 +34,6 @@ from .nomodel import buildable
 if TYPE_CHECKING:
     from ..relax import ProvenBound
 
-T = TypeVar("T")
 #: The share of the time limit the warm start (option ``hint``) may use.
 HINT_SHARE = 0.3
 
@@ -80,12 +77,6 @@ def without_plan(backend: Backend[Inc], infeasible: bool, scope: str | None) -> 
     if infeasible and scope == AXIS_ALIGNED:
         backend.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
     return backend.finish(None, Status.UNKNOWN, backend.known_bound())
-
-
-def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
-    """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
-    ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
-    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
 
 
 def check_hint(hint: str, words: tuple[str, ...]) -> None:

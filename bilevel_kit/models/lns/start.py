@@ -16,7 +16,7 @@ from ...errors import BilevelKitError
 from ...instance import Instance, topological_order
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
-from ..common import johnson_topological_order, kit_order
+from ..common import johnson_topological_order, kit_order, split_greedily
 from .fit import FastFit
 
 #: The quick heuristics tried first (no time limit: each is linear in the tasks).
@@ -139,16 +139,9 @@ def _fixed(
     for a in range(0, len(order), size):
         if budget.expired():
             return None
-        cur: list[str] = []
-        for t in kit_order(instance, order[a : a + size]):
-            if cur and fit.fits([*cur, t], PROBE_S):
-                cur.append(t)
-                continue
-            if cur:
-                kits.append(cur)
-            if not fit.fits([t]):
-                return None
-            cur = [t]
-        if cur:
-            kits.append(cur)
+        part = kit_order(instance, order[a : a + size])
+        split = split_greedily(part, lambda k: fit.fits(k, PROBE_S), fit.fits)
+        if split is None:
+            return None
+        kits += split
     return kits

@@ -5,7 +5,7 @@ its objective (:mod:`bilevel_kit.progress`)."""
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ... import progress
@@ -15,9 +15,9 @@ from ...plan import Plan, evaluate
 from ...stations import objective_of
 from ..budget import Budget
 from ..common import NoGoodCuts, Packer
+from ..exact.benders_log import BendersLog
 from ..packing import ANY_ANGLE
-from ..packing_oracle import WHY_TIME, Fit
-from .model import Master, add_cut, extract, human_order, objective_value, set_start
+from .model import Master, add_cut, extract, objective_value, set_start
 from .options import MARGIN, MilpOptions
 from .solver import TOL, SolveInfo, run_solver
 
@@ -60,9 +60,10 @@ class Live:
         self.tracker.report(objective_of(tl, self.objective.name), lower)
 
 
-class Benders:
-    """The master <-> packing loop (module docstring): the incumbent ``inc`` (objective
-    ``inc_obj``), the master's proven bound ``lower`` and the cuts seen so far."""
+class Benders(BendersLog[str, float]):
+    """The master <-> packing loop (module docstring): the incumbent ``kits`` (objective
+    ``obj``), the master's proven bounds and the cuts in
+    :class:`..exact.benders_log.BendersLog`, in seconds within the solver's tolerance."""
 
     def __init__(
         self,
@@ -75,23 +76,19 @@ class Benders:
         inc_obj: float | None,
         live: Live,
     ) -> None:
+        cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
+        left = functools.partial(budget.remaining, MARGIN)
+        super().__init__(instance, cuts, left, inc, inc_obj, TOL)
         self.live = live
-        self.instance = instance
         self.master = master
-        self.packer = packer
         self.budget = budget
         self.options = options
-        self.inc = inc
-        self.inc_obj = inc_obj
-        self.cuts = NoGoodCuts(packer, budget, MARGIN, functools.partial(add_cut, master))
-        self.lower: float | None = None
-        self.lower_any: float | None = None
-        self.proven = False
-        self.infeasible = False
-        self.iterations = 0
 
-    def left(self) -> float:
-        return self.budget.remaining(MARGIN)
+    def task_ids(self, kit: Sequence[str]) -> list[str]:
+        return list(kit)
+
+    def scored(self, kits: list[list[str]]) -> tuple[list[list[str]], float]:
+        return kits, objective_value(self.instance, kits, self.options.objective)
 
     def run(
         self, opt: Any, seed: int, solver_options: Mapping[str, Any] | None
@@ -101,8 +98,8 @@ class Benders:
         info: SolveInfo | None = None
         while self.left() > 0.05:
             self.iterations += 1
-            if self.inc is not None:
-                set_start(self.master, self.instance, self.inc)
+            if self.kits is not None:
+                set_start(self.master, self.instance, self.kits)
             # the master's bound holds for every plan only while every cut does (its scope);
             # its solutions are no plans
             proof = self.cuts.scope == ANY_ANGLE
@@ -117,25 +114,19 @@ class Benders:
                 log=self.options.log,
                 objective=self.master.model.obj,
                 options=solver_options,
-                warmstart=self.inc is not None,
+                warmstart=self.kits is not None,
                 on_bounds=self.live.on_bounds if proof and self.live.tracker.active else None,
             )
             go_on = self.step(info)
-            self.live.model_values(self.inc_obj, self.lower_any)
+            self.live.model_values(self.obj, self.lower_any)
             if not go_on:
                 break
         return info
 
     def step(self, info: SolveInfo) -> bool:
         """Use one master solution; False when the loop is done."""
-        instance, objective = self.instance, self.options.objective
         if info.infeasible:
-            # the master holds C <= U: without unproven cuts the incumbent is optimal
-            if self.cuts.unproven == 0:
-                if self.inc is not None:
-                    self.proved()
-                else:
-                    self.infeasible = True
+            self.master_infeasible()
             return False
         if info.bound is not None:
             self.record_bound(info.bound)
@@ -144,65 +135,13 @@ class Benders:
         kits = extract(self.master)
         verdicts = self.verdicts(kits)
         if all(v.fits is True for v in verdicts):
-            obj = objective_value(instance, kits, objective)
-            if self.inc_obj is None or obj <= self.inc_obj + TOL * max(1.0, abs(obj)):
-                self.inc, self.inc_obj = kits, obj
+            _, obj = self.scored(kits)
+            if self.accepts(obj):
+                self.improve(kits, obj)
             self.proven = info.optimal and self.cuts.unproven == 0
             if self.proven and self.cuts.scope == ANY_ANGLE:
                 self.lower_any = self.lower
             return False  # optimal, or the master ran out of time on a packable incumbent
         if self.left() <= 0.05:  # no time for another master solve: no cuts, no repair
             return False
-        new = self.cuts.cut_kits(map(instance.kit_parts, kits), verdicts)
-        if self.left() > 0:
-            self.repair(kits)
-        inc_obj, lower = self.inc_obj, self.lower
-        if inc_obj is not None and lower is not None and lower >= inc_obj - TOL * abs(inc_obj):
-            self.proved()
-            return False
-        return bool(new)  # nothing new to cut: only possible with unknown packings
-
-    def record_bound(self, bound: float) -> None:
-        """A master's bound: a proof for 0/90-degree plans while every cut is proven, and for
-        every plan while every cut holds at any angle (:attr:`..common.NoGoodCuts.scope`)."""
-        scope = self.cuts.scope
-        if scope is None:  # after an unproven cut the master bound is no proof
-            return
-        self.lower = bound if self.lower is None else max(self.lower, bound)
-        if scope == ANY_ANGLE:
-            self.lower_any = bound if self.lower_any is None else max(self.lower_any, bound)
-
-    def proved(self) -> None:
-        """The incumbent is optimal for the plans the cuts' scope covers."""
-        self.proven, self.lower = True, self.inc_obj
-        if self.cuts.scope == ANY_ANGLE:
-            self.lower_any = self.inc_obj
-
-    def verdicts(self, kits: list[list[str]]) -> list[Fit]:
-        """Does each kit fit (the oracle's answer; unknown past the time limit)?"""
-        out: list[Fit] = []
-        pack_tl = self.packer.pack_tl
-        for kit in kits:
-            if self.left() <= 0:  # out of time: the rest stays unknown
-                out.append(Fit(None, why=WHY_TIME))
-                continue
-            counts = self.instance.kit_parts(kit)
-            fit = self.packer.verdict(counts)
-            if fit.fits is None:  # a hard packing: one more try with a longer limit
-                fit = self.packer.verdict(counts, max(pack_tl, min(10 * pack_tl, self.left() / 3)))
-            out.append(fit)
-        return out
-
-    def repair(self, kits: list[list[str]]) -> None:
-        """Split the kits that do not fit; keep the result if it beats the incumbent."""
-        repaired: list[list[str]] = []
-        for kit in kits:
-            parts = self.packer.split(human_order(self.instance, kit))
-            if parts is None:
-                repaired = []
-                break
-            repaired += parts
-        if repaired:
-            obj = objective_value(self.instance, repaired, self.options.objective)
-            if self.inc_obj is None or obj < self.inc_obj - TOL * max(1.0, abs(obj)):
-                self.inc, self.inc_obj = repaired, obj
+        return self.cut(kits, verdicts)

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ... import progress
 from ...bounds import best_bound, min_kits
@@ -51,6 +51,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import Objective, human_times
 from ...objectives import get as get_objective
+from ...options import keyword_options
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import (
@@ -65,7 +66,6 @@ from ..exact.driver import (
     HINT_SHARE,
     bound_source,
     drive,
-    keyword_options,
     known_bound,
     proven_bound,
     without_plan,
@@ -87,6 +87,9 @@ from .model import (
 )
 from .options import MARGIN, STATION_OPTIONS, MilpOptions
 from .solver import SOLVER_OPTIONS, TOL, SolveInfo, ensure_ortools, make_solver
+
+if TYPE_CHECKING:  # (annotations only: models.relax loads when a bound is computed)
+    from ..relax import ProvenBound
 
 
 def solve(
@@ -169,7 +172,7 @@ class _Run:
     opt: Any  # the solver
     solver_options: Mapping[str, Any] | None
     extra: dict[str, Any] = field(default_factory=dict)
-    proven: Any = None  # the proven bound of models.relax (None: not computed)
+    proven: ProvenBound | None = None  # the proven bound of models.relax (None: not computed)
     K: int = 1
     upper: float | None = None  # the incumbent's makespan (makespan objective)
     inc_obj: float | None = None  # the incumbent's objective
@@ -334,17 +337,12 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
         loop.cuts.seed_pairs()  # tray=auto or benders: pair cuts seeded, as cpsat's Benders
     info = loop.run(r.opt, r.seed, r.solver_options)
     scope = loop.cuts.scope
-    r.extra.update(
-        master_solves=loop.iterations,
-        cuts=master.n_cuts,
-        unproven_cuts=loop.cuts.unproven,
-        axis_aligned_cuts=loop.cuts.axis_only,
-        master_time_s=None if info is None else info.wall_time_s,
-    )
+    r.extra.update(master_solves=loop.iterations, cuts=master.n_cuts, **loop.cut_counts())
+    r.extra["master_time_s"] = None if info is None else info.wall_time_s
     solved(r.extra, *_outcome(info))
-    if loop.inc is None:  # (an infeasible master has every cut proven: scope not None)
+    if loop.kits is None:  # (an infeasible master has every cut proven: scope not None)
         return without_plan(r, loop.infeasible, scope)
-    return _conclude(r, loop.inc, loop.lower, loop.lower_any, scope, proven=loop.proven)
+    return _conclude(r, loop.kits, loop.lower, loop.lower_any, scope, proven=loop.proven)
 
 
 def _outcome(info: SolveInfo | None) -> tuple[str, str | None]:

@@ -7,8 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from ...objectives import model_objectives
 from ..exact.driver import check_hint
+from ..exact.options import Fallback, fallback_field, hint_field, objective_field
 from ..exact.station_options import HONOURED, declare
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
@@ -27,14 +27,7 @@ class MilpOptions:
             "(cbc, glpk, gurobi, scip ...)"
         },
     )
-    objective: str = field(
-        default="makespan",
-        metadata={  # the registry's modelled objectives, a plugin's too (checked when parsed)
-            "help": "minimise makespan, (stations) sum of completions, human idle, or a "
-            "plugin's objective",
-            "choices": model_objectives,
-        },
-    )
+    objective: str = objective_field()
     tray: Literal["auto", "benders"] = field(
         default="auto",
         metadata={
@@ -43,21 +36,8 @@ class MilpOptions:
         },
     )
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
-    hint: str = field(
-        default="auto",
-        metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
-            "method name, or none; its plan is the incumbent when better than the quick plan"
-        },
-    )
-
-    fallback: Literal["lns", "none"] = field(
-        default="lns",
-        metadata={
-            "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: the incumbent, the LNS does not model them; extra['fallback'])"
-        },
-    )
+    hint: str = hint_field()
+    fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
 
     def __post_init__(self) -> None:
         check_hint(self.hint, ("auto", "none"))

@@ -12,20 +12,38 @@ will not be built the warm start has the whole time limit (:func:`warm_share`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance
 from ...objectives import get as get_objective
 from ...plan import Plan, evaluate
+from ..budget import Budget
+from ..common import Packer
 from ..exact.driver import HINT_SHARE
+from ..exact.nomodel import NoModelSpec
 from ..exact.warm import WarmRule, best_heuristic_plan, hint_methods
 from .model import model_cells, model_objective
+from .options import MilpOptions
 from .solver import TOL
 
-#: The milp driver's run state (``.method._Run``); not imported, so that ``method`` may import
-#: this module without a cycle (tests/core/test_imports.py).
-_Run = Any
+
+class Run(Protocol):
+    """What the warm start reads and writes of the milp driver's run (``.method._Run``, which
+    imports this module: a protocol, not an import, so there is no cycle)."""
+
+    instance: Instance
+    options: MilpOptions
+    budget: Budget
+    packer: Packer  # it learns the incumbent's layouts
+    extra: dict[str, Any]  # the result's ``extra`` (``hint_method``, skipped warm starts)
+
+    @property
+    def spec(self) -> NoModelSpec: ...  # the model's measured costs
+
+    @property
+    def margin(self) -> float: ...  # seconds kept back from the time limit
+
 
 #: The heuristics whose best plan is the incumbent with several stations (all take them) and
 #: ``hint=none`` (``auto``, the default, adds greedy-ce: :func:`..exact.warm.hint_methods`).
@@ -57,7 +75,7 @@ def check_station_hint(instance: Instance, hint: str) -> None:
 
 
 def station_incumbent(
-    r: _Run, seed: int
+    r: Run, seed: int
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
     """The best of :data:`STATION_METHODS` and the ``hint`` methods for the objective (its
     layouts taught to the packer), its master objective (:func:`.model.model_objective`), the
@@ -77,7 +95,7 @@ def station_incumbent(
     return kits, model_objective(instance, tl, objective), upper, max(instance.n_tasks, len(kits))
 
 
-def warm_share(r: _Run) -> float:
+def warm_share(r: Run) -> float:
     """The share of the time left for the warm start: :data:`HINT_SHARE` of the time limit,
     or all of it when the model of K = n positions will not be built anyway (over the memory
     limit, or its estimated build time above :data:`..budget.BUILD_SHARE` of what the warm
@@ -97,7 +115,7 @@ def warm_share(r: _Run) -> float:
     return 1.0 if cells * spec.build_s_per_cell > BUILD_SHARE * left * (1 - share) else share
 
 
-def _learn(r: Any, plan: Plan) -> None:
+def _learn(r: Run, plan: Plan) -> None:
     """The plan's layouts (a heuristic's, perhaps at any angle) taught to the run's packer,
     which lays out the result's kits."""
     for kit in plan.kits:

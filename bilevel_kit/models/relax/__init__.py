@@ -20,8 +20,9 @@ from ...instance import Instance
 from .kit_lp import kit_count_bound
 from .precedence import head_tail_bounds
 
-#: Grid refinements tried for the makespan's time grid (as the CP-SAT model's time scaling).
-_REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
+#: Divisors tried to make every time an exact multiple of the time grid (the makespan's, and
+#: the CP-SAT model's integer times: :func:`..cpsat.scaling.scale_times`).
+REFINE = (1, 2, 4, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000)
 
 
 @dataclass(frozen=True)
@@ -74,20 +75,23 @@ def closed_at(instance: Instance) -> Callable[[int], float]:
     return at
 
 
-def time_grid(instance: Instance, resolution: float = 0.1) -> float | None:
-    """The coarsest grid ``resolution / q`` (q in :data:`_REFINE`) holding every time of the
-    instance (then every makespan is on it), or None."""
+def time_grid(
+    instance: Instance, resolution: float = 0.1, refine: tuple[int, ...] = REFINE
+) -> float | None:
+    """The coarsest grid ``resolution / q`` (q in ``refine``) holding every time of the
+    instance, each station's delivery time and overhead (then every makespan is on it), or
+    None."""
     from ..packing import is_grid_exact
 
     ids = [t.id for t in instance.tasks]
-    params = [instance.params_of(s) for s in instance.station_ids]  # each station's d, o_H
+    params = [instance.params_of(s) for s in instance.station_ids]  # (Instance.params_of)
     values = (
         [instance.robot_time(i) for i in ids]
         + [instance.human_time(i) for i in ids]
         + [instance.kit_overhead_robot]
         + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
     )
-    for q in _REFINE:
+    for q in refine:
         if is_grid_exact(values, resolution / q):
             return resolution / q
     return None

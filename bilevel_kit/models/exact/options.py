@@ -1,0 +1,48 @@
+"""The options ``cpsat`` and ``milp`` share, declared once so that each has one default, one
+meaning and one check in both (docs/formulations.md, "One driver for cpsat and milp")."""
+
+from __future__ import annotations
+
+from dataclasses import field
+from typing import Literal
+
+from ...objectives import model_objectives
+
+Fallback = Literal["lns", "none"]
+
+
+def objective_field() -> str:
+    """Option ``objective``: a modelled objective of the registry, a plugin's too (checked
+    when parsed, when the registry is complete)."""
+    return field(
+        default="makespan",
+        metadata={
+            "help": "minimise makespan, (stations) sum_completion, human_idle, or a plugin's "
+            "objective",
+            "choices": model_objectives,
+        },
+    )
+
+
+def hint_field() -> str:
+    """Option ``hint``: the warm start (:func:`.driver.check_hint` checks it)."""
+    return field(
+        default="auto",
+        metadata={
+            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
+            "method name, or none; its plan is the incumbent when better than the quick plan"
+        },
+    )
+
+
+def fallback_field() -> Fallback:
+    """Option ``fallback``: what a run without a model (docs/formulations.md, "Model too
+    large") returns."""
+    default: Fallback = "lns"
+    return field(
+        default=default,
+        metadata={
+            "help": "no model built (too large, too slow): lns from the plan, or none "
+            "(several stations: the plan, the LNS models one station; extra['fallback'])"
+        },
+    )
