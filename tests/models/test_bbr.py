@@ -17,7 +17,7 @@ from bilevel_kit.instance import from_dict, load
 from bilevel_kit.methods import solve
 from bilevel_kit.models.bbr.search import search
 from bilevel_kit.models.bbr.space import Space
-from bilevel_kit.models.packing import ANY_ANGLE
+from bilevel_kit.models.packing import ANY_ANGLE, AXIS_ALIGNED
 
 pytest.importorskip("ortools")
 
@@ -193,3 +193,101 @@ def test_refusals():
     stations = next((INSTANCES / "stations").glob("*.json"))
     with pytest.raises(UsageError, match="several assembly stations"):
         solve(load(stations), "bbr", time_limit=5)
+
+
+# ---------------------------------------------------------------------------------------------
+# the search before the model (option ``search`` of cpsat and milp)
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", ["cpsat", "milp"])
+def test_search_first_proves_the_stool_record(method):
+    """``stool_u17_t1_loose_d0`` (51 tasks, one tray) was 1.8 % open in KitBench: the search
+    from the incumbent proves 1,008 s optimal, no model built."""
+    inst = load(INSTANCES / "kitbench" / "stool_u17_t1_loose_d0.json")
+    res = solve(inst, method, time_limit=PROOF_LIMIT, check=True, search=0.3)
+    assert res.extra["violations"] == []
+    assert res.status == "optimal"
+    assert res.objective == pytest.approx(1008.0, abs=1e-6)
+    assert res.bound == pytest.approx(1008.0, abs=1e-6)
+    assert res.extra["bound_source"] == "bbr"
+    info = res.extra["search_first"]
+    assert info["stop"] == "exhausted" and info["proven"] and info["relaxed_kits"] == 0
+    assert res.extra["solver_status"] == "proven_bound"
+
+
+@pytest.mark.parametrize("method", ["cpsat", "milp"])
+def test_search_first_is_off_by_default_and_refused_with_stations(method):
+    inst = case(2, 1)
+    res = solve(inst, method, time_limit=PROOF_LIMIT)
+    assert res.extra["search_first"] == {"skipped": "option search is 0"}
+    stations = load(INSTANCES / "stations" / "table_u1_s2.json")
+    with pytest.raises(UsageError, match="search"):
+        solve(stations, method, time_limit=5, search=0.3)
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", (2, 3, 7))
+def test_search_first_equals_the_brute_force(seed, trays):
+    inst = case(seed, trays)
+    opt, _ = best_makespan(inst)
+    res = solve(inst, "cpsat", time_limit=PROOF_LIMIT, check=True, search=0.5, workers=1)
+    assert res.extra["violations"] == []
+    assert res.makespan == pytest.approx(opt, abs=1e-6)
+    assert res.bound <= opt + 1e-9
+    info = res.extra.get("search_first")  # absent when a quick plan met a bound first
+    if info is not None:
+        assert "skipped" not in info
+        assert info["bound"] <= opt + 1e-9
+        if info["proven"]:
+            assert res.status == "optimal" and res.extra["bound_source"] == "bbr"
+
+
+def test_raised_bound_reaches_every_kit_count():
+    from bilevel_kit.models.relax import closed_at, proven_bound, raised
+
+    inst = load(INSTANCES / "hrc_table.json")
+    before = proven_bound(inst, time_limit=1.0, lp=False)
+    after = raised(before, before.value + 5.0, "bbr", inst)
+    assert after.value == before.value + 5.0 and after.source == "bbr"
+    assert after.sources["bbr"] == before.value + 5.0
+    closed = closed_at(inst)
+    for m in range(1, inst.n_tasks + 1):
+        assert after.at(m, closed) >= before.value + 5.0
+        assert after.at(m, closed) >= before.at(m, closed)
+    lower = raised(before, before.value - 1.0, "bbr", inst)
+    assert lower.value == before.value and lower.source == before.source
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", SEEDS[:6])
+def test_kits_without_a_proof_for_every_layout_are_relaxed(seed, trays):
+    """Every "no" of the fit test here holds for 0/90-degree layouts only (as the CP-SAT
+    packer's proofs): with ``relax`` (the default) such kits count for the bound, which is
+    then the optimum over the plans whose kits fit by area (a valid bound, at most the true
+    optimum), and no plan through one becomes the incumbent; without it they are dropped,
+    the optimum is the brute force's and the proof's scope is 0/90 degrees."""
+    inst = case(seed, trays)
+    opt, _ = best_makespan(inst)
+    exact = brute_fits(inst)
+
+    def axis_only(counts):
+        ok, _ = exact(counts)
+        return (True, None) if ok else (False, AXIS_ALIGNED)
+
+    by_area = search(Space(inst), lambda counts: (True, None))
+    relaxed = search(Space(inst), axis_only)
+    assert relaxed.bound == pytest.approx(by_area.value, abs=1e-9)
+    assert relaxed.bound <= opt + 1e-9
+    if relaxed.kits is not None:  # an incumbent is a plan whose kits all fit
+        assert all(fits(inst, k) for k in relaxed.kits)
+        assert relaxed.value >= opt - 1e-9
+    if relaxed.exhausted:
+        assert relaxed.value == pytest.approx(opt, abs=1e-9)
+    given = search(Space(inst), axis_only, upper=opt)  # the optimum as the incumbent
+    assert given.exhausted == (by_area.value >= opt - 1e-9)
+    assert given.bound == pytest.approx(min(opt, by_area.value), abs=1e-9)
+    strict = search(Space(inst), axis_only, relax=False)
+    assert strict.value == pytest.approx(opt, abs=1e-9) and strict.exhausted
+    no_at_all = relaxed.counters["relaxed_kits"] == 0
+    assert strict.scope == (ANY_ANGLE if no_at_all else AXIS_ALIGNED)

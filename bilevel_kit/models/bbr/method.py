@@ -22,6 +22,7 @@ One station, the makespan, one or more trays (docs/timeline.md). ``extra``: ``st
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -31,7 +32,7 @@ from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
-from .search import Outcome, search
+from .search import Outcome, packer_fits, search
 from .space import Space
 
 #: Seconds kept back at the end for the layouts of a new plan, plus this share of the limit.
@@ -85,29 +86,40 @@ def bbr(
     if unfit is not None:
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
-    upper = evaluate(instance, start).makespan if start is not None else float("inf")
+    upper = evaluate(instance, start).makespan if start is not None else math.inf
     space = Space(instance)
-
-    def fits(counts: dict[str, int]) -> tuple[bool, str | None]:
-        verdict = packer.verdict(counts)
-        if verdict.fits:
-            return True, None
-        return False, (verdict.scope or AXIS_ALIGNED) if verdict.fits is False else None
-
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
-    out = search(
+    every = search(
         space,
-        fits,
+        packer_fits(packer),
         upper=upper,
         deadline=stop_at,
         max_expansions=options.expansions,
         max_nodes=options.max_nodes,
     )
-    extra.update(out.counters, stop=out.stop)
-    plan = start
-    if out.kits is not None:
-        plan = _with_layouts(instance, packer, out.kits) or start
-    return _conclude(instance, plan, out, start_bound, extra, budget)
+    extra.update(every.counters, stop=every.stop)
+    plan = _better(instance, packer, start, every)
+    axis = None
+    if every.stop == "exhausted" and not every.exhausted:  # relaxed plans below the incumbent
+        upper = evaluate(instance, plan).makespan if plan is not None else upper
+        axis = search(
+            space,
+            packer_fits(packer),
+            upper=upper,
+            deadline=stop_at,
+            max_nodes=options.max_nodes,
+            relax=False,
+        )
+        extra["axis_aligned"] = {"stop": axis.stop, "bound": axis.bound, **axis.counters}
+        plan = _better(instance, packer, plan, axis)
+    return _conclude(instance, plan, (every, axis), start_bound, extra, budget)
+
+
+def _better(instance: Instance, packer: Packer, plan: Plan | None, out: Outcome) -> Plan | None:
+    """The search's plan with its layouts when it found one below ``plan``, else ``plan``."""
+    if out.kits is None:
+        return plan
+    return with_layouts(instance, packer, out.kits) or plan
 
 
 def _start(
@@ -125,7 +137,7 @@ def _start(
         from ..common import quick_plan
 
         kits = quick_plan(instance, packer)
-        plan = None if kits is None else _with_layouts(instance, packer, kits)
+        plan = None if kits is None else with_layouts(instance, packer, kits)
         extra.update(start_method="quick", start_makespan=_makespan(instance, plan))
         return plan, None
     from ..lns.method import LnsOptions, lns
@@ -144,7 +156,7 @@ def _makespan(instance: Instance, plan: Plan | None) -> float | None:
     return evaluate(instance, plan).makespan if plan is not None else None
 
 
-def _with_layouts(instance: Instance, packer: Packer, kits: list[list[str]]) -> Plan | None:
+def with_layouts(instance: Instance, packer: Packer, kits: list[list[str]]) -> Plan | None:
     """The search's plan with the oracle's layout of every kit (None: a layout is missing)."""
     from ..packing_oracle import typed_to_placements
 
@@ -164,36 +176,41 @@ def _with_layouts(instance: Instance, packer: Packer, kits: list[list[str]]) -> 
 def _conclude(
     instance: Instance,
     plan: Plan | None,
-    out: Outcome,
+    outs: tuple[Outcome, Outcome | None],
     start_bound: float | None,
     extra: dict[str, Any],
     budget: Budget,
 ) -> MethodOutput:
-    """Status, bound and ``extra`` (module docstring, step 3)."""
+    """Status, bound and ``extra`` (module docstring, step 3): ``outs`` the search for every
+    plan (relaxed kits kept) and, when it ran, the one for 0/90-degree plans."""
+    every, axis = outs
     real = evaluate(instance, plan).makespan if plan is not None else None
-    bound_axis = out.bound if out.scope is not None else None
-    every = out.scope == ANY_ANGLE
     bound = start_bound
-    if every and (bound is None or out.bound > bound):
-        bound = out.bound
+    if bound is None or every.bound > bound:
+        bound = every.bound
         extra["bound_source"] = "bbr"
     else:
         extra["bound_source"] = extra.get("start_bound_source")
-    if real is not None and bound is not None:
+    if real is not None:
         bound = min(bound, real)  # the search's float sums against the evaluator's
+    axis_ok = axis is not None and axis.scope is not None
+    bound_axis = max(bound, axis.bound) if axis is not None and axis_ok else bound
+    if real is not None:
+        bound_axis = min(bound_axis, real)
+    optimal = every.exhausted or (real is not None and real <= bound + 1e-9)
+    optimal_axis = optimal or bool(axis is not None and axis_ok and axis.exhausted)
     extra.update(
         bound_axis_aligned=bound_axis,
-        optimal_axis_aligned=bool(out.exhausted and out.scope is not None and plan is not None),
+        optimal_axis_aligned=optimal_axis and plan is not None,
         wall_time_s=budget.elapsed(),
     )
-    extra.update(scope_claims(out.scope))
+    extra.update(scope_claims(AXIS_ALIGNED if optimal_axis and not optimal else ANY_ANGLE))
     if plan is None:
-        if out.exhausted and every:
+        if every.stop == "exhausted" and math.isinf(every.bound):
             extra["reason"] = "no plan: every kit order was ruled out"
             return MethodOutput(None, Status.INFEASIBLE, None, extra)
         extra.setdefault("reason", "no plan within the time limit")
         return MethodOutput(None, Status.UNKNOWN, bound, extra)
     assert real is not None
-    optimal = (out.exhausted and every) or (bound is not None and real <= bound + 1e-9)
     extra.update(makespan=real, n_kits=len(plan.kits), gap=gap(real, bound))
     return MethodOutput(plan, Status.OPTIMAL if optimal else Status.FEASIBLE, bound, extra)

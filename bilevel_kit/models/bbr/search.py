@@ -14,15 +14,20 @@ after them (:mod:`.space`). The search is best-first on the node's lower bound `
 
 The tray's geometry enters lazily: a kit is enumerated by its area alone, and the packing
 oracle (memoised by part multiset) is asked only when a node is expanded (or completes a
-plan); only nodes whose kits were found to fit dominate others. A kit the oracle rules out
-with a 0/90-degree proof only, or does not decide, narrows what the search proves
-(``scope``, docs/formulations.md#what-optimal-means).
+plan). A kit it rules out for every layout is dropped. A kit it finds no layout for without
+such a proof (a 0/90-degree proof only, or no decision within its limit) is **relaxed**
+(``relax=True``, the default): kept for the bound, since parts at other angles may fit it,
+but a plan through it is no plan the search can lay out, so it never becomes the incumbent;
+its makespan is a lower bound candidate (``relaxed_best``). A relaxed node never retires one
+that is not. With ``relax=False`` such a kit is dropped instead and narrows what the search
+proves to the plans it covers (``scope``, docs/formulations.md#what-optimal-means).
 
-**Claims.** When the heap's least ``f`` reaches the incumbent's makespan, no plan is better:
-the incumbent is optimal (within ``scope``). At any stop the least ``f`` of the open nodes (or
-the incumbent's makespan, when smaller) is a lower bound on every plan's makespan, within
-``scope``. Work is counted in expanded nodes, so a run to a node limit is deterministic; the
-wall clock is checked between expansions, and the number of nodes kept is capped (memory).
+**Claims.** When the heap's least ``f`` reaches the incumbent's makespan and no relaxed plan
+is below it, no plan is better: the incumbent is optimal (within ``scope``: every plan with
+``relax``). At any stop the least of the open nodes' ``f``, the relaxed plans' makespans and
+the incumbent's makespan is a lower bound on every plan's makespan (within ``scope``). Work
+is counted in expanded nodes, so a run to a node limit is deterministic; the wall clock is
+checked between expansions, and the number of nodes kept is capped (memory).
 """
 
 from __future__ import annotations
@@ -34,11 +39,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from ..common import Packer
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .space import Space
 
 #: Answer of the fit test for a part multiset: True, or the scope of a "no" (None: undecided).
 FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
+#: What the search does with a kit (:meth:`_Search.fit`).
+FITS, NO, RELAXED = "fits", "no", "relaxed"
 
 
 @dataclass
@@ -52,13 +60,16 @@ class Node:
     alive: bool = True
     #: the oracle said its last kit fits (asked when the node is expanded, module docstring)
     verified: bool = False
+    #: a kit on its path is relaxed (module docstring)
+    relaxed: bool = False
 
 
 @dataclass
 class Outcome:
     """What a search proved: the best plan's kits (task-id lists, None: none better than the
-    given incumbent), its makespan, the lower bound, whether the search was exhausted, the
-    proof's ``scope`` and its counters."""
+    given incumbent), its makespan, the lower bound, ``exhausted`` (the incumbent is proven
+    optimal: the search ran out of nodes below it and no relaxed plan is below it), the
+    proof's ``scope``, why it stopped and its counters."""
 
     kits: list[list[str]] | None
     value: float
@@ -67,6 +78,19 @@ class Outcome:
     scope: str | None
     stop: str
     counters: dict[str, int] = field(default_factory=dict)
+
+
+def packer_fits(packer: Packer) -> FitTest:
+    """The fit test of a run's packer (:class:`..common.Packer`): "fits", or the scope of its
+    "no" (a proof for 0/90-degree layouts at least), or undecided (None)."""
+
+    def fits(counts: dict[str, int]) -> tuple[bool, str | None]:
+        verdict = packer.verdict(counts)
+        if verdict.fits:
+            return True, None
+        return False, (verdict.scope or AXIS_ALIGNED) if verdict.fits is False else None
+
+    return fits
 
 
 def _narrow(scope: str | None, by: str | None) -> str | None:
@@ -84,14 +108,16 @@ def search(
     deadline: float | None = None,
     max_expansions: int | None = None,
     max_nodes: int = 2_000_000,
+    relax: bool = True,
 ) -> Outcome:
     """Best-first branch, bound and remember (module docstring) below ``upper`` (a known
     plan's makespan; inf: none), until exhausted, ``deadline`` (a ``perf_counter`` time),
-    ``max_expansions`` nodes expanded or ``max_nodes`` nodes kept."""
-    run = _Search(space, fits, upper, deadline)
+    ``max_expansions`` nodes expanded or ``max_nodes`` nodes kept; ``relax``: kits without a
+    layout nor a proof for every layout are relaxed (module docstring)."""
+    run = _Search(space, fits, upper, deadline, relax)
     while run.heap and run.stop == "exhausted":
         f, _, _, node = run.heap[0]
-        if f >= run.upper - run.tol:
+        if f >= min(run.upper, run.relaxed_best) - run.tol:
             break
         if deadline is not None and time.perf_counter() >= deadline:
             run.stop = "time_limit"
@@ -109,8 +135,11 @@ def search(
 class _Search:
     """One search's heap, memory, incumbent, fit memo and counters (:func:`search`)."""
 
-    def __init__(self, space: Space, fits: FitTest, upper: float, deadline: float | None) -> None:
-        self.space, self.fits, self.deadline = space, fits, deadline
+    def __init__(
+        self, space: Space, fits: FitTest, upper: float, deadline: float | None, relax: bool
+    ) -> None:
+        self.space, self.fits, self.deadline, self.relax = space, fits, deadline, relax
+        self.relaxed_best = math.inf
         self.upper = upper
         self.tol = 1e-9 * max(1.0, abs(upper)) if upper < math.inf else 0.0
         root = Node(0, space.root(), None, 0, verified=True)
@@ -122,12 +151,20 @@ class _Search:
         self.fit_memo: dict[frozenset[tuple[str, int]], tuple[bool, str | None]] = {}
         self.scope: str | None = ANY_ANGLE
         self.best: Node | None = None
-        self.counts = {"expanded": 0, "generated": 0, "kept": 1, "dominated": 0, "oracle": 0}
+        self.counts = {
+            "expanded": 0,
+            "generated": 0,
+            "kept": 1,
+            "dominated": 0,
+            "oracle": 0,
+            "relaxed_kits": 0,
+        }
         self.stop = "exhausted"
 
-    def fit(self, mask: int) -> bool:
-        """Does the kit fit the tray (the oracle, memoised by part multiset)? A "no" narrows
-        the proof's scope by its own."""
+    def fit(self, mask: int) -> str:
+        """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
+        part multiset; module docstring); without ``relax`` a "no" narrows the proof's scope
+        by its own."""
         multiset: dict[str, int] = {}
         for i in range(self.space.n):
             if mask >> i & 1:
@@ -139,22 +176,29 @@ class _Search:
             self.counts["oracle"] += 1
             verdict = self.fits(multiset) if multiset else (True, None)
             self.fit_memo[key] = verdict
-        if not verdict[0]:
-            self.scope = _narrow(self.scope, verdict[1])
-        return verdict[0]
+            if not verdict[0] and verdict[1] != ANY_ANGLE and self.relax:
+                self.counts["relaxed_kits"] += 1
+        if verdict[0]:
+            return FITS
+        if verdict[1] != ANY_ANGLE and self.relax:
+            return RELAXED
+        self.scope = _narrow(self.scope, verdict[1])
+        return NO
 
     def verify(self, node: Node) -> bool:
         """The lazy fit test of a node about to be expanded; a node that passes retires the
-        nodes of its ideal it dominates."""
+        nodes of its ideal it dominates (a relaxed one only relaxed ones)."""
         if node.verified:
             return True
-        if not self.fit(node.kit):
+        answer = self.fit(node.kit)
+        if answer == NO:
             node.alive = False
             return False
         node.verified = True
+        node.relaxed = node.relaxed or answer == RELAXED
         mine = self.memory[node.done]
         for o in mine:
-            if o is not node and o.alive and _leq(node.state, o.state):
+            if o is not node and o.alive and _dominates(node, o):
                 o.alive = False
                 self.counts["dominated"] += 1
         mine[:] = [o for o in mine if o.alive]
@@ -176,20 +220,30 @@ class _Search:
             bound = space.lower_bound(done, state)
             if bound >= self.upper - self.tol:
                 continue
+            child = Node(done, state, node, mask, relaxed=node.relaxed)
             kept = self.memory.get(done)
-            if kept is not None and any(o.verified and _leq(o.state, state) for o in kept):
+            if kept is not None and any(o.verified and _dominates(o, child) for o in kept):
                 counts["dominated"] += 1
                 continue
-            child = Node(done, state, node, mask)
             if done == space.full:  # a plan better than the incumbent (if its last kit fits)
-                if self.fit(mask):
-                    self.upper, self.best = state[0], child
-                    self.tol = 1e-9 * max(1.0, abs(self.upper))
+                self._complete(child)
                 continue
             self.memory.setdefault(done, []).append(child)
             counts["kept"] += 1
             depth = -bin(done).count("1")
             heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
+
+    def _complete(self, child: Node) -> None:
+        """A complete plan below the incumbent: the new incumbent, or a relaxed plan's
+        makespan as a bound candidate (module docstring)."""
+        answer = self.fit(child.kit)
+        if answer == NO:
+            return
+        if child.relaxed or answer == RELAXED:
+            self.relaxed_best = min(self.relaxed_best, child.state[0])
+            return
+        self.upper, self.best = child.state[0], child
+        self.tol = 1e-9 * max(1.0, abs(self.upper))
 
     def _late(self) -> bool:
         return self.deadline is not None and time.perf_counter() >= self.deadline
@@ -198,10 +252,18 @@ class _Search:
         """The incumbent found, the bound, the scope and the counters (module docstring)."""
         open_f = min((f for f, _, _, n in self.heap if n.alive), default=math.inf)
         exhausted = self.stop == "exhausted"
-        bound = self.upper if exhausted else min(self.upper, open_f)
+        low = min(self.upper, self.relaxed_best)
+        bound = low if exhausted else min(low, open_f)
+        exhausted = exhausted and self.relaxed_best >= self.upper - self.tol
         kits = None if self.best is None else _kits_of(self.space, self.best)
         self.counts["ideals"] = len(self.memory)
         return Outcome(kits, self.upper, bound, exhausted, self.scope, self.stop, self.counts)
+
+
+def _dominates(a: Node, b: Node) -> bool:
+    """``a`` dominates ``b`` (same ideal): a state at most ``b``'s in every component, and not
+    relaxed unless ``b`` is (module docstring)."""
+    return (b.relaxed or not a.relaxed) and _leq(a.state, b.state)
 
 
 def _leq(a: tuple[float, ...], b: tuple[float, ...]) -> bool:

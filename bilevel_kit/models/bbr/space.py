@@ -92,6 +92,7 @@ class Space:
         self.area = [sum(types[p].area * n for p, n in ps) for ps in self.parts]
         # part-less tasks ride in a neighbouring kit (docs/timeline.md#part-less-tasks)
         self.needs = [inst.needs_kit(t) for t in self.ids]
+        self.twin = self._twins()
         self.tray_area = inst.tray.area
         params = inst.params_of()
         self.o_r, self.o_h, self.d = (
@@ -110,6 +111,27 @@ class Space:
         self.rank = [0] * self.n
         for j, i in enumerate(self.johnson):
             self.rank[i] = j
+
+    def _twins(self) -> list[int]:
+        """For each task, the task of next lower number it is interchangeable with (the same
+        parts, times, predecessors and successors), or -1: a plan that does such twins out
+        of number order is the same plan with two of them swapped, so kits add a twin only
+        after the twin before it (symmetry breaking; the repeated parts of a product unit,
+        e.g. a table's four feet)."""
+        last: dict[tuple[object, ...], int] = {}
+        out = [-1] * self.n
+        for i in range(self.n):
+            key = (
+                tuple(sorted(self.parts[i])),
+                self.r[i],
+                self.h[i],
+                self.needs[i],
+                self.pred[i],
+                self.succ[i],
+            )
+            out[i] = last.get(key, -1)
+            last[key] = i
+        return out
 
     # -- the timeline --------------------------------------------------------------------
     def root(self) -> tuple[float, ...]:
@@ -135,7 +157,7 @@ class Space:
         increasing number). ``max_r``: a kit's robot time above it cuts that kit and every
         larger one (:meth:`robot_cap`)."""
         n, pred, cap = self.n, self.pred, self.tray_area * (1 + 1e-12)
-        r, h, area, needs = self.r, self.h, self.area, self.needs
+        r, h, area, needs, twin = self.r, self.h, self.area, self.needs, self.twin
         free = [i for i in range(n) if not done >> i & 1]
         stack: list[tuple[int, int, float, float, float, bool]] = [(0, 0, 0.0, 0.0, 0.0, False)]
         while stack:
@@ -143,7 +165,7 @@ class Space:
             have = done | mask
             for j in range(start, len(free)):
                 i = free[j]
-                if pred[i] & ~have:
+                if pred[i] & ~have or (twin[i] >= 0 and not have >> twin[i] & 1):
                     continue
                 a2, r2 = ar + area[i], rs + r[i]
                 if a2 > cap or r2 > max_r:

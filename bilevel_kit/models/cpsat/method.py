@@ -84,7 +84,15 @@ from ..exact import keys
 from ..exact.driver import HINT_SHARE, check_hint, drive, without_plan
 from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, improve
-from ..exact.options import Fallback, fallback_field, hint_field, objective_field
+from ..exact.options import (
+    SEARCH_DEFAULT,
+    SEARCH_WITH_STATIONS,
+    Fallback,
+    fallback_field,
+    hint_field,
+    objective_field,
+    search_field,
+)
 from ..exact.station_options import HONOURED, check_station_options, declare
 from ..packing import ANY_ANGLE
 from .conclude import Report, conclude, plan_of
@@ -146,6 +154,7 @@ class ScheduleOptions:
     )
     log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
     fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
+    search: float = search_field()
 
     def __post_init__(self) -> None:
         _positive(self, "time_resolution", "pack_resolution")
@@ -165,7 +174,10 @@ class CpsatOptions(ScheduleOptions):
 
 #: What the model does with each option on several stations (docs/formulations.md, "Options
 #: with several stations"): every option is honoured (:func:`declare` checks each is declared).
-STATION_OPTIONS = declare(CpsatOptions, {f.name: HONOURED for f in fields(CpsatOptions)})
+STATION_OPTIONS = declare(
+    CpsatOptions,
+    {f.name: HONOURED for f in fields(CpsatOptions)} | {"search": SEARCH_WITH_STATIONS},
+)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -233,6 +245,7 @@ def solve(
     cpsat_params: dict[str, Any] | None = None,
     releases: Mapping[str, float] | None = None,
     fallback: str = "lns",
+    search: float = SEARCH_DEFAULT,
     deterministic: bool = False,
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
@@ -299,7 +312,7 @@ def run(
         },
     )
     backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
-    return drive(backend, options.fallback)
+    return drive(backend, options.fallback, options.search, bool(releases))
 
 
 class _Cpsat:
@@ -394,10 +407,26 @@ class _Cpsat:
         )
         if better is None:
             return state
-        idx = ctx.instance.index
-        kits = [[idx[t] for t in k.tasks] for k in better.kits if k.tasks]
-        layouts = [k.layout for k in better.kits if k.tasks]
-        return State(kits, scaled_makespan(ctx.sc, kits), layouts=layouts)
+        return self.adopt(better)
+
+    @property
+    def is_makespan(self) -> bool:
+        return self.ctx.minimised.is_makespan
+
+    def plan(self, state: State) -> Plan:
+        assert state.kits is not None
+        return plan_of(self.ctx, state.kits, None)
+
+    def adopt(self, plan: Plan) -> State:
+        idx = self.instance.index
+        kits = [[idx[t] for t in k.tasks] for k in plan.kits if k.tasks]
+        layouts = [k.layout for k in plan.kits if k.tasks]
+        return State(kits, scaled_makespan(self.sc, kits), layouts=layouts)
+
+    def raise_bound(self, value: float, source: str) -> None:
+        from ..relax import raised
+
+        self.ctx.proven = raised(self.ctx.proven, value, source, self.instance)
 
     def conclude(self, state: State) -> MethodOutput:
         return conclude(self.ctx, None, state, self.report)

@@ -65,6 +65,24 @@ class Backend(Protocol[Inc]):
         ``limit``)."""
         ...
 
+    @property
+    def is_makespan(self) -> bool:
+        """Does the run minimise the makespan (the ideal search's objective)?"""
+        ...
+
+    def plan(self, inc: Inc) -> Plan:
+        """``inc`` as a plan (layouts not needed: its makespan is what is read)."""
+        ...
+
+    def adopt(self, plan: Plan) -> Inc:
+        """A better plan found outside the model (with its layouts) as the incumbent."""
+        ...
+
+    def raise_bound(self, value: float, source: str) -> None:
+        """A makespan bound for every plan found after :meth:`start` (the ideal search's):
+        the bound known before the model takes it when higher (:func:`..relax.raised`)."""
+        ...
+
     def conclude(self, inc: Inc) -> MethodOutput:
         """The result of ``inc`` without a model (the bound known before the model)."""
         ...

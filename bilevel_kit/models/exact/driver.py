@@ -14,7 +14,8 @@ backend protocol (:class:`.backend.Backend`) that builds, solves and cuts its ow
 5. Otherwise the LNS improves the incumbent first within a share of the time left
    (:mod:`.lns_first`; option ``fallback=lns``): a plan that meets the bound known before the
    model is concluded without one, else the backend builds its model and searches from it
-   (:meth:`Backend.solve`).
+   (:meth:`Backend.solve`); with option ``search``, the ideal search first runs from the
+   incumbent (:mod:`.search_first`) and may prove it optimal without a model.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from ...methods import REGISTRY, MethodOutput, Status
 from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
-from . import lns_first
+from . import lns_first, search_first
 from .backend import Backend, Inc
 from .nomodel import buildable
 
@@ -38,8 +39,11 @@ if TYPE_CHECKING:
 HINT_SHARE = 0.3
 
 
-def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:
-    """One run of an exact method: the steps of the module docstring."""
+def drive(
+    backend: Backend[Inc], fallback: str, search: float = 0.0, releases: bool = False
+) -> MethodOutput:
+    """One run of an exact method: the steps of the module docstring (``search``: option
+    ``search``, the ideal search's share; ``releases``: the run has release times)."""
     unfit = backend.packer.task_not_fitting()  # then no plan exists (or none at 0/90 degrees)
     if unfit is not None:
         status = unfit_outcome(unfit, backend.extra)
@@ -56,6 +60,9 @@ def drive(backend: Backend[Inc], fallback: str) -> MethodOutput:
         if inc is not None:
             better, met = lns_first.before_model(backend, inc, fallback)
             if met:  # the LNS's plan meets the proven bound: optimal without a model
+                return backend.conclude(better)
+            better, met = search_first.before_model(backend, better, search, releases)
+            if met:  # the ideal search proved the incumbent optimal: no model
                 return backend.conclude(better)
             inc = better
         t_model = budget.elapsed()

@@ -14,6 +14,10 @@ libraries and benchmark records keep the old names).
   ``makespan_after``), ``used_s`` the seconds it ran, ``stop`` why it stopped (one of
   :data:`LNS_STOPS`), its limits ``stall_windows`` and ``max_windows`` (None: no cap),
   ``share`` and ``model_s``; or ``skipped`` (why it did not run).
+- ``search_first``: the ideal search run before the model (option ``search``,
+  :mod:`.search_first`): ``share``, ``stop``, ``proven``, ``bound``, ``proof_scope``, its
+  counters and
+  ``used_s``, with ``makespan_after`` when it found a better plan; or ``skipped``.
 """
 
 from __future__ import annotations

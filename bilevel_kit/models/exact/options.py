@@ -7,6 +7,13 @@ from dataclasses import field
 from typing import Literal
 
 from ...objectives import model_objectives
+from .station_options import Refused
+
+#: Option ``search``'s default share (docs/formulations.md, "Branch, bound and remember"):
+#: off, so that a run builds its model as before unless asked (``-p search=0.3``).
+SEARCH_DEFAULT = 0.0
+#: Option ``search`` with several stations: the ideal search models one station.
+SEARCH_WITH_STATIONS = Refused("the ideal search models one station")
 
 Fallback = Literal["lns", "none"]
 
@@ -44,5 +51,19 @@ def fallback_field() -> Fallback:
         metadata={
             "help": "no model built (too large, too slow): lns from the plan, or none "
             "(several stations: the plan, the LNS models one station; extra['fallback'])"
+        },
+    )
+
+
+def search_field() -> float:
+    """Option ``search``: the share of the time left before the model that the ideal search
+    (:mod:`.search_first`) gets; 0: none."""
+    return field(
+        default=SEARCH_DEFAULT,
+        metadata={
+            "help": "share of the time left before the model for the ideal search from the "
+            "incumbent (branch, bound and remember; one station, makespan), e.g. 0.3; 0: none",
+            "min": 0.0,
+            "max": 1.0,
         },
     )

@@ -73,6 +73,7 @@ from ..exact.driver import (
 from ..exact.keys import CLOSED_FORM_BOUND, PROVEN_BOUND, no_solve, solve_outcome, solved
 from ..exact.nomodel import MILP as MILP_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, NoModelSpec, improve
+from ..exact.options import SEARCH_DEFAULT
 from ..exact.station_options import check_station_options
 from ..packing import ANY_ANGLE
 from . import warm
@@ -104,6 +105,7 @@ def solve(
     solver_options: Mapping[str, Any] | None = None,
     hint: str = "auto",
     fallback: str = "lns",
+    search: float = SEARCH_DEFAULT,
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
@@ -150,7 +152,7 @@ def run(
         unproven_cuts=0,
         time_limit_enforced=options.solver == "highs" or options.solver in SOLVER_OPTIONS,
     )
-    return drive(r, options.fallback)
+    return drive(r, options.fallback, options.search)
 
 
 milp = run  # the registered method ``milp`` (module docstring)
@@ -241,11 +243,28 @@ class _Run:
         )
         if better is None:
             return inc
-        for kit in better.kits:
+        return self.adopt(better)
+
+    @property
+    def is_makespan(self) -> bool:
+        return self.minimised.is_makespan
+
+    def plan(self, inc: list[list[str]]) -> Plan:
+        return Plan(tuple(Kit(tuple(k)) for k in inc))
+
+    def adopt(self, plan: Plan) -> list[list[str]]:
+        """A better plan as the incumbent: its layouts taught to the packer, which lays the
+        result out, and its makespan the model's U."""
+        for kit in plan.kits:
             if kit.layout:
                 self.packer.learn(self.instance.kit_parts(kit.tasks), kit.layout)
-        self.upper = self.inc_obj = evaluate(self.instance, better).makespan  # the model's U
-        return [list(k.tasks) for k in better.kits if k.tasks]
+        self.upper = self.inc_obj = evaluate(self.instance, plan).makespan
+        return [list(k.tasks) for k in plan.kits if k.tasks]
+
+    def raise_bound(self, value: float, source: str) -> None:
+        from ..relax import raised
+
+        self.proven = raised(self.proven, value, source, self.instance)
 
     def conclude(self, inc: list[list[str]]) -> MethodOutput:
         return _conclude(self, inc, None, None, ANY_ANGLE, proven=False)

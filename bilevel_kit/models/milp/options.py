@@ -8,7 +8,14 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from ..exact.driver import check_hint
-from ..exact.options import Fallback, fallback_field, hint_field, objective_field
+from ..exact.options import (
+    SEARCH_WITH_STATIONS,
+    Fallback,
+    fallback_field,
+    hint_field,
+    objective_field,
+    search_field,
+)
 from ..exact.station_options import HONOURED, declare
 
 TRAY_MODES: tuple[str, ...] = ("auto", "benders")
@@ -38,6 +45,7 @@ class MilpOptions:
     log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
     hint: str = hint_field()
     fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
+    search: float = search_field()
 
     def __post_init__(self) -> None:
         check_hint(self.hint, ("auto", "none"))
@@ -57,5 +65,6 @@ STATION_OPTIONS = declare(
         "log": HONOURED,
         "fallback": HONOURED,
         "hint": HONOURED,
+        "search": SEARCH_WITH_STATIONS,
     },
 )

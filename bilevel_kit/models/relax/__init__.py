@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ...bounds import johnson_lines, lines_value, lower_bounds, min_kits, tray_wait
 from ...instance import Instance
@@ -51,6 +51,23 @@ class ProvenBound:
             return None
         ok = [m for m, v in self.per_kits.items() if v <= upper + 1e-9]
         return max(ok) if ok else min(self.per_kits, default=1)
+
+
+def raised(
+    proven: ProvenBound | None, value: float, source: str, instance: Instance
+) -> ProvenBound:
+    """``proven`` with a bound found later (e.g. the ideal search's, :mod:`..bbr`) for every
+    plan: its value and source when higher, and every kit count's bound raised to it, so a
+    model built afterwards (whose bound is per kit count) starts from it too."""
+    closed = closed_at(instance)
+    if proven is None:
+        m0 = int(lower_bounds(instance)["min_kits"])
+        proven = ProvenBound(closed(m0), "closed_form", {}, {}, m0)
+    per = {m: max(proven.at(m, closed), value) for m in range(1, instance.n_tasks + 1)}
+    sources = {**proven.sources, source: value}
+    if value > proven.value:
+        return replace(proven, value=value, source=source, sources=sources, per_kits=per)
+    return replace(proven, sources=sources, per_kits=per)
 
 
 def closed_at(instance: Instance) -> Callable[[int], float]:
