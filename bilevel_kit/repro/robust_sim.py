@@ -388,14 +388,26 @@ def sim_summary_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
             )
         failed = [r for r in rows if r["policy"] == name and _failed(r)]
         if failed:
-            cells = dict.fromkeys(
-                f"{r['instance']} ({r['trays']} trays, CV {r['cv']})" for r in failed
-            )
             out.append(
-                f"`{name}` failed in {len(failed)} cell x law pairs ({', '.join(cells)}), "
-                f"e.g. {failed[0]['error']}"
+                f"`{name}` failed in {len(failed)} cell x law pairs ({_where(rows, failed)}): "
+                f"{str(failed[0]['error']).rstrip('.')}."
             )
     return " ".join(out)
+
+
+def _where(rows: Sequence[Mapping[str, Any]], failed: Sequence[Mapping[str, Any]]) -> str:
+    """Per instance, how many of its cells the ``failed`` rows are in."""
+
+    def cells(rs: Sequence[Mapping[str, Any]], name: str) -> set[tuple[str, str]]:
+        return {(str(r["trays"]), str(r["cv"])) for r in rs if r["instance"] == name}
+
+    parts = []
+    for name in dict.fromkeys(str(r["instance"]) for r in failed):
+        bad, every = len(cells(failed, name)), len(cells(rows, name))
+        parts.append(
+            f"every cell of {name}" if bad == every else f"{bad} of {every} cells of {name}"
+        )
+    return ", ".join(parts)
 
 
 def _failed(r: Mapping[str, Any]) -> bool:
@@ -409,12 +421,15 @@ def _reproduced_sentence(saa: Sequence[Mapping[str, Any]]) -> str:
     optimised (``saa``: one SAA-plan row per cell)."""
     bad = [r for r in saa if str(r["reproduced"]) not in ("True", "true")]
     diff = [float(r["in_sample"]) - float(r["committed_in_sample"]) for r in bad]
+    vss = [float(r["timeline_vss"]) for r in saa]
     better, worse = sum(d < -0.005 for d in diff), sum(d > 0.005 for d in diff)
     return (
         f"The recomputed plans reproduce the committed study in {len(saa) - len(bad)} of "
         f"{len(saa)} cells; in the other {len(bad)} the recomputed SAA plan is better in sample "
         f"than the committed one in {better}, equal in {len(bad) - better - worse} and worse "
-        f"in {worse}."
+        f"in {worse}. Recomputed, the timeline VSS is {_range(vss)}, its interval above 0 in "
+        f"{sum(float(r['timeline_vss_low']) > 0 for r in saa)} cells and below 0 in "
+        f"{sum(float(r['timeline_vss_high']) < 0 for r in saa)}."
     )
 
 
