@@ -386,6 +386,12 @@ def model_objectives() -> tuple[str, ...]:
     return tuple(n for n, o in OBJECTIVES.items() if o.modelled)
 
 
+def scenario_objectives() -> tuple[str, ...]:
+    """The objectives that are functions of scenarios of the human times
+    (:attr:`Objective.scenarios`): the ones that read ``lns``'s scenario options."""
+    return tuple(n for n, o in OBJECTIVES.items() if o.scenarios)
+
+
 def is_top_level(name: str) -> bool:
     """Whether objective ``name`` is the makespan, whose numbers a result also states as
     ``makespan_bound``, ``makespan_gap`` (:attr:`Objective.top_level`; an unknown name is

@@ -12,6 +12,16 @@ and ``max`` (inclusive bounds for numbers), and ``choices`` (allowed strings, wh
 a plain ``str``: a collection, or a function returning one, called when a value is parsed, so
 that a list a plugin adds to, the objectives' registry say, is read when it is complete).
 ``typing.Literal`` types give their choices themselves.
+
+``needs`` maps another option's name to the values under which this one is read (a collection,
+or a function returning one), e.g. ``{"objective": ("expected_makespan", "cvar_makespan")}``
+for the scenario options of ``lns`` (docs/robust.md#options-of-the-scenario-objectives):
+setting the option while the other one has a value outside them is a :class:`UsageError`
+rather than an option silently ignored. "Setting" is giving its key (``-p`` or a Python
+keyword of :func:`bilevel_kit.methods.solve`), whatever the value, the default included; an
+options dataclass built directly, or a Python entry's keywords (:func:`keyword_options`),
+cannot tell a default passed from one left out, so there a value other than the default
+counts as set.
 """
 
 from __future__ import annotations
@@ -21,7 +31,7 @@ import importlib
 import math
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal, TypeVar, Union, get_args, get_origin
 
@@ -81,8 +91,53 @@ def describe(cls: type) -> list[OptionInfo]:
             default = None
         allowed = allowed_choices(f.metadata)
         kind = _type_name(hints[f.name]) if allowed is None else " | ".join(map(repr, allowed))
-        out.append(OptionInfo(f.name, kind, default, f.metadata.get("help", "")))
+        text = f.metadata.get("help", "")
+        for other, values in _needs(f.metadata).items():  # say when it is refused
+            text += f" (only with {other} {_either(values)}: refused with another {other})"
+        out.append(OptionInfo(f.name, kind, default, text))
     return out
+
+
+def _needs(meta: Mapping[str, Any]) -> dict[str, tuple[Any, ...]]:
+    """A field's ``needs`` (module docstring), each function called now."""
+    return {
+        other: tuple(values() if callable(values) else values)
+        for other, values in meta.get("needs", {}).items()
+    }
+
+
+def _either(values: tuple[Any, ...]) -> str:
+    return " or ".join(map(repr, values))
+
+
+def _default_of(f: dataclasses.Field[Any]) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return dataclasses.MISSING
+
+
+def check_needs(options: Any, owner: str, given: Collection[str] | None = None) -> None:
+    """Refuse an option set while the option its ``needs`` names has a value that does not
+    read it (module docstring): ``given`` the names the user gave, None to count every value
+    other than the default as given."""
+    for f in dataclasses.fields(options):
+        needs = _needs(f.metadata)
+        if not needs:
+            continue
+        if given is None and getattr(options, f.name) == _default_of(f):
+            continue
+        if given is not None and f.name not in given:
+            continue
+        for other, values in needs.items():
+            chosen = getattr(options, other)
+            if chosen not in values:
+                raise UsageError(
+                    f"{owner}: option {f.name!r} is read only with {other} {_either(values)}, "
+                    f"and {other} is {chosen!r}: set {other}={values[0]} or leave "
+                    f"{f.name!r} out"
+                )
 
 
 def allowed_choices(meta: Mapping[str, Any]) -> tuple[str, ...] | None:
@@ -200,16 +255,22 @@ def field_names(cls: type) -> list[str]:
 def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
     """The options dataclass ``cls`` from a Python entry's keywords (``values``: its
     ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
-    return parse_options(cls, {name: values[name] for name in field_names(cls)}, owner)
+    given = {name: values[name] for name in field_names(cls)}
+    return parse_options(cls, given, owner, explicit=False)
 
 
-def parse_options(cls: type[T], params: Mapping[str, Any], owner: str) -> T:
+def parse_options(
+    cls: type[T], params: Mapping[str, Any], owner: str, *, explicit: bool = True
+) -> T:
     """Validate ``params`` against the options dataclass ``cls`` of ``owner``.
 
     Keys match field names exactly, or case-insensitively when that is unambiguous (so ``w5``
-    and ``W5`` both name the weight ``W5``); dashes count as underscores.
+    and ``W5`` both name the weight ``W5``); dashes count as underscores. ``explicit``: the
+    keys are the ones the user gave (``needs``, module docstring); False: every option is
+    there, so only a value other than the default counts as set.
     """
     if isinstance(params, cls):
+        check_needs(params, owner)
         return params
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     lower = {name.lower(): name for name in fields}
@@ -224,9 +285,11 @@ def parse_options(cls: type[T], params: Mapping[str, Any], owner: str) -> T:
         f = fields[name]
         values[name] = _coerce(value, hints[name], f.metadata, f"{owner}: option {name!r}")
     try:
-        return cls(**values)
+        options = cls(**values)
     except (TypeError, ValueError) as exc:
         raise UsageError(f"{owner}: {exc}") from None
+    check_needs(options, owner, set(values) if explicit else None)
+    return options
 
 
 def as_params(options: Any) -> dict[str, Any]:

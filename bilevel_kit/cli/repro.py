@@ -120,6 +120,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
             "fig6": _add_fig6,
             "horizon": _add_horizon,
             "stations": _add_stations,
+            "robust-sim": _add_robust_sim,
         }.get(name, lambda _: None)(s)
         add_sweep_options(s)
 
@@ -236,6 +237,41 @@ def _add_stations(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_robust_sim(p: argparse.ArgumentParser) -> None:
+    """The cells: every (instance, trays, cv) of the lists given (docs/robust.md)."""
+    p.add_argument(
+        "--instances",
+        type=lambda t: listed(t, str),
+        metavar="table,sp12",
+        help="instances of the robust study: table, sp12 (default: both, when --trays or "
+        "--cvs is given; none of the three: the default cells, docs/robust.md)",
+    )
+    p.add_argument(
+        "--trays",
+        type=lambda t: listed(t, _trays),
+        metavar="1,2,unlimited",
+        help="tray counts (default 1, 2 and unlimited, when a selection is given)",
+    )
+    p.add_argument(
+        "--cvs",
+        type=lambda t: listed(t, positive),
+        metavar="0.1,0.3",
+        help="coefficients of variation (default 0.1, 0.2, 0.3, 0.5, when a selection is given)",
+    )
+
+
+def _trays(text: str) -> int | None:
+    """A tray count: an integer >= 1 or ``unlimited``."""
+    if text.lower() == "unlimited":
+        return None
+    try:
+        return positive_int(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer >= 1 or 'unlimited', got {text!r}"
+        ) from None
+
+
 def integers(text: str) -> tuple[int, ...]:
     """``1,2,5``: one or more integers >= 1."""
     return listed(text, positive_int)
@@ -287,9 +323,11 @@ def _run(args: argparse.Namespace) -> int:
 
         return _report(run_robust(out, **run))
     if args.experiment == "robust-sim":
-        from ..repro.robust_sim import run_robust_sim
+        from ..repro.robust_sim import run_robust_sim, select_cells
 
-        return _report(run_robust_sim(out, reps=args.reps, **run))
+        chosen = (args.instances, args.trays, args.cvs)
+        cells = select_cells(*chosen) if any(c is not None for c in chosen) else None
+        return _report(run_robust_sim(out, reps=args.reps, cells=cells, **run))
     run["calibration"] = args.calibration
     if args.experiment == "stations":
         from ..repro.stations import run_stations

@@ -96,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
     from ..methods import get_method, solve
     from ..progress import LiveLine
 
-    get_method(args.method)  # fail fast on an unknown method, before loading anything heavy
+    spec = get_method(args.method)  # fail fast on an unknown method, before anything heavy
+    spec.parse(dict(args.param))  # and on its options, before a compile (prepare below)
     record = None
     if args.work_cell is None:
         instance = load_instance(args)

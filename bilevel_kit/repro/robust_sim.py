@@ -24,7 +24,10 @@ For each cell (instance, trays, cv) of the robust study (:mod:`.robust`):
      was not optimised for.
 
 The simulated VSS is E[mean-value plan] - E[SAA plan] over the R replications, with its 95 %
-paired interval; each online policy's gain over the mean-value plan likewise.
+paired interval; each online policy's gain over the mean-value plan likewise. An online policy
+that fails in a cell (``cpsat-rolling`` choosing a kit its shelf packer cannot lay out, on
+``sp12``) is a row with its ``error`` and no numbers, not a failed cell: the fixed plans'
+comparison still stands.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from .. import atomic
-from ..errors import UsageError
+from ..errors import KitDoesNotFit, UsageError, one_line
 from ..experiments.tables import markdown_lines, write_csv
 from ..instance import Instance
 from ..plan import Kit, Plan
@@ -49,15 +52,18 @@ from .robust import (
     INSTANCES,
     ROOT,
     SCENARIOS,
+    TRAYS,
     cell_key,
     study_instance,
     study_solves,
     tray_label,
 )
 
-#: The cells run by default: the table with one tray at every cv of the study (the timeline's
-#: VSS is not zero at 0.3 and 0.5).
-CELLS: tuple[tuple[str, int | None, float], ...] = tuple(("table", 1, c) for c in CVS)
+#: The cells run by default: every cell of the study (:mod:`.robust`: both instances, 1, 2
+#: and unlimited trays, every cv; issue 41), the order of ``robust.csv``.
+CELLS: tuple[tuple[str, int | None, float], ...] = tuple(
+    (n, t, c) for n in INSTANCES for t in TRAYS for c in CVS
+)
 QUICK_CELLS: tuple[tuple[str, int | None, float], ...] = (("table", 1, 0.5),)
 #: Replications per cell and law (``--reps``); 5 with ``--quick``.
 REPS, QUICK_REPS = 30, 5
@@ -84,6 +90,22 @@ class RobustSimCell:
 
     def key(self) -> str:
         return cell_key(self)
+
+
+def select_cells(
+    instances: Sequence[str] | None = None,
+    trays: Sequence[int | None] | None = None,
+    cvs: Sequence[float] | None = None,
+) -> tuple[tuple[str, int | None, float], ...]:
+    """Every (instance, trays, cv) of the given lists (``--instances``, ``--trays``,
+    ``--cvs``), each left out meaning the robust study's own (:mod:`.robust`)."""
+    names = tuple(instances or INSTANCES)
+    unknown = [n for n in names if n not in INSTANCES]
+    if unknown:
+        raise UsageError(
+            f"robust-sim: unknown instance {unknown[0]!r}; the study's are {', '.join(INSTANCES)}"
+        )
+    return tuple((n, t, float(c)) for n in names for t in (trays or TRAYS) for c in (cvs or CVS))
 
 
 def study_plans(instance: Instance, cv: float, seed: int) -> tuple[Plan, Plan]:
@@ -124,12 +146,18 @@ def simulated(instance: Instance, plans: Mapping[str, Plan], law: str, cv: float
     params = SimParams(timing=timing_for(law, cv), use_instance_supply=False)
     eff = effective_instance(instance, params)
     seeds = range(reps)
-    out: dict[str, dict[str, list[float]]] = {}
+    out: dict[str, dict[str, Any]] = {}
     for name in (*FIXED, *ONLINE):
         policy: Any = name
         if name in plans:
             policy = FixedPlanPolicy(eff, params=params, plan=plans[name])
-        recs = replicate(instance, policy, params, seeds=seeds)
+        try:
+            recs = replicate(instance, policy, params, seeds=seeds)
+        except KitDoesNotFit as exc:
+            if name in plans:
+                raise  # a fixed plan's kits are laid out up front (_laid_out)
+            out[name] = {"error": one_line(exc)}
+            continue
         out[name] = {
             "makespan": [float(r["makespan"]) for r in recs],
             "n_kits": [float(r["n_kits"]) for r in recs],
@@ -165,7 +193,7 @@ COLUMNS = (
     "instance", "trays", "cv", "seed", "law", "policy", "reps", "makespan", "makespan_low",
     "makespan_high", "gain", "gain_low", "gain_high", "n_kits", "timeline_makespan",
     "timeline_vss", "timeline_vss_low", "timeline_vss_high", "committed_vss", "in_sample",
-    "committed_in_sample", "reproduced",
+    "committed_in_sample", "reproduced", "error",
 )  # fmt: skip
 
 
@@ -211,13 +239,21 @@ def rows_of(records: Sequence[Mapping[str, Any]], committed: Path = COMMITTED) -
         for law, runs in rec["runs"].items():
             base = runs["mean-plan"]["makespan"]
             for name, run in runs.items():
-                est, gain = estimate(run["makespan"]), paired(base, run["makespan"])
                 tl = rec["timeline"].get(name)
-                row = {
+                common = {
                     **{k: cell[k] for k in ("instance", "cv", "seed", "reps")},
                     "trays": tray_label(cell["trays"]),
                     "law": law,
                     "policy": name,
+                }
+                if "error" in run:  # the policy failed in this cell (module docstring)
+                    out.append(
+                        {k: common.get(k, run["error"] if k == "error" else "") for k in COLUMNS}
+                    )
+                    continue
+                est, gain = estimate(run["makespan"]), paired(base, run["makespan"])
+                row = {
+                    **common,
                     "makespan": est.mean,
                     "makespan_low": est.low,
                     "makespan_high": est.high,
@@ -233,6 +269,7 @@ def rows_of(records: Sequence[Mapping[str, Any]], committed: Path = COMMITTED) -
                     "in_sample": rec.get("in_sample", {}).get(name, ""),
                     "committed_in_sample": _committed_in_sample(old, name),
                     "reproduced": ok,
+                    "error": "",
                 }
                 out.append(
                     {
@@ -299,9 +336,15 @@ def sim_detail_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
             str(r["cv"]),
             str(r["law"]),
             LABELS.get(str(r["policy"]), str(r["policy"])),
-            _interval(r, "makespan"),
-            "-" if r["policy"] == "mean-plan" else _interval(r, "gain"),
-            f"{float(r['n_kits']):.1f}",
+            *(
+                ("failed", "-", "-")  # its error: the summary
+                if _failed(r)
+                else (
+                    _interval(r, "makespan"),
+                    "-" if r["policy"] == "mean-plan" else _interval(r, "gain"),
+                    f"{float(r['n_kits']):.1f}",
+                )
+            ),
         ]
         for r in rows
     ]
@@ -320,7 +363,7 @@ def sim_summary_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
     timeline's (task law), is the SAA plan still better (participant law), and where do the
     online policies stand against the mean-value plan."""
     saa = [r for r in rows if r["policy"] == "saa-plan"]
-    out = []
+    out = [_reproduced_sentence([r for r in saa if r["law"] == saa[0]["law"]])]
     for law in dict.fromkeys(str(r["law"]) for r in saa):
         mine = [r for r in saa if r["law"] == law]
         meets = sum(
@@ -335,14 +378,59 @@ def sim_summary_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
             f"{meets} of {len(mine)} cells and lies above 0 in {above}."
         )
     for name in ONLINE:
-        gains = [float(r["gain"]) for r in rows if r["policy"] == name]
-        above = sum(float(r["gain_low"]) > 0 for r in rows if r["policy"] == name)
-        below = sum(float(r["gain_high"]) < 0 for r in rows if r["policy"] == name)
-        out.append(
-            f"`{name}` gains {_range(gains)} over the mean-value plan (better in {above}, "
-            f"worse in {below} of {len(gains)} cell x law pairs)."
-        )
+        ran = [r for r in rows if r["policy"] == name and not _failed(r)]
+        above = sum(float(r["gain_low"]) > 0 for r in ran)
+        below = sum(float(r["gain_high"]) < 0 for r in ran)
+        if ran:
+            out.append(
+                f"`{name}` gains {_range([float(r['gain']) for r in ran])} over the mean-value "
+                f"plan (better in {above}, worse in {below} of {len(ran)} cell x law pairs)."
+            )
+        failed = [r for r in rows if r["policy"] == name and _failed(r)]
+        if failed:
+            out.append(
+                f"`{name}` failed in {len(failed)} cell x law pairs ({_where(rows, failed)}): "
+                f"{str(failed[0]['error']).rstrip('.')}."
+            )
     return " ".join(out)
+
+
+def _where(rows: Sequence[Mapping[str, Any]], failed: Sequence[Mapping[str, Any]]) -> str:
+    """Per instance, how many of its cells the ``failed`` rows are in."""
+
+    def cells(rs: Sequence[Mapping[str, Any]], name: str) -> set[tuple[str, str]]:
+        return {(str(r["trays"]), str(r["cv"])) for r in rs if r["instance"] == name}
+
+    parts = []
+    for name in dict.fromkeys(str(r["instance"]) for r in failed):
+        bad, every = len(cells(failed, name)), len(cells(rows, name))
+        parts.append(
+            f"every cell of {name}" if bad == every else f"{bad} of {every} cells of {name}"
+        )
+    return ", ".join(parts)
+
+
+def _failed(r: Mapping[str, Any]) -> bool:
+    """The row of a policy that failed in its cell (module docstring)."""
+    return bool(r.get("error"))
+
+
+def _reproduced_sentence(saa: Sequence[Mapping[str, Any]]) -> str:
+    """How many cells' recomputed plans reproduce the committed study, and of the others
+    how many recomputed SAA plans are better, equal or worse on the scenarios both solves
+    optimised (``saa``: one SAA-plan row per cell)."""
+    bad = [r for r in saa if str(r["reproduced"]) not in ("True", "true")]
+    diff = [float(r["in_sample"]) - float(r["committed_in_sample"]) for r in bad]
+    vss = [float(r["timeline_vss"]) for r in saa]
+    better, worse = sum(d < -0.005 for d in diff), sum(d > 0.005 for d in diff)
+    return (
+        f"The recomputed plans reproduce the committed study in {len(saa) - len(bad)} of "
+        f"{len(saa)} cells; in the other {len(bad)} the recomputed SAA plan is better in sample "
+        f"than the committed one in {better}, equal in {len(bad) - better - worse} and worse "
+        f"in {worse}. Recomputed, the timeline VSS is {_range(vss)}, its interval above 0 in "
+        f"{sum(float(r['timeline_vss_low']) > 0 for r in saa)} cells and below 0 in "
+        f"{sum(float(r['timeline_vss_high']) < 0 for r in saa)}."
+    )
 
 
 #: Table name -> (its CSV file, its renderer), merged into :data:`.report_sim.SIM_TABLES`.

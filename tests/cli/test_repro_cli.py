@@ -49,11 +49,17 @@ def test_each_study_lists_its_own_options_only(capsys):
         "calibrate": {"--draws"},
         "user-study": {"--calibration"},
         "fig6": {"--mats", "--with-cpsat", "--cpsat-time-limit", "--reps", "--calibration"},
-        "horizon": {"--horizons", "--windows", "--reference-time-limit", "--no-simulation"},
+        "horizon": {
+            "--horizons",
+            "--windows",
+            "--reference-time-limit",
+            "--no-simulation",
+            "--instances",
+        },
         "adaptive": {"--reps", "--calibration"},
         "stations": {"--lines", "--stations", "--units", "--supply", "--reps"},
         "robust": set(),
-        "robust-sim": {"--reps"},
+        "robust-sim": {"--reps", "--instances", "--trays", "--cvs"},
     }
     every = set().union(*own.values())
     for study, flags in own.items():

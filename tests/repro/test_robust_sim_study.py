@@ -8,8 +8,12 @@ from pathlib import Path
 
 import pytest
 
+from bilevel_kit.errors import UsageError
 from bilevel_kit.repro.report import read_rows
+from bilevel_kit.repro.robust import CVS, INSTANCES, TRAYS
 from bilevel_kit.repro.robust_sim import (
+    CELLS,
+    COLUMNS,
     FIXED,
     LAWS,
     ONLINE,
@@ -17,6 +21,9 @@ from bilevel_kit.repro.robust_sim import (
     ROBUST_SIM_TABLES,
     rows_of,
     run_robust_sim,
+    select_cells,
+    sim_detail_markdown,
+    sim_summary_markdown,
     sim_vss_markdown,
 )
 from bilevel_kit.repro.template import ROOT, check
@@ -41,8 +48,11 @@ def test_committed_rows_are_paired_and_complete() -> None:
         assert list(pols) == [*FIXED, *ONLINE], key
         base = float(pols["mean-plan"]["makespan"])
         assert float(pols["mean-plan"]["gain"]) == 0.0
-        for r in pols.values():
+        for name, r in pols.items():
             assert int(r["reps"]) == REPS
+            if r["error"]:  # only an online policy may fail in a cell, and has no numbers
+                assert name in ONLINE and r["makespan"] == r["gain"] == "", (key, name)
+                continue
             assert float(r["gain_low"]) <= float(r["gain"]) <= float(r["gain_high"])
             # the gain is the difference of the means on the same seeds (paired)
             assert float(r["gain"]) == pytest.approx(base - float(r["makespan"]), abs=0.02)
@@ -55,6 +65,54 @@ def test_committed_rows_are_paired_and_complete() -> None:
         other = cells[(*key[:3], LAWS[1] if key[3] == LAWS[0] else LAWS[0])]
         for name in FIXED:
             assert pols[name]["n_kits"] == other[name]["n_kits"], (key, name)
+
+
+def test_the_default_cells_are_the_whole_study_and_the_committed_csv_has_them() -> None:
+    assert len(CELLS) == len(set(CELLS)) == len(INSTANCES) * len(TRAYS) * len(CVS) == 24
+    assert select_cells() == CELLS
+    labels = {"1": 1, "2": 2, "unlimited": None}
+    done = {(r["instance"], labels[r["trays"]], float(r["cv"])) for r in read_rows(CSV)}
+    assert done == set(CELLS)
+
+
+def test_the_recomputed_mean_value_plans_give_the_committed_study_in_every_cell() -> None:
+    """docs/robust.md: only SAA plans differ from robust.csv's, each better in sample."""
+    committed = {(r["instance"], r["trays"], r["cv"]): r for r in read_rows(ROBUST)}
+    rows = [r for r in read_rows(CSV) if r["law"] == "task"]
+    for r in rows:
+        old = committed[(r["instance"], r["trays"], r["cv"])]
+        if r["policy"] == "mean-plan":
+            assert float(r["timeline_makespan"]) == float(old["mean_plan"]), r
+        if r["policy"] == "saa-plan" and r["reproduced"] != "True":
+            assert float(r["in_sample"]) < float(r["committed_in_sample"]), r
+    assert sum(r["reproduced"] == "True" for r in rows if r["policy"] == "saa-plan") == 8
+
+
+def test_select_cells_is_the_product_of_the_lists_given() -> None:
+    assert select_cells(["sp12"], None, [0.3]) == (
+        ("sp12", 1, 0.3),
+        ("sp12", 2, 0.3),
+        ("sp12", None, 0.3),
+    )
+    assert select_cells(None, [None], [0.5]) == (("table", None, 0.5), ("sp12", None, 0.5))
+    with pytest.raises(UsageError, match="unknown instance 'chair'; the study's are table, sp12"):
+        select_cells(["chair"])
+
+
+def test_the_cli_selects_cells(monkeypatch, capsys, tmp_path: Path) -> None:
+    import bilevel_kit.repro.robust_sim as mod
+    from bilevel_kit.cli import main
+
+    seen: dict = {}
+    monkeypatch.setattr(mod, "run_robust_sim", lambda out, **kw: seen.update(kw) or {})
+    out = ["--out", str(tmp_path / "o")]
+    argv = ["repro", "robust-sim", "--instances", "sp12", "--trays", "1,unlimited"]
+    assert main([*argv, "--cvs", "0.3", *out]) == 0
+    assert seen["cells"] == (("sp12", 1, 0.3), ("sp12", None, 0.3))
+    assert main(["repro", "robust-sim", "--reps", "3", *out]) == 0
+    assert seen["cells"] is None and seen["reps"] == 3  # the default cells
+    assert main(["repro", "robust-sim", "--trays", "0", *out]) == 2
+    assert "expected an integer >= 1 or 'unlimited', got '0'" in capsys.readouterr().err
 
 
 def test_the_task_law_agrees_with_the_timeline() -> None:
@@ -87,6 +145,37 @@ def test_rows_of_a_record_say_whether_the_committed_plans_were_reproduced() -> N
     assert rows_of([rec], ROBUST)[0]["reproduced"] is False
     assert "| table | 1 |" in sim_vss_markdown(rows)
     assert set(ROBUST_SIM_TABLES) == {"robust_sim_summary", "robust_sim_vss", "robust_sim_detail"}
+
+
+def test_a_failed_online_policy_is_a_row_with_its_error_not_a_failed_cell() -> None:
+    runs = {name: {"makespan": [400.0, 410.0, 420.0], "n_kits": [5, 5, 6]} for name in FIXED}
+    runs["saa-plan"]["makespan"] = [398.0, 409.0, 417.0]
+    runs["cpsat-rolling"] = {"makespan": [399.0, 408.0, 421.0], "n_kits": [5, 5, 5]}
+    runs["optimized-adaptive"] = {"error": "KitDoesNotFit: t4, t5 do not fit"}
+    est = {k: {"mean": 1.0, "half": 0.5, "n": 1000} for k in ("mean-plan", "saa-plan", "vss")}
+    cell = {"instance": "sp12", "trays": 1, "cv": 0.3, "seed": 0, "reps": 3}
+    in_sample = {"mean-plan": 376.36, "saa-plan": 376.36}  # the committed cell's
+    rec = {"cell": cell, "timeline": est, "runs": {"task": runs}, "in_sample": in_sample}
+    rows = rows_of([rec], ROBUST)
+    assert [r["policy"] for r in rows] == [*FIXED, *ONLINE] and list(rows[-1]) == list(COLUMNS)
+    failed = rows[-1]
+    assert failed["error"] == "KitDoesNotFit: t4, t5 do not fit"
+    assert failed["makespan"] == failed["gain_low"] == "" and failed["law"] == "task"
+    assert all(r["error"] == "" for r in rows[:-1]) and rows[2]["gain"] == pytest.approx(0.67)
+    assert sim_detail_markdown(rows).splitlines()[-1].endswith("| failed | - | - |")
+    summary = sim_summary_markdown(rows)
+    assert (
+        "`optimized-adaptive` failed in 1 cell x law pairs (every cell of sp12): "
+        "KitDoesNotFit: t4, t5 do not fit." in summary
+    )
+    assert "`cpsat-rolling` gains 0.67 s over the mean-value plan" in summary
+    assert "`optimized-adaptive` gains" not in summary  # it ran in no cell
+    assert summary.startswith(
+        "The recomputed plans reproduce the committed study in 0 of 1 cells; in the other 1 "
+        "the recomputed SAA plan is better in sample than the committed one in 0, equal in 1 "
+        "and worse in 0. Recomputed, the timeline VSS is 1.00 s, its interval above 0 in 1 "
+        "cells and below 0 in 0."
+    )
 
 
 def test_the_page_is_rendered_from_the_csv(tmp_path: Path) -> None:

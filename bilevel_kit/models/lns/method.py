@@ -53,6 +53,7 @@ import numpy as np
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import get as get_objective
+from ...objectives import scenario_objectives
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, pack_time_limit, unfit_outcome
@@ -66,6 +67,9 @@ MARGIN_S, MARGIN_SHARE = 0.3, 0.02
 WINDOW_KITS = 8
 #: The share of the time left the exact one-tray cut after a sweep may use.
 RECUT_SHARE = 0.1
+#: The options only the scenario objectives read: set with another, a usage error
+#: (docs/robust.md#options-of-the-scenario-objectives).
+SCENARIO_ONLY = {"objective": scenario_objectives}
 
 
 @dataclass(frozen=True)
@@ -121,13 +125,16 @@ class LnsOptions:
             "of the scenarios (0: their average)",
             "min": 0.0,
             "below": 1.0,
+            "needs": {"objective": ("cvar_makespan",)},
         },
     )
     scenarios: int = field(
-        default=20, metadata={"help": "scenarios of expected_makespan", "min": 1}
+        default=20,
+        metadata={"help": "scenarios of the human times", "min": 1, "needs": SCENARIO_ONLY},
     )
     scenario_seed: int = field(
-        default=0, metadata={"help": "seed of expected_makespan's scenarios", "min": 0}
+        default=0,
+        metadata={"help": "seed of the scenarios", "min": 0, "needs": SCENARIO_ONLY},
     )
     cv: float | None = field(
         default=None,
@@ -135,6 +142,7 @@ class LnsOptions:
             "help": "coefficient of variation of every human time in the scenarios (none: "
             "each task's sd / mean)",
             "min": 0.0,
+            "needs": SCENARIO_ONLY,
         },
     )
 
