@@ -291,3 +291,16 @@ def test_kits_without_a_proof_for_every_layout_are_relaxed(seed, trays):
     assert strict.value == pytest.approx(opt, abs=1e-9) and strict.exhausted
     no_at_all = relaxed.counters["relaxed_kits"] == 0
     assert strict.scope == (ANY_ANGLE if no_at_all else AXIS_ALIGNED)
+
+
+def test_time_limit_and_honesty_at_250_tasks():
+    """At 250 tasks one expansion enumerates far more kits than the limit allows: the clock
+    is read inside it (every 64 kits), the plan is valid and the claims are checked."""
+    from timing import allowed
+
+    inst = load(INSTANCES / "kitbench" / "intree_n250_s1_tu_tight_d30.json")
+    res = solve(inst, "bbr", time_limit=6.0, check=True)
+    assert res.wall_time_s <= allowed(6.0)
+    assert res.extra["violations"] == []
+    assert res.status == "feasible" and res.extra["stop"] == "time_limit"
+    assert res.bound <= res.makespan

@@ -211,7 +211,7 @@ class _Search:
         cap = space.robot_cap(node.done, node.state, self.upper - self.tol)
         for mask, r, h, _ in space.kits(node.done, cap):
             counts["generated"] += 1
-            if not counts["generated"] & 4095 and self._late():
+            if not counts["generated"] & 63 and self._late():
                 self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
                 heapq.heappush(self.heap, (f, 0, next(self.tick), node))
                 return
