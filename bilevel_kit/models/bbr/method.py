@@ -89,27 +89,25 @@ def bbr(
     upper = evaluate(instance, start).makespan if start is not None else math.inf
     space = Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
-    every = search(
-        space,
-        packer_fits(packer),
-        upper=upper,
-        deadline=stop_at,
-        max_expansions=options.expansions,
-        max_nodes=options.max_nodes,
-    )
+    fits = packer_fits(packer)
+
+    def run(upper: float, relax: bool, expansions: int | None) -> Outcome:
+        return search(
+            space,
+            fits,
+            upper=upper,
+            deadline=stop_at,
+            max_expansions=expansions,
+            max_nodes=options.max_nodes,
+            relax=relax,
+        )
+
+    every = run(upper, True, options.expansions)
     extra.update(every.counters, stop=every.stop)
     plan = _better(instance, packer, start, every)
     axis = None
     if every.stop == "exhausted" and not every.exhausted:  # relaxed plans below the incumbent
-        upper = evaluate(instance, plan).makespan if plan is not None else upper
-        axis = search(
-            space,
-            packer_fits(packer),
-            upper=upper,
-            deadline=stop_at,
-            max_nodes=options.max_nodes,
-            relax=False,
-        )
+        axis = run(evaluate(instance, plan).makespan if plan is not None else upper, False, None)
         extra["axis_aligned"] = {"stop": axis.stop, "bound": axis.bound, **axis.counters}
         plan = _better(instance, packer, plan, axis)
     return _conclude(instance, plan, (every, axis), start_bound, extra, budget)
