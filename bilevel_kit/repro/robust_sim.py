@@ -25,9 +25,9 @@ For each cell (instance, trays, cv) of the robust study (:mod:`.robust`):
 
 The simulated VSS is E[mean-value plan] - E[SAA plan] over the R replications, with its 95 %
 paired interval; each online policy's gain over the mean-value plan likewise. An online policy
-that fails in a cell (``cpsat-rolling`` choosing a kit its shelf packer cannot lay out, on
-``sp12``) is a row with its ``error`` and no numbers, not a failed cell: the fixed plans'
-comparison still stands.
+that fails in a cell (as ``cpsat-rolling`` did on ``sp12`` before it took the packing
+oracle's layouts, docs/simulation.md#layouts-of-committed-kits) is a row with its ``error``
+and no numbers, not a failed cell: the fixed plans' comparison still stands.
 """
 
 from __future__ import annotations

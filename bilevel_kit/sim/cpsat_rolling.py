@@ -40,9 +40,23 @@ Benders seed cuts, cut shrinking, the kit-count LP bound) by work, not by the cl
 ``time_limit``. So a simulation run is a function of (instance, policy, parameters, seed)
 on an idle or a loaded machine alike; ``time_limit`` and the packing calls' wall-clock limits
 are safety nets only: a decision that hits one (a pathologically loaded machine) is no longer
-reproducible, and is counted in :attr:`CPSATRollingPolicy.safety_nets`. Committed layouts
-come from the policy's own shelf-packer cache, not from the packing oracle's process-wide
-cache.
+reproducible, and is counted in :attr:`CPSATRollingPolicy.safety_nets`.
+
+**Layouts** (docs/simulation.md#layouts-of-committed-kits). The committed kit's layout is the
+shelf packer's when it has one (the policy's own cache, by part multiset). It is not
+exact: the model may keep a kit that its packing oracle laid out and the shelf packer cannot
+(``sp_n12_s1_t1_tight_d10``: t4-t6). Such a kit gets the model's own layout of it, else the
+oracle's (:class:`~bilevel_kit.models.common.Packer` with a deterministic limit, the model's
+packing calls' one, so it reuses their memoised answers); ``oracle_layouts`` counts these
+decisions. Where neither has a layout (the model's plans have layouts and a merged first kit
+is kept only if the shelf packer lays it out, so: the hint's first kit, when the solve found
+no plan, and the oracle's answer is unknown within its limit) the kit is split greedily, in
+its order, into consecutive kits that have one (the first is committed, the others lead the
+next hint; a task nothing lays out alone raises
+:class:`~bilevel_kit.errors.KitDoesNotFit`), counted in
+:attr:`~CPSATRollingPolicy.layout_fallbacks` and ``SimResult.layout_fallbacks``. An oracle
+layout's placements may depend on which multisets the process-wide cache saw first; the
+simulated times do not depend on placements.
 
 **Warm start.** Each decision is hinted with the previous decision's plan minus the kit it
 committed (restricted to the window, the window's new tasks appended as single kits), or a
@@ -67,15 +81,21 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
+from ..errors import KitDoesNotFit
 from ..instance import Instance, document, from_dict, topological_order
 from ..plan import Kit, Plan
 from .policies import LayoutCache
 from .state import SimState
 
 if TYPE_CHECKING:
+    from ..models.packing_oracle import TypedLayout
     from .params import SimParams
 
 _TOKEN = "__human_busy__"
+#: Where a committed kit's layout came from (module docstring, "Layouts").
+SHELF, MODEL, ORACLE, SPLIT = "shelf", "model", "oracle", "split"
+#: A decision: the committed kit, the plan's other kits (task ids), its layout's source.
+_Decision = tuple[Kit, tuple[tuple[str, ...], ...], str]
 
 
 @dataclass(frozen=True)
@@ -127,11 +147,16 @@ class CPSATRollingPolicy:
         self.options = options if options is not None else CPSATRollingOptions()
         self._order = topological_order(instance)
         self._layouts = LayoutCache(instance)
-        self._memo: dict[tuple[Any, ...], tuple[Kit, tuple[tuple[str, ...], ...]]] = {}
+        self._memo: dict[tuple[Any, ...], _Decision] = {}
         self._rest: tuple[tuple[str, ...], ...] = ()  # the previous plan after its first kit
         self.solves = 0
         #: decisions whose solve a wall-clock safety net cut short (not reproducible)
         self.safety_nets = 0
+        #: committed kits laid out by the model or the packing oracle, not the shelf packer
+        self.oracle_layouts = 0
+        #: committed kits split because nothing laid out the plan's first kit (module
+        #: docstring, "Layouts"); counted per decision, memo hits included
+        self.layout_fallbacks = 0
         #: the human time of a task in the window's model: the mean (the adaptive variants,
         #: :mod:`.adaptive`, set their pace estimate here before each decision)
         self.human_time: Callable[[str], float] = instance.human_time
@@ -167,7 +192,9 @@ class CPSATRollingPolicy:
         if hit is None:
             hit = self._solve(window, times, h0, hint, releases)
             self._memo[key] = hit
-        kit, self._rest = hit
+        kit, self._rest, source = hit
+        self.oracle_layouts += source in (MODEL, ORACLE)
+        self.layout_fallbacks += source == SPLIT
         return kit
 
     def _warm_kits(self, window: list[str]) -> tuple[tuple[str, ...], ...]:
@@ -275,8 +302,9 @@ class CPSATRollingPolicy:
         h0: float,
         warm: tuple[tuple[str, ...], ...],
         releases: dict[str, float],
-    ) -> tuple[Kit, tuple[tuple[str, ...], ...]]:
-        """The first kit of the window's plan and the plan's other kits (task ids)."""
+    ) -> _Decision:
+        """The first kit of the window's plan, the plan's other kits (task ids), and where the
+        first kit's layout came from."""
         from ..models.cpsat import best_heuristic_plan, released_makespan, solve
 
         sub = self._sub_instance(window, times, h0)
@@ -307,8 +335,57 @@ class CPSATRollingPolicy:
         if any(rel.values()):  # (else the model's plan as it is: no-delay decisions unchanged)
             plan = self._merge_first(sub, plan, len(dummy), rel, back)
         kits = [tuple(back[t] for t in k.tasks) for k in plan.kits if _TOKEN not in k.tasks]
-        first = self._layouts.kit(kits[0], f"cpsat-rolling {kits[0]}")
-        return first, tuple(kits[1:])
+        return self._commit(sub, kits, _model_layouts(out.plan, back))
+
+    def _commit(
+        self, sub: Instance, kits: list[tuple[str, ...]], model: dict[frozenset[str], TypedLayout]
+    ) -> _Decision:
+        """The first kit laid out (module docstring, "Layouts"), the plan's other kits, and
+        where the layout came from; a first kit nothing lays out is split."""
+        from ..models.common import split_greedily
+
+        first = kits[0]
+        hit = self._laid_out(sub, first, model)
+        if hit is not None:
+            return hit[0], tuple(kits[1:]), hit[1]
+        parts = split_greedily(
+            list(first), lambda ts: self._laid_out(sub, tuple(ts), model) is not None
+        )
+        if parts is None:  # a task alone has no layout either: single-task kits
+            parts = [[t] for t in first]
+        head = tuple(parts[0])
+        got = self._laid_out(sub, head, model)
+        # (else no method lays out this task alone: the shelf packer's error says so)
+        kit = got[0] if got is not None else self._layouts.kit(head, f"cpsat-rolling {head}")
+        rest = tuple(tuple(p) for p in parts[1:]) + tuple(kits[1:])
+        return kit, rest, SPLIT
+
+    def _laid_out(
+        self, sub: Instance, tasks: tuple[str, ...], model: dict[frozenset[str], TypedLayout]
+    ) -> tuple[Kit, str] | None:
+        """The kit with a layout and its source: the shelf packer's, else the model's own,
+        else the packing oracle's (deterministic limit); None if none has one."""
+        from ..models import packing_oracle
+        from ..models.budget import Budget
+        from ..models.common import Packer, pack_time_limit
+
+        try:
+            return self._layouts.kit(tasks, f"cpsat-rolling {tasks}"), SHELF
+        except KitDoesNotFit:
+            pass
+        typed = model.get(frozenset(tasks))
+        source = MODEL
+        if typed is None:  # the model's packing calls' limit, so its answers are reused
+            budget = Budget(self.options.time_limit, stretch=packing_oracle.SAFETY_NET)
+            packer = Packer(sub, pack_time_limit(budget), budget, deterministic=True)
+            nets = packing_oracle.safety_nets()
+            ok, typed = packer.counts(sub.kit_parts([_sub_id(t) for t in tasks]))
+            self.safety_nets += packing_oracle.safety_nets() > nets
+            source = ORACLE
+            if not ok or typed is None:
+                return None
+        placed = packing_oracle.typed_to_placements(self.instance, tasks, typed)
+        return Kit(tasks, placed), source
 
     def _merge_first(
         self, sub: Instance, plan: Plan, j: int, rel: dict[str, float], back: dict[str, str]
@@ -316,7 +393,6 @@ class CPSATRollingPolicy:
         """Merge the next kits into the first real kit (position ``j``) while their tasks
         need no part the stock lacks, the kit fits and the released makespan does not grow
         (module docstring)."""
-        from ..errors import KitDoesNotFit
         from ..models.cpsat import released_makespan
         from ..models.cpsat.scaling import released
 
@@ -336,6 +412,19 @@ class CPSATRollingPolicy:
                 break
             kits = [k.tasks for k in cand.kits]
         return Plan(tuple(Kit(k) for k in kits))
+
+
+def _model_layouts(plan: Plan | None, back: dict[str, str]) -> dict[frozenset[str], TypedLayout]:
+    """The model's own layouts of its plan's kits, by task set (original ids), by part type:
+    any slot of a type fits any part of that type."""
+    out: dict[frozenset[str], TypedLayout] = {}
+    for k in plan.kits if plan is not None else ():
+        if k.layout and _TOKEN not in k.tasks:
+            typed: TypedLayout = {}
+            for p in k.layout:
+                typed.setdefault(p.type, []).append((p.x, p.y, p.theta))
+            out[frozenset(back[t] for t in k.tasks)] = typed
+    return out
 
 
 def _sub_id(task: str) -> str:

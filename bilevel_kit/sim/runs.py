@@ -48,6 +48,9 @@ class SimResult:
     #: decisions a wall-clock safety net cut short (``cpsat-rolling``: not reproducible,
     #: docs/simulation.md#determinism); 0 for the other policies
     safety_nets: int = 0
+    #: committed kits split because the policy's plan had a first kit that nothing laid out
+    #: (``cpsat-rolling``, docs/simulation.md#determinism); 0 for the other policies
+    layout_fallbacks: int = 0
 
     @property
     def kit_times(self) -> tuple[KitTimes, ...]:
@@ -114,6 +117,8 @@ class SimResult:
             "feeders": {k: dict(v) for k, v in self.feeders.items()},
             "params": self.params.to_dict(),
             **({"stations": self.timeline.station_metrics()} if self.instance.stations else {}),
+            # (only when it happened: the records of every other run stay as they were)
+            **({"layout_fallbacks": self.layout_fallbacks} if self.layout_fallbacks else {}),
         }
 
 
@@ -205,11 +210,16 @@ def simulate(
     )
     shop = ShopFloor(inst, pol, params, times, seed)
     env = shop.env
-    nets = getattr(pol, "safety_nets", 0)  # (a shared policy counts over its runs)
+    # (a shared policy counts over its runs: the run's own counts are differences)
+    nets, splits = getattr(pol, "safety_nets", 0), getattr(pol, "layout_fallbacks", 0)
     env.run(until=shop.finished | env.timeout(params.max_time))
     if not shop.finished.triggered:
         raise SimulationError(f"the run did not finish within {params.max_time:g} s")
-    return replace(_result(shop, pol, seed), safety_nets=getattr(pol, "safety_nets", 0) - nets)
+    return replace(
+        _result(shop, pol, seed),
+        safety_nets=getattr(pol, "safety_nets", 0) - nets,
+        layout_fallbacks=getattr(pol, "layout_fallbacks", 0) - splits,
+    )
 
 
 def run(

@@ -91,6 +91,11 @@ class StationsPolicy:
         """The stations' decisions a wall-clock safety net cut short (:mod:`.cpsat_rolling`)."""
         return sum(getattr(p, "safety_nets", 0) for p in self.policies.values())
 
+    @property
+    def layout_fallbacks(self) -> int:
+        """The stations' committed kits split for want of a layout (:mod:`.cpsat_rolling`)."""
+        return sum(getattr(p, "layout_fallbacks", 0) for p in self.policies.values())
+
     def choose(self, state: SimState) -> str | None:
         """The station of the next kit: the earliest need among those with tasks left."""
         ready = [s for s in self.policies if state.station_left[s] > 0]
