@@ -61,11 +61,12 @@ def test_slow_participants_oracle_is_significantly_slower() -> None:
 
 
 def test_trend_verdicts_follow_slope_interval_and_ranks() -> None:
-    # the R = 100 trends are withdrawn until that grid is rerun with the replications' t-test
-    assert not (RESULTS_DIR / "fig6_r100_trends.csv").exists()
-    assert not any(k.startswith("r100.") and ".trend." in k for k in FACTS)
-    prefix = "fig6"
-    rows = read_rows(RESULTS_DIR / "fig6_trends.csv")
+    for prefix, stem in (("fig6", "fig6"), ("r100", "fig6_r100")):  # R = 30 and R = 100
+        _check_trends(prefix, read_rows(RESULTS_DIR / f"{stem}_trends.csv"))
+    assert any(k.startswith("r100.") and ".trend." in k for k in FACTS)
+
+
+def _check_trends(prefix: str, rows) -> None:
     for r in rows:
         sign = int(r["expected_sign"])
         slope = _side(r["ci_low"], r["ci_high"])
