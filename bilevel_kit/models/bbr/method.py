@@ -7,17 +7,21 @@
    state) nodes, pruned by the state's lower bound (:mod:`.space`) and by dominance, the tray
    asked lazily (the packing oracle, memoised, limited by deterministic time so its verdicts
    do not depend on the load, docs/simulation.md#determinism).
-3. **Result**: the best plan (the start's, or a better one the search found, with the
-   oracle's layouts); ``optimal`` when the search was exhausted and every kit it ruled out was
-   ruled out for every layout; ``bound`` the search's bound (the least lower bound of the
-   open nodes) under the same condition, else the start's bound.
+3. **A 0/90-degree pass** when the search ended with a relaxed plan (a kit without a layout
+   nor a proof for every layout, :mod:`.search`) below the incumbent: the same search with
+   such kits dropped, for the claims about 0/90-degree plans.
+4. **Result**: the best plan (the start's, or a better one a search found, with the
+   oracle's layouts); ``optimal`` when the first search proved it (for every plan); ``bound``
+   the higher of the search's (the least of its open bounds and relaxed plans) and the
+   start's, for every plan.
 
 One station, the makespan, one or more trays (docs/timeline.md). ``extra``: ``start_method``,
 ``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
 ``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
-``optimal_axis_aligned`` (what the search proved for 0/90-degree plans), ``proof_scope``,
-``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
+``optimal_axis_aligned`` (what the searches proved for 0/90-degree plans), ``relaxed_kits``,
+``axis_aligned`` (the second pass's stop, bound and counters), ``proof_scope``, ``makespan``,
+``n_kits``, ``gap``, ``wall_time_s``.
 """
 
 from __future__ import annotations
@@ -179,7 +183,7 @@ def _conclude(
     extra: dict[str, Any],
     budget: Budget,
 ) -> MethodOutput:
-    """Status, bound and ``extra`` (module docstring, step 3): ``outs`` the search for every
+    """Status, bound and ``extra`` (module docstring, step 4): ``outs`` the search for every
     plan (relaxed kits kept) and, when it ran, the one for 0/90-degree plans."""
     every, axis = outs
     real = evaluate(instance, plan).makespan if plan is not None else None
