@@ -236,6 +236,26 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+@contextmanager
+def _scratch_dir(prefix: str) -> Iterator[str]:
+    """A private temporary folder, removed on every way out (docs/cli.md#interrupting-a-command):
+    its removal is armed before the folder exists, so a signal that lands right after it is
+    made cannot leave it behind (``tempfile.TemporaryDirectory`` can, when the signal lands in
+    its constructor and the interrupted command ends without the interpreter's teardown), and
+    a stuck process ended by the guard removes it too (:func:`on_forced_exit`)."""
+    import os
+    import secrets
+    import tempfile
+
+    path = os.path.join(tempfile.gettempdir(), f"{prefix}{secrets.token_hex(8)}")
+    with on_forced_exit(remove_path(path)):
+        try:
+            os.mkdir(path, 0o700)
+            yield path
+        finally:
+            remove_path(path)()
+
+
 def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
     """Write ``model`` as MPS, solve it with ``python -m bilevel_kit.models.milp.highs_child``
     and load its solution back into the model's variables."""
@@ -244,12 +264,8 @@ def _run_highs_child(model: Any, req: _Request) -> SolveInfo:
     import os
     import subprocess
     import sys
-    import tempfile
 
-    with (
-        tempfile.TemporaryDirectory(prefix="bilevel_milp_") as tmp,
-        on_forced_exit(remove_path(tmp)),  # a stuck process is ended without its finally
-    ):
+    with _scratch_dir("bilevel_milp_") as tmp:
         path = os.path.join(tmp, "model.mps")
         out = os.path.join(tmp, "result.json")
         _, smap_id = model.write(path, format="mps", io_options={"symbolic_solver_labels": False})
