@@ -42,7 +42,7 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from ...bounds import johnson_order
+from ...bounds import flow_shop_makespan, johnson_order
 from ...instance import Instance
 from ...instance.model import topological_order
 
@@ -102,12 +102,11 @@ class Space:
         )
         limit = params.tray_limit
         self.trays = limit if limit is not None and limit < self.n else None
-        # Johnson's order of the task jobs (r_i, h_i), and the rank in it where the overhead
-        # jobs (o_R + d, o_H) go: after every task job Johnson's rule puts first
-        self.johnson = johnson_order(self.r, self.h)
-        key0 = _johnson_key(self.o_r + self.d, self.o_h)
-        keys = [_johnson_key(self.r[i], self.h[i]) for i in self.johnson]
-        self.overhead_at = sum(1 for k in keys if k <= key0)
+        # Johnson's order of the task jobs (r_i, h_i) and where the overhead jobs
+        # (o_R + d, o_H) go in it: Johnson's own rule on the tasks plus one overhead job
+        order = johnson_order([*self.r, self.o_r + self.d], [*self.h, self.o_h])
+        self.overhead_at = order.index(self.n)
+        self.johnson = [i for i in order if i != self.n]
         self.rank = [0] * self.n
         for j, i in enumerate(self.johnson):
             self.rank[i] = j
@@ -215,8 +214,7 @@ class Space:
         if self.trays == 1:
             sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
             robot_one = r_u + k0 * (a0 + b0) + sink
-        have = done
-        ready = min(self.r[i] for i in left if not self.pred[i] & ~have)
+        ready = min(self.r[i] for i in left if not self.pred[i] & ~done)
         out = Constants(human, flow, robot_one, a0 + ready)
         self._consts[done] = out
         return out
@@ -241,25 +239,12 @@ class Space:
         )
 
 
-def _johnson_key(a: float, b: float) -> tuple[int, float]:
-    """Johnson's rule as a sort key (:func:`bilevel_kit.bounds.johnson_order`): jobs with
-    a <= b first by a, then the others by -b."""
-    return (0, a) if a <= b else (1, -b)
-
-
 def _johnson_value(
     jobs: list[tuple[float, float]], overhead: tuple[float, float], k: int, at: int
 ) -> float:
-    """``max_j (sum_{i<=j} a_i + sum_{i>=j} b_i)`` over ``jobs`` in order with ``k`` copies of
-    ``overhead`` inserted before position ``at``: the flow-shop makespan with both machines
-    free at 0 (the module docstring's P_U)."""
+    """The flow-shop makespan with both machines free at 0 (the module docstring's P_U,
+    :func:`bilevel_kit.bounds.flow_shop_makespan`) of ``jobs`` in order with ``k`` copies of
+    ``overhead`` inserted before position ``at``."""
     seq = jobs[:at] + [overhead] * k + jobs[at:]
-    total_b = sum(b for _, b in seq)
-    best, pre_a, suf_b = 0.0, 0.0, total_b
-    for a, b in seq:
-        pre_a += a
-        value = pre_a + suf_b
-        if value > best:
-            best = value
-        suf_b -= b
-    return best
+    a, b = [x for x, _ in seq], [y for _, y in seq]
+    return flow_shop_makespan(range(len(seq)), a, b)
