@@ -165,11 +165,7 @@ class _Search:
         """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
         part multiset; module docstring); without ``relax`` a "no" narrows the proof's scope
         by its own."""
-        multiset: dict[str, int] = {}
-        for i in range(self.space.n):
-            if mask >> i & 1:
-                for p, k in self.space.parts[i]:
-                    multiset[p] = multiset.get(p, 0) + k
+        multiset = dict(self.space.instance.kit_parts(self.space.order(mask)))
         key = frozenset(multiset.items())
         verdict = self.fit_memo.get(key)
         if verdict is None:
