@@ -58,6 +58,9 @@ def message(exc: BaseException | None = None) -> str:
 #: Set once the interrupt's line is on stderr: a watchdog that must still end the process
 #: (its exit outlived the grace period) then exits without a second line.
 _REPORTED = threading.Event()
+#: Held while the line is written: a watchdog firing in that instant waits for it instead of
+#: writing a second line beside it (seen once beside two busy loops).
+_REPORTING = threading.Lock()
 
 
 #: The first signal the guard's handler took (None: none yet), for :func:`signalled`.
@@ -116,8 +119,9 @@ def deferred() -> Iterator[None]:
 
 def report(exc: BaseException | None, stream: IO[str]) -> None:
     """Print the interrupt's one line (:func:`message`), once per process."""
-    print(message(exc), file=stream, flush=True)
-    _REPORTED.set()
+    with _REPORTING:
+        print(message(exc), file=stream, flush=True)
+        _REPORTED.set()
 
 
 def exit_now(code: int) -> NoReturn:
@@ -339,10 +343,17 @@ class _Guard:
         _trace_stacks()
         _run_cleanups()
         term = signum == signal.SIGTERM
-        if not _REPORTED.is_set():  # the command's own line is enough once it is out
-            with contextlib.suppress(OSError):
-                os.write(2, f"{message(Terminated() if term else None)} (forced)\n".encode())
-        os._exit(EXIT_INTERRUPTED)
+        # a line being written now is waited for (bounded: a stuck stream must not keep the
+        # process alive) and then counts as written
+        locked = _REPORTING.acquire(timeout=0.5)
+        try:
+            if not _REPORTED.is_set() and locked:  # the command's own line is enough
+                with contextlib.suppress(OSError):
+                    os.write(2, f"{message(Terminated() if term else None)} (forced)\n".encode())
+            os._exit(EXIT_INTERRUPTED)
+        finally:  # (reached only where ``os._exit`` is replaced, as in the tests)
+            if locked:
+                _REPORTING.release()
 
     def close(self, linger: bool) -> None:
         """Stop watching; ``linger``: a deadline already running stays (the process is

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import signal
+import threading
 import time
 
 import pytest
@@ -48,6 +49,36 @@ def test_a_forced_exit_after_the_commands_line_is_silent(forced):
     with pytest.raises(Exited, match="130"):
         guard._force(signal.SIGTERM)
     assert written == []
+
+
+def test_a_forced_exit_while_the_commands_line_is_written_waits_for_it(forced):
+    """The race a busy machine hit once: the watchdog fires between the command's line and
+    its record of it. It waits for the line and then stays silent (one line, never two)."""
+    guard, written = forced
+    out = io.StringIO()
+    fired: list[BaseException] = []
+
+    class SlowStream(io.StringIO):
+        def flush(self) -> None:  # the watchdog fires while the line is being written
+            thread = threading.Thread(target=lambda: _force_into(guard, fired))
+            thread.start()
+            thread.join(timeout=0.2)  # it is held at the lock, not finished
+            assert thread.is_alive()
+            out.write(self.getvalue())
+            self._thread = thread
+
+    stream = SlowStream()
+    interrupt.report(interrupt.Terminated(), stream)
+    stream._thread.join(timeout=5.0)
+    assert out.getvalue() == "bilevel-kit: interrupted (SIGTERM)\n"
+    assert written == [] and [str(e) for e in fired] == ["130"]
+
+
+def _force_into(guard, fired: list[BaseException]) -> None:
+    try:
+        guard._force(signal.SIGTERM)
+    except Exited as exc:
+        fired.append(exc)
 
 
 def _swallowed_signal(sig: int) -> None:

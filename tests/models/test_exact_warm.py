@@ -39,7 +39,7 @@ def test_a_near_tie_goes_to_the_later_plan_in_cpsat_and_the_earlier_in_milp(tiny
     values = {"single-task": 100.0, "whole-assembly": 100.0 - 1e-9}
     plans = {name: best_heuristic_plan(tiny, (name,))[0] for name in values}
     by_plan = {id(plans[name]): v for name, v in values.items()}
-    monkeypatch.setattr(warm, "_heuristic_plan", lambda inst, name, seed, tl: plans[name])
+    monkeypatch.setattr(warm, "_heuristic_plan", lambda inst, name, seed, tl: (plans[name], False))
     monkeypatch.setattr(warm, "evaluate", lambda inst, plan: plan)
     monkeypatch.setattr(warm, "objective_of", lambda plan, objective: by_plan[id(plan)])
     methods = ("single-task", "whole-assembly")
@@ -56,3 +56,19 @@ def test_milp_reports_greedy_ce_skipped_while_its_kernels_would_compile(tiny, mo
     _, name = best_heuristic_plan(tiny, methods, 0, 5.0, "makespan", MILP_STATIONS, extra)
     assert name == "single-task"
     assert extra == {"warm_start_skipped": "greedy-ce: its kernels are not compiled"}
+
+
+def test_a_warm_start_method_stopped_by_its_time_limit_is_listed(tiny, monkeypatch):
+    """A method whose run its share of the time stopped is named in ``warm_start_cut``; its
+    plan still competes (it is a valid plan), one that ran to its end is not named."""
+    plans = {name: best_heuristic_plan(tiny, (name,))[0] for name in ("single-task", "greedy-ce")}
+    cut = {"single-task": False, "greedy-ce": True}
+    monkeypatch.setattr(
+        warm, "_heuristic_plan", lambda inst, name, seed, tl: (plans[name], cut[name])
+    )
+    monkeypatch.setattr(warm, "_kernels_would_compile", lambda: False)
+    extra: dict[str, object] = {}
+    methods = ("single-task", "greedy-ce")
+    plan, _ = best_heuristic_plan(tiny, methods, 0, 5.0, "makespan", MILP_STATIONS, extra)
+    assert extra == {"warm_start_cut": ["greedy-ce"]}
+    assert plan is not None

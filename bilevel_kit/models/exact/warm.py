@@ -80,7 +80,9 @@ def best_heuristic_plan(
     and the method's name; methods that refuse the instance (or do not model its stations)
     are skipped. ``time_limit`` (None: none) bounds them all: each gets what is left of it
     (less ``rule``'s margins); greedy-ce is skipped when its kernels would compile and a plan
-    is known (then ``extra["warm_start_skipped"]`` says so, when ``extra`` is given)."""
+    is known (then ``extra["warm_start_skipped"]`` says so, when ``extra`` is given), and a
+    method its time limit stopped is listed in ``extra["warm_start_cut"]``: a busy machine
+    can leave the warm start worse than the same method run alone with more time."""
     end = None if time_limit is None else time.perf_counter() + time_limit
     best: tuple[float, Plan, str] | None = None
     for name in methods:
@@ -95,7 +97,9 @@ def best_heuristic_plan(
                 if extra is not None:
                     extra["warm_start_skipped"] = "greedy-ce: its kernels are not compiled"
                 continue
-        plan = _heuristic_plan(instance, name, seed, tl)
+        plan, cut = _heuristic_plan(instance, name, seed, tl)
+        if cut and extra is not None:  # its plan is what the time allowed, not its own best
+            extra.setdefault("warm_start_cut", []).append(name)
         if plan is None:
             continue
         value = objective_of(evaluate(instance, plan), objective)
@@ -119,21 +123,25 @@ def _time_for(
 
 def _heuristic_plan(
     instance: Instance, name: str, seed: int, time_limit: float | None
-) -> Plan | None:
+) -> tuple[Plan | None, bool]:
     """The plan of the registered method ``name`` with its default options within
-    ``time_limit`` s (None: its own); None when it has none or refuses the instance."""
+    ``time_limit`` s (None: its own), None when it has none or refuses the instance; and
+    whether its time limit stopped it (:func:`bilevel_kit.methods.time_limit_reached`)."""
     from ...errors import BilevelKitError
-    from ...methods import get_method, require_stations_support
+    from ...methods import get_method, require_stations_support, time_limit_reached
 
     try:
         require_stations_support(instance, name)  # (several stations: those that plan them)
         spec = get_method(name)
         fn = spec.load()
+        t0 = time.perf_counter()
         if spec.options:
-            return fn(instance, spec.parse({}), seed=seed, time_limit=time_limit).plan
-        return fn(instance, seed=seed).plan
+            out = fn(instance, spec.parse({}), seed=seed, time_limit=time_limit)
+        else:
+            out = fn(instance, seed=seed)
+        return out.plan, time_limit_reached(out, time.perf_counter() - t0, time_limit)
     except BilevelKitError:
-        return None
+        return None, False
 
 
 def _kernels_would_compile() -> bool:
