@@ -7,11 +7,12 @@ figure whatever the caller's rcParams. Colours come from two sources:
   then the same colours again *with a hatch* (never the same swatch twice without a visible
   difference), and for more than :data:`MAX_SWATCHES` things a continuous colormap sampled at
   distinct points;
-* :func:`kit_colors` for the kits of a plan: the eight colours of :data:`KIT_PALETTE` up to
-  eight kits, beyond that the continuous :data:`KIT_CMAP` indexed by the kit's number,
-  explained by a colour bar. Neither holds a red, pink or grey: those are the marks every
-  Gantt chart shows (idle time, the makespan, deliveries, pickups, tray waits), and a kit
-  must never be mistaken for one (:func:`color_distance` at least :data:`MIN_CONTRAST`).
+* :data:`KIT_PALETTE` for the kits of a plan: kit k takes colour (k - 1) mod 8 whatever the
+  number of kits, and each further round of eight a hatch
+  (:func:`bilevel_kit.plots.gantt.kit_colors`, docs/figures.md#colours). It holds no red, pink
+  or grey: those are the marks every Gantt chart shows (idle time, the makespan, deliveries,
+  pickups, tray waits), and a kit must never be mistaken for one (:func:`color_distance` at
+  least :data:`MIN_CONTRAST`).
 
 Every axis of every figure carries a label with its unit ("time (s)", "x (mm)").
 matplotlib is imported inside the functions, so importing this module stays cheap.
@@ -82,8 +83,6 @@ MIN_CONTRAST = 20.0
 HATCHES = ("", "//", "..", "xx", "\\\\", "oo")
 #: How many things :func:`categorical` tells apart by colour and hatch.
 MAX_SWATCHES = len(PALETTE) * len(HATCHES)
-#: Continuous colormap of the kits when there are more than ten (with a colour bar).
-KIT_CMAP = "viridis"
 
 #: Fixed colours of the things every Gantt chart shows. Idle time is drawn opaque in
 #: :data:`IDLE_FILL` (a light :data:`IDLE_COLOR`) hatched in :data:`IDLE_COLOR`.
@@ -141,18 +140,6 @@ def categorical(n: int) -> list[Swatch]:
 
     cmap = colormaps["turbo"]
     return [Swatch(rgba(cmap(i / (n - 1)))) for i in range(n)]
-
-
-def kit_colors(n: int) -> tuple[list[RGBA], bool]:
-    """Colours of kits 1..n and whether they need a colour bar: :data:`KIT_PALETTE` up to
-    eight kits, else :data:`KIT_CMAP` sampled at the kit numbers (colour bar from kit 1 to
-    kit n)."""
-    if n <= len(KIT_PALETTE):
-        return [rgba(c) for c in KIT_PALETTE[:n]], False
-    from matplotlib import colormaps
-
-    cmap = colormaps[KIT_CMAP]
-    return [rgba(cmap(k / (n - 1))) for k in range(n)], True
 
 
 def mark_colors() -> dict[str, RGBA]:

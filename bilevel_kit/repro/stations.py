@@ -35,25 +35,22 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .. import atomic, style
+from .. import atomic
 from ..errors import UsageError
 from ..experiments.cells import is_failed, run_cells_counted, write_json
-from ..experiments.tables import markdown_lines, write_csv
+from ..experiments.tables import markdown_lines, read_csv, write_csv
 from ..generate import mixed
 from ..instance import Instance, from_dict
 from ..plan import Kit, Timeline
 from ..sim import SimParams, TimingModel, simulate
 from ..sim.stations import station_policies
+from .stations_plots import LABELS, draw_figures, rows_from_csv
 from .stations_stats import capacity, idle_floor, per_unit, served_rows
 from .stats import t_interval
-
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
-    from matplotlib.figure import Figure
 
 #: The product each station builds, station k taking entry (k - 1) mod len.
 LINES: dict[str, tuple[str, ...]] = {
@@ -87,12 +84,6 @@ CPSAT_OPTIONS: dict[str, Any] = {"window": 8, "deterministic_time": 0.05}
 PLANNING = ("cpsat-rolling", "optimized")
 PLANNING_REPS = 6
 PLANNING_DELAYS = ("none",)
-LABELS = {
-    "single-task": "Single Task",
-    "whole-assembly": "Whole Assembly",
-    "cpsat-rolling": "cpsat-rolling",
-    "optimized": "Optimized (greedy-ce)",
-}
 
 
 def line_document(line: str, stations: int, units: int) -> dict[str, Any]:
@@ -339,71 +330,6 @@ def capacity_curves(line: str, grid: Sequence[int]) -> dict[str, list[float]]:
     return {"idle": idle, "throughput": rate}
 
 
-@style.styled
-def plot_stations_panel(
-    rows: Sequence[Mapping[str, Any]],
-    *,
-    line: str,
-    delay: str,
-    metric: str = "throughput",
-    ax: Axes | None = None,
-) -> Axes:
-    """One panel: ``metric`` (``throughput`` or ``idle``, the reproduction's) against S, one
-    line per policy with its 95 % band, and the capacity bound (:func:`capacity_curves`: a
-    floor on idle, a ceiling on throughput); the idle panel marks the 10 % threshold."""
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(4.8, 3.2), layout="constrained")
-    mine = [r for r in rows if r["line"] == line and r["delay"] == delay]
-    policies = list(dict.fromkeys(r["policy"] for r in mine))
-    for policy, sw in zip(policies, style.categorical(len(policies)), strict=True):
-        rs = sorted((r for r in mine if r["policy"] == policy), key=lambda r: r["stations"])
-        x = [r["stations"] for r in rs]
-        y = [r[metric] for r in rs]
-        ax.plot(x, y, marker="o", ms=3, color=sw.color, label=LABELS.get(policy, policy))
-        # (a rate is never negative, a share never above 100 %: the t-interval's band is cut)
-        top = 100.0 if metric == "idle" else math.inf
-        lo = [max(0.0, r[f"{metric}_low"]) for r in rs]
-        hi = [min(top, r[f"{metric}_high"]) for r in rs]
-        ax.fill_between(x, lo, hi, color=sw.color, alpha=0.15, lw=0)
-    grid = sorted({int(r["stations"]) for r in mine})
-    bound = capacity_curves(line, grid)[metric]
-    ax.plot(grid, bound, color="black", ls=":", lw=1.2, label="capacity bound (any policy)")
-    if metric == "idle":
-        ax.axhline(100 * THRESHOLD, color="black", ls="--", lw=0.8, label="10 % idle")
-        ax.set_ylabel("human idle per station (%)")
-    else:
-        ax.set_ylabel("throughput (units per hour)")
-    ax.set_xlabel("stations per robot S")
-    ax.set_xticks(grid)
-    supply = "shared feeders, not scaled with S" if delay == "feeders" else "in stock"
-    ax.set_title(f"{line} line, supply: {supply}")
-    ax.grid(alpha=0.3)
-    return ax
-
-
-@style.styled
-def plot_stations(rows: Sequence[Mapping[str, Any]], line: str, *, quick: bool = False) -> Figure:
-    """Throughput (top) and human idle (bottom) against S for one line, without and with
-    supply delays (columns), one line per policy."""
-    import matplotlib.pyplot as plt
-
-    delays = [d for d in DELAYS if any(r["line"] == line and r["delay"] == d for r in rows)]
-    fig, axes = plt.subplots(
-        2, len(delays), figsize=(4.6 * len(delays), 6.4), squeeze=False, layout="constrained"
-    )
-    for j, delay in enumerate(delays):
-        plot_stations_panel(rows, line=line, delay=delay, metric="throughput", ax=axes[0][j])
-        plot_stations_panel(rows, line=line, delay=delay, metric="idle", ax=axes[1][j])
-        axes[1][j].set_title("")
-    handles, labels = axes[1][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels))
-    if quick:
-        fig.suptitle("QUICK run: fewer stations, units and replications")
-    return fig
-
-
 def _check_options(
     lines: Sequence[str],
     delays: Sequence[str],
@@ -457,18 +383,15 @@ def _write_outputs(
     quick: bool,
 ) -> dict[str, Path]:
     """The CSVs, the Markdown tables and one figure per line (module docstring)."""
-    from ..plots import save_figure
-
     files: dict[str, Path] = {
         "csv": write_csv(out / "stations.csv", rows, exclude=(), line_end="\n"),
         "served_csv": write_csv(out / "stations_served.csv", best, exclude=(), line_end="\n"),
         "markdown": out / "stations.md",
     }
     atomic.write_text(files["markdown"], head + format_markdown(rows, best) + "\n")
-    for line in dict.fromkeys(str(r["line"]) for r in rows):
-        fig = plot_stations(rows, line, quick=quick)
-        files[f"figure_{line}"] = save_figure(fig, out / f"stations_{line}.png")
-    return files
+    # drawn from the CSV as written, as paper_repro/draw_stations.py redraws the committed one
+    drawn = rows_from_csv(read_csv(files["csv"]))
+    return {**files, **draw_figures(drawn, out, capacity_curves, threshold=THRESHOLD, quick=quick)}
 
 
 def run_stations(

@@ -387,17 +387,6 @@ def test_categorical_swatches_never_repeat():
     )
 
 
-def test_kit_colors_categorical_then_continuous():
-    from bilevel_kit import style
-
-    colors, bar = style.kit_colors(8)
-    assert not bar and len(set(colors)) == 8
-    colors, bar = style.kit_colors(9)
-    assert bar and len(set(colors)) == 9
-    colors, bar = style.kit_colors(100)
-    assert bar and len(set(colors)) == 100
-
-
 def test_plural():
     from bilevel_kit.style import plural
 
