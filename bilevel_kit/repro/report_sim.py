@@ -13,7 +13,7 @@ from .adaptive import share_text
 from .fig6_stats import BETTER, WORSE
 from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
-from .robust import ROBUST_TABLES
+from .robust_facts import ROBUST_TABLES
 from .robust_sim import ROBUST_SIM_TABLES
 from .stations_tables import STATION_TABLES
 

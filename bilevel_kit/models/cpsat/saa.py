@@ -43,6 +43,7 @@ import numpy as np
 from ...instance import Instance
 from ...plan import Kit, Placement, Plan
 from ...stochastic import cvar_makespan, expected_makespan
+from .. import packing_oracle
 from ..budget import Budget
 from ..common import Packer, kit_order, pack_time_limit
 from .context import Model
@@ -115,6 +116,17 @@ def _build(
     return mdl, divisor
 
 
+def _net_cut(solver: Any, status: Any, det_limit: float) -> bool:
+    """Did CP-SAT stop on its wall-clock limit (the safety net) rather than on a proof
+    (optimal, infeasible) or on ``det_limit``, its deterministic time (inf: none)? Stopped by
+    that limit, its deterministic time reaches it (docs/robust.md#the-study)."""
+    from ortools.sat.python import cp_model
+
+    if status in (cp_model.OPTIMAL, cp_model.INFEASIBLE, cp_model.MODEL_INVALID):
+        return False
+    return bool(solver.deterministic_time < det_limit - 1e-6)
+
+
 def _hint(mdl: Model, instance: Instance, kits: Sequence[Sequence[str]]) -> None:
     where = {t: k for k, kit in enumerate(kits) for t in kit}
     for i, xs in enumerate(mdl.x):
@@ -140,10 +152,12 @@ def solve_saa(
     ``alpha`` over every plan (module docstring) within ``time_limit`` s, hinted with
     ``start``; the better of ``start`` and the model's plan.
     ``deterministic_time``: CP-SAT's deterministic time over all its solves (one worker: a
-    reproducible run, docs/simulation.md#determinism), the time limit its safety net."""
+    reproducible run, docs/simulation.md#determinism), the time limit its safety net, whose
+    firing ``info["saa_safety_net"]`` records (:func:`_net_cut`, docs/robust.md#the-study)."""
     from ortools.sat.python import cp_model
 
     budget = Budget(time_limit)
+    nets_before = packing_oracle.safety_nets()
     if instance.stations:
         raise ValueError("the SAA model covers one assembly station")
     mdl, divisor = _build(instance, scenarios, resolution, alpha)
@@ -172,12 +186,13 @@ def solve_saa(
         "saa_status": None,
         "saa_deterministic_time": 0.0,
     }
-    bound_valid, proven = True, False
+    bound_valid, proven, cut = True, False, False
     bound: float | None = None
     while budget.remaining(0.05) > 0.05:
         solver = cp_model.CpSolver()
         solver.parameters.max_time_in_seconds = budget.remaining(0.05)
         solver.parameters.num_workers = workers
+        left = math.inf
         if deterministic_time is not None:
             left = deterministic_time - info["saa_deterministic_time"]
             if left <= 0:
@@ -185,6 +200,7 @@ def solve_saa(
             solver.parameters.max_deterministic_time = left
         solver.parameters.random_seed = seed
         status = solver.solve(mdl.model)
+        cut = cut or _net_cut(solver, status, left)
         info["saa_deterministic_time"] += solver.deterministic_time
         info["saa_iterations"] += 1
         info["saa_status"] = solver.status_name(status)
@@ -211,6 +227,10 @@ def solve_saa(
         if best[1] is not None:
             mdl.model.clear_hints()
             _hint(mdl, instance, best[1])
+    else:  # the clock ran out with cuts added and work left: the net cut the run
+        cut = True
+    if deterministic_time is not None:
+        info["saa_safety_net"] = cut or packing_oracle.safety_nets() > nets_before
     value: float | None = best[0] if best[1] is not None else None
     if bound is not None and value is not None:
         bound = min(bound, value)
