@@ -115,3 +115,14 @@ def test_window_clock_follows_the_scaled_timeline(seed, n_stations, trays):
         assert clock.arrive == times[-1][1]
         assert {s: clock.done[s] for s in done} == done
         assert sum(clock.kits) == k + 1
+
+
+def test_cli_refuses_a_scenario_objective_with_stations_in_one_line(root, capsys):
+    from bilevel_kit.cli import main
+
+    path = root / "instances" / "stations" / "table_u1_s2.json"
+    args = ["solve", str(path), "-m", "lns", "-p", "objective=cvar_makespan"]
+    assert main([*args, "--time-limit", "5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert "lns does not use option 'objective=cvar_makespan' with several assembly" in err

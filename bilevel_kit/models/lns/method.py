@@ -19,6 +19,11 @@ A matheuristic (docs/formulations.md, "Large-neighbourhood search"):
    With option ``stall``, ``stall`` windows in a row without improvement end it earlier
    (counted in windows, so deterministic; the exact models' LNS first, :mod:`..exact.lns_first`).
 
+**Several stations, and the human idle** (``objective`` ``sum_completion`` or ``human_idle``):
+the search of :mod:`.stations` (moves and enumerated windows timed by the timeline itself, no
+CP-SAT windows; docs/stations.md#lns-with-several-stations), with the options of
+:data:`STATION_OPTIONS`. With one station ``sum_completion`` is the makespan.
+
 **From a given plan** (``lns(..., start_plan=, known_bound=)``, what ``cpsat`` and ``milp``
 hand over when their model is not built, :mod:`.fallback`): the given plan is the first start
 (``start_method`` ``incumbent``; a quick start replaces it only when strictly better, so the

@@ -17,8 +17,22 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
    kit, a split, the kit to another place in the robot's sequence between its station's
    neighbours, a task into a nearby kit of its station), then the **exact window**: the
    consecutive kits from it holding at most :data:`EXACT_TASKS` tasks, every rearrangement
-   of their tasks enumerated (:mod:`.enumerate`). A sweep without improvement is a local
-   optimum and ends the run; so do ``iterations``, ``stall`` and the time limit.
+   of their tasks enumerated (:mod:`.enumerate`), only those whose end state (:mod:`.clock`)
+   is not dominated timed in full. A sweep without improvement is a local optimum: then a
+   *kick* (:data:`KICK_MOVES` random valid moves, better or not) and sweeps again from there,
+   back to the best plan when they find none better; :data:`KICKS` kicks in a row without a
+   better plan end the run (``stop`` ``local_optimum``), as do ``iterations`` (kits visited),
+   ``stall`` (visits in a row without improvement), optimal (the plan meets the bound) and
+   the time limit. Every random choice draws from ``numpy.random.default_rng(seed)``.
+
+**Result.** ``status`` ``optimal`` only when the plan meets the closed-form bound, else
+``feasible``; ``bound`` the makespan's (closed form or given); with another objective
+``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
+and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
+(``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``iterations``,
+``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves timed), ``window_plans``
+(rearrangements enumerated), ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``,
+``wall_time_s``.
 
 A kit holds one station's tasks, fits the tray (:class:`.fit.FastFit`) and is not made of
 part-less tasks only (docs/timeline.md#part-less-tasks); the tasks' order keeps every
