@@ -25,9 +25,10 @@ def station_lns(
     limit: HandOff,
     extra: dict[str, Any],
 ) -> Plan | None:
-    """The search's plan from ``plan`` within ``limit`` (its seconds; its ``stall`` and
-    ``windows`` as the search's ``stall`` and ``iterations``) when it is strictly better for
-    ``objective`` and passes the checker (then ``extra["improved_by"]`` is ``lns``), else None.
+    """The search's plan from ``plan`` within ``limit`` (its seconds; its ``windows`` as the
+    search's ``iterations``, its ``stall`` in sweeps of the plan's kits) when it is strictly
+    better for ``objective`` and passes the checker (then ``extra["improved_by"]`` is
+    ``lns``), else None.
     ``extra["fallback"]``: ``method``, ``time_s``, ``objective_before``/``_after``,
     ``makespan_before``/``_after``, ``windows`` (the search's iterations), ``improvements``,
     ``stop``; ``skipped`` or ``rejected`` when it did not run or its plan was refused."""
@@ -46,9 +47,10 @@ def station_lns(
         info["skipped"] = f"less than {MIN_S:g} s left"
         return None
     chosen: Any = objective  # any modelled objective: the search times it by its expression
-    options = LnsOptions(
-        start="quick", stall=limit.stall, iterations=limit.windows, objective=chosen
-    )
+    # a window of the one-station LNS frees several kits, a visit of the search one: the LNS
+    # first's stall of W windows is W sweeps of visits here
+    stall = None if limit.stall is None else limit.stall * max(1, len(plan.kits))
+    options = LnsOptions(start="quick", stall=stall, iterations=limit.windows, objective=chosen)
     out = lns(instance, options, seed=seed, time_limit=limit.seconds, start_plan=plan)
     info.update(
         windows=out.extra.get("iterations", 0),
