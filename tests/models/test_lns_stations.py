@@ -145,3 +145,11 @@ def test_exact_models_take_the_station_search_plan(method):
     assert report["method"] == "lns" and report["makespan_after"] < report["makespan_before"]
     assert out.objective <= 0.95 * greedy.objective  # 17 % below it measured
     assert out.bound <= out.objective
+
+
+def test_lns_on_stations_is_deterministic_at_a_fixed_number_of_visits(root):
+    inst = load(root / "instances" / "stations" / "table_u1_s2.json")
+    runs = [solve(inst, "lns", seed=5, time_limit=60, iterations=40, start="quick") for _ in "ab"]
+    assert runs[0].extra["stop"] == "iterations" and runs[0].extra["iterations"] == 40
+    assert [k.tasks for k in runs[0].plan.kits] == [k.tasks for k in runs[1].plan.kits]
+    assert runs[0].objective == runs[1].objective <= runs[0].extra["start_objective"]

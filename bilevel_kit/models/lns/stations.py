@@ -98,10 +98,9 @@ def station_search(
         plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
         if plan is not None:
             run.consider(plan, name)
-    share = options.start_share * budget.time_limit if budget.time_limit else None
-    if options.start == "auto" and (share is None or share >= 0.5):
-        left = stop_at.remaining()
-        tl = None if share is None else min(share, left)
+    share = options.start_share * budget.time_limit
+    if options.start == "auto" and share >= 0.5:
+        tl = min(share, stop_at.remaining())
         plan, _ = best_heuristic_plan(
             instance, ("greedy-ce",), seed=seed, time_limit=tl, objective=run.name
         )
@@ -279,6 +278,8 @@ class _Search:
             if made == KICK_MOVES:
                 break
             options = list(moves(self.kits, int(rng.integers(len(self.kits))), self.station))
+            if not options:  # a station's one kit of one task, nowhere else to go
+                continue
             kits, changed = options[int(rng.integers(len(options)))]
             if all(self.valid_kit(k) for k in changed) and self.ordered(kits):
                 self.kits, self.real = kits, self.value(kits)
