@@ -626,5 +626,6 @@ register(
     "matheuristic: large-neighbourhood search, windows of kits re-optimised exactly by CP-SAT",
     "bilevel_kit.models.lns.method:LnsOptions",
     prepare=COMPILE_KERNELS,  # its start plan is greedy-ce's
-    objectives=("makespan", "expected_makespan", "cvar_makespan"),
+    objectives=("makespan", "expected_makespan", "cvar_makespan", "sum_completion", "human_idle"),
+    supports_stations=True,  # every objective but the scenario ones (docs/stations.md)
 )

@@ -183,7 +183,8 @@ def no_model_note(result: Result) -> str | None:
     why = NO_MODEL.get(str(keys.read(x, keys.SOLVER_STATUS)))  # (old records: old names)
     if why is None:
         return None
-    plan = f" (the plan is {x['hint_method']}'s)" if x.get("hint_method") else ""
+    who = x.get("improved_by") or x.get("hint_method")  # the LNS's hand-off, else the start
+    plan = f" (the plan is {who}'s)" if who else ""
     reason = str(x.get("reason")).removeprefix(f"{result.method}: ")
     return f"{result.method}: no model built ({why}): {reason}{plan}"
 

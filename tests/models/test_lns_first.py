@@ -180,6 +180,7 @@ class _Stub:
     limit: HandOff | None = None
     margin: float = 0.1
     n_tasks: int = 40
+    is_makespan: bool = True
 
     def __post_init__(self) -> None:
         self.budget = Budget(10.0, stretch=2.0 if self.deterministic else 1.0)
@@ -243,7 +244,7 @@ def test_the_warm_start_meeting_nothing_is_not_claimed():
     ("kw", "fallback", "why"),
     [
         ({}, "none", "fallback=none"),
-        ({"stations": ("s1", "s2")}, "lns", "several stations"),
+        ({"stations": ("s1", "s2"), "is_makespan": False}, "lns", "several stations"),
         ({"deterministic": True}, "lns", "reproducible"),
     ],
 )
@@ -251,6 +252,14 @@ def test_skipped_cleanly(kw, fallback, why):
     stub = _Stub(after=50.0, bound=10.0, **kw)
     assert lns_first.before_model(stub, 0, fallback) == (0, False)
     assert stub.given is None and why in stub.extra["lns_first"]["skipped"]
+
+
+def test_stations_with_the_makespan_run_the_lns_first():
+    """Several stations, the makespan: the LNS (its station search) runs first
+    (docs/stations.md#lns-with-several-stations)."""
+    stub = _Stub(after=90.0, bound=80.0, stations=("s1", "s2"))
+    assert lns_first.before_model(stub, 0, "lns") == (1, False)
+    assert stub.given is not None and "skipped" not in stub.extra[keys.LNS_FIRST]
 
 
 def test_improved_by_names_the_model_when_it_beats_the_lns(tiny):

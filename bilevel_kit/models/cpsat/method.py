@@ -383,10 +383,9 @@ class _Cpsat:
 
     def hand_off(self, state: State, limit: HandOff = WHOLE) -> State:
         """``state``, or the better plan the LNS finds from it in the time left (makespan
-        objective without release times, which the LNS does not model; with stations, which
-        it does not model either, greedy-ce's plan in the time left when better:
-        :func:`.station_run.station_hand_off`; not in a reproducible run, ``deterministic``,
-        whose result must not depend on the clock)."""
+        objective without release times, which the LNS does not model; with stations, every
+        objective: :func:`.station_run.station_hand_off`; not in a reproducible run,
+        ``deterministic``, whose result must not depend on the clock)."""
         ctx = self.ctx
         assert state.kits is not None
         self.extra["improved_by"] = None
@@ -394,7 +393,7 @@ class _Cpsat:
             return state
         plan = plan_of(ctx, state.kits, None, ctx.packer)
         if ctx.instance.stations:
-            found = station_hand_off(ctx, plan, self.seed, self.extra)
+            found = station_hand_off(ctx, plan, self.seed, self.extra, limit.within(ctx.left()))
             if found is None:
                 return state
             kits, layouts = found

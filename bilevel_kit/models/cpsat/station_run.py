@@ -2,8 +2,8 @@
 (docs/timeline.md#several-stations; docs/formulations.md, "Several stations"): the model is
 the one model (:mod:`.station_model` adds the station part), the run the one run; these are
 its station-specific steps: the baselines' plans as incumbents (a quick plan would mix
-stations), greedy-ce as the hand-off when no model is built (the LNS models one station) and
-the claims on an objective other than the makespan."""
+stations), ``lns``'s station search as the hand-off (the LNS first, and the time left when no
+model is built) and the claims on an objective other than the makespan."""
 
 from __future__ import annotations
 
@@ -11,10 +11,11 @@ from typing import Any
 
 from ...bounds import objective_extra
 from ...instance import Instance
-from ...plan import Placement, Plan, evaluate
+from ...plan import Placement, Plan
+from ..exact.nomodel import HandOff
+from ..exact.station_lns import station_lns
 from ..packing import ANY_ANGLE
 from .context import Context, State
-from .warm import MIN_RUN, best_heuristic_plan
 
 
 def station_baselines(instance: Instance) -> list[list[list[int]]]:
@@ -36,26 +37,15 @@ def station_baselines(instance: Instance) -> list[list[list[int]]]:
 
 
 def station_hand_off(
-    ctx: Context, plan: Plan, seed: int, extra: dict[str, Any]
+    ctx: Context, plan: Plan, seed: int, extra: dict[str, Any], limit: HandOff
 ) -> tuple[list[list[int]], list[tuple[Placement, ...]]] | None:
-    """Several stations, no model built: greedy-ce (which plans for them, unlike the LNS)
-    in the time left; its kits and layouts when its plan beats the incumbent ``plan`` for the
-    objective (``extra["improved_by"]``), else None."""
-    instance, name = ctx.instance, "greedy-ce"
-    if ctx.left() <= MIN_RUN:
-        return None
-    found, _ = best_heuristic_plan(
-        instance, (name,), seed=seed, time_limit=ctx.left(), objective=ctx.objective
-    )
+    """Several stations: ``lns``'s station search from the incumbent ``plan`` within
+    ``limit`` for the run's objective (:func:`..exact.station_lns.station_lns`); its kits and
+    layouts when its plan is better, else None."""
+    found = station_lns(ctx.instance, plan, ctx.objective, seed=seed, limit=limit, extra=extra)
     if found is None:
         return None
-    now = ctx.minimised.value(evaluate(instance, plan))
-    value = ctx.minimised.value(evaluate(instance, found))
-    assert now is not None and value is not None  # (the modelled objectives: timeline values)
-    if value >= now - 1e-9:
-        return None
-    extra["improved_by"] = name
-    idx = instance.index
+    idx = ctx.instance.index
     kits = [[idx[t] for t in k.tasks] for k in found.kits if k.tasks]
     return kits, [k.layout for k in found.kits if k.tasks]
 

@@ -13,8 +13,11 @@ plan, which is the model's own search with a bound: the LNS runs its start plans
 When the LNS's plan meets the proven bound the model is not built (the plan is optimal by the
 bound computed before the model, as in the driver's shortcut). Otherwise the status stays the
 model's: a plan the LNS found is ``optimal`` only when the model proves it or it meets that
-bound. Skipped (``extra["lns_first"]["skipped"]``) with option ``fallback=none``, several
-stations, other objectives and release times (which the LNS does not model), and in a
+bound. With several stations the LNS is ``lns``'s station search
+(docs/stations.md#lns-with-several-stations, :mod:`.station_lns`), here for the makespan.
+Skipped (``extra["lns_first"]["skipped"]``) with option ``fallback=none``, several stations
+with another objective, other objectives and release times (which the LNS does not model),
+and in a
 reproducible run (``deterministic``): the LNS's start is clock-bound, as for the no-model
 hand-off (:mod:`.nomodel`).
 """
@@ -96,8 +99,9 @@ def _skipped(backend: Backend[Any], fallback: str) -> str | None:
     """Why the LNS does not run first (None: it does)."""
     if fallback != "lns":
         return "option fallback=none"
-    if backend.instance.stations:
-        return "several stations (the LNS models one)"
+    if backend.instance.stations and not backend.is_makespan:
+        # (the bound the LNS's plan is held to after it is the makespan's)
+        return "several stations with another objective than the makespan"
     if backend.budget.deterministic:
         return "a reproducible run (the LNS's start is clock-bound)"
     return None

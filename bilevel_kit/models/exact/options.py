@@ -50,7 +50,8 @@ def fallback_field() -> Fallback:
         default=default,
         metadata={
             "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: the plan, the LNS models one station; extra['fallback'])"
+            "(several stations: cpsat runs lns's station search, milp returns the plan; "
+            "extra['fallback'])"
         },
     )
 

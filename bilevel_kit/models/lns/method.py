@@ -19,6 +19,11 @@ A matheuristic (docs/formulations.md, "Large-neighbourhood search"):
    With option ``stall``, ``stall`` windows in a row without improvement end it earlier
    (counted in windows, so deterministic; the exact models' LNS first, :mod:`..exact.lns_first`).
 
+**Several stations, and the human idle** (``objective`` ``sum_completion`` or ``human_idle``):
+the search of :mod:`.stations` (moves and enumerated windows timed by the timeline itself, no
+CP-SAT windows; docs/stations.md#lns-with-several-stations), with the options of
+:data:`STATION_OPTIONS`. With one station ``sum_completion`` is the makespan.
+
 **From a given plan** (``lns(..., start_plan=, known_bound=)``, what ``cpsat`` and ``milp``
 hand over when their model is not built, :mod:`.fallback`): the given plan is the first start
 (``start_method`` ``incumbent``; a quick start replaces it only when strictly better, so the
@@ -45,7 +50,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -58,6 +63,7 @@ from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, pack_time_limit, unfit_outcome
 from ..cpsat.scaling import scale_times, scaled_makespan
+from ..exact.station_options import HONOURED, Refused, check_station_options, declare
 from .fit import FastFit
 from .window import Context, solve_window
 
@@ -110,12 +116,14 @@ class LnsOptions:
         default=0.1,
         metadata={"help": "share of the time limit for the kit-count LP bound", "min": 0.0},
     )
-    objective: Literal["makespan", "expected_makespan", "cvar_makespan"] = field(
+    objective: Literal[
+        "makespan", "expected_makespan", "cvar_makespan", "sum_completion", "human_idle"
+    ] = field(
         default="makespan",
         metadata={
             "help": "makespan (mean times), expected_makespan (sample average over "
-            "scenarios of the human times) or cvar_makespan (their CVaR at level alpha), "
-            "docs/formulations.md"
+            "scenarios of the human times), cvar_makespan (their CVaR at level alpha), "
+            "docs/formulations.md; sum_completion or human_idle (docs/stations.md)"
         },
     )
     alpha: float = field(
@@ -147,6 +155,32 @@ class LnsOptions:
     )
 
 
+#: The options with several stations (docs/stations.md#lns-with-several-stations): the search
+#: of :mod:`.stations` has no CP-SAT windows and no kit-count LP, and the scenario objectives
+#: are the one-station SAA's.
+_NO_WINDOWS = "the station search's windows are enumerated, at most 5 tasks"
+_SCENARIOS = "the scenario objectives are modelled for one station"
+STATION_OPTIONS = declare(
+    LnsOptions,
+    {
+        "iterations": HONOURED,
+        "stall": HONOURED,
+        "window": Refused(_NO_WINDOWS),
+        "max_window": Refused(_NO_WINDOWS),
+        "window_time": Refused(_NO_WINDOWS),
+        "workers": Refused(_NO_WINDOWS),
+        "start": HONOURED,
+        "start_share": HONOURED,
+        "bound_share": Refused("the bound is the objective's closed form"),
+        "objective": Refused(_SCENARIOS, also=("sum_completion", "human_idle")),
+        "alpha": Refused(_SCENARIOS),
+        "scenarios": Refused(_SCENARIOS),
+        "scenario_seed": Refused(_SCENARIOS),
+        "cv": Refused(_SCENARIOS),
+    },
+)
+
+
 def lns(
     instance: Instance,
     options: LnsOptions,
@@ -158,7 +192,11 @@ def lns(
 ) -> MethodOutput:
     """Registered method ``lns`` (module docstring); ``start_plan`` a valid plan to start from,
     ``known_bound`` a proven makespan bound (then none is computed). ``objective=
-    "expected_makespan"`` or ``"cvar_makespan"``: :func:`.saa.lns_saa`."""
+    "expected_makespan"`` or ``"cvar_makespan"``: :func:`.saa.lns_saa`; several stations or
+    the human idle: :func:`.stations.station_search` (its options: :data:`STATION_OPTIONS`)."""
+    check_station_options(instance, "lns", options, STATION_OPTIONS)
+    if not instance.stations and get_objective(options.objective).makespan_with_one_station:
+        options = replace(options, objective="makespan")  # sum_completion: the makespan
     if get_objective(options.objective).scenarios:  # the sample average (docs/formulations.md)
         from .saa import lns_saa
 
@@ -178,6 +216,19 @@ def lns(
     unfit = None if start_plan is not None else packer.task_not_fitting()  # a plan: all fit
     if unfit is not None:
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
+    if instance.stations or not get_objective(options.objective).is_makespan:
+        from .stations import station_search
+
+        return station_search(
+            instance,
+            options,
+            budget,
+            stop_at,
+            FastFit(instance, packer),
+            seed=seed,
+            start_plan=start_plan,
+            known_bound=known_bound,
+        )
     run = _Run(instance, options, budget, stop_at, sc, packer, seed, extra)
     run.start(start_plan)
     if run.kits is None:

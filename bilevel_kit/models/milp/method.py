@@ -228,12 +228,11 @@ class _Run:
         return model_cells(self.instance, self.K)
 
     def hand_off(self, inc: list[list[str]], limit: HandOff = WHOLE) -> list[list[str]]:
-        """The incumbent, or the LNS's better plan from it (makespan objective, one station,
-        as the LNS's); its layouts taught to the packer, which lays the result out."""
+        """The incumbent, or the LNS's better plan from it (makespan objective, one station;
+        several: every objective); its layouts taught to the packer, which lays it out."""
         self.extra["improved_by"] = None
-        if self.instance.stations:
-            self.extra["fallback"] = "none: the LNS does not model several stations"
-            return inc
+        if self.instance.stations:  # lns's station search (docs/stations.md)
+            return warm.station_hand_off(self, inc, limit.within(self.budget.remaining(MARGIN)))
         plan = _with_layouts(self.instance, inc, self.packer, {})
         if plan is None or not self.minimised.is_makespan:
             return inc

@@ -17,11 +17,12 @@ from typing import Any, Protocol
 from ...errors import KitDoesNotFit, UsageError
 from ...instance import Instance
 from ...objectives import get as get_objective
-from ...plan import Plan, evaluate
+from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer
 from ..exact.driver import HINT_SHARE
-from ..exact.nomodel import NoModelSpec
+from ..exact.nomodel import HandOff, NoModelSpec
+from ..exact.station_lns import station_lns
 from ..exact.warm import WarmRule, best_heuristic_plan, hint_methods
 from .model import model_cells, model_objective
 from .options import MilpOptions
@@ -37,6 +38,9 @@ class Run(Protocol):
     budget: Budget
     packer: Packer  # it learns the incumbent's layouts
     extra: dict[str, Any]  # the result's ``extra`` (``hint_method``, skipped warm starts)
+    seed: int
+    inc_obj: float | None  # the incumbent's master objective
+    upper: float | None  # the horizon U
 
     @property
     def spec(self) -> NoModelSpec: ...  # the model's measured costs
@@ -93,6 +97,29 @@ def station_incumbent(
     kits = [list(k.tasks) for k in plan.kits if k.tasks]
     upper = get_objective(objective).horizon(instance, tl)
     return kits, model_objective(instance, tl, objective), upper, max(instance.n_tasks, len(kits))
+
+
+def station_hand_off(r: Run, inc: list[list[str]], limit: HandOff) -> list[list[str]]:
+    """Several stations: ``inc`` or the better plan of ``lns``'s station search from it within
+    ``limit`` for the objective (:func:`..exact.station_lns.station_lns`; its layouts taught
+    to the packer, its master objective and horizon U the run's)."""
+    kits = []
+    for kit in inc:  # (the incumbent's kits are in human order)
+        layout = r.packer.layout(kit)
+        if layout is None and r.instance.kit_parts(kit):
+            return inc
+        kits.append(Kit(tuple(kit), layout or ()))
+    objective = r.options.objective
+    found = station_lns(
+        r.instance, Plan(tuple(kits)), objective, seed=r.seed, limit=limit, extra=r.extra
+    )
+    if found is None:
+        return inc
+    _learn(r, found)
+    tl = evaluate(r.instance, found)
+    r.inc_obj = model_objective(r.instance, tl, objective)
+    r.upper = get_objective(objective).horizon(r.instance, tl)
+    return [list(k.tasks) for k in found.kits if k.tasks]
 
 
 def warm_share(r: Run) -> float:

@@ -1,0 +1,430 @@
+r"""``lns`` with several assembly stations, and with the human idle as objective
+(docs/stations.md#lns-with-several-stations, docs/timeline.md#several-stations).
+
+The CP-SAT windows of :mod:`.window` model one station's timeline and its makespan; here the
+search is over the plan itself, every candidate timed by the one timeline rule on the integer
+grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held to
+:func:`bilevel_kit.plan.evaluate` by property tests) and taken only when
+:func:`~bilevel_kit.plan.evaluate`'s value of the objective is strictly better:
+
+1. **Start** from the best of the given plan (``start_plan``), single-task's and
+   whole-assembly's plans (which interleave the stations by earliest need) and (``start=
+   "auto"``) greedy-ce's within ``start_share`` of the time limit.
+2. **Bound**: the objective's closed form (:func:`bilevel_kit.bounds.objective_bound`, as
+   ``cpsat`` and ``milp`` report with stations), or the given ``known_bound`` (makespan).
+3. **Sweeps**: the kits in a random order; from each kit (one *iteration*) the moves of
+   :func:`moves` (a task across the boundary to its station's next kit, the merge with that
+   kit, a split, the kit to another place in the robot's sequence between its station's
+   neighbours, a task into a nearby kit of its station), then the **exact window**: the
+   consecutive kits from it holding at most :data:`EXACT_TASKS` tasks, every rearrangement
+   of their tasks enumerated (:mod:`.enumerate`), only those whose end state (:mod:`.clock`)
+   is not dominated timed in full. A sweep without improvement is a local optimum: then a
+   *kick* (:data:`KICK_MOVES` random valid moves, better or not) and sweeps again from there,
+   back to the best plan when they find none better; :data:`KICKS` kicks in a row without a
+   better plan end the run (``stop`` ``local_optimum``), as do ``iterations`` (kits visited),
+   ``stall`` (visits in a row without improvement), optimal (the plan meets the bound) and
+   the time limit. Every random choice draws from ``numpy.random.default_rng(seed)``.
+
+**Result.** ``status`` ``optimal`` only when the plan meets the closed-form bound, else
+``feasible``; ``bound`` the makespan's (closed form or given); with another objective
+``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
+and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
+(``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``iterations``,
+``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves timed), ``window_plans``
+(rearrangements enumerated), ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``,
+``wall_time_s``.
+
+A kit holds one station's tasks, fits the tray (:class:`.fit.FastFit`) and is not made of
+part-less tasks only (docs/timeline.md#part-less-tasks); the tasks' order keeps every
+precedence: every candidate is held to these rules, so the plan passes
+:func:`bilevel_kit.validate.check`. With a plan of at most :data:`EXACT_TASKS` tasks the first
+window is the whole plan, so the search is exact there (the brute-force tests).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...bounds import objective_bound, objective_extra
+from ...instance import Instance
+from ...methods import MethodOutput, Status, gap
+from ...objectives import ModelTerms
+from ...objectives import get as get_objective
+from ...plan import Kit, Placement, Plan, evaluate
+from ..budget import Budget
+from ..cpsat.scaling import Scaled, scale_times, scaled_objective
+from .clock import Clock, dominated
+from .enumerate import Kits, rearrangements
+from .fit import FastFit
+
+#: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
+#: rearrangements, the ordered set partitions).
+EXACT_TASKS = 5
+#: Kits of its station a task may move to, before and after its own.
+REACH = 2
+#: Kicks in a row without a better plan that end the run (a local optimum of the kicks).
+KICKS = 30
+#: Random moves per kick.
+KICK_MOVES = 2
+#: Seconds a packing call of a candidate kit may take (undecided: does not fit).
+PROBE_S = 0.05
+
+
+def station_search(
+    instance: Instance,
+    options: Any,
+    budget: Budget,
+    stop_at: Budget,
+    fit: FastFit,
+    *,
+    seed: int,
+    start_plan: Plan | None,
+    known_bound: float | None,
+) -> MethodOutput:
+    """The module docstring's search for ``options.objective`` (a modelled objective)."""
+    from ..exact.warm import best_heuristic_plan
+
+    extra: dict[str, Any] = {"search": "stations"}
+    run = _Search(instance, options.objective, scale_times(instance, 0.1, True), fit, extra)
+    t0 = budget.elapsed()
+    if start_plan is not None:
+        run.consider(start_plan, "incumbent")
+    for name in ("single-task", "whole-assembly"):
+        plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
+        if plan is not None:
+            run.consider(plan, name)
+    share = options.start_share * budget.time_limit
+    if options.start == "auto" and share >= 0.5:
+        tl = min(share, stop_at.remaining())
+        plan, _ = best_heuristic_plan(
+            instance, ("greedy-ce",), seed=seed, time_limit=tl, objective=run.name
+        )
+        if plan is not None:
+            run.consider(plan, "greedy-ce")
+    extra.update(start_objective=run.real, start_time_s=budget.elapsed() - t0)
+    if run.kits is None:
+        extra["reason"] = "no start plan within the time limit"
+        return MethodOutput(None, Status.UNKNOWN, None, extra, status_objective=run.name)
+    run.bound = objective_bound(instance, run.name)
+    if known_bound is not None and run.objective.is_makespan:
+        run.bound = max(run.bound, known_bound)
+    extra["bound_source"] = "given" if known_bound is not None else "closed_form"
+    if not run.optimal():
+        run.search(np.random.default_rng(seed), stop_at, options.iterations, options.stall)
+    return run.finish(budget)
+
+
+@dataclass
+class _Search:
+    """The incumbent (kits of task indices), its value on the grid (``scaled``) and in
+    seconds (``real``, the evaluator's), its known layouts and the counters."""
+
+    instance: Instance
+    name: str
+    sc: Scaled
+    fit: FastFit
+    extra: dict[str, Any]
+    kits: Kits | None = None
+    scaled: int = 0
+    real: float = math.inf
+    bound: float | None = None
+    layouts: dict[tuple[int, ...], tuple[Placement, ...]] = field(default_factory=dict)
+    stalled: int = 0
+    counts: dict[str, int] = field(
+        default_factory=lambda: dict.fromkeys(
+            ("iterations", "improvements", "sweeps", "kicks", "tried", "window_plans"), 0
+        )
+    )
+
+    def __post_init__(self) -> None:
+        inst = self.instance
+        self.objective = get_objective(self.name)
+        self.ids = [t.id for t in inst.tasks]
+        idx = inst.index
+        self.station = [inst.station_of(t) for t in self.ids]
+        self.preds = {idx[t]: frozenset(idx[p] for p in ps) for t, ps in inst.predecessors.items()}
+        self.edges = [(idx[a], idx[b]) for a, b in inst.precedence]
+        self.needs = [inst.needs_kit(t) for t in self.ids]
+        self.valid: dict[frozenset[int], bool] = {}
+        # the objective counts the human's kit overheads (the human idle): then fewer kits in
+        # a window is never better either (.clock)
+        self.idle = self.objective.expression(ModelTerms(0, lambda: 0, lambda: 1)) != 0
+        # a station whose tasks need no kit keeps its part-less kits (the checker names them)
+        self.partless_only = {
+            s for s in set(self.station) if not any(self.needs[i] for i in self.of(s))
+        }
+
+    def of(self, station: str) -> list[int]:
+        return [i for i, s in enumerate(self.station) if s == station]
+
+    # -- candidates ---------------------------------------------------------------------------
+    def fits(self, kit: Sequence[int]) -> bool:
+        return self.fit.fits([self.ids[i] for i in kit], PROBE_S)
+
+    def valid_kit(self, kit: Sequence[int]) -> bool:
+        """One station's tasks, not part-less only (unless its station's all are), fits;
+        memoised by task set (the order within a kit does not change these)."""
+        key = frozenset(kit)
+        known = self.valid.get(key)
+        if known is None:
+            known = self.valid[key] = self._valid_kit(kit)
+        return known
+
+    def _valid_kit(self, kit: Sequence[int]) -> bool:
+        if not kit or any(self.station[i] != self.station[kit[0]] for i in kit):
+            return False
+        if not any(self.needs[i] for i in kit) and self.station[kit[0]] not in self.partless_only:
+            return False
+        return self.fits(kit)
+
+    def ordered(self, kits: Kits) -> bool:
+        """Every precedence holds in the plan's task order."""
+        pos = {i: p for p, i in enumerate(i for k in kits for i in k)}
+        return all(pos[a] < pos[b] for a, b in self.edges)
+
+    def value(self, kits: Kits) -> float:
+        """The objective of ``kits`` by the one evaluator (s)."""
+        plan = Plan(tuple(Kit(tuple(self.ids[i] for i in k)) for k in kits))
+        value = self.objective.value(evaluate(self.instance, plan))
+        assert value is not None  # (a modelled objective: a function of the timeline)
+        return value
+
+    def take(self, kits: Kits, changed: Sequence[Sequence[int]]) -> bool:
+        """Take ``kits`` when valid (``changed``: its new kits) and strictly better."""
+        self.counts["tried"] += 1
+        scaled = scaled_objective(self.sc, kits, self.name)
+        if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):
+            return False
+        if not all(self.valid_kit(k) for k in changed) or not self.ordered(kits):
+            return False
+        real = self.value(kits)
+        if real >= self.real - 1e-9:
+            return False
+        self.kits, self.scaled, self.real = [list(k) for k in kits], scaled, real
+        return True
+
+    def consider(self, plan: Plan, name: str) -> None:
+        """A start plan (valid: a method's), its layouts kept, if better."""
+        idx = self.instance.index
+        kits = [[idx[t] for t in k.tasks] for k in plan.kits if k.tasks]
+        real = self.value(kits)
+        if real >= self.real - 1e-9:
+            return
+        self.kits, self.real = kits, real
+        self.scaled = scaled_objective(self.sc, kits, self.name)
+        self.extra["start_method"] = name
+        for k in plan.kits:
+            if k.layout:
+                self.layouts[tuple(idx[t] for t in k.tasks)] = k.layout
+                self.fit.packer.learn(self.instance.kit_parts(k.tasks), k.layout)
+
+    def optimal(self) -> bool:
+        return self.bound is not None and self.real <= self.bound + 1e-6
+
+    # -- sweeps -------------------------------------------------------------------------------
+    def search(
+        self, rng: np.random.Generator, stop_at: Budget, iterations: int | None, stall: int | None
+    ) -> None:
+        """Sweeps to a local optimum, then kicks (module docstring) until :data:`KICKS` in a
+        row find no better plan, ``iterations``, ``stall``, optimal or the time limit."""
+        assert self.kits is not None
+        best = (self.kits, self.scaled, self.real)
+        stop, fruitless = "local_optimum", 0
+        while True:
+            stop = self._descend(rng, stop_at, iterations, stall)
+            if self.real < best[2] - 1e-9:
+                best, fruitless = (self.kits, self.scaled, self.real), 0
+            else:
+                self.kits, self.scaled, self.real = best  # back to the best plan
+                fruitless += 1
+            if stop != "local_optimum" or fruitless > KICKS or not self._kick(rng):
+                break
+            self.counts["kicks"] += 1
+        self.kits, self.scaled, self.real = best
+        self.extra.update(self.counts, stop=stop)
+
+    def _descend(
+        self, rng: np.random.Generator, stop_at: Budget, iterations: int | None, stall: int | None
+    ) -> str:
+        """Sweeps until one finds nothing (``local_optimum``) or a stop (its reason)."""
+        gained = True
+        while gained:
+            self.counts["sweeps"] += 1
+            gained = False
+            assert self.kits is not None
+            for k0 in rng.permutation(len(self.kits)).tolist():
+                stop = self._why_stop(stop_at, iterations, stall)
+                if stop != "local_optimum":
+                    return stop
+                if k0 >= len(self.kits):
+                    continue  # the plan has fewer kits than when the sweep began
+                self.counts["iterations"] += 1
+                self.stalled += 1
+                if self._visit(k0, stop_at):
+                    self.counts["improvements"] += 1
+                    gained, self.stalled = True, 0
+        return "local_optimum"
+
+    def _kick(self, rng: np.random.Generator) -> bool:
+        """:data:`KICK_MOVES` random valid moves, better or not; whether one was made."""
+        assert self.kits is not None
+        made = 0
+        for _ in range(20 * KICK_MOVES):
+            if made == KICK_MOVES:
+                break
+            options = list(moves(self.kits, int(rng.integers(len(self.kits))), self.station))
+            if not options:  # a station's one kit of one task, nowhere else to go
+                continue
+            kits, changed = options[int(rng.integers(len(options)))]
+            if all(self.valid_kit(k) for k in changed) and self.ordered(kits):
+                self.kits, self.real = kits, self.value(kits)
+                self.scaled = scaled_objective(self.sc, kits, self.name)
+                made += 1
+        return made > 0
+
+    def _why_stop(self, stop_at: Budget, iterations: int | None, stall: int | None) -> str:
+        if self.optimal():
+            return "optimal"
+        if iterations is not None and self.counts["iterations"] >= iterations:
+            return "iterations"
+        if stall is not None and self.stalled >= stall:
+            return "stall"
+        if stop_at.remaining() <= 0.05:
+            return "time_limit"
+        return "local_optimum"
+
+    def _visit(self, k0: int, stop_at: Budget) -> bool:
+        """The moves from kit ``k0``, then its exact window; whether any improved."""
+        assert self.kits is not None
+        better = False
+        for kits, changed in moves(self.kits, k0, self.station):
+            if stop_at.remaining() <= 0.05:
+                return better
+            if self.take(kits, changed):
+                better = True
+                break  # the incumbent changed: the window below starts from it
+        if k0 < len(self.kits):
+            better |= self._window(k0, stop_at)
+        return better
+
+    def _window(self, k0: int, stop_at: Budget) -> bool:
+        """Every rearrangement of the kits from ``k0`` holding at most :data:`EXACT_TASKS`
+        tasks (:mod:`.enumerate`); takes the best strictly better one."""
+        assert self.kits is not None
+        k1, total = k0, 0
+        while k1 < len(self.kits) and total + len(self.kits[k1]) <= EXACT_TASKS:
+            total += len(self.kits[k1])
+            k1 += 1
+        if k1 - k0 < 2 and not (k1 - k0 == 1 and len(self.kits[k0]) > 1):
+            return False
+        freed = [i for k in self.kits[k0:k1] for i in k]
+        groups = [[i for i in freed if self.station[i] == s] for s in dict.fromkeys(self.station)]
+        before, after = self.kits[:k0], self.kits[k1:]
+        base = Clock.start(self.sc)
+        for kit in before:
+            base.step(self.sc, kit)
+        incumbent = self._end_key(base, self.kits[k0:k1])
+        kept: dict[tuple[int, ...], Kits] = {}  # the rearrangements of no dominated end state
+        for n, middle in enumerate(rearrangements(groups, self.preds, self.valid_kit)):
+            if n % 64 == 63 and stop_at.remaining() <= 0.05:
+                return False
+            key = self._end_key(base, middle)
+            if dominated(key, incumbent) or any(dominated(key, k) for k in kept):
+                continue
+            kept = {k: m for k, m in kept.items() if not dominated(k, key)}
+            kept[key] = middle
+        self.counts["window_plans"] += n + 1 if kept or incumbent else 0
+        ranked = sorted(
+            (scaled_objective(self.sc, before + m + after, self.name), j, m)
+            for j, m in enumerate(kept.values())
+        )
+        for scaled, _, middle in ranked:  # the evaluator decides (off the grid: each in turn)
+            if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):
+                break
+            if self.take(before + middle + after, middle):
+                return True
+        return False
+
+    def _end_key(self, base: Clock, middle: Kits) -> tuple[int, ...]:
+        clock = base.copy()
+        for kit in middle:
+            clock.step(self.sc, kit)
+        return clock.key(self.sc, self.idle)
+
+    # -- the result -----------------------------------------------------------------------------
+    def finish(self, budget: Budget) -> MethodOutput:
+        """The plan with a layout for every kit, its status and claims (module docstring)."""
+        assert self.kits is not None
+        inst, out = self.instance, []
+        for kit in self.kits:
+            tasks = tuple(self.ids[i] for i in kit)
+            layout = self.layouts.get(tuple(kit)) or self.fit.layout(tasks)
+            if layout is None and inst.kit_parts(tasks):
+                self.extra["reason"] = "no layout for some kit within the time limit"
+                return MethodOutput(None, Status.UNKNOWN, None, self.extra, self.name)
+            out.append(Kit(tasks, layout or ()))
+        plan = Plan(tuple(out))
+        timeline = evaluate(inst, plan)
+        optimal = self.optimal()
+        makespan_bound = objective_bound(inst, "makespan")
+        self.extra.setdefault("stop", "optimal" if optimal else "time_limit")
+        self.extra.update(
+            makespan=timeline.makespan,
+            n_kits=len(out),
+            gap=gap(timeline.makespan, makespan_bound),
+            wall_time_s=budget.elapsed(),
+        )
+        status = Status.OPTIMAL if optimal else Status.FEASIBLE
+        if self.objective.is_makespan:
+            return MethodOutput(plan, status, self.bound, self.extra)
+        claims = objective_extra(inst, plan, self.name, (self.bound, None), (optimal, optimal))
+        claims.pop("objective_bound_axis_aligned")
+        self.extra.update(claims)
+        return MethodOutput(plan, status, makespan_bound, self.extra, self.name)
+
+
+def moves(kits: Kits, k0: int, station: Sequence[str]) -> Iterator[tuple[Kits, Kits]]:
+    """Plans one move from ``kits`` at kit ``k0`` (module docstring, step 3), each with its
+    new kits (whose validity the caller checks, with the precedence of the whole order)."""
+    s = station[kits[k0][0]]
+    mine = [k for k, kit in enumerate(kits) if station[kit[0]] == s]
+    at = mine.index(k0)
+    nxt = mine[at + 1] if at + 1 < len(mine) else None
+    prev = mine[at - 1] if at > 0 else -1
+    kit = kits[k0]
+    if nxt is not None:
+        other = kits[nxt]
+        if len(kit) > 1:  # its last task to the front of the next kit
+            yield _with(kits, {k0: kit[:-1], nxt: [kit[-1], *other]})
+        if len(other) > 1:  # the next kit's first task to its end
+            yield _with(kits, {k0: [*kit, other[0]], nxt: other[1:]})
+        merged = [*kit, *other]
+        yield _with(kits, {k0: merged, nxt: None})
+        yield _with(kits, {k0: None, nxt: merged})
+    for j in range(1, len(kit)):  # split, the second part right after it
+        yield [*kits[:k0], kit[:j], kit[j:], *kits[k0 + 1 :]], [kit[:j], kit[j:]]
+    rest = kits[:k0] + kits[k0 + 1 :]
+    last = nxt - 1 if nxt is not None else len(rest)
+    for q in range(prev + 1, last + 1):  # the kit elsewhere between its station's neighbours
+        if q != k0:
+            yield [*rest[:q], kit, *rest[q:]], []
+    near = mine[max(0, at - REACH) : at + REACH + 1]
+    for t in kit:  # a task into a nearby kit of its station
+        for k in near:
+            if k == k0:
+                continue
+            for q in range(len(kits[k]) + 1):
+                target = [*kits[k][:q], t, *kits[k][q:]]
+                left = [i for i in kit if i != t] or None
+                yield _with(kits, {k0: left, k: target})
+
+
+def _with(kits: Kits, change: dict[int, list[int] | None]) -> tuple[Kits, Kits]:
+    """``kits`` with the kits at ``change``'s positions replaced (None: removed)."""
+    out = [change.get(k, kit) for k, kit in enumerate(kits)]
+    return [k for k in out if k is not None], [k for k in change.values() if k is not None]
