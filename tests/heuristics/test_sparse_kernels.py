@@ -65,16 +65,6 @@ def test_compiled_depth_first_is_the_python_search(inst, max_rest, signed, jitte
     _plan_checking_every_rest_search(inst, params)
 
 
-@pytest.mark.parametrize(
-    ("family", "size", "max_rest"),
-    [("sparse", 60, 2000), ("sparse", 80, 25), ("intree", 60, 40), ("series-parallel", 40, 9)],
-)
-def test_compiled_depth_first_on_generated_graphs(family, size, max_rest):
-    """Wide windows (sparse), deep ones (in-trees, series-parallel), capped searches."""
-    inst = from_dict(generate(family, size, seed=2))
-    assert _plan_checking_every_rest_search(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
-
-
 def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
     """Plan with every compiled beam level checked against the numpy children, scores and
     choice (``build_levels`` without the compiled beam): the same rows kept in the same
@@ -125,17 +115,6 @@ def test_compiled_beam_is_the_numpy_beam(inst, max_sets, width, signed):
     _plan_checking_every_beam(inst, params)
 
 
-@pytest.mark.parametrize(
-    ("family", "size", "max_sets"),
-    [("sparse", 120, 5000), ("sparse", 60, 300), ("intree", 60, 50), ("series-parallel", 60, 40)],
-)
-def test_compiled_beam_on_generated_graphs(family, size, max_sets):
-    """Wide windows (sparse: the second level is a beam), deep ones with unlocked children."""
-    inst = from_dict(generate(family, size, seed=2))
-    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets)
-    assert _plan_checking_every_beam(inst, params)
-
-
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
     """Plan with every pair's best rest found twice, compiled and by the decomposition's
     Python loop (told it cannot score compiled; F from the same source, called from
@@ -176,11 +155,27 @@ def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
     _plan_checking_every_scored_rest(inst, params)
 
 
-@pytest.mark.parametrize(
-    ("family", "size", "max_rest"),
-    [("sparse", 100, 2000), ("sparse", 60, 30), ("intree", 60, 2000), ("series-parallel", 60, 9)],
-)
-def test_compiled_rest_scores_on_generated_graphs(family, size, max_rest):
-    """Wide and deep windows, capped and not."""
-    inst = from_dict(generate(family, size, seed=3))
-    assert _plan_checking_every_scored_rest(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
+#: (checker, family, size, seed, caps): wide windows (sparse: the beam's second level is a
+#: beam), deep ones (in-trees, series-parallel, with unlocked children), capped searches.
+GENERATED = [
+    (_plan_checking_every_rest_search, "sparse", 60, 2, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_rest_search, "sparse", 80, 2, {"max_rest_nodes": 25}),
+    (_plan_checking_every_rest_search, "intree", 60, 2, {"max_rest_nodes": 40}),
+    (_plan_checking_every_rest_search, "series-parallel", 40, 2, {"max_rest_nodes": 9}),
+    (_plan_checking_every_beam, "sparse", 120, 2, {"max_prefix_sets": 5000}),
+    (_plan_checking_every_beam, "sparse", 60, 2, {"max_prefix_sets": 300}),
+    (_plan_checking_every_beam, "intree", 60, 2, {"max_prefix_sets": 50}),
+    (_plan_checking_every_beam, "series-parallel", 60, 2, {"max_prefix_sets": 40}),
+    (_plan_checking_every_scored_rest, "sparse", 100, 3, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_scored_rest, "sparse", 60, 3, {"max_rest_nodes": 30}),
+    (_plan_checking_every_scored_rest, "intree", 60, 3, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_scored_rest, "series-parallel", 60, 3, {"max_rest_nodes": 9}),
+]
+
+
+@pytest.mark.parametrize(("checker", "family", "size", "seed", "caps"), GENERATED)
+def test_compiled_kernels_on_generated_graphs(checker, family, size, seed, caps):
+    """Each compiled search (depth-first rests, beam, scored rests) is the Python one on
+    generated graphs, and at least one search is compared."""
+    inst = from_dict(generate(family, size, seed=seed))
+    assert checker(inst, GreedyParams(ce=TINY_CE, **caps))
