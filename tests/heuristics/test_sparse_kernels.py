@@ -7,6 +7,7 @@ and on generated graphs, also with the searches capped."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,6 +21,17 @@ from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
 from bilevel_kit.heuristics.prefix import rests
 from bilevel_kit.heuristics.prefix.frontier import smallest
 from bilevel_kit.instance import Instance, from_dict
+
+#: The hypothesis settings of the three random-instance comparisons.
+EXAMPLES = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def _plan_patched(inst: Instance, params: GreedyParams, *patches: tuple[Any, str, Any]) -> None:
+    """greedy-ce's plan with each ``(owner, name, value)`` patched for the run."""
+    with pytest.MonkeyPatch.context() as mp:
+        for owner, name, value in patches:
+            mp.setattr(owner, name, value)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
 
 
 def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> int:
@@ -45,13 +57,11 @@ def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> in
         calls.append(fast[2])
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(rests.RestSearch, "depth_first", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    _plan_patched(inst, params, (rests.RestSearch, "depth_first", both))
     return len(calls)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 30), st.booleans(), st.booleans())
 def test_compiled_depth_first_is_the_python_search(inst, max_rest, signed, jitter):
     """Random instances (robot times made non-integer: the depth-first search finds every
@@ -101,13 +111,11 @@ def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
         checked.append(len(par))
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(greedy_search.PrefixSearch, "_fast_beam", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    _plan_patched(inst, params, (greedy_search.PrefixSearch, "_fast_beam", both))
     return len(checked)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 12), st.integers(1, 6), st.booleans())
 def test_compiled_beam_is_the_numpy_beam(inst, max_sets, width, signed):
     """Random instances with a beam from the first levels (small caps), signed or not."""
@@ -140,14 +148,12 @@ def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> in
         compared.append(compiled and li + 1 < dc.length)
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
-        mp.setattr(greedy_search.PrefixSearch, "_best_pair", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    deep = (rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+    _plan_patched(inst, params, deep, (greedy_search.PrefixSearch, "_best_pair", both))
     return sum(compared)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 30), st.booleans())
 def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
     """Random instances, the rest search capped or not, signed or not."""
