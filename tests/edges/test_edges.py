@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from offgrid_example import offgrid_doc
 from stations_example import first_tray_doc
 
 from bilevel_kit.cli import main
@@ -569,23 +570,9 @@ def _claims_optimal(doc: Doc) -> None:
 
 
 def offgrid_text(side: float = 50.25, tray: float = 100.5) -> str:
-    """Two squares that fill the tray's width exactly: one kit on the exact 0.75 mm grid,
-    none on the 1 mm grid (tests/models/test_grid_claims.py)."""
-    part = {"type": "a", "count": 1}
-    return json.dumps(
-        {
-            "format": "bilevel-kit/1",
-            "name": "offgrid",
-            "tray": {"width": tray, "height": 60.0},
-            "delivery_time": 10.0,
-            "kit_overhead": {"robot": 10.0, "human": 0.0},
-            "part_types": [{"id": "a", "width": side, "height": side, "pick_time": 3.0}],
-            "tasks": [
-                {"id": t, "parts": [part], "human_time": {"mean": 10.0}} for t in ("t1", "t2")
-            ],
-            "precedence": [["t1", "t2"]],
-        }
-    )
+    """The off-grid instance as a file's text: one kit on the exact 0.75 mm grid, none on the
+    1 mm grid (tests/offgrid_example.py)."""
+    return json.dumps(offgrid_doc(side, tray))
 
 
 ISSUE_23A_ROWS: dict[str, Row] = {

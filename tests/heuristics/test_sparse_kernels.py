@@ -7,6 +7,7 @@ and on generated graphs, also with the searches capped."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,6 +21,17 @@ from bilevel_kit.heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, plan
 from bilevel_kit.heuristics.prefix import rests
 from bilevel_kit.heuristics.prefix.frontier import smallest
 from bilevel_kit.instance import Instance, from_dict
+
+#: The hypothesis settings of the three random-instance comparisons.
+EXAMPLES = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def _plan_patched(inst: Instance, params: GreedyParams, *patches: tuple[Any, str, Any]) -> None:
+    """greedy-ce's plan with each ``(owner, name, value)`` patched for the run."""
+    with pytest.MonkeyPatch.context() as mp:
+        for owner, name, value in patches:
+            mp.setattr(owner, name, value)
+        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
 
 
 def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> int:
@@ -45,13 +57,11 @@ def _plan_checking_every_rest_search(inst: Instance, params: GreedyParams) -> in
         calls.append(fast[2])
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(rests.RestSearch, "depth_first", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    _plan_patched(inst, params, (rests.RestSearch, "depth_first", both))
     return len(calls)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 30), st.booleans(), st.booleans())
 def test_compiled_depth_first_is_the_python_search(inst, max_rest, signed, jitter):
     """Random instances (robot times made non-integer: the depth-first search finds every
@@ -63,16 +73,6 @@ def test_compiled_depth_first_is_the_python_search(inst, max_rest, signed, jitte
         inst = from_dict(doc)
     params = GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest, signed=signed)
     _plan_checking_every_rest_search(inst, params)
-
-
-@pytest.mark.parametrize(
-    ("family", "size", "max_rest"),
-    [("sparse", 60, 2000), ("sparse", 80, 25), ("intree", 60, 40), ("series-parallel", 40, 9)],
-)
-def test_compiled_depth_first_on_generated_graphs(family, size, max_rest):
-    """Wide windows (sparse), deep ones (in-trees, series-parallel), capped searches."""
-    inst = from_dict(generate(family, size, seed=2))
-    assert _plan_checking_every_rest_search(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
 
 
 def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
@@ -111,29 +111,16 @@ def _plan_checking_every_beam(inst: Instance, params: GreedyParams) -> int:
         checked.append(len(par))
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(greedy_search.PrefixSearch, "_fast_beam", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    _plan_patched(inst, params, (greedy_search.PrefixSearch, "_fast_beam", both))
     return len(checked)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 12), st.integers(1, 6), st.booleans())
 def test_compiled_beam_is_the_numpy_beam(inst, max_sets, width, signed):
     """Random instances with a beam from the first levels (small caps), signed or not."""
     params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets, beam_width=width, signed=signed)
     _plan_checking_every_beam(inst, params)
-
-
-@pytest.mark.parametrize(
-    ("family", "size", "max_sets"),
-    [("sparse", 120, 5000), ("sparse", 60, 300), ("intree", 60, 50), ("series-parallel", 60, 40)],
-)
-def test_compiled_beam_on_generated_graphs(family, size, max_sets):
-    """Wide windows (sparse: the second level is a beam), deep ones with unlocked children."""
-    inst = from_dict(generate(family, size, seed=2))
-    params = GreedyParams(ce=TINY_CE, max_prefix_sets=max_sets)
-    assert _plan_checking_every_beam(inst, params)
 
 
 def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> int:
@@ -161,14 +148,12 @@ def _plan_checking_every_scored_rest(inst: Instance, params: GreedyParams) -> in
         compared.append(compiled and li + 1 < dc.length)
         return fast
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
-        mp.setattr(greedy_search.PrefixSearch, "_best_pair", both)
-        plan(inst, policy=GreedyCEPolicy(inst, params, 0))
+    deep = (rests, "MIN_DEEP_COMPILED", 0)  # compiled whenever it can be
+    _plan_patched(inst, params, deep, (greedy_search.PrefixSearch, "_best_pair", both))
     return sum(compared)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@EXAMPLES
 @given(enumerable_instances(), st.integers(1, 30), st.booleans())
 def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
     """Random instances, the rest search capped or not, signed or not."""
@@ -176,11 +161,27 @@ def test_compiled_rest_scores_are_numpys(inst, max_rest, signed):
     _plan_checking_every_scored_rest(inst, params)
 
 
-@pytest.mark.parametrize(
-    ("family", "size", "max_rest"),
-    [("sparse", 100, 2000), ("sparse", 60, 30), ("intree", 60, 2000), ("series-parallel", 60, 9)],
-)
-def test_compiled_rest_scores_on_generated_graphs(family, size, max_rest):
-    """Wide and deep windows, capped and not."""
-    inst = from_dict(generate(family, size, seed=3))
-    assert _plan_checking_every_scored_rest(inst, GreedyParams(ce=TINY_CE, max_rest_nodes=max_rest))
+#: (checker, family, size, seed, caps): wide windows (sparse: the beam's second level is a
+#: beam), deep ones (in-trees, series-parallel, with unlocked children), capped searches.
+GENERATED = [
+    (_plan_checking_every_rest_search, "sparse", 60, 2, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_rest_search, "sparse", 80, 2, {"max_rest_nodes": 25}),
+    (_plan_checking_every_rest_search, "intree", 60, 2, {"max_rest_nodes": 40}),
+    (_plan_checking_every_rest_search, "series-parallel", 40, 2, {"max_rest_nodes": 9}),
+    (_plan_checking_every_beam, "sparse", 120, 2, {"max_prefix_sets": 5000}),
+    (_plan_checking_every_beam, "sparse", 60, 2, {"max_prefix_sets": 300}),
+    (_plan_checking_every_beam, "intree", 60, 2, {"max_prefix_sets": 50}),
+    (_plan_checking_every_beam, "series-parallel", 60, 2, {"max_prefix_sets": 40}),
+    (_plan_checking_every_scored_rest, "sparse", 100, 3, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_scored_rest, "sparse", 60, 3, {"max_rest_nodes": 30}),
+    (_plan_checking_every_scored_rest, "intree", 60, 3, {"max_rest_nodes": 2000}),
+    (_plan_checking_every_scored_rest, "series-parallel", 60, 3, {"max_rest_nodes": 9}),
+]
+
+
+@pytest.mark.parametrize(("checker", "family", "size", "seed", "caps"), GENERATED)
+def test_compiled_kernels_on_generated_graphs(checker, family, size, seed, caps):
+    """Each compiled search (depth-first rests, beam, scored rests) is the Python one on
+    generated graphs, and at least one search is compared."""
+    inst = from_dict(generate(family, size, seed=seed))
+    assert checker(inst, GreedyParams(ce=TINY_CE, **caps))

@@ -1,7 +1,7 @@
-"""cpsat with several assembly stations (docs/timeline.md#several-stations) equals the brute
-force (tests/brute.py, the one evaluator, kits of one station) on random two- and
+"""cpsat and milp with several assembly stations (docs/timeline.md#several-stations) equal the
+brute force (tests/brute.py, the one evaluator, kits of one station) on random two- and
 three-station instances with their own delivery times, trays and human overheads, for each
-objective."""
+objective. The other tests are cpsat's own (milp's: tests/models/test_milp_stations.py)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import pytest
 import strategies
 from brute import assert_model_optimal, assert_objective_optimal, best_makespan
 
+from bilevel_kit.bounds import objective_bound
 from bilevel_kit.instance import from_dict
 from bilevel_kit.plan import evaluate
 from bilevel_kit.stations import objective_of
@@ -19,32 +20,48 @@ pytest.importorskip("ortools")
 CASES = [(seed, s) for seed in range(12) for s in (2, 3)]
 
 
-@pytest.mark.parametrize(("seed", "n_stations"), CASES)
-def test_cpsat_equals_brute_force_on_stations(seed, n_stations):
-    from bilevel_kit.models.cpsat.method import CpsatOptions, cpsat
+def _exact(backend: str, inst, **options):
+    """cpsat (one worker) or milp on ``inst`` with ``options``, seed 0, 60 s."""
+    if backend == "cpsat":
+        from bilevel_kit.models.cpsat.method import CpsatOptions, cpsat
 
+        return cpsat(inst, CpsatOptions(workers=1, **options), seed=0, time_limit=60)
+    pytest.importorskip("pyomo")
+    from bilevel_kit.models.milp import MilpOptions, milp
+
+    return milp(inst, MilpOptions(**options), seed=0, time_limit=60)
+
+
+@pytest.mark.parametrize("backend", ["cpsat", "milp"])
+@pytest.mark.parametrize(("seed", "n_stations"), CASES)
+def test_exact_equals_brute_force_on_stations(seed, n_stations, backend):
+    """The makespan; milp within its solver's tolerance (as tests/models/test_milp.py), its
+    tray by Benders cuts."""
     inst = from_dict(strategies.stations_doc(seed, n_stations, n=5 + seed % 2))
     opt, _ = best_makespan(inst)
-    out = cpsat(inst, CpsatOptions(workers=1), seed=0, time_limit=60)
+    out = _exact(backend, inst)
     assert out.plan is not None
     assert check(inst, out.plan) == []
-    assert_model_optimal(out, opt)
+    if backend == "milp":
+        assert out.extra["tray_mode"] == "benders"
+    assert_model_optimal(out, opt, tol=1e-5 if backend == "milp" else 1e-9)
 
 
+@pytest.mark.parametrize("backend", ["cpsat", "milp"])
 @pytest.mark.parametrize("objective", ["sum_completion", "human_idle"])
 @pytest.mark.parametrize(("seed", "n_stations"), CASES)
-def test_cpsat_objectives_equal_brute_force_on_stations(seed, n_stations, objective):
-    """The sum of completions and the total human idle (tests/models/test_milp_stations.py)."""
-    from bilevel_kit.models.cpsat.method import CpsatOptions, cpsat
-
+def test_exact_objectives_equal_brute_force_on_stations(seed, n_stations, objective, backend):
+    """The sum of completions and the total human idle: the proven optimum is the brute
+    force's, the bound valid (at most the optimum) and the closed-form bound below both."""
     inst = from_dict(strategies.stations_doc(seed, n_stations, n=5 + seed % 2))
     opt, _ = best_makespan(inst, objective)
-    out = cpsat(inst, CpsatOptions(workers=1, objective=objective), seed=0, time_limit=60)
+    out = _exact(backend, inst, objective=objective)
     assert out.plan is not None
     assert check(inst, out.plan) == []
     assert out.status_objective == objective
     assert out.extra["objective_value"] == objective_of(evaluate(inst, out.plan), objective)
     assert_objective_optimal(out, opt)
+    assert objective_bound(inst, objective) <= opt + 1e-9
     assert out.bound <= evaluate(inst, out.plan).makespan + 1e-9  # still a makespan bound
 
 

@@ -18,6 +18,7 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from offgrid_example import offgrid_doc
 
 from bilevel_kit.errors import KitDoesNotFit
 from bilevel_kit.heuristics.shelf import kit_items
@@ -29,25 +30,6 @@ from bilevel_kit.models.packing import ANY_ANGLE, AXIS_ALIGNED
 pytest.importorskip("ortools")
 HAVE_MILP = all(importlib.util.find_spec(m) is not None for m in ("pyomo", "highspy"))
 needs_milp = pytest.mark.skipif(not HAVE_MILP, reason="pyomo or highspy is not installed")
-
-
-def offgrid_doc(side: float = 50.25, tray: float = 100.5) -> dict[str, Any]:
-    """Two tasks with one square part each; the two squares fill the tray's width exactly, so
-    one kit holds both, but on the 1 mm grid each grows to 51 mm and the tray shrinks to
-    100 mm. With these overheads the one-kit plan (46 s) beats two kits (56 s)."""
-    return {
-        "format": "bilevel-kit/1",
-        "name": "offgrid",
-        "tray": {"width": tray, "height": 60.0},
-        "delivery_time": 10.0,
-        "kit_overhead": {"robot": 10.0, "human": 0.0},
-        "part_types": [{"id": "a", "width": side, "height": side, "pick_time": 3.0}],
-        "tasks": [
-            {"id": "t1", "parts": [{"type": "a", "count": 1}], "human_time": {"mean": 10.0}},
-            {"id": "t2", "parts": [{"type": "a", "count": 1}], "human_time": {"mean": 10.0}},
-        ],
-        "precedence": [["t1", "t2"]],
-    }
 
 
 @pytest.fixture(autouse=True)

@@ -1,7 +1,6 @@
-"""milp with several assembly stations (docs/timeline.md#several-stations) equals the brute
-force (tests/brute.py, the one evaluator, kits of one station) on random two- and
-three-station instances with their own delivery times, trays and human overheads (the
-generator of tests/models/test_cpsat_stations.py), for each objective."""
+"""milp with several assembly stations (docs/timeline.md#several-stations): hints, the registry,
+the first kit's tray and the master's price of a plan (its brute-force cases are cpsat's,
+parametrised over both backends in tests/models/test_cpsat_stations.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +8,6 @@ import pytest
 import strategies
 from brute import assert_model_optimal, assert_objective_optimal, best_makespan
 
-from bilevel_kit.bounds import objective_bound
 from bilevel_kit.instance import from_dict
 from bilevel_kit.plan import evaluate
 from bilevel_kit.stations import objective_of
@@ -17,40 +15,6 @@ from bilevel_kit.validate import check
 
 pytest.importorskip("ortools")
 pytest.importorskip("pyomo")
-
-CASES = [(seed, s) for seed in range(12) for s in (2, 3)]
-
-
-@pytest.mark.parametrize(("seed", "n_stations"), CASES)
-def test_milp_equals_brute_force_on_stations(seed, n_stations):
-    from bilevel_kit.models.milp import MilpOptions, milp
-
-    inst = from_dict(strategies.stations_doc(seed, n_stations, n=5 + seed % 2))
-    opt, _ = best_makespan(inst)
-    out = milp(inst, MilpOptions(), seed=0, time_limit=60)
-    assert out.plan is not None
-    assert check(inst, out.plan) == []
-    assert out.extra["tray_mode"] == "benders"  # as cpsat's stations model
-    assert_model_optimal(out, opt, tol=1e-5)  # the solver's tolerance, as tests/models/test_milp.py
-
-
-@pytest.mark.parametrize("objective", ["sum_completion", "human_idle"])
-@pytest.mark.parametrize(("seed", "n_stations"), CASES)
-def test_milp_objectives_equal_brute_force_on_stations(seed, n_stations, objective):
-    """The sum of completions and the total human idle: the proven optimum is the brute
-    force's, the bound valid (at most the optimum) and the closed-form bound below both."""
-    from bilevel_kit.models.milp import MilpOptions, milp
-
-    inst = from_dict(strategies.stations_doc(seed, n_stations, n=5 + seed % 2))
-    opt, _ = best_makespan(inst, objective)
-    out = milp(inst, MilpOptions(objective=objective), seed=0, time_limit=60)
-    assert out.plan is not None
-    assert check(inst, out.plan) == []
-    assert out.status_objective == objective
-    assert out.extra["objective_value"] == objective_of(evaluate(inst, out.plan), objective)
-    assert_objective_optimal(out, opt)
-    assert objective_bound(inst, objective) <= opt + 1e-9
-    assert out.bound <= evaluate(inst, out.plan).makespan + 1e-9  # still a makespan bound
 
 
 def test_milp_stations_honours_a_hint_that_models_stations():
