@@ -142,7 +142,7 @@ def plot_stations(
     import matplotlib.pyplot as plt
 
     present = list(dict.fromkeys(str(r["delay"]) for r in rows if r["line"] == line))
-    delays = [d for d in ("none", "feeders") if d in present]
+    delays: list[str] = [d for d in ("none", "feeders") if d in present]
     delays += [d for d in present if d not in delays]
     fig, axes = plt.subplots(
         2,
