@@ -1,8 +1,10 @@
 """Rewrite the KitBench tables of docs/kitbench.md, instances/kitbench/README.md and README.md from
 instances/kitbench/index.csv, and the profile prose of docs/kitbench.md from the passes'
-committed rows (bench/results/kitbench_LABEL.csv); with --figures, also redraw a run's profile
-and gap-versus-size figures into docs/figures/; with --profiles, redraw the profile figures of
-the committed passes (docs/figures/kitbench-profile-60s.png and -10s.png) from their rows.
+committed rows (bench/results/kitbench_LABEL.csv), and the exact models against lns (the
+kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp_10s.md) likewise;
+with --figures, also redraw a run's profile and gap-versus-size figures into docs/figures/;
+with --profiles, redraw the profile figures of the committed passes
+(docs/figures/kitbench-profile-60s.png and -10s.png) from their rows.
 
 python bench/kitbench_docs.py [--check] [--figures RUN_DIR LABEL] [--profiles] [--gap-size]
 
@@ -31,6 +33,7 @@ from bilevel_kit.experiments.kitbench.profiles import (  # noqa: E402
     render_profile_blocks,
 )
 from bilevel_kit.experiments.kitbench.run import result_rows, write_figures  # noqa: E402
+from bilevel_kit.experiments.kitbench.versus import render_versus_blocks  # noqa: E402
 
 PAGES = (
     ROOT / "docs" / "kitbench.md",
@@ -38,6 +41,8 @@ PAGES = (
     ROOT / "README.md",
 )
 RESULTS = ROOT / "bench" / "results"
+#: The committed tables with a per-instance block of the exact models against lns.
+VERSUS_PAGES = (RESULTS / "kitbench_cmp_10s.md",)
 #: The committed passes drawn by --profiles: label -> (its rows, a separate pass's rows).
 PASSES = {"60s": ("kitbench_60s.csv", None), "10s": ("kitbench_10s.csv", "kitbench_10s_lns.csv")}
 
@@ -120,9 +125,10 @@ if __name__ == "__main__":
     library = Library.at(ROOT / "instances" / "kitbench")
     records = library.read()
     stale = []
-    for page in PAGES:
+    for page in (*PAGES, *VERSUS_PAGES):
         text = page.read_text(encoding="utf-8")
         new = render_profile_blocks(render_blocks(text, records), records, RESULTS)
+        new = render_versus_blocks(new, RESULTS)
         if new != text:
             stale.append(page)
             if not args.check:

@@ -1,0 +1,156 @@
+"""The exact models against lns at the same limit
+(docs/kitbench.md#exact-models-against-lns-at-the-same-limit): the excess and the goal's
+count on hand-made rows, and the committed pass (bench/results/kitbench_cmp_10s.*) rendered
+into the pages, with metadata naming what ran."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from bilevel_kit.experiments.kitbench import Library
+from bilevel_kit.experiments.kitbench.profiles import read_rows
+from bilevel_kit.experiments.kitbench.versus import (
+    excess,
+    render_versus_blocks,
+    run_text,
+    versus_blocks_in,
+    versus_markdown,
+    versus_rows,
+    versus_summary,
+    versus_text,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+RESULTS = ROOT / "bench" / "results"
+LABEL = "cmp_10s"
+
+
+def _row(instance, method, makespan, status="feasible", bound=None, valid=True):
+    return {
+        "instance": instance,
+        "tasks": "10",
+        "method": method,
+        "makespan": makespan,
+        "valid": valid,
+        "status": status,
+        "bound": "" if bound is None else str(bound),
+    }
+
+
+ROWS = [
+    _row("a", "lns", 1000.0, bound=990.0),
+    _row("a", "cpsat", 1001.0, bound=995.0),  # +0.1 %: exactly the goal, within
+    _row("a", "milp", 1001.5, bound=980.0),  # +0.15 %: a miss
+    _row("b", "lns", 500.0),
+    _row("b", "cpsat", 495.0, status="optimal", bound=495.0),  # better than lns
+    _row("b", "milp", None, status="refused", valid=None),  # no plan: never within
+    _row("c", "lns", None, status="error", valid=None),  # no reference: no excess
+    _row("c", "cpsat", 70.0),
+    _row("c", "milp", 80.0),
+]
+
+
+def test_excess_is_relative_to_the_reference_and_no_plan_is_infinite() -> None:
+    assert excess(1001.0, 1000.0) == pytest.approx(0.001, rel=1e-9)
+    assert excess(495.0, 500.0) == pytest.approx(-0.01, rel=1e-9)
+    assert excess(None, 500.0) == math.inf
+    assert excess(70.0, None) is None
+
+
+def test_rows_and_summary_count_the_goal_with_misses_worst_first() -> None:
+    table = versus_rows(ROWS, ["cpsat", "milp"])
+    assert [r["instance"] for r in table] == ["a", "b", "c"]
+    a = table[0]
+    assert a["lns"] == 1000.0 and a["best_bound"] == 995.0 and a["milp_bound"] == 980.0
+    assert a["milp_excess"] == pytest.approx(0.0015, rel=1e-9)
+    assert table[2]["cpsat_excess"] is None and table[2]["best_bound"] is None
+    s = versus_summary(table, ["cpsat", "milp"])
+    assert s["cpsat"]["instances"] == 2 and s["cpsat"]["within"] == 2
+    assert s["cpsat"]["better"] == 1 and s["cpsat"]["optimal"] == 1
+    assert s["cpsat"]["median"] == pytest.approx(-0.0045, rel=1e-9)
+    assert s["cpsat"]["worst"] == pytest.approx(0.001, rel=1e-9) and s["cpsat"]["misses"] == []
+    assert s["milp"]["within"] == 0 and s["milp"]["worst"] == math.inf
+    assert [n for n, _ in s["milp"]["misses"]] == ["b", "a"]
+
+
+def test_text_and_table_state_the_counts_and_each_miss() -> None:
+    text = versus_text(ROWS)
+    assert text.startswith("3 instances;")
+    assert "**cpsat** within 0.1 % of lns (or better) on 2 of 2 instances, better on 1" in text
+    assert "median -0.450 %, worst +0.100 %; missing the goal: none." in text
+    assert "median no plan, worst no plan; missing the goal: `b` no plan, `a` +0.150 %." in text
+    table = versus_markdown(ROWS)
+    assert "| `a` | 10 | 1,000.00 | 1,001.00 | +0.100 | feasible | 995.00 |" in table
+    assert "| `b` | 10 | 500.00 | 495.00 | -1.000 | optimal | 495.00 | - | no plan | refused |" in (
+        table
+    )
+
+
+def test_run_text_states_the_wall_time_and_the_load() -> None:
+    run = {
+        "command": "bilevel-kit bench run --methods cpsat,lns",
+        "commit": "abc",
+        "started": "2026-01-01T00:00:00Z",
+        "instances": ["a", "b"],
+        "methods": ["cpsat", "lns"],
+        "wall_s": 1234.4,
+        "load_average_before": [3.5, 4.0, 4.75],
+        "load_average_after": [6.0, 5.5, 5.0],
+    }
+    assert run_text(run) == (
+        "`bilevel-kit bench run --methods cpsat,lns` (commit `abc`, started "
+        "2026-01-01T00:00:00Z): 4 cells in 1,234 s of wall time, load average (1 / 5 / 15 min) "
+        "3.50 / 4.00 / 4.75 before and 6.00 / 5.50 / 5.00 after."
+    )
+
+
+@pytest.mark.parametrize("page", ["docs/kitbench.md", f"bench/results/kitbench_{LABEL}.md"])
+def test_the_pages_are_rendered_from_the_committed_pass(page) -> None:
+    text = (ROOT / page).read_text(encoding="utf-8")
+    assert LABEL in versus_blocks_in(text), f"{page} has no kitbench-versus block of {LABEL}"
+    assert render_versus_blocks(text, RESULTS) == text, (
+        f"{page} disagrees with bench/results/kitbench_{LABEL}.csv: "
+        "run python bench/kitbench_docs.py"
+    )
+
+
+def test_the_pass_is_one_run_of_the_three_methods_on_every_record_up_to_250_tasks() -> None:
+    run = json.loads((RESULTS / f"kitbench_{LABEL}_run.json").read_text())
+    rows = read_rows(RESULTS / f"kitbench_{LABEL}.csv")
+    assert sorted(run["methods"]) == ["cpsat", "lns", "milp"] and run["time_limit"] == 10.0
+    assert run["params"] == {"cpsat": {}, "milp": {}, "lns": {}}  # default options
+    assert "--time-limit 10" in run["command"] and run["filter"] == "tasks<=250"
+    records = Library.at(ROOT / "instances" / "kitbench").read()
+    assert sorted(run["instances"]) == sorted(r.instance for r in records if r.tasks <= 250)
+    assert sorted({(r["instance"], r["method"]) for r in rows}) == sorted(
+        (i, m) for i in run["instances"] for m in run["methods"]
+    )
+    assert len(rows) == len(run["instances"]) * len(run["methods"])
+    assert all(r["valid"] for r in rows), "every plan of the pass passes the checker"
+
+
+def test_the_records_name_the_bounds_the_pass_raised() -> None:
+    """docs/kitbench.md#the-records says the pass raised 8 bounds and set no plan: the index's
+    provenance columns name its commit exactly there."""
+    run = json.loads((RESULTS / f"kitbench_{LABEL}_run.json").read_text())
+    records = Library.at(ROOT / "instances" / "kitbench").read()
+    bounds = [r for r in records if r.bound is not None and r.bound.commit == run["commit"]]
+    assert len(bounds) == 8 and {r.bound.method for r in bounds} == {"cpsat", "lns"}
+    assert all(r.bound.time_limit == 10.0 and r.instance in run["instances"] for r in bounds)
+    assert not [r for r in records if r.plan is not None and r.plan.commit == run["commit"]]
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text().split())
+    assert "raised 8 bounds by 1 to 2 s" in docs and f"commit `{run['commit']}`" in docs
+
+
+def test_the_changelog_states_the_pass_counts() -> None:
+    rows = read_rows(RESULTS / f"kitbench_{LABEL}.csv")
+    s = versus_summary(versus_rows(rows, ["cpsat", "milp"]), ["cpsat", "milp"])
+    text = " ".join((ROOT / "CHANGELOG.md").read_text().split())
+    n, cp, mi = s["cpsat"]["instances"], s["cpsat"], s["milp"]
+    assert f"(or better) on {cp['within']} of {n}, `milp` on {mi['within']} of {n}" in text
+    assert f"{len(cp['misses'])} of the {n} miss for `cpsat`, {len(mi['misses'])} for" in text
+    assert f"worst +{100 * s['cpsat']['worst']:.1f} %" in text
