@@ -40,16 +40,11 @@ class Clock:
 
     def step(self, sc: Scaled, kit: Sequence[int]) -> None:
         """Deliver ``kit`` (a used kit of task indices) after the kits so far."""
-        s = sc.station[kit[0]] if sc.station else 0
-        d, o_h, trays = (
-            (sc.st_d[s], sc.st_oh[s], sc.st_trays[s])
-            if sc.station
-            else (
-                sc.d,
-                sc.o_h,
-                sc.trays,
-            )
-        )
+        if sc.station:
+            s = sc.station[kit[0]]
+            d, o_h, trays = sc.st_d[s], sc.st_oh[s], sc.st_trays[s]
+        else:  # one station: the instance's own
+            s, d, o_h, trays = 0, sc.d, sc.o_h, sc.trays
         mine = self.starts[s]
         start = self.arrive
         if trays is not None and len(mine) >= trays:  # its T_s-th previous kit's tray is back

@@ -330,15 +330,17 @@ class _Search:
             base.step(self.sc, kit)
         incumbent = self._end_key(base, self.kits[k0:k1])
         kept: dict[tuple[int, ...], Kits] = {}  # the rearrangements of no dominated end state
-        for n, middle in enumerate(rearrangements(groups, self.preds, self.valid_kit)):
-            if n % 64 == 63 and stop_at.remaining() <= 0.05:
+        enumerated = 0  # (none when a kit of the window no longer passes its probe)
+        for middle in rearrangements(groups, self.preds, self.valid_kit):
+            enumerated += 1
+            if enumerated % 64 == 0 and stop_at.remaining() <= 0.05:
                 return False
             key = self._end_key(base, middle)
             if dominated(key, incumbent) or any(dominated(key, k) for k in kept):
                 continue
             kept = {k: m for k, m in kept.items() if not dominated(k, key)}
             kept[key] = middle
-        self.counts["window_plans"] += n + 1 if kept or incumbent else 0
+        self.counts["window_plans"] += enumerated
         ranked = sorted(
             (scaled_objective(self.sc, before + m + after, self.name), j, m)
             for j, m in enumerate(kept.values())
