@@ -38,15 +38,18 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
     return rows
 
 
-def _plan(row: Row) -> float | None:
-    return row["makespan"] if row.get("valid") and row.get("makespan") is not None else None
+def plan_makespan(row: Row | None) -> float | None:
+    """A cell's makespan when it has a valid plan, else None (no cell, no plan, invalid)."""
+    if row is None or not row.get("valid") or row.get("makespan") is None:
+        return None
+    return float(row["makespan"])
 
 
 def pass_best(rows: Sequence[Row]) -> dict[str, float]:
     """Per instance, the least valid makespan of any method in ``rows``."""
     best: dict[str, float] = {}
     for r in rows:
-        ms = _plan(r)
+        ms = plan_makespan(r)
         if ms is not None:
             best[r["instance"]] = min(ms, best.get(r["instance"], math.inf))
     return best
@@ -64,7 +67,7 @@ def ratios(
     out: dict[str, list[float]] = {m: [] for m in methods}
     for r in rows:
         if r["method"] in out:
-            ms, ref = _plan(r), reference.get(r["instance"])
+            ms, ref = plan_makespan(r), reference.get(r["instance"])
             out[r["method"]].append(math.inf if ms is None or not ref else ms / ref)
     return out
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from ..tables import block_names, fill_blocks, markdown_lines, marked_blocks
-from .profiles import methods_of, read_rows
+from .profiles import methods_of, plan_makespan, read_rows
 
 Row = Mapping[str, Any]
 #: The reference method and the goal of issue 37: at most 0.1 % above it.
@@ -29,12 +29,6 @@ REFERENCE = "lns"
 GOAL = 0.001
 #: Slack of the comparison: equal plans computed in another order differ in the last bits.
 _EPS = 1e-12
-
-
-def _plan(row: Row | None) -> float | None:
-    if row is None or not row.get("valid") or row.get("makespan") is None:
-        return None
-    return float(row["makespan"])
 
 
 def _num(value: Any) -> float | None:
@@ -57,7 +51,7 @@ def versus_rows(
     cells = {(r["instance"], r["method"]): r for r in rows}
     out = []
     for name in dict.fromkeys(r["instance"] for r in rows):
-        ref = _plan(cells.get((name, reference)))
+        ref = plan_makespan(cells.get((name, reference)))
         mine = [cells.get((name, m)) for m in (reference, *methods)]
         bounds = [b for c in mine if c is not None and (b := _num(c.get("bound"))) is not None]
         row: dict[str, Any] = {
@@ -68,7 +62,7 @@ def versus_rows(
         }
         for m in methods:
             cell = cells.get((name, m))
-            row[m] = _plan(cell)
+            row[m] = plan_makespan(cell)
             row[f"{m}_status"] = cell["status"] if cell is not None else None
             row[f"{m}_bound"] = _num(cell.get("bound")) if cell is not None else None
             row[f"{m}_excess"] = excess(row[m], ref)
