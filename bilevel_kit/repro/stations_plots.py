@@ -13,7 +13,7 @@ against each other.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -180,7 +180,7 @@ def plot_stations(
 def draw_figures(
     rows: Sequence[Mapping[str, Any]],
     out: Path,
-    bounds_of: Any,
+    bounds_of: Callable[[str, Sequence[int]], Mapping[str, Sequence[float]]],
     *,
     threshold: float,
     quick: bool = False,
