@@ -108,8 +108,7 @@ def test_window_clock_follows_the_evaluator(seed, n_stations, trays):
     """The exact windows' end state (the stepping ``Clock``) after every prefix of
     single-task's plan is the evaluator's: the last arrival, each station's human end, the
     human starts of its last ``T`` kits and its kit count, on the integer times."""
-    from bilevel_kit.models.cpsat.scaling import scale_times
-    from bilevel_kit.models.lns.clock import Clock
+    from bilevel_kit.models.cpsat.scaling import Clock, scale_times
 
     inst = from_dict(instance_doc(seed, n_stations, trays))
     sc = scale_times(inst, 0.1, True)
