@@ -199,3 +199,23 @@ def test_the_no_model_rule_is_applied_again_after_the_lns_first(tiny, monkeypatc
         assert out.extra["improved_by"] == "lns"  # the hand-off found nothing: still lns's
     else:
         assert stub.solved == [1]
+
+
+@pytest.mark.parametrize("releases", [False, True])
+def test_never_worse_leaves_a_released_makespan_to_the_model(
+    tiny, two_plans, monkeypatch, releases
+):
+    # with release times the model minimises the released makespan, which the timeline does
+    # not see: a plan longer without releases may be the better one
+    from bilevel_kit.models.exact import driver, search_first
+
+    (better, _), _ = two_plans
+    monkeypatch.setattr(driver, "buildable", lambda *args: True)
+    monkeypatch.setattr(lns_first, "before_model", lambda b, inc, f: (inc, False))
+    monkeypatch.setattr(search_first, "before_model", lambda b, inc, s, r: (inc, False))
+    stub = _DriveStub(tiny)
+    stub.is_makespan = True
+    stub.plan = lambda inc: better  # the incumbent's plan; the model returns none
+    out = driver.drive(stub, "lns", releases=releases)
+    assert stub.solved == [0]
+    assert ("concluded" in out.extra) is not releases

@@ -17,7 +17,7 @@ backend protocol (:class:`.backend.Backend`) that builds, solves and cuts its ow
    (:meth:`Backend.solve`); with option ``search``, the ideal search first runs from the
    incumbent (:mod:`.search_first`) and may prove it optimal without a model.
 6. The plan returned is never worse than the incumbent the model started from
-   (:func:`never_worse`).
+   (:func:`never_worse`; without release times, whose makespan the timeline does not see).
 """
 
 from __future__ import annotations
@@ -73,7 +73,9 @@ def drive(
     if built:
         t_model = budget.elapsed()
         out = lns_first.after_model(backend, backend.solve(inc), t_model)
-        return out if inc is None else never_worse(backend, inc, out)
+        if inc is None or releases:  # (the model's makespan is the released one: cpsat)
+            return out
+        return never_worse(backend, inc, out)
     if inc is None:
         return backend.finish(None, Status.UNKNOWN, backend.known_bound())
     if fallback == "lns":  # the time left to the LNS from the incumbent
