@@ -219,3 +219,16 @@ def test_never_worse_leaves_a_released_makespan_to_the_model(
     out = driver.drive(stub, "lns", releases=releases)
     assert stub.solved == [0]
     assert ("concluded" in out.extra) is not releases
+
+
+def test_milp_imports_pyomo_before_its_clock():
+    # its first master build would otherwise pay the import inside the time limit
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from bilevel_kit.methods import REGISTRY; "
+        "assert 'pyomo.environ' not in sys.modules; REGISTRY['milp'].run_prepare(); "
+        "assert 'pyomo.environ' in sys.modules"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
