@@ -596,7 +596,7 @@ register(
     "bilevel_kit.models.milp.method:milp",
     "exact: the schedule as a Pyomo MILP (HiGHS by default, any Pyomo solver), tray by cuts",
     "bilevel_kit.models.milp.method:MilpOptions",
-    prepare=COMPILE_KERNELS,  # its hint and its lns fallback may run greedy-ce
+    prepare="bilevel_kit.models.milp.method:prepare",  # greedy-ce's kernels and Pyomo
     **_EXACT_MODEL,
 )
 register(

@@ -1,7 +1,7 @@
 """The LNS inside the exact models' budget (docs/formulations.md, "The LNS first"): the
 exact plan is never worse than the LNS first's; the LNS stops after ``STALL_WINDOWS`` windows
-without improvement (counted in windows: the same count under any load), solves no window on
-instances of at most ``SMALL_TASKS`` tasks, and keeps its cap and the time limit; a plan the
+without improvement (counted in windows: the same count under any load), solves windows on
+small instances too, and keeps its cap and the time limit; a plan the
 LNS found is ``optimal`` only with a proof (the model's, or the proven bound met); the paper's
 table keeps its proven optimum."""
 
@@ -64,10 +64,10 @@ def test_the_exact_plan_is_never_worse_than_the_lns_first(method, name, generate
         info = extra[keys.LNS_FIRST]
         assert info["method"] == "lns" and info["share"] == lns_first.SHARE
         assert info[keys.LNS_STALL] == lns_first.STALL_WINDOWS
-        assert info[keys.LNS_MAX_WINDOWS] is None  # more than SMALL_TASKS tasks
+        assert info[keys.LNS_MAX_WINDOWS] is None  # no window cap
         # it ran (or, on a machine too busy to leave it 1 s, said why not)
         assert info.get(keys.LNS_STOP) in keys.LNS_STOPS or "1 s left" in info["skipped"]
-        # the cap: half the time left after the warm start, at most half the limit
+        # the cap: SHARE of the time left after the warm start, at most SHARE of the limit
         assert 0 < info["time_s"] <= lns_first.SHARE * LIMIT
         assert info[keys.LNS_USED_S] <= info["time_s"] + 1.0
         if info.get(keys.LNS_STOP) == "stall":  # the last STALL_WINDOWS windows found nothing
@@ -80,14 +80,16 @@ def test_the_exact_plan_is_never_worse_than_the_lns_first(method, name, generate
 
 
 @pytest.mark.parametrize("method", ["cpsat", "milp"])
-def test_a_small_instance_gets_no_window(method, table):
-    # 12 tasks <= SMALL_TASKS: the LNS's start plans only, then the model proves the optimum
+def test_a_small_instance_gets_windows_and_the_model_its_proof(method, table):
+    # 12 tasks: the LNS solves windows too (its quick start, 435.085 s, is a local optimum of
+    # every window: it stops after STALL_WINDOWS windows), then the model proves the optimum
     # (in 1-5 s unloaded; the limit leaves room for a busy machine, the run ends at the proof)
     out = solve(table, method, seed=0, time_limit=60.0)
     info = out.extra[keys.LNS_FIRST]
-    assert table.n_tasks <= lns_first.SMALL_TASKS
-    assert info[keys.LNS_MAX_WINDOWS] == 0 and info["windows"] == 0
-    assert info[keys.LNS_STOP] in ("iterations", "optimal")
+    assert info[keys.LNS_MAX_WINDOWS] is None
+    assert info[keys.LNS_STOP] in ("stall", "local_optimum", "optimal")
+    if info[keys.LNS_STOP] == "stall":
+        assert info["windows"] == lns_first.STALL_WINDOWS and info["improvements"] == 0
     why = ("solver_status", "backend_status", "build_time_s", "master_time_s", "wall_time_s")
     assert out.status == "optimal", str({k: out.extra.get(k) for k in why})
     assert out.objective == pytest.approx(435.085, abs=1e-6)
@@ -211,20 +213,20 @@ def test_the_lns_gets_its_share_and_a_plan_above_the_bound_goes_to_the_model():
     info = stub.extra[keys.LNS_FIRST]
     assert info["makespan_after"] == 90.0
     assert "solver_status" not in stub.extra  # no status claimed: the model decides
-    # 40 tasks: stopped by STALL_WINDOWS windows without improvement, no window cap
+    # stopped by STALL_WINDOWS windows without improvement, no window cap
     assert stub.limit == HandOff(stub.given, lns_first.STALL_WINDOWS, None)
     assert info[keys.LNS_STALL] == 4 and info[keys.LNS_MAX_WINDOWS] is None
-    assert info[keys.LNS_USED_S] >= 0.0 and info["share"] == 0.5
+    assert info[keys.LNS_USED_S] >= 0.0 and info["share"] == lns_first.SHARE == 0.8
 
 
-@pytest.mark.parametrize(("n", "windows"), [(1, 0), (24, 0), (25, None), (500, None)])
-def test_instances_of_at_most_small_tasks_get_no_window(n, windows):
+@pytest.mark.parametrize("n", [1, 12, 24, 25, 500])
+def test_every_instance_gets_windows(n):
+    # small instances too (issue 37: 12 tasks, the start plans alone left cpsat 1.8 % above
+    # lns at 10 s, bench/results/kitbench_cmp_10s.csv)
     stub = _Stub(after=None, bound=80.0, n_tasks=n)
     lns_first.before_model(stub, 0, "lns")
-    assert stub.limit is not None and stub.limit.windows == windows
-    assert stub.extra[keys.LNS_FIRST][keys.LNS_MAX_WINDOWS] == windows
-    # the LNS's first window frees SMALL_TASKS tasks (module docstring of lns_first)
-    assert lns_first.SMALL_TASKS == lns_method.LnsOptions().window == 24
+    assert stub.limit == HandOff(stub.given, lns_first.STALL_WINDOWS, None)
+    assert stub.extra[keys.LNS_FIRST][keys.LNS_MAX_WINDOWS] is None
 
 
 @pytest.mark.parametrize("spec", [CPSAT, MILP])

@@ -417,7 +417,13 @@ class _Cpsat:
         return plan_of(self.ctx, state.kits, None)
 
     def adopt(self, plan: Plan) -> State:
+        """A better plan as the incumbent, its layouts taught to the packer: the model's final
+        plan is laid out again by the packer (:func:`.conclude.plan_of`), which must not lose
+        a kit the LNS laid out (at any angle, or when a packing call times out)."""
         idx = self.instance.index
+        for kit in plan.kits:
+            if kit.layout:
+                self.packer.learn(self.instance.kit_parts(kit.tasks), kit.layout)
         kits = [[idx[t] for t in k.tasks] for k in plan.kits if k.tasks]
         layouts = [k.layout for k in plan.kits if k.tasks]
         return State(kits, scaled_makespan(self.sc, kits), layouts=layouts)

@@ -10,12 +10,14 @@ backend protocol (:class:`.backend.Backend`) that builds, solves and cuts its ow
 4. The no-model rule (:func:`.nomodel.buildable`): a model over the memory limit or too slow to
    build is not built; the time left goes to the LNS from the incumbent (option ``fallback``,
    :meth:`Backend.hand_off`) and the incumbent is concluded with the bound known before the
-   model.
+   model. The rule is applied again after step 5's LNS first, in the time it left.
 5. Otherwise the LNS improves the incumbent first within a share of the time left
    (:mod:`.lns_first`; option ``fallback=lns``): a plan that meets the bound known before the
    model is concluded without one, else the backend builds its model and searches from it
    (:meth:`Backend.solve`); with option ``search``, the ideal search first runs from the
    incumbent (:mod:`.search_first`) and may prove it optimal without a model.
+6. The plan returned is never worse than the incumbent the model started from
+   (:func:`never_worse`; without release times, whose makespan the timeline does not see).
 """
 
 from __future__ import annotations
@@ -25,10 +27,11 @@ from typing import TYPE_CHECKING, Any
 from ...bounds import best_bound
 from ...instance import Instance
 from ...methods import REGISTRY, MethodOutput, Status
+from ...plan import evaluate
 from ..budget import Budget
 from ..common import scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
-from . import lns_first, search_first
+from . import keys, lns_first, search_first
 from .backend import Backend, Inc
 from .nomodel import buildable
 
@@ -56,22 +59,57 @@ def drive(
     extra, has_plan = backend.extra, inc is not None
     cells = backend.cells()
     spec, budget, margin = backend.spec, backend.budget, backend.margin
-    if buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, has_plan):
-        if inc is not None:
-            better, met = lns_first.before_model(backend, inc, fallback)
-            if met:  # the LNS's plan meets the proven bound: optimal without a model
-                return backend.conclude(better)
-            better, met = search_first.before_model(backend, better, search, releases)
-            if met:  # the ideal search proved the incumbent optimal: no model
-                return backend.conclude(better)
-            inc = better
+    built = buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, has_plan)
+    if built and inc is not None:
+        better, met = lns_first.before_model(backend, inc, fallback)
+        if met:  # the LNS's plan meets the proven bound: optimal without a model
+            return backend.conclude(better)
+        better, met = search_first.before_model(backend, better, search, releases)
+        if met:  # the ideal search proved the incumbent optimal: no model
+            return backend.conclude(better)
+        inc = better
+        # the rule again in the time the LNS left (it may have used what the build needed)
+        built = buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, True)
+    if built:
         t_model = budget.elapsed()
-        return lns_first.after_model(backend, backend.solve(inc), t_model)
+        out = lns_first.after_model(backend, backend.solve(inc), t_model)
+        if inc is None or releases:  # (the model's makespan is the released one: cpsat)
+            return out
+        return never_worse(backend, inc, out)
     if inc is None:
         return backend.finish(None, Status.UNKNOWN, backend.known_bound())
     if fallback == "lns":  # the time left to the LNS from the incumbent
-        inc = backend.hand_off(inc)
+        inc = _rest_to_lns(backend, inc)
     return backend.conclude(inc)
+
+
+def _rest_to_lns(backend: Backend[Inc], inc: Inc) -> Inc:
+    """The no-model hand-off of the time left; ``improved_by`` stays ``lns`` when the LNS first
+    improved the incumbent and this hand-off did not."""
+    before = backend.extra.get("improved_by")
+    inc = backend.hand_off(inc)
+    if backend.extra.get("improved_by") is None:
+        backend.extra["improved_by"] = before
+    return inc
+
+
+def never_worse(backend: Backend[Inc], inc: Inc, out: MethodOutput) -> MethodOutput:
+    """``out``, or the incumbent ``inc`` concluded without the model (the bound known before
+    it) when the model's plan is missing or has a longer makespan: the model searches from the
+    incumbent under C <= U, so this is a safety net against a plan lost in the model's
+    re-packing or re-timing (docs/formulations.md, "The LNS first").
+    ``extra["model_plan_worse"]`` then keeps the model's makespan (None: no plan), status and
+    bound."""
+    if not backend.is_makespan:
+        return out
+    before = evaluate(backend.instance, backend.plan(inc)).makespan
+    after = None if out.plan is None else evaluate(backend.instance, out.plan).makespan
+    if after is not None and after <= before + lns_first.TOL:
+        return out
+    worse = {"makespan": after, "status": str(out.status), "bound": out.bound}
+    result = backend.conclude(inc)
+    result.extra[keys.MODEL_PLAN_WORSE] = worse
+    return result
 
 
 def without_plan(backend: Backend[Inc], infeasible: bool, scope: str | None) -> MethodOutput:

@@ -18,6 +18,9 @@ libraries and benchmark records keep the old names).
   :mod:`.search_first`): ``share``, ``stop``, ``proven``, ``bound``, ``proof_scope``, its
   counters and
   ``used_s``, with ``makespan_after`` when it found a better plan; or ``skipped``.
+- ``model_plan_worse``: present only when the model's plan was missing or worse than the
+  incumbent it started from, which is returned instead (:func:`.driver.never_worse`): the
+  model's ``makespan`` (None: no plan), ``status`` and ``bound``.
 """
 
 from __future__ import annotations
@@ -50,6 +53,9 @@ LNS_MAX_WINDOWS = "max_windows"
 #: Why the LNS first stopped: its plan met the bound, a local optimum, ``stall_windows``
 #: windows without improvement, ``max_windows`` windows solved (0: a small instance), the cap.
 LNS_STOPS = ("optimal", "local_optimum", "stall", "iterations", "time_limit")
+
+#: The model's plan, when it was missing or worse than its incumbent (:func:`.driver.never_worse`).
+MODEL_PLAN_WORSE = "model_plan_worse"
 
 #: The names ``cpsat`` and ``milp`` wrote before (read back by :func:`read`).
 OLD_NAMES: dict[str, tuple[str, ...]] = {
