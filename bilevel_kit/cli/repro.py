@@ -80,7 +80,7 @@ STUDIES: dict[str, tuple[str, str]] = {
     ),
     "robust-kitbench": (
         "the robust study on KitBench records of up to 60 tasks (beyond the paper)",
-        "The robust study's cell (mean-value and SAA plans, VSS and EVPI) on every other "
+        "The robust study's cell (mean-value and SAA plans, VSS and EVPI) on every "
         "KitBench record of at most 60 tasks, each with its own tray count, at cv 0.5 "
         "(docs/robust.md#kitbench-up-to-60-tasks).",
     ),

@@ -2,7 +2,7 @@
 60 tasks (issue 41, docs/robust.md#kitbench-up-to-60-tasks).
 
 One cell per KitBench record of at most :data:`MAX_TASKS` tasks (``instances/kitbench/
-index.csv``, in its order; every :data:`EVERY`-th one), each with its own tray count and
+index.csv``, in its order), each with its own tray count and
 delivery time, at each CV of :data:`CVS`: the robust study's cell
 (:func:`.robust.cell_estimates`: the mean-value and SAA plans, their expected makespans on
 1,000 evaluation scenarios, the paired VSS and EVPI) with its deterministic-time budgets and
@@ -43,10 +43,6 @@ MAX_TASKS = 60
 #: (docs/robust.md#results): if planning for the spread does not pay there, it pays at no CV
 #: the study tried. One CV only, for the compute (docs/robust.md#kitbench-up-to-60-tasks).
 CVS = (0.5,)
-#: Every EVERY-th record of the index's records of at most MAX_TASKS tasks, from the first:
-#: a deterministic half, every family and both tray counts of the library (1 and unlimited),
-#: for the compute (a cell takes 20 to 30 s of CPU at 25 to 60 tasks).
-EVERY = 2
 
 
 @dataclass(frozen=True)
@@ -84,12 +80,11 @@ def kitbench_cell(cell: KitBenchCell) -> dict[str, Any]:
 def study_cells(
     cvs: Sequence[float] = CVS, seed: int = 0, max_tasks: int = MAX_TASKS
 ) -> list[KitBenchCell]:
-    """Every :data:`EVERY`-th record of at most ``max_tasks`` tasks (the index's order), from
-    the first, at every CV."""
+    """Every record of at most ``max_tasks`` tasks (the index's order), at every CV."""
     from ..experiments.kitbench.library import Library
     from .common import file_digest
 
-    records = [r for r in Library.at(LIBRARY).read() if r.tasks <= max_tasks][::EVERY]
+    records = [r for r in Library.at(LIBRARY).read() if r.tasks <= max_tasks]
     return [
         KitBenchCell(
             r.instance,

@@ -23,11 +23,11 @@ from bilevel_kit.repro.template import ROOT
 CSV = ROOT / "paper_repro" / "results" / "robust_kitbench.csv"
 
 
-def test_the_cells_are_every_other_record_of_at_most_60_tasks() -> None:
+def test_the_cells_are_every_record_of_at_most_60_tasks() -> None:
     records = [r for r in Library.at(LIBRARY).read() if r.tasks <= 60]
     cells = study_cells()
-    assert [c.instance for c in cells] == [r.instance for r in records[::2]]
-    assert len(records) == 37 and len(cells) == 19
+    assert [c.instance for c in cells] == [r.instance for r in records]
+    assert len(records) == 37 and len(cells) == 37
     assert {c.cv for c in cells} == {0.5} and max(c.tasks for c in cells) == 60
     assert {c.trays for c in cells} == {1, None}  # the library has no 2-tray record
     assert len({c.family for c in cells}) == len({r.family for r in records})
@@ -118,25 +118,25 @@ def test_the_hint_picks_another_optimal_mean_value_plan_on_sp12() -> None:
 
 
 def test_the_committed_advice_counts_the_intervals() -> None:
-    """The run of 2026-12-06 (`python paper_repro/rerun.py --only robust_kitbench --jobs 1`)."""
+    """The run of 2026-12-06 (`python paper_repro/rerun.py --only robust_kitbench --jobs 2`)."""
     text = kitbench_advice(read_rows(CSV))
     assert text.startswith(
-        "Over the 19 records (CV 0.5), the VSS interval lies above 0 in 2 (records of 12 tasks), "
-        "below 0 in 3 and meets 0 in 14; the VSS ranges from -4.52 s (-0.55 %; "
-        "table_u2_tu_tight_d0: 24 tasks, unlimited trays) to 3.53 s (1.00 % of the expected "
-        "makespan; sparse_n12_s1_t1_loose_d0: 12 tasks, 1 tray)."
+        "Over the 37 records (CV 0.5), the VSS interval lies above 0 in 5 (records of 12 to 25 "
+        "tasks), below 0 in 3 and meets 0 in 29; the VSS ranges from -4.52 s (-0.55 %; "
+        "table_u2_tu_tight_d0: 24 tasks, unlimited trays) to 9.44 s (1.35 % of the expected "
+        "makespan; sp_n25_s1_tu_loose_d30: 25 tasks, unlimited trays)."
     )
     assert (
-        "With 1 tray (13 records of 12 to 52 tasks), the VSS interval lies above 0 in 2 (records "
-        "of 12 tasks), below 0 in 0 and meets 0 in 11" in text
+        "With 1 tray (19 records of 12 to 60 tasks), the VSS interval lies above 0 in 2 (records "
+        "of 12 tasks), below 0 in 0 and meets 0 in 17" in text
     )
     assert (
-        "With unlimited trays (6 records of 12 to 60 tasks), the VSS interval lies above 0 in 0, "
-        "below 0 in 3 and meets 0 in 3" in text
+        "With unlimited trays (18 records of 12 to 60 tasks), the VSS interval lies above 0 in 3 "
+        "(records of 12 to 25 tasks), below 0 in 3 and meets 0 in 12" in text
     )
     assert (
-        "In 12 of the 19 records the SAA solve kept the mean-value plan (VSS exactly 0), proven "
-        "optimal on its scenarios in 1; in the other 11 (records of 25 to 60 tasks)" in text
+        "In 25 of the 37 records the SAA solve kept the mean-value plan (VSS exactly 0), proven "
+        "optimal on its scenarios in 2; in the other 23 (records of 24 to 60 tasks)" in text
     )
-    assert "(`safety_net_fired` is 0 in all 19 cells)" in text
-    assert "the SAA solve its plan on its scenarios in 5 (records of 12 to 27 tasks)." in text
+    assert "(`safety_net_fired` is 0 in all 37 cells)" in text
+    assert "the SAA solve its plan on its scenarios in 9 (records of 12 to 27 tasks)." in text
