@@ -18,21 +18,24 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
    neighbours, a task into a nearby kit of its station), then the **exact window**: the
    consecutive kits from it holding at most :data:`EXACT_TASKS` tasks, every rearrangement
    of their tasks enumerated (:mod:`.enumerate`), only those whose end state (:mod:`.clock`)
-   is not dominated timed in full. A sweep without improvement is a local optimum: then a
-   *kick* (:data:`KICK_MOVES` random valid moves, better or not) and sweeps again from there,
-   back to the best plan when they find none better; :data:`KICKS` kicks in a row without a
-   better plan end the run (``stop`` ``local_optimum``), as do ``iterations`` (kits visited),
-   ``stall`` (visits in a row without improvement), optimal (the plan meets the bound) and
-   the time limit. Every random choice draws from ``numpy.random.default_rng(seed)``.
+   is not dominated timed in full. On an exact grid a candidate (a move's or a window's) is
+   timed in full only when its state stays undominated by the incumbent's along the kits
+   after its change (:mod:`.trail`): the others cannot be better. A sweep without
+   improvement is a local optimum: then a *kick* (:data:`KICK_MOVES` random valid moves,
+   better or not) and sweeps again from there, back to the best plan when they find none
+   better; :data:`KICKS` kicks in a row without a better plan end the run (``stop``
+   ``local_optimum``), as do ``iterations`` (kits visited), ``stall`` (visits in a row
+   without improvement), optimal (the plan meets the bound) and the time limit. Every
+   random choice draws from ``numpy.random.default_rng(seed)``.
 
 **Result.** ``status`` ``optimal`` only when the plan meets the closed-form bound, else
 ``feasible``; ``bound`` the makespan's (closed form or given); with another objective
 ``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
 and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
 (``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``iterations``,
-``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves timed), ``window_plans``
-(rearrangements enumerated), ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``,
-``wall_time_s``.
+``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves tried), ``hopeless`` (candidates
+rejected from their states, :mod:`.trail`), ``window_plans`` (rearrangements enumerated),
+``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
 
 A kit holds one station's tasks, fits the tray (:class:`.fit.FastFit`) and is not made of
 part-less tasks only (docs/timeline.md#part-less-tasks); the tasks' order keeps every
@@ -61,6 +64,7 @@ from ..cpsat.scaling import Scaled, scale_times, scaled_objective
 from .clock import Clock, dominated
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
+from .trail import Trail
 
 #: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
 #: rearrangements, the ordered set partitions).
@@ -135,9 +139,11 @@ class _Search:
     bound: float | None = None
     layouts: dict[tuple[int, ...], tuple[Placement, ...]] = field(default_factory=dict)
     stalled: int = 0
+    trail: Trail | None = None  # the incumbent's states (:mod:`.trail`), built when needed
     counts: dict[str, int] = field(
         default_factory=lambda: dict.fromkeys(
-            ("iterations", "improvements", "sweeps", "kicks", "tried", "window_plans"), 0
+            ("iterations", "improvements", "sweeps", "kicks", "tried", "hopeless", "window_plans"),
+            0,
         )
     )
 
@@ -194,9 +200,25 @@ class _Search:
         assert value is not None  # (a modelled objective: a function of the timeline)
         return value
 
+    def hopeless(self, kits: Kits) -> bool:
+        """``kits`` is no better on the grid than the incumbent, seen from its states
+        (:mod:`.trail`); only on an exact grid, where a tie is no better either (off the grid
+        the evaluator decides ties, :meth:`take`)."""
+        if not self.sc.exact:
+            return False
+        assert self.kits is not None
+        if self.trail is None or self.trail.kits is not self.kits:
+            self.trail = Trail(self.sc, self.kits, self.idle)
+        if self.trail.hopeless(kits):
+            self.counts["hopeless"] += 1
+            return True
+        return False
+
     def take(self, kits: Kits, changed: Sequence[Sequence[int]]) -> bool:
         """Take ``kits`` when valid (``changed``: its new kits) and strictly better."""
         self.counts["tried"] += 1
+        if self.hopeless(kits):
+            return False
         scaled = scaled_objective(self.sc, kits, self.name)
         if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):
             return False
@@ -341,9 +363,10 @@ class _Search:
             kept = {k: m for k, m in kept.items() if not dominated(k, key)}
             kept[key] = middle
         self.counts["window_plans"] += enumerated
-        ranked = sorted(
+        ranked = sorted(  # (a hopeless plan would rank after the incumbent: never taken)
             (scaled_objective(self.sc, before + m + after, self.name), j, m)
             for j, m in enumerate(kept.values())
+            if not self.hopeless(before + m + after)
         )
         for scaled, _, middle in ranked:  # the evaluator decides (off the grid: each in turn)
             if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):

@@ -1,0 +1,55 @@
+r"""The incumbent's end state after each of its kits, with several stations: what lets the
+search of :mod:`.stations` reject most candidates without timing the whole plan
+(docs/stations.md#lns-with-several-stations).
+
+A candidate differs from the incumbent in a run of kits and shares the rest: the same kits
+before (the incumbent's state there is the candidate's too) and the same kits after. Stepped
+(:class:`.clock.Clock`) over its own run, then along the shared kits after it, the candidate's
+state is compared with the incumbent's at the same place of those shared kits: once it is at
+least the incumbent's everywhere (:func:`.clock.dominated`), the rest of the timeline cannot
+make the candidate's objective lower than the incumbent's (the timeline is max-plus, the
+argument of :mod:`.clock`), so it is *hopeless*. At 1,800 tasks a candidate's full timing is
+about 1,800 steps; a hopeless one usually shows it within a few kits after its run.
+"""
+
+from __future__ import annotations
+
+from ..cpsat.scaling import Scaled
+from .clock import Clock, dominated
+from .enumerate import Kits
+
+
+class Trail:
+    """The incumbent ``kits`` and its state before each kit and after the last (``keys``:
+    their vectors of :meth:`.clock.Clock.key`; ``idle``: the kit counts are part of them)."""
+
+    def __init__(self, sc: Scaled, kits: Kits, idle: bool) -> None:
+        self.sc, self.kits, self.idle = sc, kits, idle
+        clock = Clock.start(sc)
+        self.clocks = [clock.copy()]
+        for kit in kits:
+            clock.step(sc, kit)
+            self.clocks.append(clock.copy())
+        self.keys = [c.key(sc, idle) for c in self.clocks]
+
+    def hopeless(self, kits: Kits) -> bool:
+        """Whether ``kits``' objective is at least the incumbent's: its state is dominated by
+        the incumbent's somewhere along their common kits after its change (module docstring).
+        Kits are compared by identity (a move shares the incumbent's unchanged kit lists), so
+        a kit equal but rebuilt only makes the changed run longer."""
+        inc, n, m = self.kits, len(kits), len(self.kits)
+        lo = 0
+        while lo < min(n, m) and kits[lo] is inc[lo]:
+            lo += 1
+        tail = 0  # kits shared at the end, after the changed run
+        while tail < min(n, m) - lo and kits[n - 1 - tail] is inc[m - 1 - tail]:
+            tail += 1
+        clock = self.clocks[lo].copy()
+        for kit in kits[lo : n - tail]:
+            clock.step(self.sc, kit)
+        for j in range(m - tail, m + 1):  # the incumbent's place of the same shared kits
+            if dominated(clock.key(self.sc, self.idle), self.keys[j]):
+                return True
+            if j < m:
+                clock.step(self.sc, inc[j])
+        return False
