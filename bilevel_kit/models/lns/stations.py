@@ -9,7 +9,8 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
 
 1. **Start** from the best of the given plan (``start_plan``), single-task's and
    whole-assembly's plans (which interleave the stations by earliest need) and (``start=
-   "auto"``) greedy-ce's within ``start_share`` of the time limit.
+   "auto"``) greedy-ce's: within ``start_share`` of the time limit up to
+   :data:`.start.GREEDY_TASKS` tasks, within all the time left beyond (:func:`_greedy_start`).
 2. **Bound**: the objective's closed form (:func:`bilevel_kit.bounds.objective_bound`, as
    ``cpsat`` and ``milp`` report with stations), or the given ``known_bound`` (makespan).
 3. **Sweeps**: the kits in a random order; from each kit (one *iteration*) the moves of
@@ -32,7 +33,8 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
 ``feasible``; ``bound`` the makespan's (closed form or given); with another objective
 ``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
 and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
-(``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``iterations``,
+(``stations``), ``start_method``, ``start_objective``, ``start_time_s``,
+``start_greedy_cut`` (greedy-ce's start stopped by its time, when it ran), ``iterations``,
 ``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves tried), ``hopeless`` (candidates
 rejected from their states, :mod:`.trail`), ``window_plans`` (rearrangements enumerated),
 ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
@@ -64,6 +66,7 @@ from ..cpsat.scaling import Scaled, scale_times, scaled_objective
 from .clock import Clock, dominated
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
+from .start import GREEDY_TASKS
 from .trail import Trail
 
 #: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
@@ -102,14 +105,8 @@ def station_search(
         plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
         if plan is not None:
             run.consider(plan, name)
-    share = options.start_share * budget.time_limit
-    if options.start == "auto" and share >= 0.5:
-        tl = min(share, stop_at.remaining())
-        plan, _ = best_heuristic_plan(
-            instance, ("greedy-ce",), seed=seed, time_limit=tl, objective=run.name
-        )
-        if plan is not None:
-            run.consider(plan, "greedy-ce")
+    if options.start == "auto":
+        _greedy_start(run, options.start_share, budget, stop_at, seed)
     extra.update(start_objective=run.real, start_time_s=budget.elapsed() - t0)
     if run.kits is None:
         extra["reason"] = "no start plan within the time limit"
@@ -121,6 +118,38 @@ def station_search(
     if not run.optimal():
         run.search(np.random.default_rng(seed), stop_at, options.iterations, options.stall)
     return run.finish(budget)
+
+
+def _greedy_start(
+    run: _Search, start_share: float, budget: Budget, stop_at: Budget, seed: int
+) -> None:
+    """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations): within
+    ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, where the
+    search from the quick plans beats it; beyond, within all the time left (the search takes
+    what it leaves), where its decisions gain more per second than the search's moves. No
+    time is kept back per task for its overrun (the warm start's rule): at scale that margin
+    exceeds the whole share, and greedy-ce checks its clock at every decision."""
+    from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
+
+    if run.instance.n_tasks <= GREEDY_TASKS:
+        share = start_share * budget.time_limit
+    else:
+        share = stop_at.remaining()
+    if share < 0.5:
+        return
+    extra: dict[str, Any] = {}
+    plan, _ = best_heuristic_plan(
+        run.instance,
+        ("greedy-ce",),
+        seed=seed,
+        time_limit=min(share, stop_at.remaining()),
+        objective=run.name,
+        rule=WarmRule(kernel_load_s=KERNEL_LOAD_S),
+        extra=extra,
+    )
+    run.extra["start_greedy_cut"] = bool(extra.get("warm_start_cut"))
+    if plan is not None:
+        run.consider(plan, "greedy-ce")
 
 
 @dataclass
