@@ -237,7 +237,7 @@ class _Search:
             return False
         assert self.kits is not None
         if self.trail is None or self.trail.kits is not self.kits:
-            self.trail = Trail(self.sc, self.kits, self.idle)
+            self.trail = Trail(self.sc, self.kits, self.idle, since=self.trail)
         if self.trail.hopeless(kits):
             self.counts["hopeless"] += 1
             return True

@@ -23,14 +23,25 @@ class Trail:
     """The incumbent ``kits`` and its state before each kit and after the last (``keys``:
     their vectors of :meth:`.clock.Clock.key`; ``idle``: the kit counts are part of them)."""
 
-    def __init__(self, sc: Scaled, kits: Kits, idle: bool) -> None:
+    def __init__(self, sc: Scaled, kits: Kits, idle: bool, since: Trail | None = None) -> None:
+        """``since``: an earlier incumbent's trail, whose states before the first kit that
+        differs are kept (an improvement changes a few kits; the prefix is most of the plan)."""
         self.sc, self.kits, self.idle = sc, kits, idle
-        clock = Clock.start(sc)
-        self.clocks = [clock.copy()]
-        for kit in kits:
+        self.clocks: list[Clock]
+        self.keys: list[tuple[int, ...]]
+        lo = 0
+        if since is not None:
+            old = since.kits
+            while lo < min(len(kits), len(old)) and kits[lo] == old[lo]:
+                lo += 1
+            self.clocks, self.keys = since.clocks[: lo + 1], since.keys[: lo + 1]
+        else:
+            self.clocks, self.keys = [Clock.start(sc)], [Clock.start(sc).key(sc, idle)]
+        clock = self.clocks[-1].copy()
+        for kit in kits[lo:]:
             clock.step(sc, kit)
             self.clocks.append(clock.copy())
-        self.keys = [c.key(sc, idle) for c in self.clocks]
+            self.keys.append(clock.key(sc, idle))
 
     def hopeless(self, kits: Kits) -> bool:
         """Whether ``kits``' objective is at least the incumbent's: its state is dominated by
