@@ -33,7 +33,7 @@ from bilevel_kit.experiments.kitbench.profiles import (  # noqa: E402
     render_profile_blocks,
 )
 from bilevel_kit.experiments.kitbench.run import result_rows, write_figures  # noqa: E402
-from bilevel_kit.experiments.kitbench.versus import render_versus_blocks  # noqa: E402
+from bilevel_kit.experiments.kitbench.versus import number, render_versus_blocks  # noqa: E402
 
 PAGES = (
     ROOT / "docs" / "kitbench.md",
@@ -63,10 +63,6 @@ def profiles(library: Library) -> list[Path]:
 def cells_of(rows: list[dict]) -> list[dict]:
     """The cell records a pass's committed rows were made from: what each solve found, without
     the gaps, which :func:`result_rows` computes again against the current records."""
-
-    def num(text: str) -> float | None:
-        return float(text) if text not in ("", None) else None
-
     return [
         {
             "instance": r["instance"],
@@ -74,8 +70,8 @@ def cells_of(rows: list[dict]) -> list[dict]:
             "method": r["method"],
             "status": r["status"],
             "makespan": r["makespan"],
-            "bound": num(r["bound"]),
-            "wall_time_s": num(r["wall_time_s"]),
+            "bound": number(r["bound"]),
+            "wall_time_s": number(r["wall_time_s"]),
             "valid": r["valid"],
             "error": r["error"] or None,
         }

@@ -6,7 +6,7 @@ python paper_repro/rerun.py [--only calibration,user_study,...] [--jobs 2] [--fr
 Steps, in order: calibration (the one calibration every other step reads: run it first, its
 CSVs are copied before the next step starts), user_study, fig6, fig6_cached (the same command
 again, every cell saved: what a rerun costs), fig6_r100, fig6_cpsat, horizon, adaptive,
-stations, robust, robust_sim.
+stations, robust, robust_kitbench, robust_sim.
 ``--fresh`` deletes a step's output folder first, so its time is a full rerun. Each step runs
 ``python -m bilevel_kit.cli repro ...`` in a subprocess; its wall time, the load average
 before and after and the date are written to results/timing.csv (one row per step, replaced
@@ -106,6 +106,11 @@ STEPS: dict[str, tuple[list[str], str, dict[str, str]]] = {
         ["robust"],
         "out/repro/robust",
         {"robust.csv": "robust.csv", "robust.png": "figures/robust.png"},
+    ),
+    "robust_kitbench": (
+        ["robust-kitbench"],
+        "out/repro/robust_kitbench",
+        {"robust_kitbench.csv": "robust_kitbench.csv"},
     ),
     "robust_sim": (["robust-sim"], "out/repro/robust_sim", {"robust_sim.csv": "robust_sim.csv"}),
 }

@@ -78,6 +78,12 @@ STUDIES: dict[str, tuple[str, str]] = {
         "Plans for the mean human times against sample-average plans for their spread, VSS and "
         "EVPI per cv and tray count (docs/robust.md).",
     ),
+    "robust-kitbench": (
+        "the robust study on KitBench records of up to 60 tasks (beyond the paper)",
+        "The robust study's cell (mean-value and SAA plans, VSS and EVPI) on every other "
+        "KitBench record of at most 60 tasks, each with its own tray count, at cv 0.5 "
+        "(docs/robust.md#kitbench-up-to-60-tasks).",
+    ),
     "robust-sim": (
         "the robust study's plans in the shop-floor simulation, online policies beside them",
         "The robust study's mean-value and SAA plans (recomputed, checked against robust.csv) "
@@ -322,6 +328,10 @@ def _run(args: argparse.Namespace) -> int:
         from ..repro.robust import run_robust
 
         return _report(run_robust(out, **run))
+    if args.experiment == "robust-kitbench":
+        from ..repro.robust_kitbench import run_robust_kitbench
+
+        return _report(run_robust_kitbench(out, **run))
     if args.experiment == "robust-sim":
         from ..repro.robust_sim import run_robust_sim, select_cells
 

@@ -14,6 +14,7 @@ from .fig6_stats import BETTER, WORSE
 from .fmt import f, yes
 from .horizon_tables import planning_markdown, typed_rows, window_markdown
 from .robust_facts import ROBUST_TABLES
+from .robust_kitbench_facts import ROBUST_KITBENCH_TABLES
 from .robust_sim import ROBUST_SIM_TABLES
 from .stations_tables import STATION_TABLES
 
@@ -224,6 +225,7 @@ SIM_TABLES: Tables = {
     "adaptive_shares": ("adaptive.csv", adaptive_shares_markdown),
     **STATION_TABLES,
     **ROBUST_TABLES,
+    **ROBUST_KITBENCH_TABLES,
     **ROBUST_SIM_TABLES,
     "timing": ("timing.csv", timing_markdown),
 }

@@ -132,12 +132,13 @@ def _plan(out: Any) -> Plan:
 
 
 def study_solves(
-    inst: Instance, cv: float, seed: int, scenarios: int = SCENARIOS
+    inst: Instance, cv: float, seed: int, scenarios: int = SCENARIOS, start: Plan | None = None
 ) -> tuple[Any, Any, np.ndarray]:
     """A cell's mean-value and SAA solves (module docstring, steps 1-2) and the SAA's
-    ``OPTIMISE`` scenarios; the SAA solve is hinted with the mean-value plan's task lists."""
+    ``OPTIMISE`` scenarios; the SAA solve is hinted with the mean-value plan's task lists, the
+    mean-value solve with ``start`` (e.g. a KitBench record's best-known plan), if given."""
     means = np.array([[t.human_mean for t in inst.tasks]])
-    mean_out = _solve(inst, means, DET_MEAN)
+    mean_out = _solve(inst, means, DET_MEAN, start=start)
     opt = sample(inst, scenarios, seed, cv=cv, stream=OPTIMISE)
     saa_out = _solve(inst, opt, DET_SAA, start=_plan(mean_out))
     return mean_out, saa_out, opt
@@ -146,8 +147,16 @@ def study_solves(
 def robust_cell(cell: RobustCell) -> dict[str, Any]:
     """The cell's plans and estimates (module docstring)."""
     t0 = time.process_time()
-    inst = study_instance(cell.instance, cell.trays)
-    mean_out, saa_out, opt = study_solves(inst, cell.cv, cell.seed, cell.scenarios)
+    return cell_estimates(cell, study_instance(cell.instance, cell.trays), t0)
+
+
+def cell_estimates(
+    cell: Any, inst: Instance, t0: float, start: Plan | None = None
+) -> dict[str, Any]:
+    """Steps 1-4 of the module docstring on ``inst`` for ``cell`` (a :class:`RobustCell` or a
+    dataclass with its fields, e.g. :mod:`.robust_kitbench`'s), the mean-value solve hinted
+    with ``start``; ``cpu_s`` counted from ``t0`` (:func:`time.process_time`)."""
+    mean_out, saa_out, opt = study_solves(inst, cell.cv, cell.seed, cell.scenarios, start)
     mean_plan, saa_plan = _plan(mean_out), _plan(saa_out)
     ev = sample(inst, cell.evaluation, cell.seed, cv=cell.cv, stream=EVALUATE)
     a, b = makespans(inst, mean_plan, ev), makespans(inst, saa_plan, ev)
@@ -340,7 +349,7 @@ def run_robust(
     ran = run_study_cells(
         cells, robust_cell, out, jobs=jobs, progress=progress, desc="robust cells"
     )
-    ran, retried = _rerun_cut(cells, ran, out, progress)
+    ran, retried = rerun_cut(cells, ran, out, progress)
     rows = rows_of(ran[0])
     files = _write_outputs(out, rows, quick)
     summary = study_summary(
@@ -358,12 +367,13 @@ def run_robust(
     return summary
 
 
-def _rerun_cut(
-    cells: Sequence[RobustCell], ran: Any, out: Path, progress: bool | None
+def rerun_cut(
+    cells: Sequence[Any], ran: Any, out: Path, progress: bool | None, fn: Any = robust_cell
 ) -> tuple[Any, list[str]]:
-    """The sweep ``ran`` with every cell whose safety net fired (its saved record included:
-    never reused as if reproducible) computed once more, alone (``jobs=1``: the least load
-    this run adds), and the keys of those cells. A cell cut again keeps its count."""
+    """The sweep ``ran`` of cell function ``fn`` with every cell whose safety net fired (its
+    saved record included: never reused as if reproducible) computed once more, alone
+    (``jobs=1``: the least load this run adds), and the keys of those cells. A cell cut again
+    keeps its count."""
     from ..experiments.cells import cell_file
     from .common import run_study_cells
 
@@ -375,7 +385,7 @@ def _rerun_cut(
     for c in again:
         cell_file(out / "cells", c.key()).unlink(missing_ok=True)
     ok2, failed2, computed2 = run_study_cells(
-        again, robust_cell, out, jobs=1, progress=progress, desc="robust cells cut, again"
+        again, fn, out, jobs=1, progress=progress, desc="robust cells cut, again"
     )
     by_key = {r["key"]: r for r in ok if r["key"] not in cut}
     by_key.update((r["key"], r) for r in ok2)

@@ -1,6 +1,6 @@
 """The robust study's sentences for docs/robust.md, computed from the committed ``robust.csv``
-(:mod:`.robust`), so that no verdict and no number in the page's prose is typed by hand
-(:mod:`.template`).
+(:mod:`.robust`) and, for the CVaR paragraph, ``bench/results/cvar.csv`` (bench/bench_cvar.py),
+so that no verdict and no number in the page's prose is typed by hand (:mod:`.template`).
 
 The verdicts follow the 95 % paired intervals of the VSS, never a threshold on its size: a
 cell whose interval lies above 0 is one where planning for the spread pays, one whose interval
@@ -12,8 +12,10 @@ weigh.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
+from ..experiments.tables import fill_blocks, marked_blocks, read_csv
 from .robust import SCENARIOS, detail_markdown, vss_markdown
 
 Row = Mapping[str, Any]
@@ -168,6 +170,89 @@ def solves_markdown(rows: Sequence[Row]) -> str:
     return " ".join(out)
 
 
+def _versus(low: float, high: float, what: str) -> str:
+    """The verdict of a paired interval of (CVaR plan - sample-average plan) on ``what``."""
+    if low > 0:
+        return f"the CVaR plan is worse on {what}"
+    if high < 0:
+        return f"the CVaR plan is better on {what}"
+    return f"no evidence of a difference on {what}"
+
+
+def _model(r: Row, p: str, name: str, what: str) -> str:
+    """What ``lns`` with one objective (column prefix ``p``) returned, against the mean-value
+    plan of its own mean-time step, on its in-sample objective ``what``."""
+    improved, proven = _yes(r[f"{p}_improved"]), r[f"{p}_status"] == "optimal"
+    if proven:
+        did = "proves its plan optimal" if improved else "proves the mean-value plan optimal"
+    else:
+        did = (
+            "improves on the mean-value plan, without a proof,"
+            if improved
+            else ("does not improve on the mean-value plan in the time left")
+        )
+    return (
+        f"the {name} model {did} on the {r['scenarios']} scenarios (in-sample {what} "
+        f"{float(r[f'{p}_objective']):.1f} s against the mean-value plan's "
+        f"{float(r[f'{p}_mean_value_plan_objective']):.1f} s)"
+    )
+
+
+def _cvar_sentence(r: Row) -> str:
+    """One time limit of ``bench/bench_cvar.py``: what each model returned, then both plans on
+    the evaluation scenarios, with the paired intervals' verdicts."""
+    f = {k: float(v) for k, v in r.items() if k.endswith(_NUMERIC)}
+    head = f"With `lns -t {f['time_limit']:g}` (load average {f['load']:.1f} on {r['cpus']} cores)"
+    level = f"CVaR({r['alpha']})"
+    models = (
+        f"{head}, {_model(r, 'cvar', 'CVaR', level)}; {_model(r, 'sa', 'sample-average', 'mean')}."
+    )
+    sa = f"{f['sa_eval_mean']:.1f} ± {f['sa_eval_half']:.1f} s"
+    if _yes(r["same_plan"]):
+        return (
+            f"{models} Both return the same plan: mean {sa} and {level} "
+            f"{f['sa_eval_cvar']:.1f} s on {r['evaluation']} independent evaluation scenarios."
+        )
+    if not _yes(r["sa_improved"]) and not _yes(r["cvar_improved"]):
+        models += (
+            " Neither improved on its own mean-time step's plan, so the plans differ as the two "
+            "mean-time `lns` runs did."
+        )
+    mean = _versus(f["diff_low"], f["diff_high"], "the mean")
+    tail = _versus(f["diff_cvar_low"], f["diff_cvar_high"], level)
+    return (
+        f"{models} On {r['evaluation']} independent evaluation scenarios the CVaR plan's mean "
+        f"is {f['cvar_eval_mean']:.1f} ± {f['cvar_eval_half']:.1f} s against the "
+        f"sample-average plan's {sa} (paired difference {f['diff_mean']:.1f} s, 95 % interval "
+        f"[{f['diff_low']:.1f}, {f['diff_high']:.1f}]: {mean}) and its {level} "
+        f"{f['cvar_eval_cvar']:.1f} s against {f['sa_eval_cvar']:.1f} s (paired bootstrap "
+        f"interval of the difference [{f['diff_cvar_low']:.1f}, {f['diff_cvar_high']:.1f}] s: "
+        f"{tail})."
+    )
+
+
+#: The columns of bench/results/cvar.csv read as numbers (by name or suffix).
+_NUMERIC: tuple[str, ...] = ("time_limit", "load", "_eval_mean", "_eval_half", "_eval_cvar")
+_NUMERIC += ("_objective", "diff_mean", "_low", "_high", "diff_cvar")
+
+
+def cvar_markdown(rows: Sequence[Row]) -> str:
+    """docs/robust.md's CVaR paragraph from ``bench/results/cvar.csv`` (bench/bench_cvar.py):
+    one sentence per time limit, then how many scenarios the tail rests on and, where the
+    CVaR plan did worse in the tail out of sample, why."""
+    out = [_cvar_sentence(r) for r in rows]
+    r = rows[0]
+    tail = round((1 - float(r["alpha"])) * int(r["scenarios"]))
+    overfit = [x for x in rows if not _yes(x["same_plan"]) and float(x["diff_cvar_low"]) > 0]
+    out.append(
+        f"With {r['scenarios']} scenarios CVaR({r['alpha']}) rests on the {tail} worst ones"
+        + (", and the CVaR plan fits them" if overfit else "")
+        + ": to plan for the tail, use many more scenarios than for the mean (at least ten in "
+        "the tail), and judge the plan on the evaluation sample."
+    )
+    return " ".join(out)
+
+
 #: Table name -> (its CSV file, its renderer), merged into :data:`.report_sim.SIM_TABLES`.
 ROBUST_TABLES = {
     "robust_vss": ("robust.csv", vss_markdown),
@@ -175,3 +260,16 @@ ROBUST_TABLES = {
     "robust_advice": ("robust.csv", advice_markdown),
     "robust_solves": ("robust.csv", solves_markdown),
 }
+
+#: docs/robust.md's CVaR paragraph: the block ``<!-- robust:cvar -->`` ...
+#: ``<!-- /robust:cvar -->``, rendered from bench/bench_cvar.py's CSV (outside the reproduction's
+#: rendered section: a benchmark's output, not a study's).
+CVAR_CSV, CVAR_PAGE = "bench/results/cvar.csv", "docs/robust.md"
+_BLOCK = marked_blocks("robust")
+
+
+def cvar_page(root: Path) -> tuple[str, str]:
+    """(docs/robust.md now, what it must be: its CVaR block rendered from the CSV)."""
+    now = (root / CVAR_PAGE).read_text()
+    body = cvar_markdown(read_csv(root / CVAR_CSV)) + "\n"
+    return now, fill_blocks(_BLOCK, now, lambda name: body if name == "cvar" else None)

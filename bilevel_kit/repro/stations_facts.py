@@ -66,17 +66,36 @@ def metric_facts(rows: Sequence[Row]) -> Facts:
         "stations.grid": ", ".join(str(s) for s in sorted({int(r["stations"]) for r in rows})),
     }
     out["stations.cell_s"] = f"{sum(float(r['wall_s']) for r in rows):,.0f}"
-    for policy in PLANNING:
-        ran = [x for x in LINES if any(r["line"] == x and r["policy"] == policy for r in rows)]
-        left = [x for x in LINES if x not in ran]
-        text = f"the {', '.join(ran) or 'no'} line{'s' if len(ran) != 1 else ''}"
-        out[f"stations.ran.{policy}"] = text + (f" (not yet: {', '.join(left)})" if left else "")
+    out["stations.ran"] = _planning_ran(rows)
     for line in LINES:
         fed = [float(r["throughput"]) for r in rows if r["line"] == line and r["delay"] != "none"]
         stock = [float(r["throughput"]) for r in rows if r["line"] == line and r["delay"] == "none"]
         out[f"stations.{line}.feeders_max"] = f"{max(fed):.1f}" if fed else "-"
         out[f"stations.{line}.stock_max"] = f"{max(stock):.1f}" if stock else "-"
     return out
+
+
+def _planning_ran(rows: Sequence[Mapping[str, str]]) -> str:
+    """Which lines the planning policies ran on: a committed CSV may hold a partial run (each
+    cell is computed alone), and the page must say so rather than imply every line."""
+    left = {
+        policy: [
+            x for x in LINES if not any(r["line"] == x and r["policy"] == policy for r in rows)
+        ]
+        for policy in PLANNING
+    }
+    if not any(left.values()):
+        return "cpsat-rolling and Optimized ran on every line"
+    parts = []
+    for policy in PLANNING:
+        ran = [x for x in LINES if x not in left[policy]]
+        text = f"{policy.replace('optimized', 'Optimized')} on the {', '.join(ran) or 'no'} line"
+        parts.append(
+            text
+            + ("s" if len(ran) != 1 else "")
+            + (f" (not yet: {', '.join(left[policy])})" if left[policy] else "")
+        )
+    return " and ".join(parts) + "; `bilevel-kit repro stations` computes the rest"
 
 
 def bound_facts() -> Facts:

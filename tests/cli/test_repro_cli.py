@@ -59,6 +59,7 @@ def test_each_study_lists_its_own_options_only(capsys):
         "adaptive": {"--reps", "--calibration"},
         "stations": {"--lines", "--stations", "--units", "--supply", "--reps"},
         "robust": set(),
+        "robust-kitbench": set(),
         "robust-sim": {"--reps", "--instances", "--trays", "--cvs"},
     }
     every = set().union(*own.values())

@@ -12,6 +12,13 @@ A comment on a command line steers the test:
 * ``# readme-test: skip REASON``: do not run it (it needs a file of the reader's own, ...);
 * ``# readme-test: exit=N``: it is shown failing on purpose and must exit with ``N``.
 
+**Quoted output.** A ``text`` block right after a command's block (blank lines between at
+most) is what the document says that command prints: each of its non-blank lines must appear,
+in order, among the lines the command printed (stdout, then stderr), its words a prefix of the
+printed line's (a document may trim a trailing column). Durations are not compared: numbers
+printed to the millisecond (``time 2.524 s``, a table's ``time (s)``) and a summary's ``in N
+s`` are masked on both sides. Checked only where the command ran as shown, not made fast.
+
 Otherwise a command must exit 0. What the test changes, and why:
 
 * **Not run, shell syntax and named paths checked only**: creating a virtual environment or
@@ -83,6 +90,7 @@ class Command:
     kind: str  # "bash" or "python"
     expected: int = 0
     skip: str | None = None
+    output: str | None = None  # the quoted output right after its block (module docstring)
 
     @property
     def id(self) -> str:
@@ -130,17 +138,29 @@ def commands(document: str) -> list[Command]:
     return commands_in((ROOT / document).read_text(encoding="utf-8"), document)
 
 
+def _quoted_after(text: str, blocks: list[tuple[str, int, list[str]]], i: int) -> str | None:
+    """The ``text`` block right after block ``i`` (blank lines between at most), if any."""
+    if i + 1 >= len(blocks) or blocks[i + 1][0] != "text":
+        return None
+    _, start, lines = blocks[i]
+    between = text.splitlines()[start + len(lines) : blocks[i + 1][1] - 2]
+    return "\n".join(blocks[i + 1][2]) if not any(s.strip() for s in between) else None
+
+
 def commands_in(text: str, document: str) -> list[Command]:
-    out = []
-    for lang, start, lines in _blocks(text):
+    out: list[Command] = []
+    blocks = _blocks(text)
+    for i, (lang, start, lines) in enumerate(blocks):
+        quoted = _quoted_after(text, blocks, i)
         if lang == "python":
             markers = [_marked(line) for line in lines if "readme-test:" in line]
             expected, skip = markers[0] if markers else (0, None)
-            out.append(Command(document, start, "\n".join(lines), "python", expected, skip))
+            shown = "\n".join(lines)
+            out.append(Command(document, start, shown, "python", expected, skip, quoted))
             continue
         if lang not in SHELL_BLOCKS:
             continue
-        pending, first = "", start
+        pending, first, block_start = "", start, len(out)
         for n, raw in enumerate(lines, start):
             code, comment = _strip_comment(raw)
             if not pending:
@@ -153,7 +173,39 @@ def commands_in(text: str, document: str) -> list[Command]:
             if shown:
                 expected, skip = _marked(comment)
                 out.append(Command(document, first, shown, "bash", expected, skip))
+        if quoted is not None and len(out) > block_start:  # the block's last command prints it
+            last = out[-1]
+            out[-1] = Command(
+                *[getattr(last, f) for f in ("document", "line", "shown", "kind")],
+                last.expected,
+                last.skip,
+                quoted,
+            )
     return out
+
+
+#: Durations, not compared (module docstring): a number to the millisecond, a summary's "in N s".
+DURATION = re.compile(r"\b\d+\.\d{3}\b|(?<=\bin )\d+(?:\.\d+)?(?= s\b)")
+
+
+def _words(line: str) -> list[str]:
+    return DURATION.sub("#", line).split()
+
+
+def missing_output(quoted: str, printed: str) -> list[str]:
+    """The quoted lines not found, in order, in what a command printed (module docstring)."""
+    lines = [_words(line) for line in printed.splitlines()]
+    at, missing = 0, []
+    for shown in quoted.splitlines():
+        want = _words(shown)
+        if not want:
+            continue
+        hit = next((k for k in range(at, len(lines)) if lines[k][: len(want)] == want), None)
+        if hit is None:
+            missing.append(shown)
+        else:
+            at = hit + 1
+    return missing
 
 
 ALL = [c for d in DOCUMENTS for c in commands(d)]
@@ -303,6 +355,30 @@ def test_parsing_and_substitution_rules() -> None:
     parse_only(parsed[0])
     with pytest.raises(pytest.fail.Exception, match="the CLI rejects"):
         parse_only("bilevel-kit repro fig6 --no-such-option")
+    # the text block after the bash block is its last command's quoted output
+    assert chain.output == "not a command"
+    assert {solve.output, pack.output, check.output, compare.output} == {None}
+
+
+def test_quoted_output_is_compared_in_order_with_durations_masked() -> None:
+    printed = "\n".join(
+        [
+            "note: compiling (first run)",
+            "x: greedy-ce feasible  makespan 223.00 s  time 2.524 s",
+            "a  b     time (s)  file",
+            "1  2.00  0.005     i.json",
+            "done: 1 cell in 10.9 s",
+        ]
+    )
+    ok = "x: greedy-ce feasible  makespan 223.00 s  time 9.999 s\na  b  time (s)\n1  2.00  3.141"
+    assert missing_output(ok + "\ndone: 1 cell in 3 s", printed) == []
+    assert missing_output("x: greedy-ce feasible  makespan 224.00 s", printed) == [
+        "x: greedy-ce feasible  makespan 224.00 s"
+    ]
+    # in order: a line quoted before one it follows is missing
+    assert missing_output("1  2.00\na  b", printed) == ["a  b"]
+    # a two-decimal number is a result, not a duration
+    assert missing_output("1  2.01", printed) == ["1  2.01"]
 
 
 @pytest.mark.slow
@@ -348,3 +424,11 @@ def test_command_runs(command: Command, workdirs: dict[str, Path]) -> None:
         f"{command.id}: exit {done.returncode}, expected {command.expected}\n"
         f"{report}\nstderr: {done.stderr[-3000:]}"
     )
+    as_shown = command.kind == "python" or line == command.shown
+    if command.output is not None and as_shown:
+        missing = missing_output(command.output, done.stdout + "\n" + done.stderr)
+        assert not missing, (
+            f"{command.id}: the document's quoted output is not what the command prints; "
+            f"lines not found (in order): {missing}\nstdout: {done.stdout[-3000:]}\n"
+            f"stderr: {done.stderr[-2000:]}"
+        )

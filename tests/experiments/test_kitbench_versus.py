@@ -15,6 +15,7 @@ from bilevel_kit.experiments.kitbench import Library
 from bilevel_kit.experiments.kitbench.profiles import read_rows
 from bilevel_kit.experiments.kitbench.versus import (
     excess,
+    number,
     render_versus_blocks,
     run_text,
     versus_blocks_in,
@@ -59,6 +60,12 @@ def test_excess_is_relative_to_the_reference_and_no_plan_is_infinite() -> None:
     assert excess(495.0, 500.0) == pytest.approx(-0.01, rel=1e-9)
     assert excess(None, 500.0) == math.inf
     assert excess(70.0, None) is None
+
+
+def test_number_reads_a_csv_field_and_an_empty_one_is_none() -> None:
+    """The one parser of the rows' and cells' numbers (bench/kitbench_docs.py's cells too)."""
+    assert number("995.5") == 995.5 and number(7) == 7.0 and number("0") == 0.0
+    assert number("") is None and number(None) is None
 
 
 def test_rows_and_summary_count_the_goal_with_misses_worst_first() -> None:

@@ -104,23 +104,32 @@ def test_lns_refuses_what_it_does_not_model_with_stations(root, option, value):
 
 
 @pytest.mark.parametrize(("seed", "n_stations", "trays"), CASES)
-def test_window_clock_follows_the_scaled_timeline(seed, n_stations, trays):
-    """The exact windows' end state (bilevel_kit/models/lns/clock.py) after every prefix of
-    single-task's plan has the arrival and station ends of the scaled timeline."""
-    from bilevel_kit.models.cpsat.scaling import scale_times, stations_timeline
-    from bilevel_kit.models.lns.clock import Clock
+def test_window_clock_follows_the_evaluator(seed, n_stations, trays):
+    """The exact windows' end state (the stepping ``Clock``) after every prefix of
+    single-task's plan is the evaluator's: the last arrival, each station's human end, the
+    human starts of its last ``T`` kits and its kit count, on the integer times."""
+    from bilevel_kit.models.cpsat.scaling import Clock, scale_times
 
     inst = from_dict(instance_doc(seed, n_stations, trays))
     sc = scale_times(inst, 0.1, True)
-    idx = inst.index
-    kits = [[idx[t] for t in k.tasks] for k in solve(inst, "single-task").plan.kits]
+    # on an exact grid every evaluated time is a whole number of steps up to the float error
+    # of a few sums (~1e-12 steps); 1e-6 steps is far below the 1-step difference of an error
+    assert sc.exact
+    step = pytest.approx
+    plan = solve(inst, "single-task").plan
+    tl = evaluate(inst, plan)
+    ids, idx = list(inst.station_ids), inst.index
     clock = Clock.start(sc)
-    for k, kit in enumerate(kits):
-        clock.step(sc, kit)
-        times, done = stations_timeline(sc, kits[: k + 1])
-        assert clock.arrive == times[-1][1]
-        assert {s: clock.done[s] for s in done} == done
-        assert sum(clock.kits) == k + 1
+    for k, kit in enumerate(plan.kits):
+        clock.step(sc, [idx[t] for t in kit.tasks])
+        s = ids.index(tl.kit_stations[k])
+        stations = tl.kit_stations[: k + 1]
+        mine = [kt for kt, st in zip(tl.kits, stations, strict=False) if st == ids[s]]
+        assert clock.arrive == step(tl.kits[k].arrive / sc.res, abs=1e-6)
+        assert clock.done[s] == step(mine[-1].human_end / sc.res, abs=1e-6)
+        kept = mine if trays is None else mine[-trays:]
+        assert clock.starts[s] == step([kt.human_start / sc.res for kt in kept], abs=1e-6)
+        assert clock.kits[s] == len(mine) and sum(clock.kits) == k + 1
 
 
 def test_cli_refuses_a_scenario_objective_with_stations_in_one_line(root, capsys):

@@ -3,10 +3,19 @@ VSS intervals, on the committed CSV and on rows made to take each branch."""
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
 from typing import Any
 
 from bilevel_kit.repro.report import read_rows
-from bilevel_kit.repro.robust_facts import advice_markdown, solves_markdown
+from bilevel_kit.repro.robust_facts import (
+    CVAR_CSV,
+    CVAR_PAGE,
+    advice_markdown,
+    cvar_markdown,
+    cvar_page,
+    solves_markdown,
+)
 from bilevel_kit.repro.template import ROOT
 
 CSV = ROOT / "paper_repro" / "results" / "robust.csv"
@@ -77,3 +86,51 @@ def test_a_worse_cell_a_cut_cell_and_an_unproven_zero_are_named() -> None:
         "with 1 tray at CV 0.1): those rows are not a pure function"
     )
     assert "in 1 of them without a proof: zero there is not evidence" in solves
+
+
+def _cvar_row(**kw: Any) -> dict[str, Any]:
+    """A bench/results/cvar.csv row (bench/bench_cvar.py): both models improved, unproven."""
+    row: dict[str, Any] = {"time_limit": 30.0, "load": 3.04, "cpus": 2, "alpha": 0.9}
+    row |= {"scenarios": 20, "evaluation": 1000, "same_plan": "False"}
+    for p, obj in (("sa", 440.0), ("cvar", 480.0)):
+        row |= {f"{p}_status": "feasible", f"{p}_objective": obj, f"{p}_improved": "True"}
+        row |= {f"{p}_mean_value_plan_objective": obj + 5, f"{p}_eval_half": 1.8}
+    row |= {"sa_eval_mean": 441.6, "sa_eval_cvar": 495.6, "cvar_eval_mean": 444.3}
+    row |= {"cvar_eval_cvar": 497.8, "diff_mean": 2.7, "diff_low": 2.1, "diff_high": 3.3}
+    return row | {"diff_cvar": 2.2, "diff_cvar_low": 0.8, "diff_cvar_high": 3.7} | kw
+
+
+def test_the_cvar_verdicts_follow_the_intervals() -> None:
+    text = cvar_markdown([_cvar_row(cvar_status="optimal")])
+    assert text.startswith(
+        "With `lns -t 30` (load average 3.0 on 2 cores), the CVaR model proves its plan optimal "
+        "on the 20 scenarios (in-sample CVaR(0.9) 480.0 s against the mean-value plan's 485.0 s)"
+        "; the sample-average model improves on the mean-value plan, without a proof, on the 20"
+    )
+    assert (
+        "(paired difference 2.7 s, 95 % interval [2.1, 3.3]: the CVaR plan is worse on the " in text
+    )
+    assert "[0.8, 3.7] s: the CVaR plan is worse on CVaR(0.9))." in text
+    assert "rests on the 2 worst ones, and the CVaR plan fits them:" in text
+    meets = cvar_markdown([_cvar_row(diff_cvar_low=-0.5, diff_low=-1.0)])
+    assert "no evidence of a difference on the mean" in meets and "fits them" not in meets
+    assert "no evidence of a difference on CVaR(0.9)" in meets
+    same = cvar_markdown([_cvar_row(same_plan="True", sa_improved="False")])
+    assert "Both return the same plan: mean 441.6 ± 1.8 s and CVaR(0.9) 495.6 s" in same
+    assert "the sample-average model does not improve on the mean-value plan" in same
+
+
+def test_the_cvar_paragraph_is_rendered_from_the_csv(tmp_path: Path) -> None:
+    now, want = cvar_page(ROOT)
+    assert now == want, "docs/robust.md's CVaR block: run python bench/bench_cvar.py --render"
+    assert "<!-- robust:cvar -->\nWith `lns -t 30`" in now
+    for rel in (CVAR_CSV, CVAR_PAGE):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(ROOT / rel, tmp_path / rel)
+    csv = tmp_path / CVAR_CSV
+    head, first, *rest = csv.read_text().splitlines()
+    cells = first.split(",")
+    cells[head.split(",").index("sa_eval_mean")] = "123.45"
+    csv.write_text("\n".join([head, ",".join(cells), *rest]) + "\n")
+    now, want = cvar_page(tmp_path)
+    assert now != want and "123.5 ±" in want

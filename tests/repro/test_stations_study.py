@@ -12,6 +12,7 @@ from bilevel_kit.methods import solve
 from bilevel_kit.repro.common import paper_idle
 from bilevel_kit.repro.stations import (
     LINES,
+    PLANNING,
     capacity_bound,
     line_instance,
     products_per_unit,
@@ -215,3 +216,16 @@ def test_lines_sharing_an_instance_give_identical_rows(tmp_path) -> None:
     cpsat = next(r for r in rows["table"] if r["policy"] == "cpsat-rolling")
     # seeds 0 and 1: 792.2, 723.2 s; idle the reproduction's, then from the first kit
     assert (cpsat["throughput"], cpsat["idle"], cpsat["idle_steady"]) == (9.52, 14.81, 6.25)
+
+
+def test_the_page_says_which_lines_the_planning_policies_ran_on() -> None:
+    """A partial run is named as such, a full one says every line (docs/stations.md)."""
+    from bilevel_kit.repro.stations_facts import _planning_ran
+
+    full = [{"line": x, "policy": p} for x in LINES for p in PLANNING]
+    assert _planning_ran(full) == "cpsat-rolling and Optimized ran on every line"
+    partial = [r for r in full if not (r["policy"] == "cpsat-rolling" and r["line"] == "mix")]
+    assert _planning_ran(partial) == (
+        "cpsat-rolling on the table, stool, chair lines (not yet: mix) and Optimized on the "
+        "table, stool, chair, mix lines; `bilevel-kit repro stations` computes the rest"
+    )

@@ -31,7 +31,9 @@ GOAL = 0.001
 _EPS = 1e-12
 
 
-def _num(value: Any) -> float | None:
+def number(value: Any) -> float | None:
+    """A number of a pass's rows or cells: ``None`` when empty (no bound, no time), as the
+    CSV writes it."""
     return None if value in (None, "") else float(value)
 
 
@@ -53,7 +55,7 @@ def versus_rows(
     for name in dict.fromkeys(r["instance"] for r in rows):
         ref = plan_makespan(cells.get((name, reference)))
         mine = [cells.get((name, m)) for m in (reference, *methods)]
-        bounds = [b for c in mine if c is not None and (b := _num(c.get("bound"))) is not None]
+        bounds = [b for c in mine if c is not None and (b := number(c.get("bound"))) is not None]
         row: dict[str, Any] = {
             "instance": name,
             "tasks": int(next(c for c in mine if c is not None)["tasks"]),
@@ -64,7 +66,7 @@ def versus_rows(
             cell = cells.get((name, m))
             row[m] = plan_makespan(cell)
             row[f"{m}_status"] = cell["status"] if cell is not None else None
-            row[f"{m}_bound"] = _num(cell.get("bound")) if cell is not None else None
+            row[f"{m}_bound"] = number(cell.get("bound")) if cell is not None else None
             row[f"{m}_excess"] = excess(row[m], ref)
         out.append(row)
     return out

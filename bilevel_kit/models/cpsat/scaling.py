@@ -137,77 +137,113 @@ def pick_end(sc: Scaled, start: int, kit: Sequence[int]) -> int:
     return end
 
 
+@dataclass
+class Clock:
+    """The timeline's state after a run of kits (docs/timeline.md#several-stations; one
+    station is station 0 with the instance's ``d``, ``o_H`` and trays), and the only place its
+    per-kit recursion is written: ``arrive`` the last arrival; per station index ``done`` (its
+    human's end), ``starts`` (the human starts of its kits, oldest first, only the last ``T_s``
+    kept: no later time depends on the others) and ``kits`` (its used kits). The timelines
+    below step it from the start; lns's exact windows step it from a prefix's end
+    (bilevel_kit/models/lns/clock.py)."""
+
+    arrive: int
+    done: list[int]
+    starts: list[list[int]]
+    kits: list[int]
+
+    @classmethod
+    def start(cls, sc: Scaled) -> Clock:
+        n = max(1, len(sc.st_d))
+        return cls(0, [0] * n, [[] for _ in range(n)], [0] * n)
+
+    def copy(self) -> Clock:
+        return Clock(self.arrive, list(self.done), [list(s) for s in self.starts], list(self.kits))
+
+    def step(self, sc: Scaled, kit: Sequence[int]) -> tuple[int, int, int]:
+        """Deliver ``kit`` (task indices) after the kits so far; its robot start, arrival and
+        human end. An empty kit (a model's unused position) is the least solution of that
+        model's constraints on it: with one station a kit of no duration that still waits for
+        a tray (:meth:`_unused`), with several stations nothing at all (start, arrival and end
+        the previous arrival)."""
+        if not kit:
+            return self._unused(sc)
+        if sc.station:
+            s = sc.station[kit[0]]
+            d, o_h, trays = sc.st_d[s], sc.st_oh[s], sc.st_trays[s]
+        else:  # one station: the instance's own
+            s, d, o_h, trays = 0, sc.d, sc.o_h, sc.trays
+        mine = self.starts[s]
+        start = self.arrive
+        if trays is not None and len(mine) >= trays:  # its T_s-th previous kit's tray is back
+            start = max(start, mine[-trays] + o_h)
+        self.arrive = pick_end(sc, start, kit) + d
+        human_start = max(self.arrive, self.done[s])
+        mine.append(human_start)
+        if trays is not None and len(mine) > trays:
+            del mine[0]
+        self.done[s] = human_start + o_h + sum(sc.h[i] for i in kit)
+        self.kits[s] += 1
+        return start, self.arrive, self.done[s]
+
+    def _unused(self, sc: Scaled) -> tuple[int, int, int]:
+        """An empty position. One station: it takes a tray back (without ``o_H``: no parts to
+        take off), arrives when it starts, and its human start joins the tray window, as the
+        one-station model's unused positions do (:mod:`.model`)."""
+        if sc.station:
+            return self.arrive, self.arrive, self.arrive
+        mine, trays = self.starts[0], sc.trays
+        if trays is not None and len(mine) >= trays:
+            self.arrive = max(self.arrive, mine[-trays])
+        self.done[0] = max(self.arrive, self.done[0])
+        mine.append(self.done[0])
+        if trays is not None and len(mine) > trays:
+            del mine[0]
+        return self.arrive, self.arrive, self.done[0]
+
+
+def clock_after(sc: Scaled, kits: Sequence[Sequence[int]]) -> Clock:
+    """The :class:`Clock` after ``kits`` from the start."""
+    clock = Clock.start(sc)
+    for kit in kits:
+        clock.step(sc, kit)
+    return clock
+
+
 def scaled_timeline(sc: Scaled, kits: Sequence[Sequence[int]]) -> list[tuple[int, int, int]]:
     """Robot start, arrival and human end of every kit position on scaled times, with the tray
-    rule (docs/timeline.md); empty kits (unused trailing positions) take no time and need no
-    tray, which is exactly the least solution of the model's constraints on them. Several
-    stations: :func:`stations_timeline`."""
-    if sc.station:
-        return stations_timeline(sc, kits)[0]
-    out: list[tuple[int, int, int]] = []
-    hs: list[int] = []  # human starts
-    arrive = end = 0
-    for k, kit in enumerate(kits):
-        used = bool(kit)
-        start = arrive
-        if sc.trays is not None and k >= sc.trays:
-            start = max(start, hs[k - sc.trays] + sc.o_h * used)
-        arrive = pick_end(sc, start, kit) + sc.d if used else start
-        hk = sc.o_h + sum(sc.h[i] for i in kit) if used else 0
-        hs.append(max(arrive, end))
-        end = hs[-1] + hk
-        out.append((start, arrive, end))
-    return out
+    and station rules (docs/timeline.md); empty kits as :meth:`Clock.step` says."""
+    clock = Clock.start(sc)
+    return [clock.step(sc, kit) for kit in kits]
 
 
 def stations_timeline(
     sc: Scaled, kits: Sequence[Sequence[int]]
 ) -> tuple[list[tuple[int, int, int]], dict[int, int]]:
     """:func:`scaled_timeline` with several stations (docs/timeline.md#several-stations; a
-    kit's station is its tasks'), and each station's completion (the end of its last kit).
-    An unused position takes no time: its start, arrival and end are the previous arrival,
-    the least solution of the model's constraints on it."""
-    out: list[tuple[int, int, int]] = []
-    starts: dict[int, list[int]] = {}  # each station's human starts
-    done: dict[int, int] = {}  # each station's last end
-    arrive = 0
-    for kit in kits:
-        if not kit:
-            out.append((arrive, arrive, arrive))
-            continue
-        s = sc.station[kit[0]]
-        mine = starts.setdefault(s, [])
-        start, trays = arrive, sc.st_trays[s]
-        if trays is not None and len(mine) >= trays:  # its T_s-th previous kit's tray is back
-            start = max(start, mine[-trays] + sc.st_oh[s])
-        arrive = pick_end(sc, start, kit) + sc.st_d[s]
-        mine.append(max(arrive, done.get(s, 0)))
-        done[s] = mine[-1] + sc.st_oh[s] + sum(sc.h[i] for i in kit)
-        out.append((start, arrive, done[s]))
-    return out, done
+    kit's station is its tasks'), and the completion of each station with kits (the end of
+    its last kit)."""
+    clock = Clock.start(sc)
+    rows = [clock.step(sc, kit) for kit in kits]
+    return rows, {s: done for s, done in enumerate(clock.done) if clock.kits[s]}
 
 
 def scaled_makespan(sc: Scaled, kits: Sequence[Sequence[int]]) -> int:
-    """The timeline of docs/timeline.md on scaled integer times (kits of task indices)."""
-    if sc.station:
-        return max(stations_timeline(sc, kits)[1].values(), default=0)
-    tl = scaled_timeline(sc, kits)
-    return tl[-1][2] if tl else 0
+    """The timeline of docs/timeline.md on scaled integer times (kits of task indices): the
+    latest station's human end (0 for no kits)."""
+    return max(clock_after(sc, kits).done)
 
 
 def scaled_objective(sc: Scaled, kits: Sequence[Sequence[int]], objective: str) -> int:
     """Scaled objective of a plan, as the model minimises it (the registry's
     :meth:`~bilevel_kit.objectives.Objective.expression`: the human idle without its
     constant -sum h)."""
+    clock = clock_after(sc, kits)
     if sc.station:
-        done = stations_timeline(sc, kits)[1]
-        overhead = sum(sc.st_oh[sc.station[k[0]]] for k in kits if k)
-        terms = ModelTerms(
-            max(done.values(), default=0), lambda: sum(done.values()), lambda: overhead
-        )
-        return get_objective(objective).expression(terms)
-    c = scaled_makespan(sc, kits)
-    terms = ModelTerms.one_station(c, lambda: sc.o_h * len(kits))
+        overhead = sum(o_h * n for o_h, n in zip(sc.st_oh, clock.kits, strict=True))
+        terms = ModelTerms(max(clock.done), lambda: sum(clock.done), lambda: overhead)
+    else:  # (every position, as the one-station model counts them)
+        terms = ModelTerms.one_station(clock.done[0], lambda: sc.o_h * len(kits))
     return get_objective(objective).expression(terms)
 
 

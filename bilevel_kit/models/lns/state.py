@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from ..cpsat.scaling import Scaled, scaled_timeline
+from ..cpsat.scaling import Scaled, clock_after
 
 #: A max-plus linear form: state variable -> constant (the form is max_v (v + c_v)).
 Form = dict[str, int]
@@ -77,11 +77,8 @@ class Edge:
 
 
 def window_edge(sc: Scaled, kits: Sequence[Sequence[int]], k0: int) -> Edge:
-    """The :class:`Edge` of a window starting at kit ``k0`` of ``kits``."""
-    if k0 == 0:
-        return Edge(0, 0, ())
-    tl = scaled_timeline(sc, kits[:k0])
-    starts = tuple(e - kit_times(sc, k)[1] for (_, _, e), k in zip(tl, kits[:k0], strict=True))
-    trays = sc.trays
-    keep = starts if trays is None else starts[-trays:]
-    return Edge(tl[-1][1], tl[-1][2], keep if trays is not None else ())
+    """The :class:`Edge` of a window starting at kit ``k0`` of ``kits`` (one station): the
+    :class:`~..cpsat.scaling.Clock` after the kits before it."""
+    clock = clock_after(sc, kits[:k0])
+    starts = tuple(clock.starts[0]) if sc.trays is not None else ()
+    return Edge(clock.arrive, clock.done[0], starts)

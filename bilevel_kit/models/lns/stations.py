@@ -62,8 +62,8 @@ from ...objectives import ModelTerms
 from ...objectives import get as get_objective
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
-from ..cpsat.scaling import Scaled, scale_times, scaled_objective
-from .clock import Clock, dominated
+from ..cpsat.scaling import Clock, Scaled, clock_after, scale_times, scaled_objective
+from .clock import dominated, end_key
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
 from .start import GREEDY_TASKS
@@ -376,9 +376,7 @@ class _Search:
         freed = [i for k in self.kits[k0:k1] for i in k]
         groups = [[i for i in freed if self.station[i] == s] for s in dict.fromkeys(self.station)]
         before, after = self.kits[:k0], self.kits[k1:]
-        base = Clock.start(self.sc)
-        for kit in before:
-            base.step(self.sc, kit)
+        base = clock_after(self.sc, before)
         incumbent = self._end_key(base, self.kits[k0:k1])
         kept: dict[tuple[int, ...], Kits] = {}  # the rearrangements of no dominated end state
         enumerated = 0  # (none when a kit of the window no longer passes its probe)
@@ -408,7 +406,7 @@ class _Search:
         clock = base.copy()
         for kit in middle:
             clock.step(self.sc, kit)
-        return clock.key(self.sc, self.idle)
+        return end_key(self.sc, clock, self.idle)
 
     # -- the result -----------------------------------------------------------------------------
     def finish(self, budget: Budget) -> MethodOutput:

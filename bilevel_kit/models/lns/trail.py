@@ -1,27 +1,27 @@
 r"""The incumbent's end state after each of its kits, with several stations: what lets the
-search of :mod:`.stations` reject most candidates without timing the whole plan
+search of :mod:`.stations` reject candidates without timing the whole plan
 (docs/stations.md#lns-with-several-stations).
 
 A candidate differs from the incumbent in a run of kits and shares the rest: the same kits
 before (the incumbent's state there is the candidate's too) and the same kits after. Stepped
-(:class:`.clock.Clock`) over its own run, then along the shared kits after it, the candidate's
-state is compared with the incumbent's at the same place of those shared kits: once it is at
-least the incumbent's everywhere (:func:`.clock.dominated`), the rest of the timeline cannot
-make the candidate's objective lower than the incumbent's (the timeline is max-plus, the
-argument of :mod:`.clock`), so it is *hopeless*. At 1,800 tasks a candidate's full timing is
-about 1,800 steps; a hopeless one usually shows it within a few kits after its run.
+(:class:`..cpsat.scaling.Clock`) over its own run, then along the shared kits after it, the
+candidate's state is compared with the incumbent's at the same place of those shared kits:
+once it is at least the incumbent's everywhere (:func:`.clock.dominated`), the rest of the
+timeline cannot make the candidate's objective lower than the incumbent's (the timeline is
+max-plus, the argument of :mod:`.clock`), so it is *hopeless*. A full timing steps every kit
+of the plan; a hopeless candidate often shows it within a few kits after its run.
 """
 
 from __future__ import annotations
 
-from ..cpsat.scaling import Scaled
-from .clock import Clock, dominated
+from ..cpsat.scaling import Clock, Scaled
+from .clock import dominated, end_key
 from .enumerate import Kits
 
 
 class Trail:
     """The incumbent ``kits`` and its state before each kit and after the last (``keys``:
-    their vectors of :meth:`.clock.Clock.key`; ``idle``: the kit counts are part of them)."""
+    their vectors of :func:`.clock.end_key`; ``idle``: the kit counts are part of them)."""
 
     def __init__(self, sc: Scaled, kits: Kits, idle: bool, since: Trail | None = None) -> None:
         """``since``: an earlier incumbent's trail, whose states before the first kit that
@@ -36,12 +36,12 @@ class Trail:
                 lo += 1
             self.clocks, self.keys = since.clocks[: lo + 1], since.keys[: lo + 1]
         else:
-            self.clocks, self.keys = [Clock.start(sc)], [Clock.start(sc).key(sc, idle)]
+            self.clocks, self.keys = [Clock.start(sc)], [end_key(sc, Clock.start(sc), idle)]
         clock = self.clocks[-1].copy()
         for kit in kits[lo:]:
             clock.step(sc, kit)
             self.clocks.append(clock.copy())
-            self.keys.append(clock.key(sc, idle))
+            self.keys.append(end_key(sc, clock, idle))
 
     def hopeless(self, kits: Kits) -> bool:
         """Whether ``kits``' objective is at least the incumbent's: its state is dominated by
@@ -59,7 +59,7 @@ class Trail:
         for kit in kits[lo : n - tail]:
             clock.step(self.sc, kit)
         for j in range(m - tail, m + 1):  # the incumbent's place of the same shared kits
-            if dominated(clock.key(self.sc, self.idle), self.keys[j]):
+            if dominated(end_key(self.sc, clock, self.idle), self.keys[j]):
                 return True
             if j < m:
                 clock.step(self.sc, inc[j])
