@@ -126,23 +126,27 @@ def _greedy_start(
     """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations): within
     ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, where the
     search from the quick plans beats it; beyond, within all the time left (the search takes
-    what it leaves), where its decisions gain more per second than the search's moves. No
-    time is kept back per task for its overrun (the warm start's rule): at scale that margin
-    exceeds the whole share, and greedy-ce checks its clock at every decision."""
+    what it leaves), where its decisions gain more per second than the search's moves. There
+    it runs up to :data:`.method.MARGIN_S` before the limit, not to the search's margin (which
+    keeps a share of the limit for the oracle's final layouts: every start plan carries its
+    own), so that it gets about the time greedy-ce alone gets. No time is kept back per task
+    for its overrun (the warm start's rule): at scale that margin exceeds the whole share,
+    and greedy-ce checks its clock at every decision."""
     from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
+    from .method import MARGIN_S
 
     if run.instance.n_tasks <= GREEDY_TASKS:
-        share = start_share * budget.time_limit
+        limit = min(start_share * budget.time_limit, stop_at.remaining())
     else:
-        share = stop_at.remaining()
-    if share < 0.5:
+        limit = budget.remaining() - MARGIN_S
+    if limit < 0.5:
         return
     extra: dict[str, Any] = {}
     plan, _ = best_heuristic_plan(
         run.instance,
         ("greedy-ce",),
         seed=seed,
-        time_limit=min(share, stop_at.remaining()),
+        time_limit=limit,
         objective=run.name,
         rule=WarmRule(kernel_load_s=KERNEL_LOAD_S),
         extra=extra,
