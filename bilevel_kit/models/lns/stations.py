@@ -92,8 +92,10 @@ def station_search(
     seed: int,
     start_plan: Plan | None,
     known_bound: float | None,
+    greedy_at: Budget,
 ) -> MethodOutput:
-    """The module docstring's search for ``options.objective`` (a modelled objective)."""
+    """The module docstring's search for ``options.objective`` (a modelled objective);
+    ``greedy_at`` the deadline of greedy-ce's start at scale (:func:`_greedy_start`)."""
     from ..exact.warm import best_heuristic_plan
 
     extra: dict[str, Any] = {"search": "stations"}
@@ -106,7 +108,7 @@ def station_search(
         if plan is not None:
             run.consider(plan, name)
     if options.start == "auto":
-        _greedy_start(run, options.start_share, budget, stop_at, seed)
+        _greedy_start(run, options.start_share, budget, stop_at, greedy_at, seed)
     extra.update(start_objective=run.real, start_time_s=budget.elapsed() - t0)
     if run.kits is None:
         extra["reason"] = "no start plan within the time limit"
@@ -121,24 +123,28 @@ def station_search(
 
 
 def _greedy_start(
-    run: _Search, start_share: float, budget: Budget, stop_at: Budget, seed: int
+    run: _Search,
+    start_share: float,
+    budget: Budget,
+    stop_at: Budget,
+    greedy_at: Budget,
+    seed: int,
 ) -> None:
     """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations): within
     ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, where the
     search from the quick plans beats it; beyond, within all the time left (the search takes
     what it leaves), where its decisions gain more per second than the search's moves. There
-    it runs up to :data:`.method.MARGIN_S` before the limit, not to the search's margin (which
-    keeps a share of the limit for the oracle's final layouts: every start plan carries its
-    own), so that it gets about the time greedy-ce alone gets. No time is kept back per task
-    for its overrun (the warm start's rule): at scale that margin exceeds the whole share,
-    and greedy-ce checks its clock at every decision."""
+    it runs to ``greedy_at`` (:data:`.method.MARGIN_S` before the limit), not to ``stop_at``
+    (which also keeps a share of the limit for the oracle's final layouts: every start plan
+    carries its own), so that it gets about the time greedy-ce alone gets. No time is kept
+    back per task for its overrun (the warm start's rule): at scale that margin exceeds the
+    whole share, and greedy-ce checks its clock at every decision."""
     from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
-    from .method import MARGIN_S
 
     if run.instance.n_tasks <= GREEDY_TASKS:
         limit = min(start_share * budget.time_limit, stop_at.remaining())
     else:
-        limit = budget.remaining() - MARGIN_S
+        limit = greedy_at.remaining()
     if limit < 0.5:
         return
     extra: dict[str, Any] = {}
