@@ -78,7 +78,9 @@ REACH = 2
 KICKS = 30
 #: Random moves per kick.
 KICK_MOVES = 2
-#: Seconds a packing call of a candidate kit may take (undecided: does not fit).
+#: Seconds a packing call of a candidate kit may take (undecided: does not fit), as CP-SAT's
+#: deterministic time (:func:`..packing_oracle.deterministic_limits`): a wall-clock probe gave
+#: another verdict, and so another search, on a loaded machine.
 PROBE_S = 0.05
 
 
@@ -209,7 +211,8 @@ class _Search:
 
     # -- candidates ---------------------------------------------------------------------------
     def fits(self, kit: Sequence[int]) -> bool:
-        return self.fit.fits([self.ids[i] for i in kit], PROBE_S)
+        parts = self.instance.kit_parts([self.ids[i] for i in kit])
+        return self.fit.counts(parts, PROBE_S, deterministic=True) is True
 
     def valid_kit(self, kit: Sequence[int]) -> bool:
         """One station's tasks, not part-less only (unless its station's all are), fits;
