@@ -171,3 +171,27 @@ def test_lns_on_stations_is_deterministic_at_a_fixed_number_of_visits(root):
     assert runs[0].extra["stop"] == "iterations" and runs[0].extra["iterations"] == 40
     assert [k.tasks for k in runs[0].plan.kits] == [k.tasks for k in runs[1].plan.kits]
     assert runs[0].objective == runs[1].objective <= runs[0].extra["start_objective"]
+
+
+def test_lns_on_stations_is_never_worse_than_its_finished_greedy_ce_start(monkeypatch):
+    """Issue 37 at scale: beyond ``GREEDY_TASKS`` tasks greedy-ce's start runs within all the
+    time left (docs/stations.md#lns-with-several-stations), so when it finishes its plan is
+    the start or beaten. The threshold is lowered to this 90-task instance (greedy-ce about
+    1 s) and ``start_share=0`` would leave it no time below it; one visit: the search cannot
+    make up for a start without greedy-ce's plan (single-task's is far worse here)."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.models.lns import stations
+
+    assert stations.GREEDY_TASKS == 200  # docs/stations.md states it
+    inst = from_dict(generate("intree", 30, seed=0, stations=3))
+    greedy = solve(inst, "greedy-ce")
+    quick = solve(inst, "lns", time_limit=60, iterations=1, start_share=0.0)
+    assert "start_greedy_cut" not in quick.extra  # below the threshold: its share, none
+    assert quick.objective > greedy.objective  # (what the test would miss without the start)
+    monkeypatch.setattr(stations, "GREEDY_TASKS", inst.n_tasks - 1)
+    out = solve(inst, "lns", time_limit=60, iterations=1, start_share=0.0, check=True)
+    assert out.extra["violations"] == []
+    assert out.extra["start_greedy_cut"] is False  # 60 s for its second or so
+    assert out.extra["start_objective"] <= greedy.objective + 1e-9
+    assert out.objective <= greedy.objective + 1e-9
+    assert out.extra["stop"] == "iterations"

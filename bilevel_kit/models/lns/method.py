@@ -228,6 +228,7 @@ def lns(
             seed=seed,
             start_plan=start_plan,
             known_bound=known_bound,
+            greedy_at=budget.cut(MARGIN_S),
         )
     run = _Run(instance, options, budget, stop_at, sc, packer, seed, extra)
     run.start(start_plan)

@@ -9,7 +9,8 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
 
 1. **Start** from the best of the given plan (``start_plan``), single-task's and
    whole-assembly's plans (which interleave the stations by earliest need) and (``start=
-   "auto"``) greedy-ce's within ``start_share`` of the time limit.
+   "auto"``) greedy-ce's: within ``start_share`` of the time limit up to
+   :data:`.start.GREEDY_TASKS` tasks, within all the time left beyond (:func:`_greedy_start`).
 2. **Bound**: the objective's closed form (:func:`bilevel_kit.bounds.objective_bound`, as
    ``cpsat`` and ``milp`` report with stations), or the given ``known_bound`` (makespan).
 3. **Sweeps**: the kits in a random order; from each kit (one *iteration*) the moves of
@@ -18,21 +19,25 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
    neighbours, a task into a nearby kit of its station), then the **exact window**: the
    consecutive kits from it holding at most :data:`EXACT_TASKS` tasks, every rearrangement
    of their tasks enumerated (:mod:`.enumerate`), only those whose end state (:mod:`.clock`)
-   is not dominated timed in full. A sweep without improvement is a local optimum: then a
-   *kick* (:data:`KICK_MOVES` random valid moves, better or not) and sweeps again from there,
-   back to the best plan when they find none better; :data:`KICKS` kicks in a row without a
-   better plan end the run (``stop`` ``local_optimum``), as do ``iterations`` (kits visited),
-   ``stall`` (visits in a row without improvement), optimal (the plan meets the bound) and
-   the time limit. Every random choice draws from ``numpy.random.default_rng(seed)``.
+   is not dominated timed in full. On an exact grid a candidate (a move's or a window's) is
+   timed in full only when its state stays undominated by the incumbent's along the kits
+   after its change (:mod:`.trail`): the others cannot be better. A sweep without
+   improvement is a local optimum: then a *kick* (:data:`KICK_MOVES` random valid moves,
+   better or not) and sweeps again from there, back to the best plan when they find none
+   better; :data:`KICKS` kicks in a row without a better plan end the run (``stop``
+   ``local_optimum``), as do ``iterations`` (kits visited), ``stall`` (visits in a row
+   without improvement), optimal (the plan meets the bound) and the time limit. Every
+   random choice draws from ``numpy.random.default_rng(seed)``.
 
 **Result.** ``status`` ``optimal`` only when the plan meets the closed-form bound, else
 ``feasible``; ``bound`` the makespan's (closed form or given); with another objective
 ``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
 and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
-(``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``iterations``,
-``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves timed), ``window_plans``
-(rearrangements enumerated), ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``,
-``wall_time_s``.
+(``stations``), ``start_method``, ``start_objective``, ``start_time_s``,
+``start_greedy_cut`` (greedy-ce's start stopped by its time, when it ran), ``iterations``,
+``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves tried), ``hopeless`` (candidates
+rejected from their states, :mod:`.trail`), ``window_plans`` (rearrangements enumerated),
+``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
 
 A kit holds one station's tasks, fits the tray (:class:`.fit.FastFit`) and is not made of
 part-less tasks only (docs/timeline.md#part-less-tasks); the tasks' order keeps every
@@ -61,6 +66,8 @@ from ..cpsat.scaling import Clock, Scaled, clock_after, scale_times, scaled_obje
 from .clock import dominated, end_key
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
+from .start import GREEDY_TASKS
+from .trail import Trail
 
 #: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
 #: rearrangements, the ordered set partitions).
@@ -71,7 +78,9 @@ REACH = 2
 KICKS = 30
 #: Random moves per kick.
 KICK_MOVES = 2
-#: Seconds a packing call of a candidate kit may take (undecided: does not fit).
+#: Seconds a packing call of a candidate kit may take (undecided: does not fit), as CP-SAT's
+#: deterministic time (:func:`..packing_oracle.deterministic_limits`): a wall-clock probe gave
+#: another verdict, and so another search, on a loaded machine.
 PROBE_S = 0.05
 
 
@@ -85,8 +94,10 @@ def station_search(
     seed: int,
     start_plan: Plan | None,
     known_bound: float | None,
+    greedy_at: Budget,
 ) -> MethodOutput:
-    """The module docstring's search for ``options.objective`` (a modelled objective)."""
+    """The module docstring's search for ``options.objective`` (a modelled objective);
+    ``greedy_at`` the deadline of greedy-ce's start at scale (:func:`_greedy_start`)."""
     from ..exact.warm import best_heuristic_plan
 
     extra: dict[str, Any] = {"search": "stations"}
@@ -98,14 +109,8 @@ def station_search(
         plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
         if plan is not None:
             run.consider(plan, name)
-    share = options.start_share * budget.time_limit
-    if options.start == "auto" and share >= 0.5:
-        tl = min(share, stop_at.remaining())
-        plan, _ = best_heuristic_plan(
-            instance, ("greedy-ce",), seed=seed, time_limit=tl, objective=run.name
-        )
-        if plan is not None:
-            run.consider(plan, "greedy-ce")
+    if options.start == "auto":
+        _greedy_start(run, options.start_share, budget, stop_at, greedy_at, seed)
     extra.update(start_objective=run.real, start_time_s=budget.elapsed() - t0)
     if run.kits is None:
         extra["reason"] = "no start plan within the time limit"
@@ -117,6 +122,46 @@ def station_search(
     if not run.optimal():
         run.search(np.random.default_rng(seed), stop_at, options.iterations, options.stall)
     return run.finish(budget)
+
+
+def _greedy_start(
+    run: _Search,
+    start_share: float,
+    budget: Budget,
+    stop_at: Budget,
+    greedy_at: Budget,
+    seed: int,
+) -> None:
+    """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations): within
+    ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, where the
+    search from the quick plans beats it; beyond, within all the time left (the search takes
+    what it leaves), where its decisions gain more per second than the search's moves. There
+    it runs to ``greedy_at`` (:data:`.method.MARGIN_S` before the limit), not to ``stop_at``
+    (which also keeps a share of the limit for the oracle's final layouts: every start plan
+    carries its own), so that it gets about the time greedy-ce alone gets. No time is kept
+    back per task for its overrun (the warm start's rule): at scale that margin exceeds the
+    whole share, and greedy-ce checks its clock at every decision."""
+    from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
+
+    if run.instance.n_tasks <= GREEDY_TASKS:
+        limit = min(start_share * budget.time_limit, stop_at.remaining())
+    else:
+        limit = greedy_at.remaining()
+    if limit < 0.5:
+        return
+    extra: dict[str, Any] = {}
+    plan, _ = best_heuristic_plan(
+        run.instance,
+        ("greedy-ce",),
+        seed=seed,
+        time_limit=limit,
+        objective=run.name,
+        rule=WarmRule(kernel_load_s=KERNEL_LOAD_S),
+        extra=extra,
+    )
+    run.extra["start_greedy_cut"] = bool(extra.get("warm_start_cut"))
+    if plan is not None:
+        run.consider(plan, "greedy-ce")
 
 
 @dataclass
@@ -135,9 +180,11 @@ class _Search:
     bound: float | None = None
     layouts: dict[tuple[int, ...], tuple[Placement, ...]] = field(default_factory=dict)
     stalled: int = 0
+    trail: Trail | None = None  # the incumbent's states (:mod:`.trail`), built when needed
     counts: dict[str, int] = field(
         default_factory=lambda: dict.fromkeys(
-            ("iterations", "improvements", "sweeps", "kicks", "tried", "window_plans"), 0
+            ("iterations", "improvements", "sweeps", "kicks", "tried", "hopeless", "window_plans"),
+            0,
         )
     )
 
@@ -164,7 +211,8 @@ class _Search:
 
     # -- candidates ---------------------------------------------------------------------------
     def fits(self, kit: Sequence[int]) -> bool:
-        return self.fit.fits([self.ids[i] for i in kit], PROBE_S)
+        parts = self.instance.kit_parts([self.ids[i] for i in kit])
+        return self.fit.counts(parts, PROBE_S, deterministic=True) is True
 
     def valid_kit(self, kit: Sequence[int]) -> bool:
         """One station's tasks, not part-less only (unless its station's all are), fits;
@@ -194,9 +242,25 @@ class _Search:
         assert value is not None  # (a modelled objective: a function of the timeline)
         return value
 
+    def hopeless(self, kits: Kits) -> bool:
+        """``kits`` is no better on the grid than the incumbent, seen from its states
+        (:mod:`.trail`); only on an exact grid, where a tie is no better either (off the grid
+        the evaluator decides ties, :meth:`take`)."""
+        if not self.sc.exact:
+            return False
+        assert self.kits is not None
+        if self.trail is None or self.trail.kits is not self.kits:
+            self.trail = Trail(self.sc, self.kits, self.idle, since=self.trail)
+        if self.trail.hopeless(kits):
+            self.counts["hopeless"] += 1
+            return True
+        return False
+
     def take(self, kits: Kits, changed: Sequence[Sequence[int]]) -> bool:
         """Take ``kits`` when valid (``changed``: its new kits) and strictly better."""
         self.counts["tried"] += 1
+        if self.hopeless(kits):
+            return False
         scaled = scaled_objective(self.sc, kits, self.name)
         if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):
             return False
@@ -339,9 +403,10 @@ class _Search:
             kept = {k: m for k, m in kept.items() if not dominated(k, key)}
             kept[key] = middle
         self.counts["window_plans"] += enumerated
-        ranked = sorted(
+        ranked = sorted(  # (a hopeless plan would rank after the incumbent: never taken)
             (scaled_objective(self.sc, before + m + after, self.name), j, m)
             for j, m in enumerate(kept.values())
+            if not self.hopeless(before + m + after)
         )
         for scaled, _, middle in ranked:  # the evaluator decides (off the grid: each in turn)
             if scaled > self.scaled or (scaled == self.scaled and self.sc.exact):
