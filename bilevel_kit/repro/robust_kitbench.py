@@ -60,6 +60,9 @@ class KitBenchCell:
     wait_and_see: int = WAIT_AND_SEE_N
     #: the instance file's digest (:func:`.common.file_digest`): a changed file is a new cell
     digest: str = ""
+    #: the best-known plan's file digest: the mean-value solve's hint, so an improved record
+    #: (``bench update``) is a new cell too, never a saved cell of the old hint
+    hint_digest: str = ""
 
     def key(self) -> str:
         return cell_key(self)
@@ -73,8 +76,13 @@ def kitbench_cell(cell: KitBenchCell) -> dict[str, Any]:
 
     t0 = time.process_time()
     inst = load(LIBRARY / f"{cell.instance}.json")
-    best = read(LIBRARY / "solutions" / f"{cell.instance}.json").plan
+    best = read(_hint_path(cell.instance)).plan
     return cell_estimates(cell, inst, t0, start=best)
+
+
+def _hint_path(instance: str) -> Path:
+    """The record's best-known plan, the mean-value solve's hint."""
+    return LIBRARY / "solutions" / f"{instance}.json"
 
 
 def study_cells(
@@ -94,6 +102,7 @@ def study_cells(
             family=r.family,
             tasks=r.tasks,
             digest=file_digest(LIBRARY / f"{r.instance}.json"),
+            hint_digest=file_digest(_hint_path(r.instance)),
         )
         for cv in cvs
         for r in records

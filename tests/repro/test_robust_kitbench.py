@@ -34,6 +34,25 @@ def test_the_cells_are_every_record_of_at_most_60_tasks() -> None:
     assert all(len(c.digest) == 12 for c in cells)
 
 
+def test_a_cell_is_keyed_by_its_hint_too(tmp_path, monkeypatch) -> None:
+    """The mean-value solve is hinted with the record's best-known plan: a solutions file that
+    ``bench update`` improved makes a new cell key, so a saved cell of the old hint is not
+    reused (the instance file alone names the same cell)."""
+    from shutil import copytree
+
+    from bilevel_kit.repro import robust_kitbench
+
+    (before,) = study_cells(max_tasks=12)[:1]
+    library = tmp_path / "kitbench"
+    copytree(LIBRARY, library)
+    hint = library / "solutions" / f"{before.instance}.json"
+    hint.write_text(hint.read_text() + "\n")  # another file, the same instance file
+    monkeypatch.setattr(robust_kitbench, "LIBRARY", library)
+    (after,) = study_cells(max_tasks=12)[:1]
+    assert after.instance == before.instance and after.digest == before.digest
+    assert after.hint_digest != before.hint_digest and after.key() != before.key()
+
+
 def test_committed_rows_are_the_cells_and_honest() -> None:
     rows = read_rows(CSV)
     assert [r["instance"] for r in rows] == [c.instance for c in study_cells()]
