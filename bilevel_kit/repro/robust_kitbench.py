@@ -39,6 +39,8 @@ from .robust import (
 LIBRARY = ROOT / "instances" / "kitbench"
 #: The largest record taken (tasks, the index's ``tasks``: every unit's).
 MAX_TASKS = 60
+#: The largest record of a ``--quick`` run.
+QUICK_TASKS = 12
 #: The CV: the largest of the robust study, where its gains were largest
 #: (docs/robust.md#results): if planning for the spread does not pay there, it pays at no CV
 #: the study tried. One CV only, for the compute (docs/robust.md#kitbench-up-to-60-tasks).
@@ -142,6 +144,16 @@ def kitbench_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
     return "\n".join(markdown_lines(head, body))
 
 
+def heading(max_tasks: int, quick: bool) -> str:
+    """The markdown's first line: the records it covers (a quick run's are fewer)."""
+    quick_note = " (QUICK: a reduced run)" if quick else ""
+    return (
+        f"Robust planning on KitBench up to {max_tasks} tasks{quick_note}: VSS (s) = "
+        f"E[mean-value plan] - E[SAA plan] on {EVALUATION} evaluation scenarios, mean "
+        "[95 % paired interval].\n\n"
+    )
+
+
 def _yes(x: Any) -> bool:
     return str(x) in ("True", "true")
 
@@ -156,7 +168,8 @@ def run_robust_kitbench(
     progress: bool | None = None,
     **_: Any,
 ) -> dict[str, Any]:
-    """The panel (module docstring); ``quick``: the records of at most 12 tasks at CV 0.3.
+    """The panel (module docstring); ``quick``: the records of at most :data:`QUICK_TASKS`
+    tasks at CV 0.3.
     Cells are saved under ``out_dir/cells/`` (a rerun computes only the missing ones)."""
     from ..experiments.cells import write_json
     from .common import run_study_cells, study_summary
@@ -165,19 +178,15 @@ def run_robust_kitbench(
     grid = tuple(cvs) if cvs else ((0.3,) if quick else CVS)
     if min(grid) < 0:
         raise UsageError(f"bad robust-kitbench cv {grid}: cv >= 0")
-    cells = study_cells(grid, seed, 12 if quick else MAX_TASKS)
+    max_tasks = QUICK_TASKS if quick else MAX_TASKS
+    cells = study_cells(grid, seed, max_tasks)
     out = Path(out_dir)
     ran = run_study_cells(
         cells, kitbench_cell, out, jobs=jobs, progress=progress, desc="robust-kitbench cells"
     )
     ran, retried = rerun_cut(cells, ran, out, progress, kitbench_cell)
     rows = kitbench_rows(ran[0])
-    quick_note = " (QUICK: a reduced run)" if quick else ""
-    head = (
-        f"Robust planning on KitBench up to {MAX_TASKS} tasks{quick_note}: VSS (s) = "
-        f"E[mean-value plan] - E[SAA plan] on {EVALUATION} evaluation scenarios, mean "
-        "[95 % paired interval].\n\n"
-    )
+    head = heading(max_tasks, quick)
     files = {
         "csv": write_csv(out / "robust_kitbench.csv", rows, exclude=(), line_end="\n"),
         "markdown": out / "robust_kitbench.md",

@@ -13,7 +13,9 @@ from bilevel_kit.repro.report import read_rows
 from bilevel_kit.repro.robust import EVALUATION
 from bilevel_kit.repro.robust_kitbench import (
     LIBRARY,
+    QUICK_TASKS,
     KitBenchCell,
+    heading,
     kitbench_cell,
     study_cells,
 )
@@ -51,6 +53,15 @@ def test_a_cell_is_keyed_by_its_hint_too(tmp_path, monkeypatch) -> None:
     (after,) = study_cells(max_tasks=12)[:1]
     assert after.instance == before.instance and after.digest == before.digest
     assert after.hint_digest != before.hint_digest and after.key() != before.key()
+
+
+def test_a_quick_run_names_its_own_records() -> None:
+    # the --quick run takes the records of at most QUICK_TASKS tasks, not MAX_TASKS
+    assert heading(QUICK_TASKS, True).startswith(
+        "Robust planning on KitBench up to 12 tasks (QUICK: a reduced run): VSS (s) = "
+    )
+    assert heading(60, False).startswith("Robust planning on KitBench up to 60 tasks: VSS")
+    assert max(c.tasks for c in study_cells(max_tasks=QUICK_TASKS)) == QUICK_TASKS
 
 
 def test_committed_rows_are_the_cells_and_honest() -> None:
