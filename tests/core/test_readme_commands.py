@@ -50,7 +50,7 @@ import shlex
 import shutil
 import subprocess
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pytest
@@ -174,13 +174,7 @@ def commands_in(text: str, document: str) -> list[Command]:
                 expected, skip = _marked(comment)
                 out.append(Command(document, first, shown, "bash", expected, skip))
         if quoted is not None and len(out) > block_start:  # the block's last command prints it
-            last = out[-1]
-            out[-1] = Command(
-                *[getattr(last, f) for f in ("document", "line", "shown", "kind")],
-                last.expected,
-                last.skip,
-                quoted,
-            )
+            out[-1] = replace(out[-1], output=quoted)
     return out
 
 
