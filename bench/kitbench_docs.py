@@ -1,7 +1,7 @@
 """Rewrite the KitBench tables of docs/kitbench.md, instances/kitbench/README.md and README.md from
 instances/kitbench/index.csv, and the profile prose of docs/kitbench.md from the passes'
 committed rows (bench/results/kitbench_LABEL.csv), and the exact models against lns (the
-kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp_10s.md) likewise;
+kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp*_10s.md) likewise;
 with --figures, also redraw a run's profile and gap-versus-size figures into docs/figures/;
 with --profiles, redraw the profile figures of the committed passes
 (docs/figures/kitbench-profile-60s.png and -10s.png) from their rows.
@@ -42,7 +42,7 @@ PAGES = (
 )
 RESULTS = ROOT / "bench" / "results"
 #: The committed tables with a per-instance block of the exact models against lns.
-VERSUS_PAGES = (RESULTS / "kitbench_cmp_10s.md",)
+VERSUS_PAGES = (RESULTS / "kitbench_cmp_10s.md", RESULTS / "kitbench_cmp2_10s.md")
 #: The committed passes drawn by --profiles: label -> (its rows, a separate pass's rows).
 PASSES = {"60s": ("kitbench_60s.csv", None), "10s": ("kitbench_10s.csv", "kitbench_10s_lns.csv")}
 
