@@ -21,7 +21,8 @@ from .robust import SCENARIOS, detail_markdown, vss_markdown
 Row = Mapping[str, Any]
 
 
-def _yes(x: Any) -> bool:
+def yes(x: Any) -> bool:
+    """A CSV's boolean field (written as ``True``/``False``)."""
     return str(x) in ("True", "true")
 
 
@@ -84,8 +85,8 @@ def _tray_sentence(trays: str, mine: Sequence[Row]) -> str:
             f"{float(best['vss']):.2f} s ({_cell(best)})."
         )
     rest = [r for r in mine if not _pays(r)]
-    kept = [r for r in rest if float(r["vss"]) == 0.0 and _yes(r["same_plan"])]
-    proven = [r for r in kept if _yes(r["saa_proven"])]
+    kept = [r for r in rest if float(r["vss"]) == 0.0 and yes(r["same_plan"])]
+    proven = [r for r in kept if yes(r["saa_proven"])]
     if len(proven) == len(rest):
         why = "the SAA solve proved the mean-value plan optimal on its scenarios (VSS 0)"
     else:
@@ -143,7 +144,7 @@ def solves_markdown(rows: Sequence[Row]) -> str:
             f"({', '.join(_cell(r) for r in cut)}): those rows are not a pure function of "
             "their configuration and seed, the others are."
         ]
-    open_ = [r for r in rows if not _yes(r["saa_proven"])]
+    open_ = [r for r in rows if not yes(r["saa_proven"])]
     sentence = (
         f"The SAA solve is proven optimal on its {SCENARIOS} scenarios in "
         f"{len(rows) - len(open_)} of {len(rows)} cells"
@@ -154,9 +155,9 @@ def solves_markdown(rows: Sequence[Row]) -> str:
             "of the exact SAA plan's)"
         )
     out.append(sentence + ".")
-    kept = [r for r in rows if float(r["vss"]) == 0.0 and _yes(r["same_plan"])]
+    kept = [r for r in rows if float(r["vss"]) == 0.0 and yes(r["same_plan"])]
     if kept:
-        unproven = [r for r in kept if not _yes(r["saa_proven"])]
+        unproven = [r for r in kept if not yes(r["saa_proven"])]
         out.append(
             f"A VSS of exactly zero ({len(kept)} cells) means the SAA solve kept the mean-value "
             + (
@@ -182,7 +183,7 @@ def _versus(low: float, high: float, what: str) -> str:
 def _model(r: Row, p: str, name: str, what: str) -> str:
     """What ``lns`` with one objective (column prefix ``p``) returned, against the mean-value
     plan of its own mean-time step, on its in-sample objective ``what``."""
-    improved, proven = _yes(r[f"{p}_improved"]), r[f"{p}_status"] == "optimal"
+    improved, proven = yes(r[f"{p}_improved"]), r[f"{p}_status"] == "optimal"
     if proven:
         did = "proves its plan optimal" if improved else "proves the mean-value plan optimal"
     else:
@@ -208,12 +209,12 @@ def _cvar_sentence(r: Row) -> str:
         f"{head}, {_model(r, 'cvar', 'CVaR', level)}; {_model(r, 'sa', 'sample-average', 'mean')}."
     )
     sa = f"{f['sa_eval_mean']:.1f} ± {f['sa_eval_half']:.1f} s"
-    if _yes(r["same_plan"]):
+    if yes(r["same_plan"]):
         return (
             f"{models} Both return the same plan: mean {sa} and {level} "
             f"{f['sa_eval_cvar']:.1f} s on {r['evaluation']} independent evaluation scenarios."
         )
-    if not _yes(r["sa_improved"]) and not _yes(r["cvar_improved"]):
+    if not yes(r["sa_improved"]) and not yes(r["cvar_improved"]):
         models += (
             " Neither improved on its own mean-time step's plan, so the plans differ as the two "
             "mean-time `lns` runs did."
@@ -243,7 +244,7 @@ def cvar_markdown(rows: Sequence[Row]) -> str:
     out = [_cvar_sentence(r) for r in rows]
     r = rows[0]
     tail = round((1 - float(r["alpha"])) * int(r["scenarios"]))
-    overfit = [x for x in rows if not _yes(x["same_plan"]) and float(x["diff_cvar_low"]) > 0]
+    overfit = [x for x in rows if not yes(x["same_plan"]) and float(x["diff_cvar_low"]) > 0]
     out.append(
         f"With {r['scenarios']} scenarios CVaR({r['alpha']}) rests on the {tail} worst ones"
         + (", and the CVaR plan fits them" if overfit else "")

@@ -35,6 +35,7 @@ from .robust import (
     rerun_cut,
     rows_of,
 )
+from .robust_facts import yes as _yes
 
 LIBRARY = ROOT / "instances" / "kitbench"
 #: The largest record taken (tasks, the index's ``tasks``: every unit's).
@@ -152,10 +153,6 @@ def heading(max_tasks: int, quick: bool) -> str:
         f"E[mean-value plan] - E[SAA plan] on {EVALUATION} evaluation scenarios, mean "
         "[95 % paired interval].\n\n"
     )
-
-
-def _yes(x: Any) -> bool:
-    return str(x) in ("True", "true")
 
 
 def run_robust_kitbench(

@@ -13,7 +13,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from .robust import SCENARIOS
-from .robust_facts import Row, _pays, _worse, _yes
+from .robust_facts import Row, _pays, _worse
+from .robust_facts import yes as _yes
 from .robust_kitbench import kitbench_markdown
 
 
