@@ -35,7 +35,7 @@ from .robust import (
     rerun_cut,
     rows_of,
 )
-from .robust_facts import yes as _yes
+from .robust_facts import yes
 
 LIBRARY = ROOT / "instances" / "kitbench"
 #: The largest record taken (tasks, the index's ``tasks``: every unit's).
@@ -137,8 +137,8 @@ def kitbench_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
             f"{float(r['mean_plan']):.1f}",
             f"{float(r['vss']):.2f} [{float(r['vss_low']):.2f}, {float(r['vss_high']):.2f}]",
             f"{float(r['vss_pct']):.2f}",
-            "yes" if _yes(r["saa_proven"]) else "no",
-            "no" if _yes(r["same_plan"]) else "yes",
+            "yes" if yes(r["saa_proven"]) else "no",
+            "no" if yes(r["same_plan"]) else "yes",
         ]
         for r in rows
     ]

@@ -13,8 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from .robust import SCENARIOS
-from .robust_facts import Row, _pays, _worse
-from .robust_facts import yes as _yes
+from .robust_facts import Row, _pays, _worse, yes
 from .robust_kitbench import kitbench_markdown
 
 
@@ -57,10 +56,10 @@ def _range(rows: Sequence[Row]) -> str:
 
 def _kept(rows: Sequence[Row]) -> str:
     """The cells whose SAA solve kept the mean-value plan (VSS exactly 0), proven or not."""
-    kept = [r for r in rows if float(r["vss"]) == 0.0 and _yes(r["same_plan"])]
+    kept = [r for r in rows if float(r["vss"]) == 0.0 and yes(r["same_plan"])]
     if not kept:
         return ""
-    open_ = [r for r in kept if not _yes(r["saa_proven"])]
+    open_ = [r for r in kept if not yes(r["saa_proven"])]
     out = (
         f"In {len(kept)} of the {len(rows)} records the SAA solve kept the mean-value plan "
         f"(VSS exactly 0), proven optimal on its scenarios in {len(kept) - len(open_)}"
@@ -87,7 +86,7 @@ def kitbench_advice(rows: Sequence[Row]) -> str:
     out.append(_kept(rows))
     worse = [r for r in rows if _worse(r)]
     if worse:
-        overfit = sum(_yes(r["saa_proven"]) for r in worse)
+        overfit = sum(yes(r["saa_proven"]) for r in worse)
         out.append(
             f"Where the VSS interval lies below 0 the SAA plan is worse out of sample "
             f"({'; '.join(_cell(r) for r in worse)}), {overfit} of them proven optimal on its "
@@ -108,8 +107,8 @@ def kitbench_advice(rows: Sequence[Row]) -> str:
             f"(`safety_net_fired` is 0 in all {len(rows)} cells): each row is a pure function "
             "of its configuration and seed."
         )
-    proven = [r for r in rows if _yes(r["saa_proven"])]
-    mean_proven = [r for r in rows if _yes(r["mean_plan_proven"])]
+    proven = [r for r in rows if yes(r["saa_proven"])]
+    mean_proven = [r for r in rows if yes(r["mean_plan_proven"])]
     out.append(
         f"The mean-value solve proves its plan optimal for the mean times in "
         f"{len(mean_proven)} of {len(rows)} records, the SAA solve its plan on its scenarios "
