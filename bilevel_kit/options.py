@@ -11,7 +11,8 @@ A field's ``metadata`` may hold ``help`` (one line for ``bilevel-kit methods NAM
 and ``max`` (inclusive bounds for numbers), and ``choices`` (allowed strings, when the type is
 a plain ``str``: a collection, or a function returning one, called when a value is parsed, so
 that a list a plugin adds to, the objectives' registry say, is read when it is complete).
-``typing.Literal`` types give their choices themselves.
+``typing.Literal`` types give their choices themselves. :func:`option` declares such a field in
+one call.
 
 ``needs`` maps another option's name to the values under which this one is read (a collection,
 or a function returning one), e.g. ``{"objective": ("expected_makespan", "cvar_makespan")}``
@@ -236,15 +237,20 @@ def _check_range(value: float, meta: Mapping[str, Any], where: str) -> None:
         raise UsageError(f"{where}: must be < {below}, got {value!r}")
 
 
+def option(default: Any, help: str, **checks: Any) -> Any:
+    """One field of an options dataclass: its default, its one-line ``help`` and its checks
+    (``min``, ``max``, ``below``, ``choices``, ``needs``: module docstring) as keywords, so
+    that each declaration is one call rather than a ``field()`` with a metadata dict."""
+    return dataclasses.field(default=default, metadata={"help": help, **checks})
+
+
 def finger_room_field() -> bool:
     """The ``finger_room`` option (off by default) of every method that has it (greedy-ce,
     cpsat): one declaration, so its default, meaning and check are the same for each."""
-    return dataclasses.field(
-        default=False,
-        metadata={
-            "help": "pack every part with room for the station gripper's open fingers "
-            "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline"
-        },
+    return option(
+        False,
+        "pack every part with room for the station gripper's open fingers "
+        "(docs/execution.md#finger-room): its grasp footprint is packed, not its outline",
     )
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, fields
 from typing import Literal
 
 from ..errors import UsageError
-from ..options import finger_room_field
+from ..options import finger_room_field, option
 from .ce.params import CEParams
 from .greedy_search import SearchLimits
 
@@ -41,135 +41,72 @@ class GreedyCEOptions:
     """The options of ``greedy-ce`` as the command line gives them (flat); ``None`` means the
     instance's value. The CE fields mirror :class:`CEParams` (same names and defaults)."""
 
-    horizon: int | None = field(
-        default=None, metadata={"help": "rolling horizon N, tasks per window", "min": 1}
+    horizon: int | None = option(None, "rolling horizon N, tasks per window", min=1)
+    signed: bool = option(False, "terms (5)-(6) signed as printed, not absolute")
+    precedence: Literal["hard", "penalty"] = option(
+        "hard", "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"
     )
-    signed: bool = field(
-        default=False, metadata={"help": "terms (5)-(6) signed as printed, not absolute"}
+    decision: Literal["exact", "enumerate"] = option(
+        "exact", "hard precedence: exact search over prefix sets, or enumerate every sequence"
     )
-    precedence: Literal["hard", "penalty"] = field(
-        default="hard",
-        metadata={"help": "hard: only feasible sequences; penalty: all, W1 per violation (Eq. 3)"},
+    max_prefix_sets: int = option(
+        SearchLimits.max_prefix_sets,
+        "prefix sets per epoch beyond which the search is a beam",
+        min=1,
     )
-    decision: Literal["exact", "enumerate"] = field(
-        default="exact",
-        metadata={
-            "help": "hard precedence: exact search over prefix sets, or enumerate every sequence"
-        },
+    beam_width: int = option(
+        SearchLimits.beam_width, "prefix sets kept per size once the search is a beam", min=1
     )
-    max_prefix_sets: int = field(
-        default=SearchLimits.max_prefix_sets,
-        metadata={"help": "prefix sets per epoch beyond which the search is a beam", "min": 1},
+    max_rest_nodes: int = option(
+        SearchLimits.max_rest_nodes,
+        "search nodes per window-rest search (then the best so far)",
+        min=1,
     )
-    beam_width: int = field(
-        default=SearchLimits.beam_width,
-        metadata={"help": "prefix sets kept per size once the search is a beam", "min": 1},
+    polish: bool = option(False, "polish every CE layout with the convex SOCP")
+    W1: float | None = option(
+        None, "weight of term (3), per task whose predecessors are not kitted"
     )
-    max_rest_nodes: int = field(
-        default=SearchLimits.max_rest_nodes,
-        metadata={"help": "search nodes per window-rest search (then the best so far)", "min": 1},
+    W2: float | None = option(None, "weight of term (4), reward per task in the kit")
+    W3: float | None = option(None, "weight of term (5), |d + R(kit) - H_rem|, per s")
+    W4: float | None = option(None, "weight of term (6), |d + R(rest) - H(kit)|, per s")
+    W5: float | None = option(None, "weight of term (7), reward per mm of kit fitness")
+    W6: float | None = option(
+        None, "weight of the overlap area Z (mm^2) in the kit fitness (Eq. 11)"
     )
-    polish: bool = field(
-        default=False, metadata={"help": "polish every CE layout with the convex SOCP"}
+    W7: float | None = option(None, "weight of the W7 term (Sec. V-B), per part not yet available")
+    # one CE iteration scores every sample: 10^6 took 30 s and 0.5 GB
+    samples: int = option(200, "CE samples per iteration (2 to 20,000)", min=2, max=20_000)
+    elite: int = option(
+        30, "CE elite samples the mean and covariance are refitted to (<= samples)", min=2
     )
-    W1: float | None = field(
-        default=None,
-        metadata={"help": "weight of term (3), per task whose predecessors are not kitted"},
+    # a cap of 10^12 allocated its 8 TB trace before any iteration
+    max_iter: int = option(100, "CE iteration cap (1 to 1,000,000)", min=1, max=1_000_000)
+    tol: float = option(
+        1e-4, "CE convergence: relative change of the elite threshold (unitless, >= 0)", min=0.0
     )
-    W2: float | None = field(
-        default=None, metadata={"help": "weight of term (4), reward per task in the kit"}
+    patience: int = option(
+        10, "CE convergence: iterations within tol (1 to 1,000,000)", min=1, max=1_000_000
     )
-    W3: float | None = field(
-        default=None, metadata={"help": "weight of term (5), |d + R(kit) - H_rem|, per s"}
+    init_sd_frac: float = option(0.25, "CE initial sd of x, y as a fraction of the tray side (> 0)")
+    init_sd_theta: float = option(30.0, "CE initial sd of the angles, degrees", min=0.0)
+    min_sd: float = option(0.5, "CE floor of the sd (> 0): mm for positions, degrees for angles")
+    out_weight: float | None = option(
+        None, "CE penalty per mm of tray overhang (>= 0; none: automatic)", min=0.0
     )
-    W4: float | None = field(
-        default=None, metadata={"help": "weight of term (6), |d + R(rest) - H(kit)|, per s"}
+    precision: Literal["float32", "float64"] = option(
+        "float32", "CE precision of sample scoring (results are float64)"
     )
-    W5: float | None = field(
-        default=None, metadata={"help": "weight of term (7), reward per mm of kit fitness"}
+    repair: bool = option(True, "push overlapping CE candidates apart before rejecting them")
+    restart_sd_scale: float = option(
+        0.1, "CE sd of a run from a given layout, relative to a random start (>= 0)", min=0.0
     )
-    W6: float | None = field(
-        default=None,
-        metadata={"help": "weight of the overlap area Z (mm^2) in the kit fitness (Eq. 11)"},
-    )
-    W7: float | None = field(
-        default=None,
-        metadata={"help": "weight of the W7 term (Sec. V-B), per part not yet available"},
-    )
-    samples: int = field(  # one CE iteration scores every sample: 10^6 took 30 s and 0.5 GB
-        default=200,
-        metadata={"help": "CE samples per iteration (2 to 20,000)", "min": 2, "max": 20_000},
-    )
-    elite: int = field(
-        default=30,
-        metadata={
-            "help": "CE elite samples the mean and covariance are refitted to (<= samples)",
-            "min": 2,
-        },
-    )
-    max_iter: int = field(  # a cap of 10^12 allocated its 8 TB trace before any iteration
-        default=100,
-        metadata={"help": "CE iteration cap (1 to 1,000,000)", "min": 1, "max": 1_000_000},
-    )
-    tol: float = field(
-        default=1e-4,
-        metadata={
-            "help": "CE convergence: relative change of the elite threshold (unitless, >= 0)",
-            "min": 0.0,
-        },
-    )
-    patience: int = field(
-        default=10,
-        metadata={
-            "help": "CE convergence: iterations within tol (1 to 1,000,000)",
-            "min": 1,
-            "max": 1_000_000,
-        },
-    )
-    init_sd_frac: float = field(
-        default=0.25,
-        metadata={"help": "CE initial sd of x, y as a fraction of the tray side (> 0)"},
-    )
-    init_sd_theta: float = field(
-        default=30.0, metadata={"help": "CE initial sd of the angles, degrees", "min": 0.0}
-    )
-    min_sd: float = field(
-        default=0.5,
-        metadata={"help": "CE floor of the sd (> 0): mm for positions, degrees for angles"},
-    )
-    out_weight: float | None = field(
-        default=None,
-        metadata={"help": "CE penalty per mm of tray overhang (>= 0; none: automatic)", "min": 0.0},
-    )
-    precision: Literal["float32", "float64"] = field(
-        default="float32", metadata={"help": "CE precision of sample scoring (results are float64)"}
-    )
-    repair: bool = field(
-        default=True,
-        metadata={"help": "push overlapping CE candidates apart before rejecting them"},
-    )
-    restart_sd_scale: float = field(
-        default=0.1,
-        metadata={
-            "help": "CE sd of a run from a given layout, relative to a random start (>= 0)",
-            "min": 0.0,
-        },
-    )
-    mirrored: bool = field(
-        default=True, metadata={"help": "CE mirrored (antithetic) sampling: mu + L z and mu - L z"}
-    )
-    smoothing: float = field(
-        default=1.0, metadata={"help": "CE mean update smoothing, in (0, 1]", "max": 1.0}
-    )
-    cov_smoothing: float = field(
-        default=0.3, metadata={"help": "CE covariance update smoothing, in (0, 1]", "max": 1.0}
-    )
-    snap: bool = field(
-        default=False,
-        metadata={
-            "help": "turn each CE angle to the nearest quarter turn where the layout stays "
-            "valid and its fitness does not drop"
-        },
+    mirrored: bool = option(True, "CE mirrored (antithetic) sampling: mu + L z and mu - L z")
+    smoothing: float = option(1.0, "CE mean update smoothing, in (0, 1]", max=1.0)
+    cov_smoothing: float = option(0.3, "CE covariance update smoothing, in (0, 1]", max=1.0)
+    snap: bool = option(
+        False,
+        "turn each CE angle to the nearest quarter turn where the layout stays "
+        "valid and its fitness does not drop",
     )
     finger_room: bool = finger_room_field()
 

@@ -78,11 +78,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 from ..errors import KitDoesNotFit
 from ..instance import Instance, document, from_dict, topological_order
+from ..options import option
 from ..plan import Kit, Plan
 from .policies import LayoutCache
 from .state import SimState
@@ -102,27 +103,19 @@ _Decision = tuple[Kit, tuple[tuple[str, ...], ...], str]
 class CPSATRollingOptions:
     """Options of the ``cpsat-rolling`` policy (see the module docstring)."""
 
-    window: int = field(default=12, metadata={"help": "tasks re-planned per epoch", "min": 1})
-    supply_window: int = field(
-        default=8,
-        metadata={
-            "help": "tasks re-planned when a part is missing (at most window; 0: window)",
-            "min": 0,
-        },
+    window: int = option(12, "tasks re-planned per epoch", min=1)
+    supply_window: int = option(
+        8, "tasks re-planned when a part is missing (at most window; 0: window)", min=0
     )
-    deterministic_time: float = field(
-        default=0.1,
-        metadata={"help": "CP-SAT deterministic time per solve (reproducible)", "min": 0.0},
+    deterministic_time: float = option(
+        0.1, "CP-SAT deterministic time per solve (reproducible)", min=0.0
     )
-    time_limit: float = field(
-        default=10.0,
-        metadata={"help": "wall-clock safety net per epoch (s); not reproducible", "min": 0.0},
+    time_limit: float = option(
+        10.0, "wall-clock safety net per epoch (s); not reproducible", min=0.0
     )
-    workers: int = field(
-        default=1, metadata={"help": "CP-SAT workers (1: deterministic)", "min": 1}
-    )
-    tray: Literal["auto", "embedded", "benders"] = field(
-        default="benders", metadata={"help": "tray feasibility in the CP-SAT model"}
+    workers: int = option(1, "CP-SAT workers (1: deterministic)", min=1)
+    tray: Literal["auto", "embedded", "benders"] = option(
+        "benders", "tray feasibility in the CP-SAT model"
     )
 
 

@@ -25,11 +25,12 @@ with one line naming the file (:class:`~bilevel_kit.errors.UsageError`, exit 2) 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 from ..errors import UsageError
 from ..instance import Instance
+from ..options import option
 from ..plan import Kit, Plan
 from ..validate import check
 from .state import SimState
@@ -42,12 +43,9 @@ if TYPE_CHECKING:
 class FixedPlanOptions:
     """Options of the ``fixed-plan`` policy (see the module docstring)."""
 
-    plan: str = field(
-        default="",
-        metadata={
-            "help": "solution file (solve -o) whose kits run in its order; "
-            "default: greedy-ce's offline plan"
-        },
+    plan: str = option(
+        "",
+        "solution file (solve -o) whose kits run in its order; default: greedy-ce's offline plan",
     )
 
 

@@ -35,9 +35,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from ..instance import Instance
+from ..options import option
 from .timing import PAPER_CV, TimingModel
 
 
@@ -45,21 +46,16 @@ from .timing import PAPER_CV, TimingModel
 class PaceOptions:
     """The prior of the pace estimate (``-p key=value``; None: from the run's timing model)."""
 
-    prior_cv: float | None = field(
-        default=None,
-        metadata={
-            "help": "CV of the speed factor's lognormal prior (mean 1); default: the run's "
-            "participant CV, or the paper's 61.14/374.78 when the run draws none",
-            "min": 0.0,
-        },
+    prior_cv: float | None = option(
+        None,
+        "CV of the speed factor's lognormal prior (mean 1); default: the run's "
+        "participant CV, or the paper's 61.14/374.78 when the run draws none",
+        min=0.0,
     )
-    task_cv: float | None = field(
-        default=None,
-        metadata={
-            "help": "CV of the per-task lognormal noise around factor x mean; default: the "
-            "run's task_cv",
-            "min": 0.0,
-        },
+    task_cv: float | None = option(
+        None,
+        "CV of the per-task lognormal noise around factor x mean; default: the run's task_cv",
+        min=0.0,
     )
 
     def resolve(self, instance: Instance, timing: TimingModel) -> tuple[float, float]:

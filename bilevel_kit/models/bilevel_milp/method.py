@@ -15,7 +15,7 @@ from ...bounds import best_bound
 from ...errors import UsageError
 from ...instance import Instance
 from ...methods import MethodOutput, Status
-from ...options import keyword_options
+from ...options import keyword_options, option
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..milp.model import human_order
@@ -38,29 +38,17 @@ class BilevelMilpOptions:
     """Options of the registered method ``bilevel-milp`` (the Python :func:`solve` also takes
     a warm-start plan, CE parameters, shared kit values and solver options)."""
 
-    solver: str = field(
-        default="highs",
-        metadata={"help": "highs (HiGHS in a child process) or any Pyomo solver name"},
+    solver: str = option("highs", "highs (HiGHS in a child process) or any Pyomo solver name")
+    lower: Literal["ce", "best"] = option(
+        "best", "kit values from CE and the oracle, or also CP-SAT's fitness layout"
     )
-    lower: Literal["ce", "best"] = field(
-        default="best",
-        metadata={"help": "kit values from CE and the oracle, or also CP-SAT's fitness layout"},
+    pack_time_limit: float = option(
+        0.5, "seconds per multiset for the CP-SAT fitness layout", min=0.0
     )
-    pack_time_limit: float = field(
-        default=0.5,
-        metadata={"help": "seconds per multiset for the CP-SAT fitness layout", "min": 0.0},
-    )
-    max_tasks: int = field(
-        default=MAX_TASKS, metadata={"help": "largest instance accepted (tasks)", "min": 1}
-    )
-    max_columns: int = field(
-        default=MAX_COLUMNS,
-        metadata={"help": "largest number of candidate kits accepted", "min": 1},
-    )
-    signed: bool = field(
-        default=False, metadata={"help": "the printed signed terms 5 and 6 (docs/errata.md)"}
-    )
-    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+    max_tasks: int = option(MAX_TASKS, "largest instance accepted (tasks)", min=1)
+    max_columns: int = option(MAX_COLUMNS, "largest number of candidate kits accepted", min=1)
+    signed: bool = option(False, "the printed signed terms 5 and 6 (docs/errata.md)")
+    log: bool = option(False, "print the MILP solver's log")
 
 
 def solve(

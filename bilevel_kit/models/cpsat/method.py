@@ -58,7 +58,7 @@ driver for cpsat and milp".
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ... import progress
@@ -67,7 +67,7 @@ from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
-from ...options import finger_room_field, keyword_options
+from ...options import finger_room_field, keyword_options, option
 from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -127,32 +127,22 @@ def _positive(owner: object, *names: str) -> None:
 class ScheduleOptions:
     """The CP-SAT model's options (the Python :func:`solve` takes these as keywords)."""
 
-    workers: int = field(default=2, metadata={"help": "CP-SAT worker threads", "min": 1})
-    tray: TrayMode = field(
-        default="auto",
-        metadata={"help": "tray packing: embedded in the model, by Benders cuts, or auto"},
+    workers: int = option(2, "CP-SAT worker threads", min=1)
+    tray: TrayMode = option(  # noqa: RUF009 (a field with a str default)
+        "auto", "tray packing: embedded in the model, by Benders cuts, or auto"
     )
     objective: str = objective_field()
-    time_resolution: float = field(
-        default=0.1,
-        metadata={
-            "help": "time grid in s (>= 0.001), refined when times are not exact",
-            "min": 0.001,
-            "max": 1e4,
-        },
+    time_resolution: float = option(
+        0.1, "time grid in s (>= 0.001), refined when times are not exact", min=0.001, max=1e4
     )
-    refine_times: bool = field(
-        default=True, metadata={"help": "refine the time grid until every time is exact"}
+    refine_times: bool = option(True, "refine the time grid until every time is exact")
+    pack_resolution: float = option(  # the instances' length range (docs/formats.md#ranges)
+        1.0,
+        "packing grid in mm (>= 0.01); part sizes are rounded up",
+        min=MIN_LENGTH,
+        max=MAX_LENGTH,
     )
-    pack_resolution: float = field(
-        default=1.0,
-        metadata={  # the instances' length range (docs/formats.md#ranges)
-            "help": "packing grid in mm (>= 0.01); part sizes are rounded up",
-            "min": MIN_LENGTH,
-            "max": MAX_LENGTH,
-        },
-    )
-    log: bool = field(default=False, metadata={"help": "print CP-SAT's search log"})
+    log: bool = option(False, "print CP-SAT's search log")
     fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
     search: float = search_field()
 

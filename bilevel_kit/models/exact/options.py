@@ -3,10 +3,10 @@ meaning and one check in both (docs/formulations.md, "One driver for cpsat and m
 
 from __future__ import annotations
 
-from dataclasses import field
 from typing import Literal
 
 from ...objectives import model_objectives
+from ...options import option
 from .station_options import Refused
 
 #: Option ``search``'s default share (docs/formulations.md, "Branch, bound and remember"):
@@ -21,24 +21,19 @@ Fallback = Literal["lns", "none"]
 def objective_field() -> str:
     """Option ``objective``: a modelled objective of the registry, a plugin's too (checked
     when parsed, when the registry is complete)."""
-    return field(
-        default="makespan",
-        metadata={
-            "help": "minimise makespan, (stations) sum_completion, human_idle, or a plugin's "
-            "objective",
-            "choices": model_objectives,
-        },
+    return option(
+        "makespan",
+        "minimise makespan, (stations) sum_completion, human_idle, or a plugin's objective",
+        choices=model_objectives,
     )
 
 
 def hint_field() -> str:
     """Option ``hint``: the warm start (:func:`.driver.check_hint` checks it)."""
-    return field(
-        default="auto",
-        metadata={
-            "help": "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
-            "method name, or none; its plan is the incumbent when better than the quick plan"
-        },
+    return option(
+        "auto",
+        "warm start: auto (best of single-task, whole-assembly, greedy-ce), a "
+        "method name, or none; its plan is the incumbent when better than the quick plan",
     )
 
 
@@ -46,25 +41,21 @@ def fallback_field() -> Fallback:
     """Option ``fallback``: what a run without a model (docs/formulations.md, "Model too
     large") returns."""
     default: Fallback = "lns"
-    return field(
-        default=default,
-        metadata={
-            "help": "no model built (too large, too slow): lns from the plan, or none "
-            "(several stations: cpsat runs lns's station search, milp returns the plan; "
-            "extra['fallback'])"
-        },
+    return option(
+        default,
+        "no model built (too large, too slow): lns from the plan, or none "
+        "(several stations: cpsat runs lns's station search, milp returns the plan; "
+        "extra['fallback'])",
     )
 
 
 def search_field() -> float:
     """Option ``search``: the share of the time left before the model that the ideal search
     (:mod:`.search_first`) gets; 0: none."""
-    return field(
-        default=SEARCH_DEFAULT,
-        metadata={
-            "help": "share of the time left before the model for the ideal search from the "
-            "incumbent (branch, bound and remember; one station, makespan), e.g. 0.3; 0: none",
-            "min": 0.0,
-            "max": 1.0,
-        },
+    return option(
+        SEARCH_DEFAULT,
+        "share of the time left before the model for the ideal search from the "
+        "incumbent (branch, bound and remember; one station, makespan), e.g. 0.3; 0: none",
+        min=0.0,
+        max=1.0,
     )

@@ -59,6 +59,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import get as get_objective
 from ...objectives import scenario_objectives
+from ...options import option
 from ...plan import Kit, Placement, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, pack_time_limit, unfit_outcome
@@ -82,76 +83,49 @@ SCENARIO_ONLY = {"objective": scenario_objectives}
 class LnsOptions:
     """Options of the registered method ``lns``."""
 
-    iterations: int | None = field(
-        default=None,
-        metadata={"help": "windows to solve (none: until the time limit or a local optimum)"},
+    iterations: int | None = option(
+        None, "windows to solve (none: until the time limit or a local optimum)"
     )
-    stall: int | None = field(
-        default=None,
-        metadata={
-            "help": "windows in a row without improvement that end the run (none: sweeps to a "
-            "local optimum)",
-            "min": 1,
-        },
+    stall: int | None = option(
+        None,
+        "windows in a row without improvement that end the run (none: sweeps to a local optimum)",
+        min=1,
     )
-    window: int = field(default=24, metadata={"help": "tasks freed per window at first", "min": 2})
-    max_window: int = field(
-        default=60, metadata={"help": "largest window (tasks) after sweeps without gain", "min": 2}
+    window: int = option(24, "tasks freed per window at first", min=2)
+    max_window: int = option(60, "largest window (tasks) after sweeps without gain", min=2)
+    window_time: float = option(
+        1.0, "CP-SAT deterministic time per window (about seconds)", min=0.01
     )
-    window_time: float = field(
-        default=1.0,
-        metadata={"help": "CP-SAT deterministic time per window (about seconds)", "min": 0.01},
+    workers: int = option(1, "CP-SAT workers per window (several: interleaved)", min=1)
+    start: Literal["auto", "quick"] = option(
+        "auto", "start plans: auto (quick plans and greedy-ce) or quick (no greedy-ce)"
     )
-    workers: int = field(
-        default=1, metadata={"help": "CP-SAT workers per window (several: interleaved)", "min": 1}
-    )
-    start: Literal["auto", "quick"] = field(
-        default="auto",
-        metadata={"help": "start plans: auto (quick plans and greedy-ce) or quick (no greedy-ce)"},
-    )
-    start_share: float = field(
-        default=0.1, metadata={"help": "share of the time limit for greedy-ce's start", "min": 0.0}
-    )
-    bound_share: float = field(
-        default=0.1,
-        metadata={"help": "share of the time limit for the kit-count LP bound", "min": 0.0},
-    )
+    start_share: float = option(0.1, "share of the time limit for greedy-ce's start", min=0.0)
+    bound_share: float = option(0.1, "share of the time limit for the kit-count LP bound", min=0.0)
     objective: Literal[
         "makespan", "expected_makespan", "cvar_makespan", "sum_completion", "human_idle"
-    ] = field(
-        default="makespan",
-        metadata={
-            "help": "makespan (mean times), expected_makespan (sample average over "
-            "scenarios of the human times), cvar_makespan (their CVaR at level alpha), "
-            "docs/formulations.md; sum_completion or human_idle (docs/stations.md)"
-        },
+    ] = option(
+        "makespan",
+        "makespan (mean times), expected_makespan (sample average over "
+        "scenarios of the human times), cvar_makespan (their CVaR at level alpha), "
+        "docs/formulations.md; sum_completion or human_idle (docs/stations.md)",
     )
-    alpha: float = field(
-        default=0.9,
-        metadata={
-            "help": "CVaR level of cvar_makespan: the mean of the worst (1 - alpha) share "
-            "of the scenarios (0: their average)",
-            "min": 0.0,
-            "below": 1.0,
-            "needs": {"objective": ("cvar_makespan",)},
-        },
+    alpha: float = option(
+        0.9,
+        "CVaR level of cvar_makespan: the mean of the worst (1 - alpha) share "
+        "of the scenarios (0: their average)",
+        min=0.0,
+        below=1.0,
+        needs={"objective": ("cvar_makespan",)},
     )
-    scenarios: int = field(
-        default=20,
-        metadata={"help": "scenarios of the human times", "min": 1, "needs": SCENARIO_ONLY},
-    )
-    scenario_seed: int = field(
-        default=0,
-        metadata={"help": "seed of the scenarios", "min": 0, "needs": SCENARIO_ONLY},
-    )
-    cv: float | None = field(
-        default=None,
-        metadata={
-            "help": "coefficient of variation of every human time in the scenarios (none: "
-            "each task's sd / mean)",
-            "min": 0.0,
-            "needs": SCENARIO_ONLY,
-        },
+    scenarios: int = option(20, "scenarios of the human times", min=1, needs=SCENARIO_ONLY)
+    scenario_seed: int = option(0, "seed of the scenarios", min=0, needs=SCENARIO_ONLY)
+    cv: float | None = option(
+        None,
+        "coefficient of variation of every human time in the scenarios (none: "
+        "each task's sd / mean)",
+        min=0.0,
+        needs=SCENARIO_ONLY,
     )
 
 

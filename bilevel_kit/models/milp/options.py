@@ -4,9 +4,10 @@ seconds a run keeps back from its time limit."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
+from ...options import option
 from ..exact.driver import check_hint
 from ..exact.options import (
     SEARCH_WITH_STATIONS,
@@ -27,22 +28,17 @@ MARGIN = 0.2
 class MilpOptions:
     """Options of the registered method ``milp``."""
 
-    solver: str = field(
-        default="highs",
-        metadata={
-            "help": "highs (HiGHS in a child process) or any Pyomo solver name "
-            "(cbc, glpk, gurobi, scip ...)"
-        },
+    solver: str = option(
+        "highs",
+        "highs (HiGHS in a child process) or any Pyomo solver name (cbc, glpk, gurobi, scip ...)",
     )
     objective: str = objective_field()
-    tray: Literal["auto", "benders"] = field(
-        default="auto",
-        metadata={
-            "help": "auto (milp has no embedded tray: benders) or benders: Benders cuts, seeded "
-            "for the task pairs that do not fit (one station)"
-        },
+    tray: Literal["auto", "benders"] = option(
+        "auto",
+        "auto (milp has no embedded tray: benders) or benders: Benders cuts, seeded "
+        "for the task pairs that do not fit (one station)",
     )
-    log: bool = field(default=False, metadata={"help": "print the MILP solver's log"})
+    log: bool = option(False, "print the MILP solver's log")
     hint: str = hint_field()
     fallback: Fallback = fallback_field()  # noqa: RUF009 (a field() with a str default)
     search: float = search_field()
