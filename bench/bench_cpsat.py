@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bilevel_kit.instance import Instance, from_dict, load
+from bilevel_kit.instance import Instance, load
 from bilevel_kit.models import packing_oracle as cpsat_packing
 from bilevel_kit.models.cpsat import solve
 from bilevel_kit.models.exact import keys
@@ -32,48 +32,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def table_instance() -> Instance:
-    """instances/hrc_table.json, or the same 12-task table built here when it is missing
-    (4 legs x [foot -> connector -> top], docs/paper-data.md)."""
-    path = ROOT / "instances/hrc_table.json"
-    if path.exists():
-        return load(path)
-    parts = [
-        ("leg", 152.4, 12.7, 12.0),
-        ("foot", 43.0, 43.0, 10.0),
-        ("connector", 41.0, 41.0, 10.0),
-        ("screw_long", 14.0, 6.0, 5.0),
-        ("screw_short", 8.0, 6.0, 5.0),
-    ]
-    kinds = (
-        ("foot", [("leg", 1), ("foot", 1), ("screw_short", 1)], 33.0),
-        ("conn", [("connector", 1), ("screw_short", 1)], 26.0),
-        ("top", [("screw_long", 2)], 34.695),
-    )
-    tasks, prec = [], []
-    for leg in range(1, 5):
-        for kind, needs, human in kinds:
-            tasks.append(
-                {
-                    "id": f"{kind}{leg}",
-                    "parts": [{"type": t, "count": c} for t, c in needs],
-                    "human_time": {"mean": human},
-                }
-            )
-        prec += [[f"foot{leg}", f"conn{leg}"], [f"conn{leg}", f"top{leg}"]]
-    return from_dict(
-        {
-            "format": "bilevel-kit/1",
-            "name": "hrc_table",
-            "tray": {"width": 300.0, "height": 200.0},
-            "delivery_time": 2.0,
-            "kit_overhead": {"robot": 8.0, "human": 4.0},
-            "part_types": [
-                {"id": i, "width": w, "height": h, "pick_time": p} for i, w, h, p in parts
-            ],
-            "tasks": tasks,
-            "precedence": prec,
-        }
-    )
+    """The paper's table, instances/hrc_table.json (docs/paper-data.md)."""
+    return load(ROOT / "instances/hrc_table.json")
 
 
 def run(inst: Instance, label: str, mode: str, args: argparse.Namespace) -> dict[str, Any]:
