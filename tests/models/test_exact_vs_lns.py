@@ -79,12 +79,21 @@ class _Backend:
 
     instance: object
     is_makespan: bool = True
+    known: float = 0.25  # the bound known before the model
+    raised: tuple[float, str] | None = None
 
     def plan(self, inc: Plan) -> Plan:
         return inc
 
+    def known_bound(self) -> float:
+        return self.known
+
+    def raise_bound(self, value: float, source: str) -> None:
+        self.raised = (value, source)
+        self.known = max(self.known, value)
+
     def conclude(self, inc: Plan) -> MethodOutput:
-        return MethodOutput(inc, Status.FEASIBLE, 1.0, {"concluded": True})
+        return MethodOutput(inc, Status.FEASIBLE, self.known, {"concluded": True})
 
 
 @pytest.fixture(scope="module")
@@ -102,12 +111,40 @@ def two_plans(tiny):
 def test_a_model_plan_worse_than_its_incumbent_is_replaced(tiny, two_plans):
     (better, worse), (_, high) = two_plans
     model = MethodOutput(worse, Status.FEASIBLE, 0.5, {"solver_status": "feasible"})
-    out = never_worse(_Backend(tiny), better, model)
+    backend = _Backend(tiny)
+    out = never_worse(backend, better, model)
     assert out.plan is better and out.extra["concluded"] is True
     assert out.extra[keys.MODEL_PLAN_WORSE] == {
         "makespan": pytest.approx(high),
         "status": "feasible",
         "bound": 0.5,
+        "bound_taken": True,
+    }
+    # the model's bound (0.5, for every plan) is kept, not the lower one known before (0.25)
+    assert backend.raised == (0.5, "model") and out.bound == 0.5
+
+
+def test_a_lower_model_bound_leaves_the_known_one(tiny, two_plans):
+    (better, worse), _ = two_plans
+    backend = _Backend(tiny, known=0.75)
+    out = never_worse(backend, better, MethodOutput(worse, Status.FEASIBLE, 0.5, {}))
+    assert backend.raised is None and out.bound == 0.75
+    assert out.extra[keys.MODEL_PLAN_WORSE]["bound_taken"] is True
+
+
+def test_a_model_bound_above_the_incumbent_is_not_taken(tiny, two_plans):
+    """A bound above a valid plan's makespan contradicts that plan: it is reported in
+    ``model_plan_worse`` and not given to the incumbent."""
+    (better, worse), (_, high) = two_plans
+    backend = _Backend(tiny)
+    model = MethodOutput(worse, Status.OPTIMAL, high, {})
+    out = never_worse(backend, better, model)
+    assert backend.raised is None and out.bound == 0.25
+    assert out.extra[keys.MODEL_PLAN_WORSE] == {
+        "makespan": pytest.approx(high),
+        "status": "optimal",
+        "bound": pytest.approx(high),
+        "bound_taken": False,
     }
 
 

@@ -99,7 +99,10 @@ def never_worse(backend: Backend[Inc], inc: Inc, out: MethodOutput) -> MethodOut
     incumbent under C <= U, so this is a safety net against a plan lost in the model's
     re-packing or re-timing (docs/formulations.md, "The LNS first").
     ``extra["model_plan_worse"]`` then keeps the model's makespan (None: no plan), status and
-    bound."""
+    bound. The model's bound (for every plan, :func:`..common.scope_claims`) still holds, so
+    the incumbent is concluded with it when it is higher than the bound known before the
+    model (``bound_source`` ``model``); a bound above the incumbent's makespan contradicts
+    that plan and is not taken (``model_plan_worse["bound_taken"]`` says which)."""
     if not backend.is_makespan:
         return out
     before = evaluate(backend.instance, backend.plan(inc)).makespan
@@ -107,6 +110,10 @@ def never_worse(backend: Backend[Inc], inc: Inc, out: MethodOutput) -> MethodOut
     if after is not None and after <= before + lns_first.TOL:
         return out
     worse = {"makespan": after, "status": str(out.status), "bound": out.bound}
+    taken = out.bound is not None and out.bound <= before + lns_first.TOL
+    if taken and out.bound > backend.known_bound() + lns_first.TOL:
+        backend.raise_bound(out.bound, "model")
+    worse["bound_taken"] = taken
     result = backend.conclude(inc)
     result.extra[keys.MODEL_PLAN_WORSE] = worse
     return result
