@@ -37,7 +37,9 @@ from ..budget import Budget
 from ..common import Packer, scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .search import Outcome, packer_fits, search
+from .search import Space as SearchSpace
 from .space import Space
+from .stations import StationSpace
 
 #: Seconds kept back at the end for the layouts of a new plan, plus this share of the limit.
 MARGIN_S, MARGIN_SHARE = 0.2, 0.02
@@ -91,7 +93,7 @@ def bbr(
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
     upper = evaluate(instance, start).makespan if start is not None else math.inf
-    space = Space(instance)
+    space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
     fits = packer_fits(packer)
 
@@ -136,10 +138,7 @@ def _start(
     and bound, or the quick plans' best (:func:`..common.quick_plan`, every packing call
     limited by deterministic time, so the start does not depend on the load) and no bound."""
     if options.start == "quick":
-        from ..common import quick_plan
-
-        kits = quick_plan(instance, packer)
-        plan = None if kits is None else with_layouts(instance, packer, kits)
+        plan = _quick(instance, packer, seed, budget)
         extra.update(start_method="quick", start_makespan=_makespan(instance, plan))
         return plan, None
     from ..lns.method import LnsOptions, lns
@@ -152,6 +151,21 @@ def _start(
         start_bound_source=got.extra.get("bound_source"),
     )
     return got.plan, got.bound
+
+
+def _quick(instance: Instance, packer: Packer, seed: int, budget: Budget) -> Plan | None:
+    """The quick start: one station's quick plans, or with several stations the better of
+    single-task's and whole-assembly's (as ``lns``'s station search starts,
+    docs/stations.md#lns-with-several-stations); both are deterministic."""
+    if instance.stations:
+        from ..exact.warm import best_heuristic_plan
+
+        methods = ("single-task", "whole-assembly")
+        return best_heuristic_plan(instance, methods, seed=seed, time_limit=budget.remaining())[0]
+    from ..common import quick_plan
+
+    kits = quick_plan(instance, packer)
+    return None if kits is None else with_layouts(instance, packer, kits)
 
 
 def _makespan(instance: Instance, plan: Plan | None) -> float | None:
