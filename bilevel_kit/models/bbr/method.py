@@ -1,8 +1,9 @@
 """The registered method ``bbr``: branch, bound and remember over the precedence ideals.
 
 1. **Start**: ``lns`` within ``start_share`` of the time limit (``start="lns"``), or the
-   quick plans alone (``start="quick"``): its plan is the incumbent, its makespan the first
-   upper bound of the search.
+   quick plans alone (``start="quick"``; with several stations the better of single-task's
+   and whole-assembly's): its plan is the incumbent, its makespan the first upper bound of
+   the search.
 2. **Search** (:mod:`.search`) with the rest of the time: best-first over (ideal, timeline
    state) nodes, pruned by the state's lower bound (:mod:`.space`) and by dominance, the tray
    asked lazily (the packing oracle, memoised, limited by deterministic time so its verdicts
@@ -15,7 +16,8 @@
    the higher of the search's (the least of its open bounds and relaxed plans) and the
    start's, for every plan.
 
-One station, the makespan, one or more trays (docs/timeline.md). ``extra``: ``start_method``,
+The makespan, one or more trays, one station (:mod:`.space`) or several (:mod:`.stations`,
+docs/timeline.md#several-stations); no other objective. ``extra``: ``start_method``,
 ``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
 ``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and

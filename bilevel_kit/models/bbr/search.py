@@ -2,10 +2,11 @@ r"""Branch, bound and remember over the ideals of the precedence graph (docs/for
 "Branch, bound and remember"; Sewell & Jacobson 2012, Morrison, Sewell & Jacobson 2014).
 
 A node is an ideal ``J`` (the tasks of the kits so far, a bit mask) with the timeline's state
-after them (:mod:`.space`). The search is best-first on the node's lower bound ``f``
+after them (:mod:`.space`; with several stations :mod:`.stations`, a kit of one station's
+tasks). The search is best-first on the node's lower bound ``f``
 (:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
 
-* **branch**: a node's children are its kits (:meth:`.space.Space.kits`), each the node's
+* **branch**: a node's children are its kits (:meth:`.space.Space.children`), each the node's
   ideal plus a down-set extension whose parts fit the tray;
 * **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
 * **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
