@@ -137,7 +137,7 @@ def _start(
     extra: dict[str, Any],
 ) -> tuple[Plan | None, float | None]:
     """The first incumbent and its proven bound (module docstring, step 1): ``lns``'s plan
-    and bound, or the quick plans' best (:func:`..common.quick_plan`, every packing call
+    and bound, or the quick plans' best (:func:`_quick`: one station's every packing call
     limited by deterministic time, so the start does not depend on the load) and no bound."""
     if options.start == "quick":
         plan = _quick(instance, packer, seed, budget)
@@ -158,7 +158,8 @@ def _start(
 def _quick(instance: Instance, packer: Packer, seed: int, budget: Budget) -> Plan | None:
     """The quick start: one station's quick plans, or with several stations the better of
     single-task's and whole-assembly's (as ``lns``'s station search starts,
-    docs/stations.md#lns-with-several-stations); both are deterministic."""
+    docs/stations.md#lns-with-several-stations): deterministic methods, each within the
+    time left."""
     if instance.stations:
         from ..exact.warm import best_heuristic_plan
 
