@@ -102,6 +102,10 @@ def test_bound_at_an_expansion_stop_is_below_the_optimum(seed, n_stations, trays
     assert bounds == sorted(bounds)  # best-first: the bound only rises with the work
     first = search(StationSpace(inst), brute_fits(inst), max_expansions=1)
     assert first.stop == "expansions" and first.bound < opt  # a stop before the proof
+    res = solve(inst, "bbr", start="quick", expansions=1, check=True)  # the method's claims
+    assert res.extra["violations"] == [] and res.extra["stop"] == "expansions"
+    assert res.bound <= opt + 1e-6 <= res.makespan + 2e-6
+    assert res.status == "feasible" or res.makespan == pytest.approx(opt, abs=1e-6)
 
 
 def test_expansion_limit_is_deterministic_and_honest():
