@@ -614,11 +614,12 @@ register(
 register(
     "bbr",
     "bilevel_kit.models.bbr.method:bbr",
-    "exact: branch, bound and remember over the precedence ideals (one station, makespan)",
+    "exact: branch, bound and remember over the precedence ideals (makespan)",
     "bilevel_kit.models.bbr.method:BbrOptions",
     prepare=COMPILE_KERNELS,  # its start is lns's, which runs greedy-ce
     # a new exact method beside cpsat and milp: named, not in the main job's default set
     in_default=False,
+    supports_stations=True,  # the makespan only (docs/formulations.md)
 )
 register(
     "lns",

@@ -187,12 +187,10 @@ def test_expansion_limit_is_deterministic_and_honest():
 
 
 def test_refusals():
+    """Another objective is refused (several stations: tests/models/test_bbr_stations.py)."""
     inst = load(INSTANCES / "hrc_table.json")
     with pytest.raises(UsageError, match="objective"):
         solve(inst, "bbr", time_limit=5, objective="sum_completion")
-    stations = next((INSTANCES / "stations").glob("*.json"))
-    with pytest.raises(UsageError, match="several assembly stations"):
-        solve(load(stations), "bbr", time_limit=5)
 
 
 # ---------------------------------------------------------------------------------------------

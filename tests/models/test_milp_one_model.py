@@ -115,16 +115,17 @@ def test_cli_says_in_one_line_when_no_model_is_built(tmp_path, capsys):
 
 
 def test_cli_refuses_a_hint_without_stations_support_in_one_line(tmp_path, capsys):
-    """``-p hint=bbr`` with stations: exit 2, one line naming the file, the option and why
-    (bbr does not model several stations), no solution written."""
+    """``-p hint=bilevel-milp`` with stations: exit 2, one line naming the file, the option
+    and why (bilevel-milp does not model several stations), no solution written."""
     from stations_example import first_tray_doc
 
     path = tmp_path / "first_tray.json"
     path.write_text(json.dumps(first_tray_doc()))
     out = tmp_path / "sol.json"
-    args = ["solve", str(path), "-m", "milp", "-p", "hint=bbr", "--time-limit", "5"]
+    args = ["solve", str(path), "-m", "milp", "-p", "hint=bilevel-milp", "--time-limit", "5"]
     assert main([*args, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert f"{path}: milp does not use option 'hint=bbr' with several assembly stations" in err
-    assert "(bbr does not model them)" in err and not out.exists()
+    hint = "hint=bilevel-milp"
+    assert f"{path}: milp does not use option '{hint}' with several assembly stations" in err
+    assert "(bilevel-milp does not model them)" in err and not out.exists()

@@ -27,9 +27,9 @@ def test_milp_stations_honours_a_hint_that_models_stations():
     out = milp(inst, MilpOptions(hint="single-task", fallback="none"), time_limit=20)
     assert out.plan is not None and check(inst, out.plan) == []
     assert out.extra["hint_method"] in ("single-task", "whole-assembly", "greedy-ce")
-    with pytest.raises(UsageError, match="hint=bbr") as exc:
-        milp(inst, MilpOptions(hint="bbr"), time_limit=5)
-    assert "\n" not in str(exc.value) and "bbr does not model them" in str(exc.value)
+    with pytest.raises(UsageError, match="hint=bilevel-milp") as exc:
+        milp(inst, MilpOptions(hint="bilevel-milp"), time_limit=5)
+    assert "\n" not in str(exc.value) and "bilevel-milp does not model them" in str(exc.value)
 
 
 def test_milp_sum_completion_on_one_station_is_the_makespan(table):

@@ -222,8 +222,8 @@ def test_cpsat_time_grid_off_the_times_is_honest_with_stations(inst):
 
 def test_cpsat_hint_method_without_stations_is_one_line(inst):
     """A hint method that does not plan for several stations: one line, exit 2."""
-    with pytest.raises(UsageError, match="method 'bbr' does not model several assembly"):
-        solve(inst, "cpsat", time_limit=5, hint="bbr")
+    with pytest.raises(UsageError, match="method 'bilevel-milp' does not model several"):
+        solve(inst, "cpsat", time_limit=5, hint="bilevel-milp")
 
 
 def test_cpsat_keyword_entry_solves_stations(inst):

@@ -36,6 +36,7 @@ CASES = [(seed, 2 + seed % 2, 4 + seed % 4) for seed in range(6)]
 EXACT: dict[str, dict[str, Any]] = {
     "cpsat": {"time_limit": 30, "workers": 1},
     "milp": {"time_limit": 30},
+    "bbr": {"time_limit": 30, "start": "quick"},
 }
 
 

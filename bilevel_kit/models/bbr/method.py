@@ -1,8 +1,9 @@
 """The registered method ``bbr``: branch, bound and remember over the precedence ideals.
 
 1. **Start**: ``lns`` within ``start_share`` of the time limit (``start="lns"``), or the
-   quick plans alone (``start="quick"``): its plan is the incumbent, its makespan the first
-   upper bound of the search.
+   quick plans alone (``start="quick"``; with several stations the better of single-task's
+   and whole-assembly's): its plan is the incumbent, its makespan the first upper bound of
+   the search.
 2. **Search** (:mod:`.search`) with the rest of the time: best-first over (ideal, timeline
    state) nodes, pruned by the state's lower bound (:mod:`.space`) and by dominance, the tray
    asked lazily (the packing oracle, memoised, limited by deterministic time so its verdicts
@@ -15,7 +16,8 @@
    the higher of the search's (the least of its open bounds and relaxed plans) and the
    start's, for every plan.
 
-One station, the makespan, one or more trays (docs/timeline.md). ``extra``: ``start_method``,
+The makespan, one or more trays, one station (:mod:`.space`) or several (:mod:`.stations`,
+docs/timeline.md#several-stations); no other objective. ``extra``: ``start_method``,
 ``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
 ``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
@@ -37,7 +39,9 @@ from ..budget import Budget
 from ..common import Packer, scope_claims, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .search import Outcome, packer_fits, search
+from .search import Space as SearchSpace
 from .space import Space
+from .stations import StationSpace
 
 #: Seconds kept back at the end for the layouts of a new plan, plus this share of the limit.
 MARGIN_S, MARGIN_SHARE = 0.2, 0.02
@@ -91,7 +95,7 @@ def bbr(
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
     upper = evaluate(instance, start).makespan if start is not None else math.inf
-    space = Space(instance)
+    space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
     fits = packer_fits(packer)
 
@@ -133,13 +137,10 @@ def _start(
     extra: dict[str, Any],
 ) -> tuple[Plan | None, float | None]:
     """The first incumbent and its proven bound (module docstring, step 1): ``lns``'s plan
-    and bound, or the quick plans' best (:func:`..common.quick_plan`, every packing call
+    and bound, or the quick plans' best (:func:`_quick`: one station's every packing call
     limited by deterministic time, so the start does not depend on the load) and no bound."""
     if options.start == "quick":
-        from ..common import quick_plan
-
-        kits = quick_plan(instance, packer)
-        plan = None if kits is None else with_layouts(instance, packer, kits)
+        plan = _quick(instance, packer, seed, budget)
         extra.update(start_method="quick", start_makespan=_makespan(instance, plan))
         return plan, None
     from ..lns.method import LnsOptions, lns
@@ -152,6 +153,22 @@ def _start(
         start_bound_source=got.extra.get("bound_source"),
     )
     return got.plan, got.bound
+
+
+def _quick(instance: Instance, packer: Packer, seed: int, budget: Budget) -> Plan | None:
+    """The quick start: one station's quick plans, or with several stations the better of
+    single-task's and whole-assembly's (as ``lns``'s station search starts,
+    docs/stations.md#lns-with-several-stations): deterministic methods, each within the
+    time left."""
+    if instance.stations:
+        from ..exact.warm import best_heuristic_plan
+
+        methods = ("single-task", "whole-assembly")
+        return best_heuristic_plan(instance, methods, seed=seed, time_limit=budget.remaining())[0]
+    from ..common import quick_plan
+
+    kits = quick_plan(instance, packer)
+    return None if kits is None else with_layouts(instance, packer, kits)
 
 
 def _makespan(instance: Instance, plan: Plan | None) -> float | None:

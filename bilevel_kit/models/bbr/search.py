@@ -2,10 +2,11 @@ r"""Branch, bound and remember over the ideals of the precedence graph (docs/for
 "Branch, bound and remember"; Sewell & Jacobson 2012, Morrison, Sewell & Jacobson 2014).
 
 A node is an ideal ``J`` (the tasks of the kits so far, a bit mask) with the timeline's state
-after them (:mod:`.space`). The search is best-first on the node's lower bound ``f``
+after them (:mod:`.space`; with several stations :mod:`.stations`, a kit of one station's
+tasks). The search is best-first on the node's lower bound ``f``
 (:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
 
-* **branch**: a node's children are its kits (:meth:`.space.Space.kits`), each the node's
+* **branch**: a node's children are its kits (:meth:`.space.Space.children`), each the node's
   ideal plus a down-set extension whose parts fit the tray;
 * **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
 * **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
@@ -36,17 +37,40 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import Protocol
 
+from ...instance import Instance
 from ..common import Packer
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
-from .space import Space
 
 #: Answer of the fit test for a part multiset: True, or the scope of a "no" (None: undecided).
 FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
 #: What the search does with a kit (:meth:`_Search.fit`).
 FITS, NO, RELAXED = "fits", "no", "relaxed"
+
+
+class Space(Protocol):
+    """What the search asks of its space: one station's (:class:`.space.Space`) or several
+    stations' (:class:`.stations.StationSpace`)."""
+
+    instance: Instance
+    full: int
+
+    def root(self) -> tuple[float, ...]: ...
+
+    def step(
+        self, state: tuple[float, ...], r: float, h: float, station: int = 0
+    ) -> tuple[float, ...]: ...
+
+    def lower_bound(self, done: int, state: tuple[float, ...]) -> float: ...
+
+    def children(
+        self, done: int, state: tuple[float, ...], below: float
+    ) -> Iterator[tuple[int, float, float, int]]: ...
+
+    def order(self, mask: int) -> list[str]: ...
 
 
 @dataclass
@@ -204,15 +228,14 @@ class _Search:
         """Push the node's children that survive the bound and the dominance test."""
         space, counts = self.space, self.counts
         counts["expanded"] += 1
-        cap = space.robot_cap(node.done, node.state, self.upper - self.tol)
-        for mask, r, h, _ in space.kits(node.done, cap):
+        for mask, r, h, station in space.children(node.done, node.state, self.upper - self.tol):
             counts["generated"] += 1
             if not counts["generated"] & 63 and self._late():
                 self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
                 heapq.heappush(self.heap, (f, 0, next(self.tick), node))
                 return
             done = node.done | mask
-            state = space.step(node.state, r, h)
+            state = space.step(node.state, r, h, station)
             bound = space.lower_bound(done, state)
             if bound >= self.upper - self.tol:
                 continue
@@ -222,23 +245,23 @@ class _Search:
                 counts["dominated"] += 1
                 continue
             if done == space.full:  # a plan better than the incumbent (if its last kit fits)
-                self._complete(child)
+                self._complete(child, bound)  # the bound of a complete plan is its makespan
                 continue
             self.memory.setdefault(done, []).append(child)
             counts["kept"] += 1
             depth = -bin(done).count("1")
             heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
 
-    def _complete(self, child: Node) -> None:
+    def _complete(self, child: Node, makespan: float) -> None:
         """A complete plan below the incumbent: the new incumbent, or a relaxed plan's
         makespan as a bound candidate (module docstring)."""
         answer = self.fit(child.kit)
         if answer == NO:
             return
         if child.relaxed or answer == RELAXED:
-            self.relaxed_best = min(self.relaxed_best, child.state[0])
+            self.relaxed_best = min(self.relaxed_best, makespan)
             return
-        self.upper, self.best = child.state[0], child
+        self.upper, self.best = makespan, child
         self.tol = 1e-9 * max(1.0, abs(self.upper))
 
     def _late(self) -> bool:

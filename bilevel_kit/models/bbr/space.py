@@ -73,6 +73,7 @@ class Space:
     #: trays in circulation that bind (None: unlimited, or at least as many as tasks)
     trays: int | None = field(init=False)
     _consts: dict[int, Constants] = field(init=False, default_factory=dict)
+    _robot: dict[int, tuple[float, float]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         inst = self.instance
@@ -137,9 +138,12 @@ class Space:
         """The state before the first kit: human and robot free at 0, every tray home."""
         return (0.0, 0.0) + (0.0,) * max(0, (self.trays or 1) - 1)
 
-    def step(self, state: tuple[float, ...], r: float, h: float) -> tuple[float, ...]:
+    def step(
+        self, state: tuple[float, ...], r: float, h: float, station: int = 0
+    ) -> tuple[float, ...]:
         """The state after one more kit of robot time ``r`` and human time ``h`` (tasks only;
-        the overheads are added here): the timeline's rule (module docstring)."""
+        the overheads are added here): the timeline's rule (module docstring). ``station``:
+        the kit's (one here; :class:`.stations.StationSpace` takes several)."""
         end, nxt = state[0], state[1]
         arrive = nxt + self.o_r + r + self.d
         hs = arrive if arrive > end else end
@@ -150,11 +154,18 @@ class Space:
         return (new_end, max(arrive, rets[0]), *rets[1:])
 
     # -- kits ------------------------------------------------------------------------------
-    def kits(self, done: int, max_r: float = math.inf) -> Iterator[tuple[int, float, float, float]]:
+    def children(
+        self, done: int, state: tuple[float, ...], below: float
+    ) -> Iterator[tuple[int, float, float, int]]:
+        """The kits from a node that may lead below ``below``: :meth:`kits` under
+        :meth:`robot_cap` (the search's branching, :mod:`.search`)."""
+        return self.kits(done, self.robot_cap(done, state, below))
+
+    def kits(self, done: int, max_r: float = math.inf) -> Iterator[tuple[int, float, float, int]]:
         """Every kit from the ideal ``done`` whose parts' area fits the tray and that holds a
-        task needing a kit: ``(mask, r(S), h(S), area(S))``, each set once (tasks added in
-        increasing number). ``max_r``: a kit's robot time above it cuts that kit and every
-        larger one (:meth:`robot_cap`)."""
+        task needing a kit: ``(mask, r(S), h(S), station)`` (station 0, the one), each set
+        once (tasks added in increasing number). ``max_r``: a kit's robot time above it cuts
+        that kit and every larger one (:meth:`robot_cap`)."""
         n, pred, cap = self.n, self.pred, self.tray_area * (1 + 1e-12)
         r, h, area, needs, twin = self.r, self.h, self.area, self.needs, self.twin
         free = [i for i in range(n) if not done >> i & 1]
@@ -171,7 +182,7 @@ class Space:
                     continue
                 m2, real2 = mask | 1 << i, real or needs[i]
                 if real2:  # a kit of part-less tasks alone is never needed
-                    yield m2, r2, hs + h[i], a2
+                    yield m2, r2, hs + h[i], 0
                 stack.append((j + 1, m2, r2, hs + h[i], a2, real2))
 
     def robot_cap(self, done: int, state: tuple[float, ...], below: float) -> float:
@@ -218,6 +229,20 @@ class Space:
         out = Constants(human, flow, robot_one, a0 + ready)
         self._consts[done] = out
         return out
+
+    def robot_work(self, done: int) -> tuple[float, float]:
+        """``(r(U) + k0 (o_R + d), o_H + min sink h)`` of the tasks ``U`` left (cached): the
+        robot's least work on them and the least human work after their last kit arrives,
+        for the robot term of the several-station bound (:class:`.stations.StationSpace`)."""
+        hit = self._robot.get(done)
+        if hit is None:
+            left = [i for i in range(self.n) if not done >> i & 1]
+            area_u = sum(self.area[i] for i in left)
+            k0 = max(1, math.ceil(area_u / self.tray_area - _AREA_EPS))
+            sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
+            hit = (sum(self.r[i] for i in left) + k0 * (self.o_r + self.d), self.o_h + sink)
+            self._robot[done] = hit
+        return hit
 
     def _overhead_pos(self, left: list[int]) -> int:
         """Where the overhead jobs go among ``left`` (Johnson's order)."""

@@ -11,8 +11,10 @@ of the time left.
   (:func:`..relax.raised`).
 
 ``extra["search_first"]`` reports its counters, stop, bound and time, or why it was skipped:
-option ``search`` 0, several stations, another objective, release times (the search models
-none of them) and a reproducible run (``deterministic``: its stop is clock-bound).
+option ``search`` 0, several stations (the bound it hands the model, per kit count, is one
+station's: :func:`..relax.raised`; ``bbr`` itself searches them), another objective, release
+times (the search models neither) and a reproducible run (``deterministic``: its stop is
+clock-bound).
 """
 
 from __future__ import annotations
@@ -79,7 +81,7 @@ def _skipped(backend: Backend[Any], share: float, releases: bool) -> str | None:
     if share <= 0:
         return "option search is 0"
     if backend.instance.stations:
-        return "the search models one station"
+        return "the bound it hands the model is one station's (relax.raised)"
     if not backend.is_makespan:
         return "the search minimises the makespan"
     if releases:
