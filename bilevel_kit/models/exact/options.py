@@ -12,8 +12,11 @@ from .station_options import Refused
 #: Option ``search``'s default share (docs/formulations.md, "Branch, bound and remember"):
 #: off, so that a run builds its model as before unless asked (``-p search=0.3``).
 SEARCH_DEFAULT = 0.0
-#: Option ``search`` with several stations: the ideal search models one station.
-SEARCH_WITH_STATIONS = Refused("the ideal search models one station")
+#: Option ``search`` with several stations: the bound the ideal search hands the model is per
+#: kit count of one station (:func:`..relax.raised`); ``-m bbr`` searches several stations.
+SEARCH_WITH_STATIONS = Refused(
+    "the bound the ideal search hands the model is one station's; use -m bbr"
+)
 
 Fallback = Literal["lns", "none"]
 
