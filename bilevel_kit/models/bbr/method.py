@@ -29,11 +29,12 @@ docs/timeline.md#several-stations); no other objective. ``extra``: ``start_metho
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
+from ...options import option
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, scope_claims, unfit_outcome
@@ -51,32 +52,19 @@ MARGIN_S, MARGIN_SHARE = 0.2, 0.02
 class BbrOptions:
     """Options of the registered method ``bbr``."""
 
-    start: Literal["lns", "quick"] = field(
-        default="lns",
-        metadata={
-            "help": "first incumbent: lns within start_share, or the quick plans alone "
-            "(reproducible: with expansions, the whole run is)"
-        },
+    start: Literal["lns", "quick"] = option(
+        "lns",
+        "first incumbent: lns within start_share, or the quick plans alone "
+        "(reproducible: with expansions, the whole run is)",
     )
-    start_share: float = field(
-        default=0.25,
-        metadata={"help": "share of the time limit for the lns start", "min": 0.0, "max": 1.0},
+    start_share: float = option(0.25, "share of the time limit for the lns start", min=0.0, max=1.0)
+    expansions: int | None = option(
+        None, "nodes to expand (none: until exhausted or the time limit)", min=1
     )
-    expansions: int | None = field(
-        default=None,
-        metadata={"help": "nodes to expand (none: until exhausted or the time limit)", "min": 1},
+    max_nodes: int = option(
+        1_000_000, "nodes kept in memory before the search stops (about 0.5 kB each)", min=1
     )
-    max_nodes: int = field(
-        default=1_000_000,
-        metadata={
-            "help": "nodes kept in memory before the search stops (about 0.5 kB each)",
-            "min": 1,
-        },
-    )
-    pack_time: float = field(
-        default=2.0,
-        metadata={"help": "deterministic time per packing call (about seconds)", "min": 0.01},
-    )
+    pack_time: float = option(2.0, "deterministic time per packing call (about seconds)", min=0.01)
 
 
 def bbr(
