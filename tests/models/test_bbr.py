@@ -215,13 +215,15 @@ def test_search_first_proves_the_stool_record(method):
 
 
 @pytest.mark.parametrize("method", ["cpsat", "milp"])
-def test_search_first_is_off_by_default_and_refused_with_stations(method):
+def test_search_first_is_off_by_default_and_skipped_for_other_objectives(method):
+    """Off unless asked; with stations another objective than the makespan skips it as with one
+    station (no proof asked: a short limit; tests/models/test_search_first_stations.py)."""
     inst = case(2, 1)
     res = solve(inst, method, time_limit=PROOF_LIMIT)
     assert res.extra["search_first"] == {"skipped": "option search is 0"}
     stations = load(INSTANCES / "stations" / "table_u1_s2.json")
-    with pytest.raises(UsageError, match="search"):
-        solve(stations, method, time_limit=5, search=0.3)
+    res = solve(stations, method, time_limit=5, search=0.3, objective="sum_completion")
+    assert res.extra["search_first"] == {"skipped": "the search minimises the makespan"}
 
 
 @pytest.mark.parametrize("trays", TRAYS)

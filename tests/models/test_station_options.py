@@ -28,14 +28,14 @@ pytest.importorskip("pyomo.environ")
 pytest.importorskip("pyomo.contrib.appsi.solvers")
 
 RULES = {"cpsat": (CpsatOptions, CPSAT_RULES), "milp": (MilpOptions, MILP_RULES)}
-#: Every option but ``search`` is honoured with stations (cpsat: one station is the S = 1 case
-#: of its model; milp: its one model too). These tests also drive the refusal path with a
-#: refusal declared here (:func:`refusing`), through ``solve`` and the CLI.
+#: Every option is honoured with stations (cpsat: one station is the S = 1 case of its model;
+#: milp: its one model too). These tests also drive the refusal path with a refusal declared
+#: here (:func:`refusing`), through ``solve`` and the CLI.
 REFUSED = {("cpsat", "tray"): "embedded", ("milp", "tray"): "benders"}
-#: The table of docs/formulations.md: the refused options (``search``: the ideal search models
-#: one station; its refusal is tested in tests/models/test_bbr.py) and the honoured ones (cpsat:
-#: every other one, one station being the S = 1 case of its model).
-REFUSED_NOW = {"search"}
+#: The table of docs/formulations.md: the refused options (none since ``search`` runs the ideal
+#: search on the stations' space, tests/models/test_search_first_stations.py) and the honoured
+#: ones (every one, one station being the S = 1 case of cpsat's model).
+REFUSED_NOW: set[str] = set()
 HONOURED = {
     "cpsat": {f.name for f in dataclasses.fields(CpsatOptions)} - REFUSED_NOW,
     "milp": {f.name for f in dataclasses.fields(MilpOptions)} - REFUSED_NOW,

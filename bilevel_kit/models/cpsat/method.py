@@ -86,7 +86,6 @@ from ..exact.nomodel import CPSAT as CPSAT_NO_MODEL
 from ..exact.nomodel import WHOLE, HandOff, improve
 from ..exact.options import (
     SEARCH_DEFAULT,
-    SEARCH_WITH_STATIONS,
     Fallback,
     fallback_field,
     hint_field,
@@ -99,7 +98,7 @@ from .conclude import Report, conclude, plan_of
 from .context import MARGIN, Context, Model, State
 from .finger_room import with_room
 from .model import build, canonical, release_bound
-from .proven import kit_cap, known_bound, scaled_kit_bounds, strong_bound
+from .proven import kit_cap, known_bound, scaled_kit_bounds, scaled_lower, strong_bound
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .station_run import station_baselines, station_hand_off
 from .tray import embed_scope, tray_mode
@@ -164,10 +163,7 @@ class CpsatOptions(ScheduleOptions):
 
 #: What the model does with each option on several stations (docs/formulations.md, "Options
 #: with several stations"): every option is honoured (:func:`declare` checks each is declared).
-STATION_OPTIONS = declare(
-    CpsatOptions,
-    {f.name: HONOURED for f in fields(CpsatOptions)} | {"search": SEARCH_WITH_STATIONS},
-)
+STATION_OPTIONS = declare(CpsatOptions, {f.name: HONOURED for f in fields(CpsatOptions)})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -509,6 +505,7 @@ def _solve_model(run: _Cpsat, upper: int | None, incumbent: list[list[int]] | No
         pack_res=options.pack_resolution,
         groups=ctx.groups,
         kit_bounds=scaled_kit_bounds(ctx),
+        lower=scaled_lower(ctx),
     )
     extra["build_time_s"] = budget.elapsed()
     ctx.budget = budget.cut(extra["model_cells"] * OVERRUN_S_PER_CELL)  # CP-SAT's overrun

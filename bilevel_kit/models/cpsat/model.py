@@ -81,11 +81,13 @@ def build(
     pack_res: float,
     groups: list[list[list[int]]],
     kit_bounds: Mapping[int, int] | None = None,
+    lower: int | None = None,
 ) -> Model:
     r"""The model of the module docstring with K kit positions (``upper``: C <= U);
     ``kit_bounds``: m -> a lower bound on the scaled makespan of every plan of exactly m kits
     (the kit-count LP of :mod:`bilevel_kit.models.relax`), added as
-    :math:`C \ge \sum_m L_m (u_{m-1} - u_m)`."""
+    :math:`C \ge \sum_m L_m (u_{m-1} - u_m)`; ``lower``: several stations, C >= L, a lower
+    bound on the scaled makespan of every plan (:func:`.proven.scaled_lower`)."""
     from ortools.sat.python import cp_model
 
     m = cp_model.CpModel()
@@ -98,6 +100,8 @@ def build(
         from .station_model import build_stations
 
         out = build_stations(m, instance, sc, x, used, upper, objective)
+        if lower is not None:
+            m.add(lower <= out.C)
         out.order = (p, y)  # (hinted: a complete hint, :func:`.station_model.hint_stations`)
         out.parts = [tuple(t.parts) for t in instance.tasks]
         _tray(instance, out, embedded, pack_res)

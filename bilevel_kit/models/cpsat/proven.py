@@ -6,6 +6,7 @@ limit, fed to the model per kit count, used to cap the kit count (with the model
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ...bounds import best_bound, end_tasks, kit_slacks
@@ -47,10 +48,21 @@ def scaled_kit_bounds(ctx: Context) -> dict[int, int] | None:
     return on_grid(ctx.proven, ctx.sc.res, ctx.sc.exact)
 
 
+def scaled_lower(ctx: Context) -> int | None:
+    """Several stations, the makespan: the proven bound (the ideal search's,
+    :func:`..relax.raised`) as a lower bound on the model's makespan, on an exact grid only (as
+    the closed form, :func:`.station_model.build_stations`); None: none. One station's reaches
+    the model per kit count instead (:func:`scaled_kit_bounds`)."""
+    sc = ctx.sc
+    if ctx.proven is None or not sc.station or not sc.exact or not ctx.minimised.is_makespan:
+        return None
+    return math.ceil(ctx.proven.value / sc.res - 1e-6)
+
+
 def proven_kit_cap(ctx: Context, upper: int, K: int) -> int:
     """K lowered to the most kits a plan of scaled makespan at most ``upper`` can have by the
     kit-count LP (on an exact grid only: then scaled and real makespans agree)."""
-    if ctx.proven is None or not ctx.sc.exact:
+    if ctx.proven is None or not ctx.sc.exact or ctx.sc.station:  # (closed_at: one station)
         return K
     from ..relax import closed_at
 

@@ -7,16 +7,10 @@ from typing import Literal
 
 from ...objectives import model_objectives
 from ...options import option
-from .station_options import Refused
 
 #: Option ``search``'s default share (docs/formulations.md, "Branch, bound and remember"):
 #: off, so that a run builds its model as before unless asked (``-p search=0.3``).
 SEARCH_DEFAULT = 0.0
-#: Option ``search`` with several stations: the bound the ideal search hands the model is per
-#: kit count of one station (:func:`..relax.raised`); ``-m bbr`` searches several stations.
-SEARCH_WITH_STATIONS = Refused(
-    "the bound the ideal search hands the model is one station's; use -m bbr"
-)
 
 Fallback = Literal["lns", "none"]
 
@@ -58,7 +52,7 @@ def search_field() -> float:
     return option(
         SEARCH_DEFAULT,
         "share of the time left before the model for the ideal search from the "
-        "incumbent (branch, bound and remember; one station, makespan), e.g. 0.3; 0: none",
+        "incumbent (branch, bound and remember; makespan), e.g. 0.3; 0: none",
         min=0.0,
         max=1.0,
     )

@@ -10,11 +10,14 @@ of the time left.
   its open nodes, for every plan) joins the proven bound the model starts from
   (:func:`..relax.raised`).
 
+With several stations the search runs on their space (:class:`..bbr.stations.StationSpace`,
+as ``bbr`` does) and its bound raises the overall bound alone: the kit-count bounds are one
+station's (:func:`..relax.raised`), so the model takes it as a lower bound on its makespan
+and the result for its status, bound and gap (docs/stations.md#bbr-with-several-stations).
+
 ``extra["search_first"]`` reports its counters, stop, bound and time, or why it was skipped:
-option ``search`` 0, several stations (the bound it hands the model, per kit count, is one
-station's: :func:`..relax.raised`; ``bbr`` itself searches them), another objective, release
-times (the search models neither) and a reproducible run (``deterministic``: its stop is
-clock-bound).
+option ``search`` 0, another objective, release times (the search models neither) and a
+reproducible run (``deterministic``: its stop is clock-bound).
 """
 
 from __future__ import annotations
@@ -35,8 +38,10 @@ def before_model(backend: Backend[Inc], inc: Inc, share: float, releases: bool) 
     """The incumbent after the search from ``inc`` (module docstring), and whether it is
     proven optimal (then no model is needed)."""
     from ..bbr.method import with_layouts
+    from ..bbr.search import Space as SearchSpace
     from ..bbr.search import packer_fits, search
     from ..bbr.space import Space
+    from ..bbr.stations import StationSpace
 
     extra, budget, instance = backend.extra, backend.budget, backend.instance
     skipped = _skipped(backend, share, releases)
@@ -47,8 +52,9 @@ def before_model(backend: Backend[Inc], inc: Inc, share: float, releases: bool) 
     upper = evaluate(instance, plan).makespan
     t0 = budget.elapsed()
     seconds = share * max(0.0, budget.remaining(backend.margin))
+    space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     out = search(
-        Space(instance),
+        space,
         packer_fits(backend.packer),
         upper=upper,
         deadline=time.perf_counter() + seconds,
@@ -80,8 +86,6 @@ def _skipped(backend: Backend[Any], share: float, releases: bool) -> str | None:
     """Why the search does not run (module docstring), or None."""
     if share <= 0:
         return "option search is 0"
-    if backend.instance.stations:
-        return "the bound it hands the model is one station's (relax.raised)"
     if not backend.is_makespan:
         return "the search minimises the makespan"
     if releases:

@@ -363,8 +363,8 @@ def _solve_master(r: _Run, inc: list[list[str]] | None) -> MethodOutput:
     """Build the master with K kits (and C <= U) and run the Benders loop from the incumbent."""
     options, K, upper = r.options, r.K, r.upper
     lower = None if r.proven is None else r.proven.value
-    if r.instance.stations:  # the closed form (the stations' bounds) on C
-        lower = r.closed
+    if r.instance.stations:  # the closed form (the stations' bounds) on C, or the ideal
+        lower = r.best  # search's when higher (:mod:`..exact.search_first`, makespan only)
     master = build(r.instance, K, upper, options.objective, lower)
     r.extra["build_time_s"] = r.budget.elapsed()
     loop = Benders(r.instance, master, r.packer, r.budget, options, inc, r.inc_obj, r.live)

@@ -10,7 +10,6 @@ from typing import Literal
 from ...options import option
 from ..exact.driver import check_hint
 from ..exact.options import (
-    SEARCH_WITH_STATIONS,
     Fallback,
     fallback_field,
     hint_field,
@@ -61,6 +60,6 @@ STATION_OPTIONS = declare(
         "log": HONOURED,
         "fallback": HONOURED,
         "hint": HONOURED,
-        "search": SEARCH_WITH_STATIONS,
+        "search": HONOURED,
     },
 )
