@@ -58,6 +58,8 @@ class Constants:
     flow: float  # P_U
     robot_one: float  # r(U) + k0 (o_R + d + o_H) + min sink h (one tray), else -inf
     first: float  # o_R + d + min ready r
+    robot: float  # r(U) + k0 (o_R + d): the robot's least work on U
+    sink: float  # min sink h
 
 
 @dataclass
@@ -73,7 +75,6 @@ class Space:
     #: trays in circulation that bind (None: unlimited, or at least as many as tasks)
     trays: int | None = field(init=False)
     _consts: dict[int, Constants] = field(init=False, default_factory=dict)
-    _robot: dict[int, tuple[float, float]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         inst = self.instance
@@ -221,28 +222,21 @@ class Space:
         flow = _johnson_value(
             [(self.r[i], self.h[i]) for i in left], (a0, b0), k0, self._overhead_pos(left)
         )
-        robot_one = -math.inf
-        if self.trays == 1:
-            sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
-            robot_one = r_u + k0 * (a0 + b0) + sink
+        robot = r_u + k0 * a0
+        sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
+        robot_one = r_u + k0 * (a0 + b0) + sink if self.trays == 1 else -math.inf
         ready = min(self.r[i] for i in left if not self.pred[i] & ~done)
-        out = Constants(human, flow, robot_one, a0 + ready)
+        out = Constants(human, flow, robot_one, a0 + ready, robot, sink)
         self._consts[done] = out
         return out
 
     def robot_work(self, done: int) -> tuple[float, float]:
-        """``(r(U) + k0 (o_R + d), o_H + min sink h)`` of the tasks ``U`` left (cached): the
-        robot's least work on them and the least human work after their last kit arrives,
-        for the robot term of the several-station bound (:class:`.stations.StationSpace`)."""
-        hit = self._robot.get(done)
-        if hit is None:
-            left = [i for i in range(self.n) if not done >> i & 1]
-            area_u = sum(self.area[i] for i in left)
-            k0 = max(1, math.ceil(area_u / self.tray_area - _AREA_EPS))
-            sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
-            hit = (sum(self.r[i] for i in left) + k0 * (self.o_r + self.d), self.o_h + sink)
-            self._robot[done] = hit
-        return hit
+        """``(r(U) + k0 (o_R + d), o_H + min sink h)`` of the tasks ``U`` left (the cached
+        :meth:`constants`): the robot's least work on them and the least human work after
+        their last kit arrives, for the robot term of the several-station bound
+        (:class:`.stations.StationSpace`)."""
+        c = self.constants(done)
+        return c.robot, self.o_h + c.sink
 
     def _overhead_pos(self, left: list[int]) -> int:
         """Where the overhead jobs go among ``left`` (Johnson's order)."""
