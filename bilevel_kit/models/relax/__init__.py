@@ -59,36 +59,33 @@ def raised(
     """``proven`` with a bound found later (e.g. the ideal search's, :mod:`..bbr`) for every
     plan: its value and source when higher, and every kit count's bound raised to it, so a
     model built afterwards (whose bound is per kit count) starts from it too. Several
-    stations: the overall value alone (:func:`_raised_stations`; :func:`closed_at` and the
+    stations: the overall value alone (:func:`_per_kits_stations`; :func:`closed_at` and the
     kit-count LP model one station)."""
     if instance.stations:
-        return _raised_stations(proven, value, source, instance)
-    closed = closed_at(instance)
-    if proven is None:
-        m0 = int(lower_bounds(instance)["min_kits"])
-        proven = ProvenBound(closed(m0), "closed_form", {}, {}, m0)
-    per = {m: max(proven.at(m, closed), value) for m in range(1, instance.n_tasks + 1)}
+        proven, per = _per_kits_stations(proven, value, instance)
+    else:
+        closed = closed_at(instance)
+        if proven is None:
+            m0 = int(lower_bounds(instance)["min_kits"])
+            proven = ProvenBound(closed(m0), "closed_form", {}, {}, m0)
+        per = {m: max(proven.at(m, closed), value) for m in range(1, instance.n_tasks + 1)}
     sources = {**proven.sources, source: value}
     if value > proven.value:
         return replace(proven, value=value, source=source, sources=sources, per_kits=per)
     return replace(proven, sources=sources, per_kits=per)
 
 
-def _raised_stations(
-    proven: ProvenBound | None, value: float, source: str, instance: Instance
-) -> ProvenBound:
-    """:func:`raised` with several stations: the closed form of the stations
-    (:func:`bilevel_kit.bounds.best_bound`) when nothing was proven yet, its value and source
-    raised when ``value`` is higher; the kit counts' bounds already known (none from the
-    kit-count LP, which models one station) are raised to ``value`` too, which holds for every
-    plan and so for every plan of m kits; no new one is made."""
+def _per_kits_stations(
+    proven: ProvenBound | None, value: float, instance: Instance
+) -> tuple[ProvenBound, dict[int, float]]:
+    """:func:`raised` with several stations: ``proven``, or the closed form of the stations
+    (:func:`bilevel_kit.bounds.best_bound`) when nothing was proven yet, and the kit counts'
+    bounds already known (none from the kit-count LP, which models one station) raised to
+    ``value``, which holds for every plan and so for every plan of m kits; no new one is
+    made."""
     if proven is None:
         proven = ProvenBound(best_bound(instance), "closed_form", {}, {})
-    per = {m: max(v, value) for m, v in proven.per_kits.items()}
-    sources = {**proven.sources, source: value}
-    if value > proven.value:
-        return replace(proven, value=value, source=source, sources=sources, per_kits=per)
-    return replace(proven, sources=sources, per_kits=per)
+    return proven, {m: max(v, value) for m, v in proven.per_kits.items()}
 
 
 def closed_at(instance: Instance) -> Callable[[int], float]:
