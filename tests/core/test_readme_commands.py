@@ -15,9 +15,11 @@ A comment on a command line steers the test:
 **Quoted output.** A ``text`` block right after a command's block (blank lines between at
 most) is what the document says that command prints: each of its non-blank lines must appear,
 in order, among the lines the command printed (stdout, then stderr), its words a prefix of the
-printed line's (a document may trim a trailing column). Durations are not compared: numbers
-printed to the millisecond (``time 2.524 s``, a table's ``time (s)``) and a summary's ``in N
-s`` are masked on both sides. Checked only where the command ran as shown, not made fast.
+printed line's (a document may trim a trailing column). Durations are not compared, and only
+they are masked (on both sides): a summary's ``time 2.524 s`` and ``in N s``, and in a table
+the cell that starts where its header's ``time (s)`` starts (until a blank line). Any other
+number, to whatever precision, must match. Checked only where the command ran as shown, not
+made fast.
 
 Otherwise a command must exit 0. What the test changes, and why:
 
@@ -178,20 +180,35 @@ def commands_in(text: str, document: str) -> list[Command]:
     return out
 
 
-#: Durations, not compared (module docstring): a number to the millisecond, a summary's "in N s".
-DURATION = re.compile(r"\b\d+\.\d{3}\b|(?<=\bin )\d+(?:\.\d+)?(?= s\b)")
+#: Durations in a summary, not compared (module docstring): "time 2.524 s", "in N s".
+DURATION = re.compile(r"(?:(?<=\btime )|(?<=\bin ))\d+(?:\.\d+)?(?= s\b)")
+#: A table's duration column (its header cell) and a number starting a cell.
+TIME_COLUMN = "time (s)"
+NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
 
-def _words(line: str) -> list[str]:
-    return DURATION.sub("#", line).split()
+def masked(text: str) -> list[list[str]]:
+    """Each line's words with its durations masked (module docstring): the summary forms, and
+    the cell of a ``time (s)`` column, found by its header's offset, until a blank line."""
+    out, column = [], -1
+    for line in text.splitlines():
+        if not line.strip():
+            column = -1
+        elif TIME_COLUMN in line:
+            column = line.index(TIME_COLUMN)
+        elif column >= 0 and line[column - 1 : column] in ("", " "):
+            cell = NUMBER.match(line, column)
+            if cell is not None:
+                line = line[:column] + "#" + line[cell.end() :]
+        out.append(DURATION.sub("#", line).split())
+    return out
 
 
 def missing_output(quoted: str, printed: str) -> list[str]:
     """The quoted lines not found, in order, in what a command printed (module docstring)."""
-    lines = [_words(line) for line in printed.splitlines()]
+    lines = masked(printed)
     at, missing = 0, []
-    for shown in quoted.splitlines():
-        want = _words(shown)
+    for shown, want in zip(quoted.splitlines(), masked(quoted), strict=True):
         if not want:
             continue
         hit = next((k for k in range(at, len(lines)) if lines[k][: len(want)] == want), None)
@@ -358,21 +375,32 @@ def test_quoted_output_is_compared_in_order_with_durations_masked() -> None:
     printed = "\n".join(
         [
             "note: compiling (first run)",
-            "x: greedy-ce feasible  makespan 223.00 s  time 2.524 s",
-            "a  b     time (s)  file",
-            "1  2.00  0.005     i.json",
+            "x: greedy-ce feasible  makespan 223.085 s  time 2.524 s",
+            "a  b       time (s)  file",
+            "1  2.000   0.005     i.json",
+            "",
+            "c  time (s)",
+            "3  7.250",
             "done: 1 cell in 10.9 s",
         ]
     )
-    ok = "x: greedy-ce feasible  makespan 223.00 s  time 9.999 s\na  b  time (s)\n1  2.00  3.141"
-    assert missing_output(ok + "\ndone: 1 cell in 3 s", printed) == []
+    ok = "x: greedy-ce feasible  makespan 223.085 s  time 9.999 s\n"
+    ok += "a  b       time (s)\n1  2.000   3.141"
+    assert missing_output(ok + "\nc  time (s)\n3  1.5\ndone: 1 cell in 3 s", printed) == []
     assert missing_output("x: greedy-ce feasible  makespan 224.00 s", printed) == [
         "x: greedy-ce feasible  makespan 224.00 s"
     ]
     # in order: a line quoted before one it follows is missing
-    assert missing_output("1  2.00\na  b", printed) == ["a  b"]
-    # a two-decimal number is a result, not a duration
-    assert missing_output("1  2.01", printed) == ["1  2.01"]
+    assert missing_output("1  2.000\na  b", printed) == ["a  b"]
+    # only durations are masked: a result to the millisecond, in a summary or a table, is not
+    assert missing_output("x: greedy-ce feasible  makespan 223.086 s", printed) == [
+        "x: greedy-ce feasible  makespan 223.086 s"
+    ]
+    assert missing_output("a  b       time (s)\n1  2.001", printed) == ["1  2.001"]
+    # the time column ends at a blank line: after it, a number at that offset is a result
+    assert missing_output("a  b       time (s)\n\n1  2.000   3.141", printed) == [
+        "1  2.000   3.141"
+    ]
 
 
 @pytest.mark.slow
