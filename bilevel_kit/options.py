@@ -32,13 +32,14 @@ import importlib
 import math
 import types
 import typing
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal, TypeVar, Union, get_args, get_origin
 
 from .errors import UsageError
 
 T = TypeVar("T")
+R = TypeVar("R")
 
 _TRUE = ("true", "yes", "on", "1")
 _FALSE = ("false", "no", "off", "0")
@@ -263,6 +264,17 @@ def keyword_options(cls: type[T], values: Mapping[str, Any], owner: str) -> T:
     ``locals()``, the entry's other arguments left out), validated like ``-p`` options."""
     given = {name: values[name] for name in field_names(cls)}
     return parse_options(cls, given, owner, explicit=False)
+
+
+def keyword_run(run: Callable[..., R], cls: type[T], values: Mapping[str, Any], owner: str) -> R:
+    """A Python entry's call of its method's ``run(instance, options, **rest)``: ``values`` (the
+    entry's ``locals()``) split into the options dataclass ``cls`` (:func:`keyword_options`)
+    and the entry's other arguments, passed on by name, so an entry never forwards them by
+    hand."""
+    options = keyword_options(cls, values, owner)
+    fields = set(field_names(cls))
+    rest = {k: v for k, v in values.items() if k not in fields and k != "instance"}
+    return run(values["instance"], options, **rest)
 
 
 def parse_options(

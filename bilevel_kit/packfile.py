@@ -13,21 +13,17 @@ from typing import Any
 
 from .errors import InstanceError
 from .instance import (
-    ID_PATTERN,
-    MAX_LENGTH,
     MAX_PACK_PARTS,
     Instance,
     PartType,
     Tray,
     check_lengths,
 )
+from .instance.json_schema import ID, LENGTH  # ids and lengths (mm) as in the instances
 from .jsonio import read_json, validate_document
 
 #: The ``format`` tag of layout files.
 LAYOUT_FORMAT = "bilevel-kit-layout/1"
-
-#: Lengths in mm, in the instances' range (docs/formats.md#ranges).
-_POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
 
 
 def schema() -> dict[str, Any]:
@@ -42,7 +38,7 @@ def schema() -> dict[str, Any]:
                 "type": "object",
                 "required": ["width", "height"],
                 "additionalProperties": False,
-                "properties": {"width": _POS, "height": _POS},
+                "properties": {"width": LENGTH, "height": LENGTH},
             },
             "items": {
                 "type": "array",
@@ -52,9 +48,9 @@ def schema() -> dict[str, Any]:
                     "required": ["id", "width", "height"],
                     "additionalProperties": False,
                     "properties": {
-                        "id": {"type": "string", "minLength": 1, "pattern": ID_PATTERN},
-                        "width": _POS,
-                        "height": _POS,
+                        "id": ID,
+                        "width": LENGTH,
+                        "height": LENGTH,
                         "count": {
                             "type": "integer",
                             "minimum": 1,

@@ -449,16 +449,9 @@ def _claims_of_1(doc: dict[str, Any], num: _Numbers) -> Claims:
     ``status_objective`` in ``extra`` (the registry's keys)."""
     stated = {k: num.optional(doc.get(k), f"$.{k}") for k in ("objective", "bound", "gap")}
     status_objective = doc.get("status_objective", "makespan")
-    return Claims(
-        status=doc["status"],
-        objective=stated["objective"],
-        bound=stated["bound"],
-        gap=stated["gap"],
-        has_gap="gap" in doc,
-        status_objective=status_objective,
-        objective_claims=_objective_claims(status_objective, doc.get("extra") or {}, num),
-        refused=frozenset(k for k, v in stated.items() if v is None and doc.get(k) is not None),
-    )
+    claims = _stated_claims(doc["status"], doc, stated, "objective", status_objective)
+    objective_claims = _objective_claims(status_objective, doc.get("extra") or {}, num)
+    return replace(claims, objective_claims=objective_claims)
 
 
 def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
@@ -477,19 +470,7 @@ def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
         return f"$.objective.{k}" if top and k in own else f"$.makespan.{k}"
 
     stated = {k: num.optional(block.get(k), where(k)) for k in keys}
-    claims = Claims(
-        status=doc["status"],
-        objective=stated["value"],
-        bound=stated["bound"],
-        gap=stated["gap"],
-        has_gap="gap" in block,
-        status_objective=name,
-        refused=frozenset(
-            {"value": "objective"}.get(k, k)
-            for k, v in stated.items()
-            if v is None and block.get(k) is not None
-        ),
-    )
+    claims = _stated_claims(doc["status"], block, stated, "value", name)
     if top:
         for k in (k for k in keys if k in other and k in own):
             theirs = num.optional(other[k], f"$.makespan.{k}")
@@ -506,6 +487,31 @@ def _claims_of_2(doc: dict[str, Any], num: _Numbers) -> Claims:
     stated_in = ("objective.value", "objective.bound")
     return replace(
         claims, objective_claims=(value, bound, gap, "gap" in own), objective_where=stated_in
+    )
+
+
+def _stated_claims(
+    status: str,
+    block: Mapping[str, Any],
+    stated: Mapping[str, float | None],
+    value_key: str,
+    status_objective: str,
+) -> Claims:
+    """The claims of one block of stated numbers (``value_key``, ``bound``, ``gap``, as read
+    strictly into ``stated``), in either format; a refused number is named by the claim it
+    makes (``objective`` for the value)."""
+    return Claims(
+        status=status,
+        objective=stated[value_key],
+        bound=stated["bound"],
+        gap=stated["gap"],
+        has_gap="gap" in block,
+        status_objective=status_objective,
+        refused=frozenset(
+            "objective" if k == value_key else k
+            for k, v in stated.items()
+            if v is None and block.get(k) is not None
+        ),
     )
 
 

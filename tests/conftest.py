@@ -7,13 +7,11 @@ import os
 from pathlib import Path
 
 import pytest
+from paths import INSTANCES, ROOT
 
 from bilevel_kit.instance import document
 
 os.environ.setdefault("MPLBACKEND", "Agg")
-
-ROOT = Path(__file__).resolve().parent.parent
-INSTANCES = ROOT / "instances"
 
 
 @pytest.fixture(scope="session")

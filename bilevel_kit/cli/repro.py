@@ -4,6 +4,7 @@ beyond the paper (see paper_repro/); each study is a subcommand with its own opt
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from .common import (
@@ -217,12 +218,7 @@ def _add_horizon(p: argparse.ArgumentParser) -> None:
 
 
 def _add_stations(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--lines",
-        type=lambda t: listed(t, str),
-        metavar="table,mix",
-        help="lines: table, stool, chair, mix (default all)",
-    )
+    _add_list(p, "--lines", str, "table,mix", "lines: table, stool, chair, mix (default all)")
     p.add_argument(
         "--stations",
         type=integers,
@@ -235,35 +231,46 @@ def _add_stations(p: argparse.ArgumentParser) -> None:
         metavar="U",
         help="units each station builds (default 2)",
     )
-    p.add_argument(
+    _add_list(
+        p,
         "--supply",
-        type=lambda t: listed(t, str),
-        metavar="none,feeders",
-        help="supply settings: none (all in stock), feeders (default both)",
+        str,
+        "none,feeders",
+        "supply settings: none (all in stock), feeders (default both)",
     )
 
 
 def _add_robust_sim(p: argparse.ArgumentParser) -> None:
     """The cells: every (instance, trays, cv) of the lists given (docs/robust.md)."""
-    p.add_argument(
+    _add_list(
+        p,
         "--instances",
-        type=lambda t: listed(t, str),
-        metavar="table,sp12",
-        help="instances of the robust study: table, sp12 (default: both, when --trays or "
+        str,
+        "table,sp12",
+        "instances of the robust study: table, sp12 (default: both, when --trays or "
         "--cvs is given; none of the three: the default cells, docs/robust.md)",
     )
-    p.add_argument(
+    _add_list(
+        p,
         "--trays",
-        type=lambda t: listed(t, _trays),
-        metavar="1,2,unlimited",
-        help="tray counts (default 1, 2 and unlimited, when a selection is given)",
+        _trays,
+        "1,2,unlimited",
+        "tray counts (default 1, 2 and unlimited, when a selection is given)",
     )
-    p.add_argument(
+    _add_list(
+        p,
         "--cvs",
-        type=lambda t: listed(t, positive),
-        metavar="0.1,0.3",
-        help="coefficients of variation (default 0.1, 0.2, 0.3, 0.5, when a selection is given)",
+        positive,
+        "0.1,0.3",
+        "coefficients of variation (default 0.1, 0.2, 0.3, 0.5, when a selection is given)",
     )
+
+
+def _add_list(
+    p: argparse.ArgumentParser, flag: str, item: Callable[[str], Any], metavar: str, text: str
+) -> None:
+    """An option taking comma-separated values, each parsed by ``item`` (:func:`listed`)."""
+    p.add_argument(flag, type=lambda t: listed(t, item), metavar=metavar, help=text)
 
 
 def _trays(text: str) -> int | None:

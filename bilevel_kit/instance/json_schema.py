@@ -23,9 +23,11 @@ from .ranges import (
 
 _NONNEG = {"type": "number", "minimum": 0, "maximum": MAX_TIME}  # times (s)
 _POS = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_TIME}  # times > 0 (s)
-#: lengths (mm); the lower limit MIN_LENGTH is checked after the schema, with its reason
-_LENGTH = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
-_ID = {"type": "string", "minLength": 1, "pattern": ID_PATTERN}
+#: lengths (mm, also the pack files'); the lower limit MIN_LENGTH is checked after the schema,
+#: with its reason
+LENGTH = {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_LENGTH}
+#: ids (also the pack files')
+ID = {"type": "string", "minLength": 1, "pattern": ID_PATTERN}
 
 
 def schema() -> dict[str, Any]:
@@ -79,7 +81,7 @@ def _tray_schema() -> dict[str, Any]:
         "type": "object",
         "required": ["width", "height"],
         "additionalProperties": False,
-        "properties": {"width": _LENGTH, "height": _LENGTH},
+        "properties": {"width": LENGTH, "height": LENGTH},
     }
 
 
@@ -101,14 +103,14 @@ def _part_type_schema() -> dict[str, Any]:
         "required": ["id", "width", "height", "pick_time"],
         "additionalProperties": False,
         "properties": {
-            "id": _ID,
+            "id": ID,
             "name": {"type": "string"},
-            "width": _LENGTH,
-            "height": _LENGTH,
+            "width": LENGTH,
+            "height": LENGTH,
             "pick_time": _NONNEG,
             "rotatable": {"type": "boolean", "default": True},
             "grasp_width": {
-                **_LENGTH,
+                **LENGTH,
                 "description": "width of the feature a parallel gripper closes on (mm), at "
                 "most the smaller side; default: the smaller side",
             },
@@ -132,11 +134,11 @@ def _task_schema() -> dict[str, Any]:
         "required": ["id", "parts", "human_time"],
         "additionalProperties": False,
         "properties": {
-            "id": _ID,
+            "id": ID,
             "name": {"type": "string"},
             "product": {"type": "string", "minLength": 1},
             "station": {
-                **_ID,
+                **ID,
                 "description": "the assembly station of the task (one of 'stations'); "
                 "default: the station serving its product unit",
             },
@@ -208,7 +210,7 @@ def _stations_schema() -> dict[str, Any]:
             "required": ["id"],
             "additionalProperties": False,
             "properties": {
-                "id": _ID,
+                "id": ID,
                 "delivery_time": {**_NONNEG, "description": "d_s (s); default: delivery_time"},
                 "trays": {
                     "type": "integer",
@@ -264,7 +266,7 @@ def _robot_schema() -> dict[str, Any]:
             "description": "enforce Sawyer reachability of every placement (uses 'work_cell', "
             "or the default work cell)",
         },
-        "reach_resolution": {**_LENGTH, "default": 10.0, "description": "reach map cell (mm)"},
+        "reach_resolution": {**LENGTH, "default": 10.0, "description": "reach map cell (mm)"},
         "robot_times": {
             "enum": ["pick_time", "motion"],
             "default": "pick_time",

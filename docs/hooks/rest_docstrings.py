@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import html
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import griffe
@@ -117,55 +117,74 @@ def cross_reference(obj: griffe.Object, loader: griffe.GriffeLoader, body: str) 
     )
 
 
-def math_blocks(text: str) -> str:
-    """``.. math::`` directives as ``$$`` blocks, one per blank-line separated equation."""
+#: A block's start: the match of its opening line, given the output so far (None: no block).
+BlockStart = Callable[[str, list[str]], re.Match[str] | None]
+#: A block's rewrite: appends its Markdown to the output and returns the index after the block.
+BlockRewrite = Callable[[list[str], int, re.Match[str], list[str]], int]
+
+
+def rewrite_blocks(text: str, starts: BlockStart, block: BlockRewrite) -> str:
+    """``text`` line by line, each block that ``starts`` at a line rewritten by ``block`` (the
+    one walk that both block kinds share), every other line kept."""
     lines = text.split("\n")
     out: list[str] = []
     i = 0
     while i < len(lines):
-        directive = MATH_BLOCK.match(lines[i])
-        if not directive:
+        match = starts(lines[i], out)
+        if match is None:
             out.append(lines[i])
             i += 1
-            continue
-        indent = len(directive["indent"])
-        body = [directive["first"].strip()] if directive["first"].strip() else []
-        i += 1
-        while i < len(lines) and (
-            not lines[i].strip() or len(lines[i]) - len(lines[i].lstrip()) > indent
-        ):
-            body.append(lines[i].strip())
-            i += 1
-        while body and not body[-1]:
-            body.pop()  # trailing blank lines belong to the text after the block
-            i -= 1
-        # A $$ block indented by less than four spaces would not be a block to Markdown.
-        pad = " " * indent if indent >= 4 else ""
-        equations = "\n".join(body).strip().split("\n\n")
-        out.append("")
-        for equation in equations:
-            out += [f"{pad}$$", *(f"{pad}{line}" for line in equation.split("\n")), f"{pad}$$", ""]
+        else:
+            i = block(lines, i, match, out)
     return "\n".join(out)
+
+
+def math_blocks(text: str) -> str:
+    """``.. math::`` directives as ``$$`` blocks, one per blank-line separated equation."""
+    return rewrite_blocks(text, lambda line, _: MATH_BLOCK.match(line), _math_block)
+
+
+def _math_block(lines: list[str], i: int, directive: re.Match[str], out: list[str]) -> int:
+    indent = len(directive["indent"])
+    body = [directive["first"].strip()] if directive["first"].strip() else []
+    i += 1
+    while i < len(lines) and (
+        not lines[i].strip() or len(lines[i]) - len(lines[i].lstrip()) > indent
+    ):
+        body.append(lines[i].strip())
+        i += 1
+    while body and not body[-1]:
+        body.pop()  # trailing blank lines belong to the text after the block
+        i -= 1
+    # A $$ block indented by less than four spaces would not be a block to Markdown.
+    pad = " " * indent if indent >= 4 else ""
+    equations = "\n".join(body).strip().split("\n\n")
+    out.append("")
+    for equation in equations:
+        out += [f"{pad}$$", *(f"{pad}{line}" for line in equation.split("\n")), f"{pad}$$", ""]
+    return i
 
 
 def doctest_blocks(text: str) -> str:
     """Doctest blocks (``>>>`` up to the next blank line) as fenced ``pycon`` code blocks."""
-    lines = text.split("\n")
-    out: list[str] = []
-    i = 0
-    while i < len(lines):
-        prompt = DOCTEST.match(lines[i])
-        if not prompt or (out and out[-1].strip()):
-            out.append(lines[i])  # a ">>>" inside a paragraph is not a doctest block
-            i += 1
-            continue
-        pad = prompt["indent"]
-        out.append(f"{pad}```pycon")
-        while i < len(lines) and lines[i].strip():
-            out.append(lines[i])
-            i += 1
-        out.append(f"{pad}```")
-    return "\n".join(out)
+    return rewrite_blocks(text, _doctest_start, _doctest_block)
+
+
+def _doctest_start(line: str, out: list[str]) -> re.Match[str] | None:
+    prompt = DOCTEST.match(line)
+    if out and out[-1].strip():
+        return None  # a ">>>" inside a paragraph is not a doctest block
+    return prompt
+
+
+def _doctest_block(lines: list[str], i: int, prompt: re.Match[str], out: list[str]) -> int:
+    pad = prompt["indent"]
+    out.append(f"{pad}```pycon")
+    while i < len(lines) and lines[i].strip():
+        out.append(lines[i])
+        i += 1
+    out.append(f"{pad}```")
+    return i
 
 
 def rewrite(text: str, obj: griffe.Object, loader: griffe.GriffeLoader) -> str:

@@ -9,9 +9,9 @@ import csv
 import json
 import math
 import re
-from pathlib import Path
 
 import pytest
+from paths import RESULTS, ROOT
 
 from bilevel_kit.experiments.kitbench import Library
 from bilevel_kit.experiments.kitbench.profiles import (
@@ -23,9 +23,6 @@ from bilevel_kit.experiments.kitbench.profiles import (
     render_profile_blocks,
     shares,
 )
-
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "bench" / "results"
 
 
 @pytest.fixture(scope="module")

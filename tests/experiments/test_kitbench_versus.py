@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import pytest
+from paths import RESULTS, ROOT
 
 from bilevel_kit.experiments.kitbench import Library
 from bilevel_kit.experiments.kitbench.profiles import read_rows
@@ -25,8 +25,6 @@ from bilevel_kit.experiments.kitbench.versus import (
     versus_text,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "bench" / "results"
 LABEL = "cmp_10s"
 
 

@@ -13,7 +13,7 @@ from strategies import random_doc
 from timing import PROOF_LIMIT, allowed
 
 from bilevel_kit import bounds
-from bilevel_kit.instance import from_dict
+from bilevel_kit.instance import InstanceBuilder, from_dict
 from bilevel_kit.models import cpsat as cs
 from bilevel_kit.plan import Kit, Plan, evaluate
 
@@ -120,25 +120,17 @@ def test_tray_geometry_forces_cuts_and_both_modes_agree():
     tray but cannot be placed together, at any angle (their inscribed disks, 60 mm wide,
     have no room to lie apart), so the tray allows one task per kit. Benders cuts with that
     proof: optimal. The embedded tray proves it for 0/90-degree plans only."""
-    doc = {
-        "format": "bilevel-kit/1",
-        "name": "squares",
-        "tray": {"width": 100.0, "height": 100.0},
-        "delivery_time": 1.0,
-        "kit_overhead": {"robot": 1.0, "human": 1.0},
-        "part_types": [
-            {"id": "s", "width": 60.0, "height": 60.0, "pick_time": 4.0},
-            {"id": "k", "width": 20.0, "height": 20.0, "pick_time": 1.0},
-        ],
-        "tasks": [
-            {"id": "a", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 3.0}},
-            {"id": "b", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 9.0}},
-            {"id": "c", "parts": [{"type": "k", "count": 2}], "human_time": {"mean": 2.0}},
-            {"id": "e", "parts": [{"type": "s", "count": 1}], "human_time": {"mean": 1.0}},
-        ],
-        "precedence": [["a", "e"]],
-    }
-    inst = from_dict(doc)
+    inst = (
+        InstanceBuilder("squares", tray=(100.0, 100.0), delivery_time=1.0, kit_overhead=(1.0, 1.0))
+        .part_type("s", 60.0, 60.0, pick_time=4.0)
+        .part_type("k", 20.0, 20.0, pick_time=1.0)
+        .task("a", {"s": 1}, human_time=3.0)
+        .task("b", {"s": 1}, human_time=9.0)
+        .task("c", {"k": 2}, human_time=2.0)
+        .task("e", {"s": 1}, human_time=1.0)
+        .precede("a", "e")
+        .build()
+    )
     opt, _ = brute_force(inst)
     emb = cs.solve(inst, tray="embedded", **FAST)
     ben = cs.solve(inst, tray="benders", **FAST)

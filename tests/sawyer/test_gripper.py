@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 import math
 import re
-from pathlib import Path
 
 import pytest
+from paths import INSTANCES, ROOT
 
 from bilevel_kit import load, solve
 from bilevel_kit import solution as solution_io
@@ -31,8 +31,7 @@ from bilevel_kit.sawyer.workcell import (
     parse_work_cell,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
-TABLE = ROOT / "instances" / "hrc_table.json"
+TABLE = INSTANCES / "hrc_table.json"
 CELL = ROOT / "examples" / "hrc_table_cell.json"
 
 

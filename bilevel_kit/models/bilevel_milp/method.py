@@ -15,7 +15,7 @@ from ...bounds import best_bound
 from ...errors import UsageError
 from ...instance import Instance
 from ...methods import MethodOutput, Status
-from ...options import keyword_options, option
+from ...options import keyword_run, option
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..milp.model import human_order
@@ -70,17 +70,7 @@ def solve(
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's) and the Python-only arguments of :func:`run`."""
-    options = keyword_options(BilevelMilpOptions, locals(), "bilevel-milp")
-    return run(
-        instance,
-        options,
-        seed=seed,
-        time_limit=time_limit,
-        warm_plan=warm_plan,
-        ce_params=ce_params,
-        values=values,
-        solver_options=solver_options,
-    )
+    return keyword_run(run, BilevelMilpOptions, locals(), "bilevel-milp")
 
 
 def run(

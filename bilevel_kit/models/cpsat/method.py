@@ -67,7 +67,7 @@ from ...errors import UsageError
 from ...instance import MAX_LENGTH, MIN_LENGTH, Instance
 from ...methods import MethodOutput, Status, require_stations_support
 from ...objectives import get as get_objective
-from ...options import finger_room_field, keyword_options, option
+from ...options import finger_room_field, keyword_run, option
 from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
@@ -237,17 +237,7 @@ def solve(
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's), ``hint`` a plan to start from, ``cpsat_params`` extra CP-SAT parameters,
     ``releases`` the release times and ``deterministic`` (module docstring, "Time")."""
-    options = keyword_options(ScheduleOptions, locals(), "cpsat")
-    return run(
-        instance,
-        options,
-        seed=seed,
-        time_limit=time_limit,
-        hint=hint,
-        cpsat_params=cpsat_params,
-        releases=releases,
-        deterministic=deterministic,
-    )
+    return keyword_run(run, ScheduleOptions, locals(), "cpsat")
 
 
 # ---------------------------------------------------------------------------------------------

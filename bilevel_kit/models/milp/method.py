@@ -51,7 +51,7 @@ from ...instance import Instance
 from ...methods import MethodOutput, Status, gap
 from ...objectives import Objective, human_times
 from ...objectives import get as get_objective
-from ...options import keyword_options
+from ...options import keyword_run
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import (
@@ -109,8 +109,7 @@ def solve(
 ) -> MethodOutput:
     """The Python entry: :func:`run` with the options as keywords (validated like the
     method's); ``solver_options`` are passed to the solver."""
-    options = keyword_options(MilpOptions, locals(), "milp")
-    return run(instance, options, seed=seed, time_limit=time_limit, solver_options=solver_options)
+    return keyword_run(run, MilpOptions, locals(), "milp")
 
 
 def run(
