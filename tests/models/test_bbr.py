@@ -304,3 +304,42 @@ def test_time_limit_and_honesty_at_250_tasks():
     assert res.extra["violations"] == []
     assert res.status == "feasible" and res.extra["stop"] == "time_limit"
     assert res.bound <= res.makespan
+
+
+# ---------------------------------------------------------------------------------------------
+# option ``upper``: a makespan to prove (a known plan elsewhere)
+# ---------------------------------------------------------------------------------------------
+
+
+def test_given_upper_proves_what_it_can_and_claims_no_more():
+    """Below the quick start's makespan Q, a given upper U is searched below as if a plan of U
+    were held. With O the optimum the run without U proves (every layout): U at O, or under
+    it, comes back as the bound with the start's plan, not ``optimal``; U between O and Q
+    finds and proves O; U at Q is not used (the same result as without it). The cases are
+    those the run without U proves optimal for every layout and starts above O."""
+    checked = 0
+    for seed in SEEDS:
+        for trays in TRAYS:
+            inst = case(seed, trays)
+            plain = solve(inst, "bbr", time_limit=PROOF_LIMIT, start="quick")
+            opt, start = plain.makespan, plain.extra["start_makespan"]
+            if plain.status != "optimal" or start <= opt + 1e-6:
+                continue  # a relaxed kit left open (a 0/90 proof only), or a start at O
+            checked += 1
+            for upper in (opt, opt - 1.0):
+                res = solve(inst, "bbr", time_limit=PROOF_LIMIT, start="quick", upper=upper)
+                assert res.status == "feasible" and res.extra["stop"] == "exhausted"
+                assert res.bound == pytest.approx(upper, abs=1e-9)
+                assert res.makespan == pytest.approx(start, abs=1e-9)
+                assert res.extra["upper_given"] == upper
+            res = solve(inst, "bbr", time_limit=PROOF_LIMIT, start="quick", upper=(opt + start) / 2)
+            assert res.status == "optimal" and res.makespan == pytest.approx(opt, abs=1e-9)
+            assert res.bound == pytest.approx(opt, abs=1e-9)
+            res = solve(inst, "bbr", time_limit=PROOF_LIMIT, start="quick", upper=start)
+            assert "upper_given" not in res.extra
+            assert (res.status, res.makespan, res.bound) == (
+                plain.status,
+                plain.makespan,
+                plain.bound,
+            )
+    assert checked == 14  # the cases where the quick start is not optimal (of 36)

@@ -3,7 +3,9 @@
 1. **Start**: ``lns`` within ``start_share`` of the time limit (``start="lns"``), or the
    quick plans alone (``start="quick"``; with several stations the better of single-task's
    and whole-assembly's): its plan is the incumbent, its makespan the first upper bound of
-   the search.
+   the search; option ``upper``, when below it, replaces that first upper bound (a plan
+   known elsewhere, e.g. a KitBench record's: the search then proves that no plan is below
+   it, or finds one; ``extra["upper_given"]``, and ``optimal`` only for a plan held).
 2. **Search** (:mod:`.search`) with the rest of the time: best-first over (ideal, timeline
    state) nodes, pruned by the state's lower bound (:mod:`.space`) and by dominance, the tray
    asked lazily (the packing oracle, memoised, limited by deterministic time so its verdicts
@@ -23,7 +25,7 @@ docs/timeline.md#several-stations); no other objective. ``extra``: ``start_metho
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
 ``optimal_axis_aligned`` (what the searches proved for 0/90-degree plans), ``relaxed_kits``,
 ``axis_aligned`` (the second pass's stop, bound and counters), ``proof_scope``, ``makespan``,
-``n_kits``, ``gap``, ``wall_time_s``.
+``n_kits``, ``gap``, ``wall_time_s``, ``upper_given`` (the option ``upper`` when used).
 """
 
 from __future__ import annotations
@@ -65,6 +67,12 @@ class BbrOptions:
         1_000_000, "nodes kept in memory before the search stops (about 0.5 kB each)", min=1
     )
     pack_time: float = option(2.0, "deterministic time per packing call (about seconds)", min=0.01)
+    upper: float | None = option(
+        None,
+        "a makespan to prove (s): the search starts below it as below a plan (a known plan "
+        "elsewhere, e.g. a KitBench record); exhausted, it proves no plan is below it",
+        min=0.0,
+    )
 
 
 def bbr(
@@ -83,6 +91,9 @@ def bbr(
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
     upper = evaluate(instance, start).makespan if start is not None else math.inf
+    given = options.upper is not None and options.upper < upper  # the search's first upper
+    if given:
+        upper = options.upper
     space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
     fits = packer_fits(packer)
@@ -103,9 +114,12 @@ def bbr(
     plan = _better(instance, packer, start, every)
     axis = None
     if every.stop == "exhausted" and not every.exhausted:  # relaxed plans below the incumbent
-        axis = run(evaluate(instance, plan).makespan if plan is not None else upper, False, None)
+        held = evaluate(instance, plan).makespan if plan is not None else math.inf
+        axis = run(min(held, upper), False, None)
         extra["axis_aligned"] = {"stop": axis.stop, "bound": axis.bound, **axis.counters}
         plan = _better(instance, packer, plan, axis)
+    if given:
+        extra["upper_given"] = options.upper
     return _conclude(instance, plan, (every, axis), start_bound, extra, budget)
 
 
@@ -204,7 +218,10 @@ def _conclude(
     bound_axis = max(bound, axis.bound) if axis is not None and axis_ok else bound
     if real is not None:
         bound_axis = min(bound_axis, real)
-    optimal = every.exhausted or (real is not None and real <= bound + 1e-9)
+    # exhausted below a given upper (``upper_given``) proves no plan below it, not that the
+    # plan held attains it: then only the bound says so
+    proven = every.exhausted and "upper_given" not in extra
+    optimal = proven or (real is not None and real <= bound + 1e-9)
     optimal_axis = optimal or bool(axis is not None and axis_ok and axis.exhausted)
     extra.update(
         bound_axis_aligned=bound_axis,
