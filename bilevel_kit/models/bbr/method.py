@@ -91,9 +91,9 @@ def bbr(
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
     upper = evaluate(instance, start).makespan if start is not None else math.inf
-    given = options.upper is not None and options.upper < upper  # the search's first upper
-    if given:
-        upper = options.upper
+    given = False  # the search's first upper bound is option upper, not a plan held
+    if options.upper is not None and options.upper < upper:
+        upper, given = options.upper, True
     space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
     fits = packer_fits(packer)
