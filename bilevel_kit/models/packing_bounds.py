@@ -230,9 +230,11 @@ def band_blocks(sizes: Sequence[tuple[float, float]], W: float, H: float, tol: f
         slabs += along - along * sigma * sigma - S * sigma
     if slabs > L * (1 + ANGLE_SLACK):  # (i)
         return True
-    if sum(a * b for a, b in others) > (L * S - sum(a * b for a, b in band)) * (1 + ANGLE_SLACK):
+    # the slack is added, not multiplied: a tray filled exactly leaves 0 room, give or take
+    # rounding, for (iii) and for room
+    if sum(a * b for a, b in others) > L * S * (1 + ANGLE_SLACK) - sum(a * b for a, b in band):
         return True  # (iii)
-    room = L - slabs
+    room = L * (1 + ANGLE_SLACK) - slabs
     for a, b in others:  # (ii)
         if b > 2 * eps and not fits_at_some_angle(a, b, min(L, room + 2 * eps * L / b), S):
             return True

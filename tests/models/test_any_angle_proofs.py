@@ -237,3 +237,21 @@ def test_one_part_fits_at_no_angle_or_only_along_the_diagonal() -> None:
     assert (no.fits, no.scope) == (False, ANY_ANGLE)
     tilted = packing_oracle.fit_verdict(Tray(150.0, 60.0), leg, {"leg": 1}, time_limit=5.0)
     assert (tilted.fits, tilted.scope) == (False, AXIS_ALIGNED)
+
+
+def test_what_the_checker_tolerance_allows_is_not_ruled_out() -> None:
+    """The checker lets parts cross each other and the tray edge by up to TOL: a seat and a
+    part 2.5e-6 mm wider than the 40 mm left, or one part 1.5e-6 mm longer than the tray, are
+    valid layouts, so no any-angle proof may rule them out (the parts leave area to spare)."""
+    d = 0.9 * TOL
+    seat = Placement("a", "seat", 60.0 - d, 60.0, 0.0, 120.0, 120.0)
+    w, h = 40.0 + 2.5 * TOL, 100.0
+    strip = Placement("b", "strip", 120.0 - 2 * d + w / 2, 60.0, 0.0, w, h)
+    long_ = Placement("c", "long", 80.0, 60.0, 0.0, 160.0 + 1.5 * TOL, 100.0)
+    for layout in ([seat, strip], [long_]):
+        assert layout_violations(layout, 160.0, 120.0) == []
+        items = [
+            (c.part, PartType(id=c.type, width=c.w, height=c.h, pick_time=1.0, rotatable=True))
+            for c in layout
+        ]
+        assert _true_size_scope(Tray(160.0, 120.0), items) != ANY_ANGLE, layout
