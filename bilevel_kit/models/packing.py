@@ -7,10 +7,11 @@ size is a multiple of the resolution the grid is exact: integer sizes admit an i
 packing whenever any packing exists (bottom-left compaction), so "infeasible" is then a proof
 for 0/90-degree layouts. Otherwise "infeasible" means "not at this resolution". Every
 infeasible answer records in ``extra["proof"]`` whether it is a proof (an exact grid without
-reachability, or a reason that holds at true sizes: a part larger than the tray, or more part
-area than tray area) and in ``extra["proof_scope"]`` which layouts it rules out
-(:data:`ANY_ANGLE`: every layout the checker accepts, parts at any angle; :data:`AXIS_ALIGNED`:
-the layouts whose parts lie at 0 or 90 degrees, docs/formulations.md#what-optimal-means).
+reachability, or a reason that holds at true sizes: a part larger than the tray, more part
+area than tray area, or an any-angle test of :mod:`.packing_bounds`) and in
+``extra["proof_scope"]`` which layouts it rules out (:data:`ANY_ANGLE`: every layout the
+checker accepts, parts at any angle; :data:`AXIS_ALIGNED`: the layouts whose parts lie at 0
+or 90 degrees, docs/formulations.md#what-optimal-means).
 ``bilevel-kit pack`` reports the others as "no layout on this grid";
 :func:`exact_resolution` gives the grid on which every size is exact, which the oracle
 (:mod:`.packing_oracle`) uses to confirm such an answer.
@@ -75,7 +76,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..geometry import area_fits, cells_available, cells_needed
+from ..geometry import TOL, area_fits, cells_available, cells_needed
 from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
 from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
@@ -524,15 +525,24 @@ def _answer(
 
 
 def _true_size_scope(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> str | None:
-    """A reason no layout exists, grid or not, and its scope: more part area than tray area
-    or two inscribed disks without room (:func:`.packing_bounds.disks_collide`):
-    :data:`ANY_ANGLE`; a part that fits the tray in neither 0/90-degree orientation:
-    :data:`AXIS_ALIGNED` (a long part may still fit along the diagonal); None without one."""
-    from .packing_bounds import disks_collide
+    """A reason no layout exists, grid or not, and its scope: more part area than tray area,
+    two inscribed disks without room (:func:`.packing_bounds.disks_collide`), a part that fits
+    at no angle (:func:`.packing_bounds.fits_at_some_angle`, sizes less the checker's ``TOL``
+    on a tray ``2 TOL`` larger) or band parts as wide as the tray
+    (:func:`.packing_bounds.band_blocks`): :data:`ANY_ANGLE`; a part that fits the tray in
+    neither 0/90-degree orientation: :data:`AXIS_ALIGNED` (a long part may still fit along the
+    diagonal); None without one."""
+    from .packing_bounds import band_blocks, disks_collide, fits_at_some_angle
 
-    if not area_fits(sum(pt.area for _, pt in items), tray.width, tray.height):
+    W, H = tray.width, tray.height
+    sizes = [(pt.width, pt.height) for _, pt in items]
+    if not area_fits(sum(pt.area for _, pt in items), W, H):
         return ANY_ANGLE
-    if disks_collide([(pt.width, pt.height) for _, pt in items], tray.width, tray.height):
+    if disks_collide(sizes, W, H):
+        return ANY_ANGLE
+    if any(not fits_at_some_angle(w - TOL, h - TOL, W + 2 * TOL, H + 2 * TOL) for w, h in sizes):
+        return ANY_ANGLE
+    if band_blocks(sizes, W, H, TOL):
         return ANY_ANGLE
     for _, pt in items:
         fits = pt.width <= tray.width and pt.height <= tray.height

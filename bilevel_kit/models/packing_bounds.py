@@ -34,10 +34,45 @@ overlap, so neither do their disks: the centres are at least
 :math:`\sqrt{(W - r_i - r_j)^2 + (H - r_i - r_j)^2}`. This distance falls as
 :math:`s = r_i + r_j` grows, so the two largest disks decide; two 60 mm squares on a 100 mm
 tray fail it (56.6 < 60), at any angles.
+
+Two more tests hold at any angle:
+
+* **One part at any angle** (:func:`fits_at_some_angle`; Carver, "Solution to problem E 1225",
+  Amer. Math. Monthly 63, 1956; also Wetzel, "Rectangles in rectangles", Math. Mag. 73, 2000).
+  With :math:`p \ge q` and :math:`A \ge B`, a p x q rectangle fits an A x B box iff
+  :math:`p \le A,\ q \le B`, or :math:`p > A,\ q \le B` and
+
+  .. math:: B \ge \frac{2pqA + (p^2 - q^2)\sqrt{p^2 + q^2 - A^2}}{p^2 + q^2}.
+
+  At angle t the extents are :math:`p\cos t + q\sin t` and :math:`p\sin t + q\cos t`
+  (:math:`t \in [0, \pi/2]` by symmetry). When p > A the first one is at most A exactly on
+  :math:`[t_1, \pi/2]`, with :math:`t_1` its second root; there :math:`p\sin t - q\cos t =
+  \sqrt{p^2 + q^2 - A^2}`, which gives :math:`\cos t_1, \sin t_1` and the fraction above as
+  the second extent at :math:`t_1`. That extent is :math:`R\sin(t + \psi)`, concave on the
+  interval, so its minimum there is at :math:`t_1` or at :math:`\pi/2` (where it is p > B).
+* **Band parts** (:func:`band_blocks`): on a tray L x S (S the smaller side), a part a x b with
+  :math:`a \ge b = S` spans the tray across: at a tilt t its extent across is
+  :math:`a|\sin t| + b|\cos t| > b` unless t is a multiple of 180 degrees (of 90 when a = b).
+  So it lies axis-aligned, and every other part lies in the strips S wide left over, whose
+  lengths add up to :math:`L - \sum a` over the band parts. No layout exists when (i) the
+  band parts' lengths add up to more than L, (ii) another part fits at no angle in a
+  :math:`(L - \sum a) \times S` box, or (iii) the other parts' area exceeds
+  :math:`(L - \sum a) S`. The checker's tolerance (parts may cross each other or the tray edge
+  by ``tol``) lets a part tilt slightly: a valid layout stays valid, interiors disjoint, with
+  every part shrunk by ``tol`` (the projections on the separating axis shrink by ``tol``) on a
+  tray grown by ``2 tol``. There a band part leaves :math:`\varepsilon = S - b` across, its
+  tilt has :math:`\sin t \le \sigma = 2\varepsilon / b` (the extent across exceeds
+  :math:`b` by :math:`\sin t\,(a - b\tan(t/2)) \ge \sin t\, b/2` for :math:`t \le 45°`), and
+  it covers every vertical line of an x range of length at least
+  :math:`a - a\sigma^2 - S\sigma` up to :math:`\varepsilon`. A part of smaller side
+  :math:`q > \varepsilon` reaches into such a range by at most :math:`\varepsilon L / q` (its
+  vertical chords are concave in x, reach q and are at most :math:`\varepsilon` there), which
+  (ii) adds to the box on both sides; (iii) compares the shrunk areas.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -148,6 +183,62 @@ def disks_collide(sizes: Sequence[tuple[float, float]], W: float, H: float) -> b
         return False
     s = radii[0] + radii[1]  # <= min(W, H): both disks fit on their own
     return (W - s) ** 2 + (H - s) ** 2 < s * s * (1 - 1e-9)
+
+
+#: Relative room the any-angle tests add to a box, so that float rounding never turns a part
+#: that fits (e.g. exactly, p == A) into a "no".
+ANGLE_SLACK = 1e-9
+
+
+def fits_at_some_angle(p: float, q: float, A: float, B: float) -> bool:
+    """Does a p x q rectangle fit an A x B box at some angle? Carver's condition (module
+    docstring); the box counts :data:`ANGLE_SLACK` larger, so a "no" is never a rounding
+    margin."""
+    p, q = max(p, q), min(p, q)
+    A, B = max(A, B) * (1 + ANGLE_SLACK), min(A, B) * (1 + ANGLE_SLACK)
+    if q > B:  # the part is at least q wide in every direction
+        return False
+    if p <= A:
+        return True
+    # p > A: the smallest turn that brings the x extent down to A, and the y extent there
+    y = (2 * p * q * A + (p * p - q * q) * math.sqrt(p * p + q * q - A * A)) / (p * p + q * q)
+    return y <= B
+
+
+def band_blocks(sizes: Sequence[tuple[float, float]], W: float, H: float, tol: float) -> bool:
+    """True when no layout exists at any angle by the band rule (module docstring): parts
+    whose smaller side is the tray's smaller side S split it into strips S wide in which every
+    other part must fit. ``sizes``: true (w, h) in mm; ``tol``: the checker's length tolerance
+    (parts shrink by ``tol``, the tray grows by ``2 tol``)."""
+    S0 = min(W, H)
+    L, S = max(W, H) + 2 * tol, S0 + 2 * tol
+    shrunk = [(max(w, h) - tol, min(w, h) - tol) for w, h in sizes]
+    is_band = [min(w, h) >= S0 * (1 - 1e-12) for w, h in sizes]
+    band = [ab for ab, b in zip(shrunk, is_band, strict=True) if b]
+    others = [ab for ab, b in zip(shrunk, is_band, strict=True) if not b]
+    if not band:
+        return False
+    eps = max(S - b for _, b in band)  # room across left by a band part
+    if eps < 0:
+        return True  # a band part wider than the tray in every direction
+    if eps > 0.1 * min(b for _, b in band):
+        return False  # the tilt bounds below assume a small eps
+    slabs = 0.0  # a lower bound on the total length of the band parts' slabs
+    for a, b in band:
+        along = a if a > S else b  # a <= S: the part may also lie turned by 90 degrees
+        sigma = 2 * eps / b  # sin of its largest tilt
+        slabs += along - along * sigma * sigma - S * sigma
+    if slabs > L * (1 + ANGLE_SLACK):  # (i)
+        return True
+    # the slack is added, not multiplied: a tray filled exactly leaves 0 room, give or take
+    # rounding, for (iii) and for room
+    if sum(a * b for a, b in others) > L * S * (1 + ANGLE_SLACK) - sum(a * b for a, b in band):
+        return True  # (iii)
+    room = L * (1 + ANGLE_SLACK) - slabs
+    for a, b in others:  # (ii)
+        if b > 2 * eps and not fits_at_some_angle(a, b, min(L, room + 2 * eps * L / b), S):
+            return True
+    return False
 
 
 def infeasibility_reason(sizes: Sizes, W: int, H: int) -> str | None:
