@@ -4,10 +4,8 @@ optimum against the brute force with 1, 2 and unlimited trays, and the method's 
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
-import numpy as np
 import pytest
 from brute import best_makespan, fits, segmentations
 from reference_timeline import reference
@@ -125,46 +123,6 @@ def test_transition_and_bound_on_every_plan(seed, trays):
         assert sp.lower_bound(done, state) == pytest.approx(ref.makespan, abs=1e-9)
         seen += 1
     assert seen >= 4  # every case has a few plans that fit the larger tray
-
-
-def _constants_by_the_docstring(sp: Space, done: int) -> tuple[float, ...]:
-    """The per-ideal constants written from space.py's docstring, task by task: the flow shop
-    by :func:`bilevel_kit.bounds.flow_shop_makespan`'s recursion, not the closed form."""
-    from bilevel_kit.bounds import flow_shop_makespan
-
-    left = [i for i in sp.johnson if not done >> i & 1]
-    k0 = max(1, math.ceil(sum(sp.area[i] for i in left) / sp.tray_area - 1e-9))
-    a0, b0 = sp.o_r + sp.d, sp.o_h
-    at = sum(1 for i in left if sp.rank[i] < sp.overhead_at)
-    jobs = [(sp.r[i], sp.h[i]) for i in left]
-    seq = jobs[:at] + [(a0, b0)] * k0 + jobs[at:]
-    flow = flow_shop_makespan(range(len(seq)), [a for a, _ in seq], [b for _, b in seq])
-    r_u, h_u = sum(sp.r[i] for i in left), sum(sp.h[i] for i in left)
-    sink = min(sp.h[i] for i in left if not sp.succ[i] & ~done)
-    ready = min(sp.r[i] for i in left if not sp.pred[i] & ~done)
-    one = r_u + k0 * (a0 + b0) + sink if sp.trays == 1 else -math.inf
-    return (h_u + k0 * b0, flow, one, a0 + ready, r_u + k0 * a0, sink)
-
-
-@pytest.mark.parametrize(
-    "name", ("table_u5_t1_tight_d10", "mixed_u2_tu_tight_d0", "intree_n100_s1_t1_tight_d30")
-)
-def test_constants_equal_the_docstring_on_random_ideals(name):
-    """The vectorised per-ideal constants against the task-by-task formulas, on 300 ideals
-    (prefixes of random linear extensions) of three KitBench records."""
-    inst = load(INSTANCES / "kitbench" / f"{name}.json")
-    sp = Space(inst)
-    rng = np.random.default_rng(7)
-    for _ in range(300):
-        done, free = 0, [i for i in range(sp.n) if not sp.pred[i]]
-        for _ in range(int(rng.integers(0, sp.n))):  # a random prefix of a linear extension
-            i = free.pop(int(rng.integers(len(free))))
-            done |= 1 << i
-            free += [j for j in range(sp.n) if sp.pred[j] >> i & 1 and not sp.pred[j] & ~done]
-        got = sp.constants(done)
-        want = _constants_by_the_docstring(sp, done)
-        have = (got.human, got.flow, got.robot_one, got.first, got.robot, got.sink)
-        assert have == pytest.approx(want, rel=1e-12, abs=1e-9)
 
 
 def test_kits_are_every_down_set_extension_once():

@@ -42,9 +42,7 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from ...bounds import johnson_order
+from ...bounds import flow_shop_makespan, johnson_order
 from ...instance import Instance
 from ...instance.model import topological_order
 
@@ -62,37 +60,6 @@ class Constants:
     first: float  # o_R + d + min ready r
     robot: float  # r(U) + k0 (o_R + d): the robot's least work on U
     sink: float  # min sink h
-
-
-@dataclass(frozen=True)
-class _Vectors:
-    """The tasks in Johnson's order as arrays (:meth:`Space.constants`): ``perm`` maps that
-    order to the task numbers (the ideal's bits), ``src``/``dst`` are the precedence edges."""
-
-    perm: np.ndarray
-    r: np.ndarray
-    h: np.ndarray
-    area: np.ndarray
-    src: np.ndarray
-    dst: np.ndarray
-    nbytes: int
-
-    @classmethod
-    def of(cls, space: Space) -> _Vectors:
-        perm = np.asarray(space.johnson, dtype=np.intp)
-        pos = {t: space.rank[i] for i, t in enumerate(space.ids)}
-        prec = space.instance.precedence
-        src = np.asarray([pos[a] for a, _ in prec], dtype=np.intp)
-        dst = np.asarray([pos[b] for _, b in prec], dtype=np.intp)
-        return cls(
-            perm,
-            np.asarray(space.r, dtype=float)[perm],
-            np.asarray(space.h, dtype=float)[perm],
-            np.asarray(space.area, dtype=float)[perm],
-            src,
-            dst,
-            (space.n + 7) // 8,
-        )
 
 
 @dataclass
@@ -145,7 +112,6 @@ class Space:
         self.rank = [0] * self.n
         for j, i in enumerate(self.johnson):
             self.rank[i] = j
-        self._vec = _Vectors.of(self)
 
     def _twins(self) -> list[int]:
         """For each task, the task of next lower number it is interchangeable with (the same
@@ -242,32 +208,24 @@ class Space:
 
     # -- the bound -----------------------------------------------------------------------
     def constants(self, done: int) -> Constants:
-        """The per-ideal constants of the lower bound (cached), with numpy on the tasks left in
-        Johnson's order: the bound is asked of every child, and its sums and flow shop over
-        every task left, task by task in Python, were most of the search's time
-        (bench/bench_bbr_bound.py measures the two side by side)."""
+        """The per-ideal constants of the lower bound (cached)."""
         hit = self._consts.get(done)
         if hit is not None:
             return hit
-        v = self._vec
-        bits = np.frombuffer(done.to_bytes(v.nbytes, "little"), dtype=np.uint8)
-        left = np.unpackbits(bits, count=self.n, bitorder="little")[v.perm] == 0
-        r, h = v.r[left], v.h[left]
-        r_u, h_u = float(np.cumsum(r)[-1]), float(np.cumsum(h)[-1])
-        area_u = float(np.cumsum(v.area[left])[-1])
+        left = [i for i in self.johnson if not done >> i & 1]
+        r_u = sum(self.r[i] for i in left)
+        h_u = sum(self.h[i] for i in left)
+        area_u = sum(self.area[i] for i in left)
         k0 = max(1, math.ceil(area_u / self.tray_area - _AREA_EPS))
         a0, b0 = self.o_r + self.d, self.o_h
         human = h_u + k0 * b0
-        at = int(np.count_nonzero(left[: self.overhead_at]))  # tasks before the overhead jobs
-        flow = _flow_value(r, h, (a0, b0), k0, at)
+        flow = _johnson_value(
+            [(self.r[i], self.h[i]) for i in left], (a0, b0), k0, self._overhead_pos(left)
+        )
         robot = r_u + k0 * a0
-        waits = np.zeros(self.n, dtype=bool)  # a task left with a successor left
-        waits[v.src[left[v.dst]]] = True
-        sink = float(h[~waits[left]].min())
-        waits[:] = False  # a task left with a predecessor left
-        waits[v.dst[left[v.src]]] = True
-        ready = float(r[~waits[left]].min())
+        sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
         robot_one = r_u + k0 * (a0 + b0) + sink if self.trays == 1 else -math.inf
+        ready = min(self.r[i] for i in left if not self.pred[i] & ~done)
         out = Constants(human, flow, robot_one, a0 + ready, robot, sink)
         self._consts[done] = out
         return out
@@ -279,6 +237,10 @@ class Space:
         (:class:`.stations.StationSpace`)."""
         c = self.constants(done)
         return c.robot, self.o_h + c.sink
+
+    def _overhead_pos(self, left: list[int]) -> int:
+        """Where the overhead jobs go among ``left`` (Johnson's order)."""
+        return sum(1 for i in left if self.rank[i] < self.overhead_at)
 
     def lower_bound(self, done: int, state: tuple[float, ...]) -> float:
         """The state's lower bound on the makespan (module docstring); its makespan when
@@ -296,14 +258,12 @@ class Space:
         )
 
 
-def _flow_value(
-    r: np.ndarray, h: np.ndarray, overhead: tuple[float, float], k: int, at: int
+def _johnson_value(
+    jobs: list[tuple[float, float]], overhead: tuple[float, float], k: int, at: int
 ) -> float:
-    r"""The flow-shop makespan with both machines free at 0 (the module docstring's P_U) of the
-    jobs ``(r_i, h_i)`` in order with ``k`` copies of ``overhead`` inserted before position
-    ``at``: :math:`\max_j (\sum_{i \le j} a_i + \sum_{i \ge j} b_i)`, the closed form of
-    :func:`bilevel_kit.bounds.flow_shop_makespan`'s recursion."""
-    a = np.concatenate((r[:at], np.full(k, overhead[0]), r[at:]))
-    b = np.concatenate((h[:at], np.full(k, overhead[1]), h[at:]))
-    before = np.cumsum(b) - b  # sum of b_i over i < j
-    return float(np.max(np.cumsum(a) - before) + before[-1] + b[-1])
+    """The flow-shop makespan with both machines free at 0 (the module docstring's P_U,
+    :func:`bilevel_kit.bounds.flow_shop_makespan`) of ``jobs`` in order with ``k`` copies of
+    ``overhead`` inserted before position ``at``."""
+    seq = jobs[:at] + [overhead] * k + jobs[at:]
+    a, b = [x for x, _ in seq], [y for _, y in seq]
+    return flow_shop_makespan(range(len(seq)), a, b)
