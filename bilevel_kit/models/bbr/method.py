@@ -91,9 +91,8 @@ def bbr(
         return MethodOutput(None, unfit_outcome(unfit, extra), None, extra)
     start, start_bound = _start(instance, options, seed, budget, packer, extra)
     upper = evaluate(instance, start).makespan if start is not None else math.inf
-    given = False  # the search's first upper bound is option upper, not a plan held
-    if options.upper is not None and options.upper < upper:
-        upper, given = options.upper, True
+    if options.upper is not None and options.upper < upper:  # the first upper: no plan held
+        upper = extra["upper_given"] = options.upper
     space: SearchSpace = StationSpace(instance) if instance.stations else Space(instance)
     stop_at = budget.deadline - MARGIN_S - MARGIN_SHARE * budget.time_limit
     fits = packer_fits(packer)
@@ -118,8 +117,6 @@ def bbr(
         axis = run(min(held, upper), False, None)
         extra["axis_aligned"] = {"stop": axis.stop, "bound": axis.bound, **axis.counters}
         plan = _better(instance, packer, plan, axis)
-    if given:
-        extra["upper_given"] = options.upper
     return _conclude(instance, plan, (every, axis), start_bound, extra, budget)
 
 
