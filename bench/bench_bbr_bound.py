@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -51,13 +52,13 @@ print(json.dumps({"wall_s": wall, "bound": out.bound, **out.counters}))
 def run_one(code: Path, name: str, expansions: int) -> dict[str, object]:
     """One search with the package at ``code``, in its own process."""
     library = str(ROOT / "instances" / "kitbench")
-    env_path = f"PYTHONPATH={code}"
     done = subprocess.run(
-        ["env", env_path, sys.executable, "-c", CHILD, name, str(expansions), library],
+        [sys.executable, "-c", CHILD, name, str(expansions), library],
         capture_output=True,
         text=True,
         check=True,
         cwd=code,
+        env={**os.environ, "PYTHONPATH": str(code)},
     )
     return json.loads(done.stdout.strip().splitlines()[-1])
 
