@@ -220,11 +220,15 @@ def _part_types(entries: list[dict[str, Any]], tray: Tray, source: str) -> dict[
 
 
 def _check_fits(pt: PartType, tray: Tray, where: str, source: str) -> None:
-    """A part must fit the tray axis-aligned (either way round when it may rotate): else no
+    """A part must fit the tray axis-aligned (either way round when it may rotate), up to the
+    packers' and the checker's tolerance (:func:`~bilevel_kit.geometry.length_fits`): else no
     kit holding it has a layout."""
-    fits = pt.width <= tray.width and pt.height <= tray.height
-    if pt.rotatable:
-        fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
+    from ..geometry import length_fits
+
+    def fits_as(w: float, h: float) -> bool:
+        return length_fits(w, tray.width) and length_fits(h, tray.height)
+
+    fits = fits_as(pt.width, pt.height) or (pt.rotatable and fits_as(pt.height, pt.width))
     if not fits:
         orient = "either axis-aligned orientation" if pt.rotatable else "its fixed orientation"
         raise InstanceError(

@@ -76,7 +76,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..geometry import TOL, area_fits, cells_available, cells_needed
+from ..geometry import TOL, cells_available, cells_needed
 from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
 from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
@@ -525,30 +525,34 @@ def _answer(
 
 
 def _true_size_scope(tray: _Rect, items: Sequence[tuple[str, PartType]]) -> str | None:
-    """A reason no layout exists, grid or not, and its scope: more part area than tray area,
-    two inscribed disks without room (:func:`.packing_bounds.disks_collide`), a part that fits
-    at no angle (:func:`.packing_bounds.fits_at_some_angle`, sizes less the checker's ``TOL``
-    on a tray ``2 TOL`` larger) or band parts as wide as the tray
+    """A reason no layout exists, grid or not, and its scope. Every test argues on the
+    checker's world made exact (:func:`.packing_bounds.exact_world`: parts ``TOL`` smaller,
+    the tray ``TOL`` larger): more part area than tray area, two inscribed disks without room
+    (:func:`.packing_bounds.disks_collide`), a part that fits at no angle
+    (:func:`.packing_bounds.fits_at_some_angle`) or band parts as wide as the tray
     (:func:`.packing_bounds.band_blocks`): :data:`ANY_ANGLE`; a part that fits the tray in
     neither 0/90-degree orientation: :data:`AXIS_ALIGNED` (a long part may still fit along the
     diagonal); None without one."""
-    from .packing_bounds import band_blocks, disks_collide, fits_at_some_angle
+    from .packing_bounds import (
+        ANGLE_SLACK,
+        band_blocks,
+        disks_collide,
+        exact_world,
+        fits_at_some_angle,
+    )
 
-    W, H = tray.width, tray.height
-    sizes = [(pt.width, pt.height) for _, pt in items]
-    if not area_fits(sum(pt.area for _, pt in items), W, H):
+    true = [(pt.width, pt.height) for _, pt in items]
+    sizes, W, H = exact_world(true, tray.width, tray.height, TOL)
+    if sum(w * h for w, h in sizes) > W * H * (1 + ANGLE_SLACK):
         return ANY_ANGLE
     if disks_collide(sizes, W, H):
         return ANY_ANGLE
-    if any(not fits_at_some_angle(w - TOL, h - TOL, W + 2 * TOL, H + 2 * TOL) for w, h in sizes):
+    if any(not fits_at_some_angle(w, h, W, H) for w, h in sizes):
         return ANY_ANGLE
-    if band_blocks(sizes, W, H, TOL):
+    if band_blocks(true, tray.width, tray.height, TOL):
         return ANY_ANGLE
-    for _, pt in items:
-        fits = pt.width <= tray.width and pt.height <= tray.height
-        if pt.rotatable:
-            fits = fits or (pt.height <= tray.width and pt.width <= tray.height)
-        if not fits:
+    for (w, h), (_, pt) in zip(sizes, items, strict=True):
+        if not (w <= W and h <= H) and not (pt.rotatable and h <= W and w <= H):
             return AXIS_ALIGNED
     return None
 

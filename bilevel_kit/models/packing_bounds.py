@@ -57,17 +57,28 @@ Two more tests hold at any angle:
   lengths add up to :math:`L - \sum a` over the band parts. No layout exists when (i) the
   band parts' lengths add up to more than L, (ii) another part fits at no angle in a
   :math:`(L - \sum a) \times S` box, or (iii) the other parts' area exceeds
-  :math:`(L - \sum a) S`. The checker's tolerance (parts may cross each other or the tray edge
-  by ``tol``) lets a part tilt slightly: a valid layout stays valid, interiors disjoint, with
-  every part shrunk by ``tol`` (the projections on the separating axis shrink by ``tol``) on a
-  tray grown by ``2 tol``. There a band part leaves :math:`\varepsilon = S - b` across, its
-  tilt has :math:`\sin t \le \sigma = 2\varepsilon / b` (the extent across exceeds
+  :math:`(L - \sum a) S`. In the exact world below a band part leaves
+  :math:`\varepsilon = S - b` across, so it may tilt slightly: its tilt has
+  :math:`\sin t \le \sigma = 2\varepsilon / b` (the extent across exceeds
   :math:`b` by :math:`\sin t\,(a - b\tan(t/2)) \ge \sin t\, b/2` for :math:`t \le 45°`), and
   it covers every vertical line of an x range of length at least
   :math:`a - a\sigma^2 - S\sigma` up to :math:`\varepsilon`. A part of smaller side
   :math:`q > \varepsilon` reaches into such a range by at most :math:`\varepsilon L / q` (its
   vertical chords are concave in x, reach q and are at most :math:`\varepsilon` there), which
-  (ii) adds to the box on both sides; (iii) compares the shrunk areas.
+  (ii) adds to the box on both sides; (iii) compares the areas.
+
+**The checker's tolerance.** The any-angle tests argue on an exact world
+(:func:`exact_world`): the checker lets a part (its type's footprint) cross the tray edge by up
+to ``tol`` and another part by up to ``tol`` on one of the two rectangles' edge normals. Draw
+every part ``tol / 2`` smaller on each side, about its centre: its projection on any unit
+direction u, :math:`w|u_1| + h|u_2|`, loses :math:`\mathrm{tol}\,(|u_1| + |u_2|) \ge
+\mathrm{tol}`, half at each end. Two parts that overlapped by at most ``tol`` on some axis are
+then apart on it, so their interiors are disjoint, and every corner lies at least ``tol / 2``
+further in, inside a tray ``tol`` larger. So a layout the checker accepts gives one with
+disjoint interiors of parts ``tol`` smaller on a tray ``tol`` larger, and a proof there that no
+layout exists holds for the checker. (The packers' area filter,
+:func:`bilevel_kit.geometry.area_fits`, is not such a proof: it leaves out the overlaps the
+checker allows, a micrometre-scale difference.)
 """
 
 from __future__ import annotations
@@ -205,14 +216,24 @@ def fits_at_some_angle(p: float, q: float, A: float, B: float) -> bool:
     return y <= B
 
 
+def exact_world(
+    sizes: Sequence[tuple[float, float]], W: float, H: float, tol: float
+) -> tuple[list[tuple[float, float]], float, float]:
+    """The checker's tolerant world as an exact one (module docstring, "The checker's
+    tolerance"): every part ``tol`` smaller in both sides, the tray ``tol`` larger. A proof
+    that these parts do not fit this tray with disjoint interiors holds for the checker."""
+    return [(max(w - tol, 0.0), max(h - tol, 0.0)) for w, h in sizes], W + tol, H + tol
+
+
 def band_blocks(sizes: Sequence[tuple[float, float]], W: float, H: float, tol: float) -> bool:
     """True when no layout exists at any angle by the band rule (module docstring): parts
     whose smaller side is the tray's smaller side S split it into strips S wide in which every
     other part must fit. ``sizes``: true (w, h) in mm; ``tol``: the checker's length tolerance
-    (parts shrink by ``tol``, the tray grows by ``2 tol``)."""
+    (the rule argues on :func:`exact_world`)."""
     S0 = min(W, H)
-    L, S = max(W, H) + 2 * tol, S0 + 2 * tol
-    shrunk = [(max(w, h) - tol, min(w, h) - tol) for w, h in sizes]
+    exact, Wx, Hx = exact_world(sizes, W, H, tol)
+    L, S = max(Wx, Hx), min(Wx, Hx)
+    shrunk = [(max(w, h), min(w, h)) for w, h in exact]
     is_band = [min(w, h) >= S0 * (1 - 1e-12) for w, h in sizes]
     band = [ab for ab, b in zip(shrunk, is_band, strict=True) if b]
     others = [ab for ab, b in zip(shrunk, is_band, strict=True) if not b]

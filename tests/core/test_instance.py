@@ -132,6 +132,19 @@ def test_part_larger_than_tray(doc, tmp_path):
     assert "either axis-aligned orientation" in _error(doc, tmp_path)
 
 
+def test_part_within_the_length_tolerance_of_the_tray(doc, tmp_path):
+    """The packers' and the checker's rule (geometry.length_fits): a part up to TOL longer
+    than the tray is accepted, one 2 TOL longer is not."""
+    from bilevel_kit.geometry import TOL
+
+    doc["part_types"][1]["width"] = 100.0 + TOL
+    path = tmp_path / "i.json"
+    path.write_text(json.dumps(doc))
+    assert load(path).part_types["b"].width == 100.0 + TOL
+    doc["part_types"][1]["width"] = 100.0 + 2 * TOL
+    assert "does not fit the 100 x 100 mm tray in its fixed orientation" in _error(doc, tmp_path)
+
+
 def test_rotation_makes_a_long_part_acceptable(doc):
     doc["tray"] = {"width": 30.0, "height": 100.0}
     doc["part_types"][1].update(rotatable=True)  # 40 x 5 fits only turned by 90 degrees

@@ -255,3 +255,31 @@ def test_what_the_checker_tolerance_allows_is_not_ruled_out() -> None:
             for c in layout
         ]
         assert _true_size_scope(Tray(160.0, 120.0), items) != ANY_ANGLE, layout
+
+
+def test_a_layout_using_every_tolerance_of_the_checker_is_not_ruled_out() -> None:
+    """Two parts TOL larger than the strip they share, overlapping by 0.9 TOL and crossing
+    both tray edges: ``check`` accepts the plan, though their area exceeds
+    (W + TOL)(H + TOL), so no any-angle proof may rule the kit out (``exact_world``)."""
+    from bilevel_kit import InstanceBuilder, Kit, Plan, check
+
+    b = InstanceBuilder("tol", tray=(160.0, 120.0), delivery_time=1.0, kit_overhead=(1.0, 1.0))
+    b.part_type("seat", 120.0 + TOL, 120.0 + TOL, pick_time=1.0)
+    b.part_type("strip", 40.0 + TOL, 120.0 + TOL, pick_time=1.0)
+    instance = b.task("t", {"seat": 1, "strip": 1}, human_time=10.0).build()
+    types = dict(instance.part_types)
+    seat, strip = types["seat"], types["strip"]
+    x0 = -0.55 * TOL  # the row spans 160 + 1.1 TOL: 0.55 TOL past each edge
+    x1 = x0 + seat.width - 0.9 * TOL
+    layout = (
+        Placement("t/seat/0", "seat", x0 + seat.width / 2, 60.0, 0.0, seat.width, seat.height),
+        Placement("t/strip/0", "strip", x1 + strip.width / 2, 60.0, 0.0, strip.width, strip.height),
+    )
+    assert [v.kind for v in check(instance, Plan((Kit(("t",), layout),)))] == []
+    assert seat.area + strip.area > (160.0 + TOL) * (120.0 + TOL)  # the area filter says "no"
+    items = [(p.part, types[p.type]) for p in layout]
+    assert _true_size_scope(Tray(160.0, 120.0), items) is None
+    fit = packing_oracle.fit_verdict(
+        Tray(160.0, 120.0), types, {"seat": 1, "strip": 1}, time_limit=5.0
+    )
+    assert fit.scope != ANY_ANGLE, fit
