@@ -75,47 +75,57 @@ print(json.dumps({
 """
 
 
-def wide_instance(n: int, seed: int) -> dict[str, object]:
-    """n tasks without precedence, one part type, robot times given per task."""
-    rng = random.Random(seed)
+def _independent(
+    name: str,
+    tray: tuple[float, float],
+    delivery: float,
+    part: tuple[str, float, float, float],
+    tasks: list[tuple[int, float, float]],
+    **more: object,
+) -> dict[str, object]:
+    """A document of tasks without precedence on one part type ``part`` (id, width, height,
+    pick time), each task (part count, robot time, human time); ``more``: other sections."""
+    pid, width, height, pick = part
     return {
         "format": "bilevel-kit/1",
-        "name": f"wide_n{n}_s{seed}",
-        "tray": {"width": 300.0, "height": 200.0},
-        "delivery_time": 2.0,
-        "part_types": [{"id": "part", "width": 40.0, "height": 30.0, "pick_time": 3.0}],
+        "name": name,
+        "tray": {"width": tray[0], "height": tray[1]},
+        "delivery_time": delivery,
+        **more,
+        "part_types": [{"id": pid, "width": width, "height": height, "pick_time": pick}],
         "tasks": [
             {
                 "id": f"t{j}",
-                "parts": [{"type": "part", "count": rng.randint(1, 3)}],
-                "robot_time": float(rng.randint(3, 30)),
-                "human_time": {"mean": float(rng.randint(5, 40))},
+                "parts": [{"type": pid, "count": count}],
+                "robot_time": robot,
+                "human_time": {"mean": human},
             }
-            for j in range(n)
+            for j, (count, robot, human) in enumerate(tasks)
         ],
     }
+
+
+def wide_instance(n: int, seed: int) -> dict[str, object]:
+    """n tasks without precedence, one part type, robot times given per task."""
+    rng = random.Random(seed)
+    tasks = [
+        (rng.randint(1, 3), float(rng.randint(3, 30)), float(rng.randint(5, 40))) for _ in range(n)
+    ]
+    return _independent(f"wide_n{n}_s{seed}", (300.0, 200.0), 2.0, ("part", 40.0, 30.0, 3.0), tasks)
 
 
 def johnson_instance(n: int, seed: int) -> dict[str, object]:
     """The Johnson special case: F2||Cmax is exact (bilevel_kit/bounds.py, bound (d))."""
     rng = random.Random(seed)
-    return {
-        "format": "bilevel-kit/1",
-        "name": f"johnson_n{n}_s{seed}",
-        "tray": {"width": 100.0, "height": 100.0},
-        "delivery_time": 0.0,
-        "kit_overhead": {"robot": 0.0, "human": 0.0},
-        "part_types": [{"id": "p", "width": 10.0, "height": 10.0, "pick_time": 1.0}],
-        "tasks": [
-            {
-                "id": f"t{i}",
-                "parts": [{"type": "p", "count": 1}],
-                "robot_time": float(rng.randint(1, 30)),
-                "human_time": {"mean": float(rng.randint(1, 30))},
-            }
-            for i in range(n)
-        ],
-    }
+    tasks = [(1, float(rng.randint(1, 30)), float(rng.randint(1, 30))) for _ in range(n)]
+    return _independent(
+        f"johnson_n{n}_s{seed}",
+        (100.0, 100.0),
+        0.0,
+        ("p", 10.0, 10.0, 1.0),
+        tasks,
+        kit_overhead={"robot": 0.0, "human": 0.0},
+    )
 
 
 def make_instance(family: str, size: int, path: Path) -> None:

@@ -66,36 +66,9 @@ def _score_samples(
     parts pre-filled; ``half_w``/``half_h``: half sides of the rotatable parts; ``consts``:
     (pi / 180, tray width, tray height, W6, 0, 2) in the samples' dtype. Writes the
     projected centres into ``X``, ``z`` (box Z) and ``cost`` (D_same - D_diff + W6 Z)."""
-    if X.itemsize == 4:  # float32
-        _rotated_extents32(X, n, rot_idx, half_w, half_h, exT, eyT, consts[0])
-    else:
-        _rotated_extents64(X, n, rot_idx, half_w, half_h, exT, eyT, consts[0])
+    _rotated_extents(X[2 * n :], rot_idx, half_w, half_h, exT, eyT, consts[0])
     _project(X, n, exT, eyT, consts[1], consts[2])
     _pair_scores(X, n, exT, eyT, pair_i, pair_j, sign, consts[3], consts[4], consts[5], cost, z)
-
-
-def _rotated_extents64(
-    X: np.ndarray,
-    n: int,
-    rot_idx: np.ndarray,
-    half_w: np.ndarray,
-    half_h: np.ndarray,
-    exT: np.ndarray,
-    eyT: np.ndarray,
-    deg: float,
-) -> None:  # pragma: no cover - compiled by numba
-    """Half-extents of the rotatable parts' boxes in float64, with ``cos``/``sin`` (the float32
-    twin is :func:`_rotated_extents32`)."""
-    for k in range(rot_idx.size):
-        row = rot_idx[k]
-        hw = half_w[k]
-        hh = half_h[k]
-        for s in range(X.shape[1]):
-            t = X[2 * n + k, s] * deg
-            c = abs(np.cos(t))
-            sn = abs(np.sin(t))
-            exT[row, s] = c * hw + sn * hh
-            eyT[row, s] = sn * hw + c * hh
 
 
 def _project(
@@ -172,25 +145,27 @@ def _sin_cos_small(a: np.float32) -> tuple[np.float32, np.float32]:  # pragma: n
     return sn, c
 
 
-def _rotated_extents32(
-    X: np.ndarray,
-    n: int,
+def _rotated_extents(
+    angles: np.ndarray,
     rot_idx: np.ndarray,
     half_w: np.ndarray,
     half_h: np.ndarray,
     exT: np.ndarray,
     eyT: np.ndarray,
-    deg: np.float32,
+    deg: float,
 ) -> None:  # pragma: no cover - compiled by numba (tests compare it with numpy's cos/sin)
     """Half-extents ``|cos t| w/2 + |sin t| h/2`` and ``|sin t| w/2 + |cos t| h/2`` of the
-    rotatable parts in float32, with a polynomial ``sin``/``cos`` the compiler vectorises (the
-    C library's ``cosf``/``sinf`` are scalar calls: they were 45 % of the scoring time).
+    rotatable parts (row k of ``angles``: part k's angles in degrees, ``deg``: pi / 180), with
+    numpy's ``cos``/``sin`` in float64 and in float32 with a polynomial ``sin``/``cos`` the
+    compiler vectorises (the C library's ``cosf``/``sinf`` are scalar calls: they were 45 % of
+    the scoring time).
 
-    The angle (degrees) is reduced by the nearest multiple q of 90 degrees to
+    In float32 the angle (degrees) is reduced by the nearest multiple q of 90 degrees to
     ``r in [-pi/4, pi/4]``, where Cephes' float32 minimax polynomials give ``sin r`` and
     ``cos r`` to about 1 ulp; ``|cos t|`` and ``|sin t|`` are those of r, swapped when q is
     odd."""
-    S = X.shape[1]
+    S = angles.shape[1]
+    f32 = angles.itemsize == 4
     half = np.float32(0.5)
     two = np.float32(2.0)
     ninety = np.float32(90.0)
@@ -199,19 +174,27 @@ def _rotated_extents32(
         row = rot_idx[k]
         hw = half_w[k]
         hh = half_h[k]
-        th = X[2 * n + k]
+        th = angles[k]
         ex = exT[row]
         ey = eyT[row]
-        for s in range(S):
-            a = th[s]
-            q = np.floor(a * inv90 + half)
-            sn, c = _sin_cos_small((a - q * ninety) * deg)
-            sn, c = abs(sn), abs(c)
-            odd = q - two * np.floor(q * half) != np.float32(0.0)
-            ac = sn if odd else c
-            asn = c if odd else sn
-            ex[s] = ac * hw + asn * hh
-            ey[s] = asn * hw + ac * hh
+        if not f32:
+            for s in range(S):
+                t = th[s] * deg
+                c64 = abs(np.cos(t))
+                sn64 = abs(np.sin(t))
+                ex[s] = c64 * hw + sn64 * hh
+                ey[s] = sn64 * hw + c64 * hh
+        else:
+            for s in range(S):
+                a = th[s]
+                q = np.floor(a * inv90 + half)
+                sn, c = _sin_cos_small((a - q * ninety) * deg)
+                sn, c = abs(sn), abs(c)
+                odd = q - two * np.floor(q * half) != np.float32(0.0)
+                ac = sn if odd else c
+                asn = c if odd else sn
+                ex[s] = ac * hw + asn * hh
+                ey[s] = asn * hw + ac * hh
 
 
 def _uniform_pairs(raw: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:  # pragma: no cover
@@ -608,9 +591,9 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
     Built on first use: the module's functions are replaced by their compiled versions, so
     that the CE block calls the compiled scorer and Cholesky factorisation. The environment
     variable is read at every call."""
-    global _JITTED, _score_samples, _sin_cos_small, _rotated_extents32, _cholesky_into, _ce_block
+    global _JITTED, _score_samples, _sin_cos_small, _rotated_extents, _cholesky_into, _ce_block
     global _sample_into, _track_best, _refit, _factor, _flat
-    global _rotated_extents64, _project, _pair_scores
+    global _project, _pair_scores
     global _push_apart_loop, _uniform_pairs, _box_muller
     if disabled():
         return None
@@ -619,8 +602,7 @@ def _compiled() -> tuple[ScoreKernel, Callable[..., int]] | None:
         if jit is None:
             return None
         _sin_cos_small = jit(_sin_cos_small)
-        _rotated_extents32 = jit(_rotated_extents32)
-        _rotated_extents64 = jit(_rotated_extents64)
+        _rotated_extents = jit(_rotated_extents)
         _project = jit(_project)
         _pair_scores = jit(_pair_scores)
         _score_samples = jit(_score_samples)

@@ -237,14 +237,14 @@ def _synthetic_targets(
 
 
 def _draw_cells(
-    path: str, cal: Mapping[str, Any], jac: np.ndarray, synth: np.ndarray, setup: _Setup
+    cal: Mapping[str, Any], jac: np.ndarray, synth: np.ndarray, setup: _Setup
 ) -> list[CalibrationDraw]:
     """One cell per draw: its synthetic targets and its resampled calibration studies."""
     rng = np.random.default_rng(np.random.SeedSequence([setup.seed, 15, BOOTSTRAP, 2]))
     index = rng.integers(0, setup.studies, (len(synth), setup.studies))
     return [
         CalibrationDraw(
-            instance=path,
+            instance=setup.path,
             draw=b,
             seed=setup.seed,
             studies=setup.studies,
@@ -262,8 +262,9 @@ def _draw_cells(
 
 @dataclass(frozen=True)
 class _Setup:
-    """The run's settings: seed, calibration studies, grid, CE, draws, learning, quick."""
+    """The run's settings: instance, seed, calibration studies, grid, CE, draws, learning, quick."""
 
+    path: str
     seed: int
     studies: int
     grid: int
@@ -291,6 +292,7 @@ def run_calibration(
     t0 = time.perf_counter()
     inst, path = load_instance(instance)
     setup = _Setup(
+        path,
         seed,
         2 if quick else CALIBRATION_STUDIES,
         3 if quick else 5,
@@ -315,7 +317,7 @@ def run_calibration(
     jac = _jacobian(inst, cohort, design, cal)
     params = study_params(timing, None, setup.ce, STUDY_DELIVERY)
     synth = _synthetic_targets(inst, params, design, seed, setup.draws)
-    cells = _draw_cells(path, cal, jac, synth, setup)
+    cells = _draw_cells(cal, jac, synth, setup)
     records = run_cells(
         cells,
         calibration_draw,
@@ -325,7 +327,7 @@ def run_calibration(
         desc="calibration draws",
     )
     succeeded(records, "bootstrap draw(s)")
-    result = _result(cal, design, records, setup, path, inst.name)
+    result = _result(cal, design, records, setup, inst.name)
     result["wall_s"] = time.perf_counter() - t0
     _write(Path(out_dir), result)
     return result
@@ -350,7 +352,6 @@ def _result(
     design: WithinSubjectModel,
     records: Sequence[Mapping[str, Any]],
     setup: _Setup,
-    path: str,
     name: str,
 ) -> dict[str, Any]:
     """The summary: parameter rows, target rows, draw rows and the provenance."""
@@ -370,7 +371,7 @@ def _result(
     return {
         "quick": setup.quick,
         "seed": setup.seed,
-        "parameters": _parameter_rows(cal, design, draws, setup, path),
+        "parameters": _parameter_rows(cal, design, draws, setup),
         "targets": _target_rows(cal, draws),
         "draws": draws,
         "instance": name,
@@ -383,7 +384,6 @@ def _parameter_rows(
     design: WithinSubjectModel,
     draws: Sequence[Mapping[str, Any]],
     setup: _Setup,
-    path: str,
 ) -> list[dict[str, Any]]:
     """``calibration.csv``: name, value, role, the bootstrap's SD and 95 % range, source."""
     coh = f"calibration cohort: seed {setup.seed}, {setup.studies} studies x {PAPER_N}"
@@ -417,8 +417,8 @@ def _parameter_rows(
     cmd = "bilevel-kit repro calibrate" + (" --quick" if setup.quick else "")
     prov = {
         "command": f"{cmd} --seed {setup.seed}",
-        "instance": Path(path).name,
-        "instance_sha1": file_digest(path),
+        "instance": Path(setup.path).name,
+        "instance_sha1": file_digest(setup.path),
         "package_version": __version__,
         "quick": setup.quick,
     }

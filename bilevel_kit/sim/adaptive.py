@@ -27,18 +27,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from ..errors import UsageError
 from ..instance import Instance
-from ..options import NoOptions
 from ..plan import Kit
 from .cpsat_rolling import CPSATRollingOptions, CPSATRollingPolicy
 from .pace import PaceEstimator, PaceOptions, Posterior
 from .policies import OptimizedPolicy
-from .state import SimState
+from .state import PolicyBase, SimState
 from .timing import TimingModel
 
 if TYPE_CHECKING:
@@ -98,21 +97,13 @@ def _pace_options(options: object) -> PaceOptions:
     return options if isinstance(options, PaceOptions) else PaceOptions()
 
 
-class OptimizedAdaptivePolicy:
+class OptimizedAdaptivePolicy(PolicyBase):
     """``optimized`` planning with the posterior mean of the participant's speed factor."""
 
     name: ClassVar[str] = "optimized-adaptive"
     sees_true_speed: ClassVar[bool] = False
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: PaceOptions | NoOptions | None = None,
-    ) -> None:
-        self.instance = instance
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         self.base = OptimizedPolicy(instance, seed=seed, params=params)
         self.pace = Pace(instance, params, _pace_options(options), self.sees_true_speed)
 
@@ -145,15 +136,8 @@ class CPSATRollingAdaptivePolicy(CPSATRollingPolicy):
     name: ClassVar[str] = "cpsat-rolling-adaptive"
     sees_true_speed: ClassVar[bool] = False
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: CPSATRollingOptions | None = None,
-    ) -> None:
-        super().__init__(instance, seed=seed, params=params, options=options)
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
+        super()._setup(instance, seed, params, options)
         self.pace = Pace(instance, params, _pace_options(options), self.sees_true_speed)
 
     def reset(self) -> None:

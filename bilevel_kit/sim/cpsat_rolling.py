@@ -86,7 +86,7 @@ from ..instance import Instance, document, from_dict, topological_order
 from ..options import option
 from ..plan import Kit, Plan
 from .policies import LayoutCache
-from .state import SimState
+from .state import PolicyBase, SimState
 
 if TYPE_CHECKING:
     from ..models.packing_oracle import TypedLayout
@@ -119,25 +119,19 @@ class CPSATRollingOptions:
     )
 
 
-class CPSATRollingPolicy:
+class CPSATRollingPolicy(PolicyBase):
     """Rolling-horizon exact re-planning with CP-SAT (see the module docstring)."""
 
     name: ClassVar[str] = "cpsat-rolling"
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: CPSATRollingOptions | None = None,
-    ) -> None:
-        self.instance = instance
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         #: its one station's d, o_H and trays (several: a policy per station,
         #: :mod:`.stations`, so several are refused here)
         self.station = instance.params_of()
         self.seed = seed
-        self.options = options if options is not None else CPSATRollingOptions()
+        self.options: CPSATRollingOptions = (
+            options if options is not None else CPSATRollingOptions()
+        )
         self._order = topological_order(instance)
         self._layouts = LayoutCache(instance)
         self._memo: dict[tuple[Any, ...], _Decision] = {}

@@ -26,14 +26,14 @@ with one line naming the file (:class:`~bilevel_kit.errors.UsageError`, exit 2) 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ..errors import UsageError
 from ..instance import Instance
 from ..options import option
 from ..plan import Kit, Plan
 from ..validate import check
-from .state import SimState
+from .state import PolicyBase, SimState
 
 if TYPE_CHECKING:
     from .params import SimParams
@@ -84,24 +84,20 @@ def _offline_plan(instance: Instance, seed: int, params: SimParams | None) -> Pl
     return greedy_plan(instance, greedy_params(params), seed)
 
 
-class FixedPlanPolicy:
-    """Executes a fixed plan kit by kit (module docstring); ``plan`` overrides the options."""
+class FixedPlanPolicy(PolicyBase):
+    """Executes a fixed plan kit by kit (module docstring); ``plan`` overrides the options
+    (``built``: the seed, params and options of :class:`~.state.PolicyBase`)."""
 
     name: ClassVar[str] = "fixed-plan"
 
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: FixedPlanOptions | None = None,
-        plan: Plan | None = None,
-    ) -> None:
-        self.instance = instance
+    def __init__(self, instance: Instance, *, plan: Plan | None = None, **built: Any) -> None:
+        self._given = plan
+        super().__init__(instance, **built)
+
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         path = options.plan if options is not None else ""
-        if plan is not None:
-            self.plan = checked_plan(plan, instance)
+        if self._given is not None:
+            self.plan = checked_plan(self._given, instance)
         elif path:
             self.plan = load_plan(path, instance)
         else:

@@ -9,15 +9,14 @@ Every policy implements :class:`.state.Policy` and is built as
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ..heuristics.baselines import packed_kit
 from ..heuristics.cross_entropy import CEParams
 from ..heuristics.greedy_ce import GreedyCEPolicy, GreedyParams, GreedyStats
 from ..instance import Instance, topological_order
-from ..options import NO_OPTIONS, NoOptions
 from ..plan import Kit
-from .state import SimState
+from .state import PolicyBase, SimState
 
 if TYPE_CHECKING:
     from .params import SimParams
@@ -47,32 +46,13 @@ class LayoutCache:
         return Kit(tasks, hit.layout)
 
 
-class _NoOptionsPolicy:
-    """The constructor the option-less policies share: ``cls(instance, *, seed, params,
-    options)`` keeps the instance and hands it, the seed and the params to :meth:`_setup`."""
-
-    def __init__(
-        self,
-        instance: Instance,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: NoOptions = NO_OPTIONS,
-    ) -> None:
-        self.instance = instance
-        self._setup(instance, seed, params)
-
-    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
-        raise NotImplementedError
-
-
-class SingleTaskPolicy(_NoOptionsPolicy):
+class SingleTaskPolicy(PolicyBase):
     """The paper's Single Task baseline: one kit per task, in the deterministic topological
     order (:func:`bilevel_kit.instance.topological_order`), shelf-packer layout."""
 
     name: ClassVar[str] = "single-task"
 
-    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         self._order = topological_order(instance)
         self._layouts = LayoutCache(instance)
         self._pos = 0
@@ -89,13 +69,13 @@ class SingleTaskPolicy(_NoOptionsPolicy):
         return self._layouts.kit((t,), f"kit for task {t!r}")
 
 
-class WholeAssemblyPolicy(_NoOptionsPolicy):
+class WholeAssemblyPolicy(PolicyBase):
     """The paper's Whole Assembly baseline: all (remaining) tasks of the next unit in one kit,
     in topological order, shelf-packer layout."""
 
     name: ClassVar[str] = "whole-assembly"
 
-    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         order = topological_order(instance)
         unit = {t.id: t.unit for t in instance.tasks}
         # the units present (1..units; a station's own instance keeps its tasks' units)
@@ -115,7 +95,7 @@ class WholeAssemblyPolicy(_NoOptionsPolicy):
         return None
 
 
-class OptimizedPolicy(_NoOptionsPolicy):
+class OptimizedPolicy(PolicyBase):
     """The paper's Optimized condition: greedy-ce called online through ``decide``.
 
     Passes the done set, the human's remaining time and (when some type has a supply process)
@@ -127,7 +107,7 @@ class OptimizedPolicy(_NoOptionsPolicy):
 
     name: ClassVar[str] = "optimized"
 
-    def _setup(self, instance: Instance, seed: int, params: SimParams | None) -> None:
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
         self.greedy = GreedyCEPolicy(instance, greedy_params(params), seed)
 
     def reset(self) -> None:

@@ -16,11 +16,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 from ..heuristics.greedy_ce import PolicyState
 from ..instance import Instance, Supply
 from ..plan import Kit
+
+if TYPE_CHECKING:
+    from .params import SimParams
 
 #: Stock reported for part types without a supply process (they never run out).
 UNLIMITED = 10**9
@@ -165,3 +168,23 @@ class Policy(Protocol):
     def decide(self, state: SimState) -> Kit | None: ...
 
     def reset(self) -> None: ...
+
+
+class PolicyBase:
+    """The constructor the package's policies share: ``cls(instance, *, seed, params,
+    options)`` keeps the instance and hands it, the seed, the params and the options (None:
+    the policy's defaults) to its ``_setup``."""
+
+    def __init__(
+        self,
+        instance: Instance,
+        *,
+        seed: int = 0,
+        params: SimParams | None = None,
+        options: Any = None,
+    ) -> None:
+        self.instance = instance
+        self._setup(instance, seed, params, options)
+
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
+        raise NotImplementedError

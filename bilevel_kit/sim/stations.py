@@ -31,7 +31,7 @@ from ..errors import UsageError
 from ..instance import Instance
 from ..plan import Kit
 from ..stations import station_instance
-from .state import Policy, SimState
+from .state import Policy, PolicyBase, SimState
 
 if TYPE_CHECKING:
     from .params import SimParams
@@ -59,19 +59,16 @@ def require_station_policy(instance: Instance, name: str) -> None:
         )
 
 
-class StationsPolicy:
-    """One policy per station, the station of earliest need first (the module docstring)."""
+class StationsPolicy(PolicyBase):
+    """One policy per station, the station of earliest need first (the module docstring);
+    ``factory`` builds each station's, with the seed, params and options (``built``)."""
 
-    def __init__(
-        self,
-        instance: Instance,
-        factory: Any,
-        *,
-        seed: int = 0,
-        params: SimParams | None = None,
-        options: Any = None,
-    ) -> None:
-        self.instance = instance
+    def __init__(self, instance: Instance, factory: Any, **built: Any) -> None:
+        self.factory = factory
+        super().__init__(instance, **built)
+
+    def _setup(self, instance: Instance, seed: int, params: SimParams | None, options: Any) -> None:
+        factory = self.factory
         self.name: str = getattr(factory, "name", "policy")
         self.policies: dict[str, Policy] = {
             s: factory(station_instance(instance, s), seed=seed, params=params, options=options)

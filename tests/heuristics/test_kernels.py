@@ -188,7 +188,7 @@ def test_float32_extents_polynomial_is_accurate() -> None:
     ey = np.empty((1, S), dtype=np.float32)
     hw, hh = np.float32(76.2), np.float32(6.35)  # half a table leg
     deg = np.float32(math.pi / 180.0)
-    _kernels._rotated_extents32(X, 1, np.array([0]), np.array([hw]), np.array([hh]), ex, ey, deg)
+    _kernels._rotated_extents(X[2:], np.array([0]), np.array([hw]), np.array([hh]), ex, ey, deg)
     rad = np.radians(angles.astype(np.float64))
     c, s = np.abs(np.cos(rad)), np.abs(np.sin(rad))
     # float32 rounding of the angle itself (|angle| <= 720: 3e-5 degrees) bounds the error

@@ -144,7 +144,7 @@ def solve_window(
         left = end - time.perf_counter()
         if left <= 0.01:
             return Outcome(None, False, True)
-        new, optimal, stopped = _solve_once(ctx, kits, k0, k1, upper, seed, left)
+        new, optimal, stopped = _WindowModel.of(ctx, kits, k0, k1, upper).solve(seed, left)
         if stopped or new is None:
             return Outcome(None, False, stopped)
         if all([ctx.fits(k) for k in new]):
@@ -152,50 +152,49 @@ def solve_window(
     return Outcome(None, False, False)
 
 
-def _solve_once(
-    ctx: Context,
-    kits: Sequence[Sequence[int]],
-    k0: int,
-    k1: int,
-    upper: int,
-    seed: int,
-    wall_left: float,
-) -> tuple[list[list[int]] | None, bool, bool]:
-    """One CP-SAT solve of the window: (kits or None, optimal, stopped by the wall clock)."""
-    import time
-
-    from ortools.sat.python import cp_model
-
-    sc = ctx.sc
-    tasks = [i for k in kits[k0:k1] for i in k]
-    flexible = sc.trays is None or sc.trays == 1
-    n_pos = min(len(tasks), k1 - k0 + max(2, (k1 - k0) // 2)) if flexible else k1 - k0
-    win = _WindowModel(ctx, tasks, n_pos, flexible, k0, upper)
-    win.timeline(window_edge(sc, kits, k0))
-    # the suffix's first kit: at k1 when the count is fixed; with one tray at 1 or later
-    win.objective(tail_response(sc, kits[k1:], k0 + 1 if flexible else k1))
-    win.hint(kits[k0:k1])
-    solver = cp_model.CpSolver()
-    p = solver.parameters
-    p.num_workers = max(1, ctx.workers)
-    if ctx.workers > 1:
-        p.interleave_search = True
-    p.random_seed = seed
-    p.max_deterministic_time = ctx.dtime
-    p.max_time_in_seconds = max(0.01, wall_left)
-    t0 = time.perf_counter()
-    st = stoppable.solve(solver, win.m)  # Ctrl-C and SIGTERM stop it (docs/cli.md)
-    stopped = (
-        st not in (cp_model.OPTIMAL, cp_model.INFEASIBLE)
-        and time.perf_counter() - t0 >= wall_left - 1e-3
-    )
-    if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE) or stopped:
-        return None, False, stopped
-    return win.kits(solver), st == cp_model.OPTIMAL, False
-
-
 class _WindowModel:
     """The CP-SAT model of one window (module docstring)."""
+
+    @classmethod
+    def of(
+        cls, ctx: Context, kits: Sequence[Sequence[int]], k0: int, k1: int, upper: int
+    ) -> _WindowModel:
+        """The model of the kits ``[k0, k1)`` of ``kits``: timeline, objective and hint."""
+        sc = ctx.sc
+        tasks = [i for k in kits[k0:k1] for i in k]
+        flexible = sc.trays is None or sc.trays == 1
+        n_pos = min(len(tasks), k1 - k0 + max(2, (k1 - k0) // 2)) if flexible else k1 - k0
+        win = cls(ctx, tasks, n_pos, flexible, k0, upper)
+        win.timeline(window_edge(sc, kits, k0))
+        # the suffix's first kit: at k1 when the count is fixed; with one tray at 1 or later
+        win.objective(tail_response(sc, kits[k1:], k0 + 1 if flexible else k1))
+        win.hint(kits[k0:k1])
+        return win
+
+    def solve(self, seed: int, wall_left: float) -> tuple[list[list[int]] | None, bool, bool]:
+        """One CP-SAT solve of the window: (kits or None, optimal, stopped by the wall clock)."""
+        import time
+
+        from ortools.sat.python import cp_model
+
+        ctx = self.ctx
+        solver = cp_model.CpSolver()
+        p = solver.parameters
+        p.num_workers = max(1, ctx.workers)
+        if ctx.workers > 1:
+            p.interleave_search = True
+        p.random_seed = seed
+        p.max_deterministic_time = ctx.dtime
+        p.max_time_in_seconds = max(0.01, wall_left)
+        t0 = time.perf_counter()
+        st = stoppable.solve(solver, self.m)  # Ctrl-C and SIGTERM stop it (docs/cli.md)
+        stopped = (
+            st not in (cp_model.OPTIMAL, cp_model.INFEASIBLE)
+            and time.perf_counter() - t0 >= wall_left - 1e-3
+        )
+        if st not in (cp_model.OPTIMAL, cp_model.FEASIBLE) or stopped:
+            return None, False, stopped
+        return self.kits(solver), st == cp_model.OPTIMAL, False
 
     def __init__(
         self, ctx: Context, tasks: list[int], n_pos: int, flexible: bool, k0: int, upper: int
