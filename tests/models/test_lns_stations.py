@@ -14,6 +14,7 @@ from test_objectives_brute import instance_doc
 
 from bilevel_kit import UsageError, load, solve
 from bilevel_kit.instance import from_dict
+from bilevel_kit.models.budget import Budget
 from bilevel_kit.plan import evaluate
 from bilevel_kit.stations import objective_of
 
@@ -178,11 +179,13 @@ def test_lns_on_stations_is_never_worse_than_its_finished_greedy_ce_start(monkey
     time left (docs/stations.md#lns-with-several-stations), so when it finishes its plan is
     the start or beaten. The threshold is lowered to this 90-task instance (greedy-ce about
     1 s) and ``start_share=0`` would leave it no time below it; one visit: the search cannot
-    make up for a start without greedy-ce's plan (single-task's is far worse here)."""
+    make up for a start without greedy-ce's plan (single-task's is far worse here). The
+    fixed-size cuts are left out: here they beat greedy-ce's plan themselves."""
     from bilevel_kit.generate import generate
     from bilevel_kit.models.lns import stations
 
     assert stations.GREEDY_TASKS == 200  # docs/stations.md states it
+    monkeypatch.setattr(stations, "station_cuts", lambda *args: [])
     inst = from_dict(generate("intree", 30, seed=0, stations=3))
     greedy = solve(inst, "greedy-ce")
     quick = solve(inst, "lns", time_limit=60, iterations=1, start_share=0.0)
@@ -195,3 +198,77 @@ def test_lns_on_stations_is_never_worse_than_its_finished_greedy_ce_start(monkey
     assert out.extra["start_objective"] <= greedy.objective + 1e-9
     assert out.objective <= greedy.objective + 1e-9
     assert out.extra["stop"] == "iterations"
+
+
+def _fit(inst):
+    from bilevel_kit.models.budget import Budget
+    from bilevel_kit.models.common import Packer
+    from bilevel_kit.models.lns.fit import FastFit
+
+    return FastFit(inst, Packer(inst, 0.05, Budget(60)))
+
+
+def test_recut_tail_cuts_each_stations_trailing_single_task_kits_again():
+    """What greedy-ce leaves when its limit stops it, each station's remaining tasks in
+    single-task kits, is cut again into kits of the given size after the kits it decided
+    (:func:`bilevel_kit.models.lns.start.recut_tail`): 3 stations of 30 in-tree tasks, one
+    decided kit of two tasks at S1, the rest single: S1's 28 tasks in 7 kits of 4, S2's and
+    S3's 30 in 8 (7 of 4, one of 2), each station's task order kept."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.models.budget import Budget
+    from bilevel_kit.models.lns.start import recut_tail
+    from bilevel_kit.plan import Kit, Plan
+
+    inst = from_dict(generate("intree", 30, seed=0, stations=3))
+    single = solve(inst, "single-task").plan
+    s1 = [k.tasks[0] for k in single.kits if inst.station_of(k.tasks[0]) == "S1"]
+    decided = Kit((s1[0], s1[1]))
+    rest = [k for k in single.kits if k.tasks[0] not in s1[:2]]
+    plan = Plan((decided, *rest))
+    out = recut_tail(inst, plan, 4, _fit(inst), Budget(60))
+    assert out is not None and out.kits[0] == decided
+    for s, want in (("S1", [2] + [4] * 7), ("S2", [4] * 7 + [2]), ("S3", [4] * 7 + [2])):
+        mine = [k.tasks for k in out.kits if inst.station_of(k.tasks[0]) == s]
+        assert [len(k) for k in mine] == want
+        before = [t for k in plan.kits for t in k.tasks if inst.station_of(t) == s]
+        assert [t for k in mine for t in k] == before  # each station's task order kept
+    assert evaluate(inst, out).makespan < evaluate(inst, plan).makespan
+    whole = solve(inst, "whole-assembly").plan  # no single-task kit at the end: nothing to cut
+    assert recut_tail(inst, whole, 4, _fit(inst), Budget(60)) is None
+
+
+def test_lns_on_stations_starts_from_the_best_fixed_size_cut():
+    """Issue 37 at scale: with stations the fixed-size cuts of each station's topological
+    order are starts (:func:`bilevel_kit.models.lns.start.station_cuts`). On 1,800 sparse
+    tasks on 3 stations the best cut (32 tasks a kit, 23,592 s) beat greedy-ce at 20 s by
+    28 % (bench/results/lns_scale.md); here, 90 in-tree tasks, it beats the baselines, so
+    the start is a cut's and no worse than any."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.models.budget import Budget
+    from bilevel_kit.models.lns.start import STATION_SIZES, station_cuts
+
+    inst = from_dict(generate("intree", 30, seed=0, stations=3))
+    cuts = station_cuts(inst, _fit(inst), Budget(60))
+    assert [size for size, _, _ in cuts] == list(STATION_SIZES)
+    best = min(evaluate(inst, plan).makespan for _, _, plan in cuts)
+    out = solve(inst, "lns", time_limit=60, iterations=1, start="quick", check=True)
+    assert out.extra["violations"] == []
+    assert out.extra["start_method"] == f"fixed cut {out.extra['start_cut_size']}"
+    assert out.extra["start_objective"] == best
+    assert best < min(solve(inst, m).objective for m in ("single-task", "whole-assembly"))
+
+
+def test_lns_on_stations_holds_the_cut_back_behind_a_finished_greedy_ce():
+    """A finished greedy-ce's plan is the search's start even where a fixed-size cut is
+    better (from greedy-ce's kits the search ended better, bench/results/lns_scale.md), and
+    the cut is taken after the search when the search's plan is worse: 90 in-tree tasks on
+    3 stations, greedy-ce 1,434 s, the best cut 1,291 s, one visit of the search."""
+    from bilevel_kit.generate import generate
+    from bilevel_kit.models.lns.start import station_cuts
+
+    inst = from_dict(generate("intree", 30, seed=0, stations=3))
+    best = min(evaluate(inst, p).makespan for _, _, p in station_cuts(inst, _fit(inst), Budget(60)))
+    out = solve(inst, "lns", time_limit=60, iterations=1, check=True)
+    assert out.extra["violations"] == [] and out.extra["start_greedy_cut"] is False
+    assert out.extra["start_method"] == "greedy-ce" and out.extra["start_objective"] > best
+    assert out.extra["cut_after_search"] is True and out.objective == best

@@ -5,7 +5,10 @@ order (:func:`..common.johnson_topological_order`), each cut into kits of a fixe
 tasks (split further where a kit does not fit) and cut exactly for one tray (:mod:`..segment`:
 exact with one tray, a candidate otherwise); and greedy-ce within its share of the time limit
 (when that share is at least :data:`GREEDY_MIN_S`).
-Fits are decided by :class:`.fit.FastFit`.
+Fits are decided by :class:`.fit.FastFit`. With several stations (:mod:`.stations`): the
+fixed-size cuts of each station's topological order interleaved by earliest need
+(:func:`station_cuts`), and greedy-ce's plan with its single-task tail cut again
+(:func:`recut_tail`).
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from collections.abc import Sequence
 
 from ...errors import BilevelKitError
 from ...instance import Instance, topological_order
-from ...plan import Kit, Plan, evaluate
+from ...plan import Kit, Plan, TimelineBuilder, evaluate
 from ..budget import Budget
 from ..common import johnson_topological_order, kit_order, split_greedily
 from .fit import FastFit
@@ -145,3 +148,129 @@ def _fixed(
             return None
         kits += split
     return kits
+
+
+# -- several stations (:mod:`.stations`) ------------------------------------------------------
+
+#: Tasks per kit of the stations' fixed-size cuts: :data:`SIZES` and larger ones. Measured on
+#: 1,800 sparse tasks on 3 stations (bench/results/lns_scale.md), where the robot serving three
+#: humans is the bottleneck, the best cut held 32 tasks per kit: 23,592 s, against
+#: 32,775-33,530 s for greedy-ce at 20 s and 28,429 s for greedy-ce run to its end (53 s).
+STATION_SIZES = (*SIZES, 32, 48)
+
+
+def station_cuts(instance: Instance, fit: FastFit, budget: Budget) -> list[tuple[int, float, Plan]]:
+    """The fixed-size cuts with several stations: each station's tasks in topological order
+    cut into kits of :data:`STATION_SIZES` tasks (split greedily where one does not fit), the
+    stations' kits interleaved by earliest need (:func:`interleave`); (size, seconds it took,
+    plan) for each size, smallest first, while the budget lasts."""
+    import time
+
+    order = topological_order(instance)
+    queues: dict[str, list[str]] = {s: [] for s in instance.station_ids}
+    for t in order:
+        queues[instance.station_of(t)].append(t)
+    out = []
+    for size in STATION_SIZES:
+        t0 = time.perf_counter()
+        if budget.expired():
+            break
+        cut = _station_fixed(instance, queues, size, fit, budget)
+        if cut is None:
+            break
+        out.append((size, time.perf_counter() - t0, interleave(instance, [], cut)))
+    return out
+
+
+def recut_tail(
+    instance: Instance, plan: Plan, size: int, fit: FastFit, budget: Budget
+) -> Plan | None:
+    """``plan`` with each station's trailing single-task kits (what greedy-ce leaves when its
+    time limit stops it) cut again into kits of ``size`` tasks in their order, interleaved by
+    earliest need after the other kits (None: nothing to cut, or the budget ran out)."""
+    tails, in_tail = _tails(instance, plan)
+    if not any(len(t) > 1 for t in tails.values()):
+        return None
+    cut = _station_fixed(instance, tails, size, fit, budget)
+    if cut is None:
+        return None
+    head = [k for k, tail in zip(plan.kits, in_tail, strict=True) if not tail]
+    return interleave(instance, head, cut)
+
+
+def _tails(instance: Instance, plan: Plan) -> tuple[dict[str, list[str]], list[bool]]:
+    """Each station's tasks in its trailing single-task kits, in order, and which kits
+    those are."""
+    tails: dict[str, list[str]] = {s: [] for s in instance.station_ids}
+    in_tail = [False] * len(plan.kits)
+    closed: set[str] = set()  # stations whose tail has ended (a larger kit before it)
+    for j in range(len(plan.kits) - 1, -1, -1):
+        kit = plan.kits[j]
+        s = instance.station_of(kit.tasks[0])
+        if s in closed:
+            continue
+        if len(kit.tasks) == 1:
+            tails[s].insert(0, kit.tasks[0])
+            in_tail[j] = True
+        else:
+            closed.add(s)
+    return tails, in_tail
+
+
+def _station_fixed(
+    instance: Instance, queues: dict[str, list[str]], size: int, fit: FastFit, budget: Budget
+) -> dict[str, list[list[str]]] | None:
+    """Each station's tasks (in ``queues``, in order) in kits of ``size`` tasks, each split
+    greedily until it fits (a probe of :data:`PROBE_S` deterministic seconds); a kit of
+    part-less tasks only joins its station's kit before it (after it, when first), which keeps
+    the order and the fit. None: a task does not fit, or the budget ran out."""
+
+    def fits(kit: list[str]) -> bool:
+        return fit.counts(instance.kit_parts(kit), PROBE_S, deterministic=True) is True
+
+    out: dict[str, list[list[str]]] = {}
+    for s, tasks in queues.items():
+        kits: list[list[str]] = []
+        for a in range(0, len(tasks), size):
+            if budget.expired():
+                return None
+            split = split_greedily(tasks[a : a + size], fits)
+            if split is None:
+                return None
+            kits += split
+        needy = [any(instance.needs_kit(t) for t in k) for k in kits]
+        if any(needy):  # (a station of part-less tasks only keeps its part-less kits)
+            merged: list[list[str]] = []
+            carry: list[str] = []
+            for kit, needs in zip(kits, needy, strict=True):
+                if needs:
+                    merged.append(carry + kit)
+                    carry = []
+                elif merged:
+                    merged[-1] = merged[-1] + kit
+                else:
+                    carry += kit
+            kits = merged
+        out[s] = kits
+    return out
+
+
+def interleave(instance: Instance, head: Sequence[Kit], queues: dict[str, list[list[str]]]) -> Plan:
+    """``head``, then each station's kits of ``queues`` in its own order, interleaved by
+    earliest need: the next kit is the station's whose human is free first (ties to the
+    station listed first), as the baselines interleave theirs (:mod:`...heuristics.baselines`)."""
+    timeline = TimelineBuilder(instance)
+    kits = list(head)
+    for kit in kits:
+        timeline.append(kit)
+    heads = dict.fromkeys(queues, 0)
+    while True:
+        ready = [s for s in queues if heads[s] < len(queues[s])]
+        if not ready:
+            break
+        station = min(ready, key=timeline.station_free)
+        kit = Kit(tuple(queues[station][heads[station]]))
+        heads[station] += 1
+        timeline.append(kit)
+        kits.append(kit)
+    return Plan(tuple(kits))

@@ -8,9 +8,14 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
 :func:`~bilevel_kit.plan.evaluate`'s value of the objective is strictly better:
 
 1. **Start** from the best of the given plan (``start_plan``), single-task's and
-   whole-assembly's plans (which interleave the stations by earliest need) and (``start=
-   "auto"``) greedy-ce's: within ``start_share`` of the time limit up to
-   :data:`.start.GREEDY_TASKS` tasks, within all the time left beyond (:func:`_greedy_start`).
+   whole-assembly's plans (which interleave the stations by earliest need), the fixed-size
+   cuts of each station's topological order, interleaved the same way
+   (:func:`.start.station_cuts`, :func:`_best_cut`), and (``start="auto"``) greedy-ce's:
+   within ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, within
+   all the time left beyond (:func:`_greedy_start`); stopped by its limit, also its plan with
+   each station's trailing single-task kits cut again (:func:`.start.recut_tail`). A greedy-ce
+   that finished is the search's start even where a cut is better (from its kits the search
+   ended better); the best cut is then held back and taken after the search if better.
 2. **Bound**: the objective's closed form (:func:`bilevel_kit.bounds.objective_bound`, as
    ``cpsat`` and ``milp`` report with stations), or the given ``known_bound`` (makespan).
 3. **Sweeps**: the kits in a random order; from each kit (one *iteration*) the moves of
@@ -33,8 +38,11 @@ grid of :mod:`..cpsat.scaling` (:func:`~..cpsat.scaling.scaled_objective`, held 
 ``feasible``; ``bound`` the makespan's (closed form or given); with another objective
 ``status_objective`` is it, and ``extra`` states its ``objective_value``, ``objective_bound``
 and ``objective_gap`` (:func:`bilevel_kit.bounds.objective_extra`). ``extra``: ``search``
-(``stations``), ``start_method``, ``start_objective``, ``start_time_s``,
-``start_greedy_cut`` (greedy-ce's start stopped by its time, when it ran), ``iterations``,
+(``stations``), ``start_method``, ``start_objective``, ``start_time_s``, ``start_cut_size``
+(the best fixed-size cut's kit size),
+``start_greedy_cut`` (greedy-ce's start stopped by its time, when it ran),
+``cut_after_search`` (the best fixed-size cut, held back behind a finished greedy-ce, was
+better than the search's plan and taken), ``iterations``,
 ``improvements``, ``sweeps``, ``kicks``, ``tried`` (moves tried), ``hopeless`` (candidates
 rejected from their states, :mod:`.trail`), ``window_plans`` (rearrangements enumerated),
 ``stop``, ``bound_source``, ``makespan``, ``n_kits``, ``gap``, ``wall_time_s``.
@@ -66,7 +74,7 @@ from ..cpsat.scaling import Clock, Scaled, clock_after, scale_times, scaled_obje
 from .clock import dominated, end_key
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
-from .start import GREEDY_TASKS
+from .start import CUT_SHARE, GREEDY_TASKS, recut_tail, station_cuts
 from .trail import Trail
 
 #: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
@@ -78,6 +86,9 @@ REACH = 2
 KICKS = 30
 #: Random moves per kick.
 KICK_MOVES = 2
+#: The start plans :meth:`_Search.consider` takes as valid (a method's plan, or the plan
+#: given); the others' kits and order are checked first.
+TRUSTED = ("incumbent", "single-task", "whole-assembly", "greedy-ce")
 #: Seconds a packing call of a candidate kit may take (undecided: does not fit), as CP-SAT's
 #: deterministic time (:func:`..packing_oracle.deterministic_limits`): a wall-clock probe gave
 #: another verdict, and so another search, on a loaded machine.
@@ -109,8 +120,14 @@ def station_search(
         plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
         if plan is not None:
             run.consider(plan, name)
+    cut = _best_cut(run, stop_at)
+    finished = False
     if options.start == "auto":
-        _greedy_start(run, options.start_share, budget, stop_at, greedy_at, seed)
+        finished = _greedy_start(
+            run, options.start_share, budget, stop_at, greedy_at, seed, cut[:3] if cut else None
+        )
+    if cut is not None and not finished:  # (a finished greedy-ce's plan: the search's start)
+        run.consider(cut[3], f"fixed cut {cut[0]}")
     extra.update(start_objective=run.real, start_time_s=budget.elapsed() - t0)
     if run.kits is None:
         extra["reason"] = "no start plan within the time limit"
@@ -121,7 +138,25 @@ def station_search(
     extra["bound_source"] = "given" if known_bound is not None else "closed_form"
     if not run.optimal():
         run.search(np.random.default_rng(seed), stop_at, options.iterations, options.stall)
+    if cut is not None and finished and run.assess(cut[3]) < run.real - 1e-9:
+        started = extra["start_method"]
+        run.consider(cut[3], f"fixed cut {cut[0]}")  # held back, and better than the search's
+        extra.update(start_method=started, cut_after_search=True)
     return run.finish(budget)
+
+
+def _best_cut(run: _Search, stop_at: Budget) -> tuple[int, float, float, Plan] | None:
+    """The best of the fixed-size cuts of :func:`.start.station_cuts`, made within
+    :data:`.start.CUT_SHARE` of the time limit: (its kit size, the seconds it took, its
+    value, the plan); None when none was made."""
+    best: tuple[int, float, float, Plan] | None = None
+    for size, took, plan in station_cuts(run.instance, run.fit, stop_at.head(CUT_SHARE)):
+        value = run.assess(plan)
+        if best is None or value < best[2]:
+            best = (size, took, value, plan)
+    if best is not None:
+        run.extra["start_cut_size"] = best[0]
+    return best
 
 
 def _greedy_start(
@@ -131,24 +166,43 @@ def _greedy_start(
     stop_at: Budget,
     greedy_at: Budget,
     seed: int,
-) -> None:
-    """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations): within
-    ``start_share`` of the time limit up to :data:`.start.GREEDY_TASKS` tasks, where the
-    search from the quick plans beats it; beyond, within all the time left (the search takes
-    what it leaves), where its decisions gain more per second than the search's moves. There
-    it runs to ``greedy_at`` (:data:`.method.MARGIN_S` before the limit), not to ``stop_at``
-    (which also keeps a share of the limit for the oracle's final layouts: every start plan
+    cut: tuple[int, float, float] | None = None,
+) -> bool:
+    """greedy-ce's plan as a start (docs/stations.md#lns-with-several-stations), within
+    ``start_share`` of the time limit; ``cut`` the best fixed-size cut's (kit size, seconds
+    it took, value) (:func:`_best_cut`). Whether a greedy-ce plan finished (its limit did not
+    stop it): that plan is the search's start, the cut held back (the search from greedy-ce's
+    kits ended better than from the best cut's, bench/results/lns_scale.md).
+
+    A greedy-ce its limit stopped leaves its remaining tasks in single-task kits: with
+    ``cut`` they are cut again into kits of that size after the kits it decided
+    (:func:`.start.recut_tail`), another start. Beyond :data:`.start.GREEDY_TASKS` tasks
+    greedy-ce runs within all the time left less the cut's time (kept for cutting its tail
+    again), up to ``greedy_at`` (:data:`.method.MARGIN_S` before the limit, not ``stop_at``,
+    which also keeps a share of the limit for the oracle's final layouts: every start plan
     carries its own), so that it gets about the time greedy-ce alone gets. No time is kept
     back per task for its overrun (the warm start's rule): at scale that margin exceeds the
     whole share, and greedy-ce checks its clock at every decision."""
-    from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
-
     if run.instance.n_tasks <= GREEDY_TASKS:
         limit = min(start_share * budget.time_limit, stop_at.remaining())
     else:
-        limit = greedy_at.remaining()
+        limit = greedy_at.remaining() - (cut[1] if cut is not None else 0.0)
+    return _greedy_run(run, limit, seed, cut, greedy_at)
+
+
+def _greedy_run(
+    run: _Search,
+    limit: float,
+    seed: int,
+    cut: tuple[int, float, float] | None,
+    greedy_at: Budget,
+) -> bool:
+    """greedy-ce within ``limit`` s as a start (:func:`_greedy_start`), and when its limit
+    stopped it, its plan with its tail cut again at ``cut``'s size; whether it finished."""
+    from ..exact.warm import KERNEL_LOAD_S, WarmRule, best_heuristic_plan
+
     if limit < 0.5:
-        return
+        return False
     extra: dict[str, Any] = {}
     plan, _ = best_heuristic_plan(
         run.instance,
@@ -160,8 +214,16 @@ def _greedy_start(
         extra=extra,
     )
     run.extra["start_greedy_cut"] = bool(extra.get("warm_start_cut"))
-    if plan is not None:
-        run.consider(plan, "greedy-ce")
+    if plan is None:
+        return False
+    run.consider(plan, "greedy-ce")
+    if not run.extra["start_greedy_cut"]:
+        return True
+    if cut is not None:
+        tail = recut_tail(run.instance, plan, cut[0], run.fit, greedy_at)
+        if tail is not None:
+            run.consider(tail, f"greedy-ce, its tail cut {cut[0]}")
+    return False
 
 
 @dataclass
@@ -272,13 +334,25 @@ class _Search:
         self.kits, self.scaled, self.real = [list(k) for k in kits], scaled, real
         return True
 
-    def consider(self, plan: Plan, name: str) -> None:
-        """A start plan (valid: a method's), its layouts kept, if better."""
+    def assess(self, plan: Plan, trusted: bool = False) -> float:
+        """The value of a plan whose kits are all valid and in order (``trusted``: a
+        method's, not checked); inf when one is not."""
         idx = self.instance.index
         kits = [[idx[t] for t in k.tasks] for k in plan.kits if k.tasks]
-        real = self.value(kits)
+        if not trusted and not (all(self.valid_kit(k) for k in kits) and self.ordered(kits)):
+            return math.inf
+        return self.value(kits)
+
+    def consider(self, plan: Plan, name: str) -> float:
+        """A start plan (valid: a method's, or every kit valid and in order), its layouts
+        kept, if better; its value (inf: a kit not valid, or the order breaks a precedence)."""
+        idx = self.instance.index
+        kits = [[idx[t] for t in k.tasks] for k in plan.kits if k.tasks]
+        real = self.assess(plan, trusted=name in TRUSTED)
+        if real == math.inf:
+            return real
         if real >= self.real - 1e-9:
-            return
+            return real
         self.kits, self.real = kits, real
         self.scaled = scaled_objective(self.sc, kits, self.name)
         self.extra["start_method"] = name
@@ -286,6 +360,7 @@ class _Search:
             if k.layout:
                 self.layouts[tuple(idx[t] for t in k.tasks)] = k.layout
                 self.fit.packer.learn(self.instance.kit_parts(k.tasks), k.layout)
+        return real
 
     def optimal(self) -> bool:
         return self.bound is not None and self.real <= self.bound + 1e-6
