@@ -21,7 +21,8 @@
 The makespan, one or more trays, one station (:mod:`.space`) or several (:mod:`.stations`,
 docs/timeline.md#several-stations); no other objective. ``extra``: ``start_method``,
 ``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
-``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
+``expanded``, ``resumed`` (partial expansions resumed), ``generated``, ``kept``,
+``dominated``, ``oracle`` (packing calls), ``ideals``,
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
 ``optimal_axis_aligned`` (what the searches proved for 0/90-degree plans), ``relaxed_kits``,
 ``axis_aligned`` (the second pass's stop, bound and counters), ``proof_scope``, ``makespan``,

@@ -7,7 +7,11 @@ tasks). The search is best-first on the node's lower bound ``f``
 (:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
 
 * **branch**: a node's children are its kits (:meth:`.space.Space.children`), each the node's
-  ideal plus a down-set extension whose parts fit the tray;
+  ideal plus a down-set extension whose parts fit the tray; a node pushes at most
+  :data:`BATCH` children per expansion and then goes back on the heap with its own ``f``, the
+  rest of its kits generated when it is popped again (partial expansion: a node with a
+  million kits below the incumbent does not hold the search until all are generated, and its
+  ``f`` still bounds every plan through the kits not yet generated);
 * **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
 * **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
   componentwise at most); a dominated child is dropped, a dominating one retires the nodes it
@@ -49,6 +53,8 @@ from ..packing import ANY_ANGLE, AXIS_ALIGNED
 FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
 #: What the search does with a kit (:meth:`_Search.fit`).
 FITS, NO, RELAXED = "fits", "no", "relaxed"
+#: Children a node pushes per expansion before it goes back on the heap (partial expansion).
+BATCH = 256
 
 
 class Space(Protocol):
@@ -86,6 +92,8 @@ class Node:
     verified: bool = False
     #: a kit on its path is relaxed (module docstring)
     relaxed: bool = False
+    #: the kits not yet generated of a node partly expanded (module docstring)
+    pending: Iterator[tuple[int, float, float, int]] | None = None
 
 
 @dataclass
@@ -153,6 +161,8 @@ def search(
             heapq.heappop(run.heap)
             if node.alive and run.verify(node):
                 run.expand(node, f)
+            else:
+                node.pending = None
     return run.outcome()
 
 
@@ -182,6 +192,7 @@ class _Search:
             "dominated": 0,
             "oracle": 0,
             "relaxed_kits": 0,
+            "resumed": 0,
         }
         self.stop = "exhausted"
 
@@ -225,13 +236,24 @@ class _Search:
         return True
 
     def expand(self, node: Node, f: float) -> None:
-        """Push the node's children that survive the bound and the dominance test."""
+        """Push the node's children that survive the bound and the dominance test, at most
+        :data:`BATCH` of them: with more kits left the node goes back on the heap with its
+        ``f`` (deeper children first among equal bounds) and the next pop resumes it
+        (``resumed``; module docstring)."""
         space, counts = self.space, self.counts
-        counts["expanded"] += 1
-        for mask, r, h, station in space.children(node.done, node.state, self.upper - self.tol):
+        kits = node.pending
+        if kits is None:
+            counts["expanded"] += 1
+            kits = space.children(node.done, node.state, self.upper - self.tol)
+        else:
+            counts["resumed"] += 1
+        node.pending = None
+        pushed = 0
+        for mask, r, h, station in kits:
             counts["generated"] += 1
             if not counts["generated"] & 63 and self._late():
                 self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
+                node.pending = kits
                 heapq.heappush(self.heap, (f, 0, next(self.tick), node))
                 return
             done = node.done | mask
@@ -251,6 +273,12 @@ class _Search:
             counts["kept"] += 1
             depth = -bin(done).count("1")
             heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
+            pushed += 1
+            if pushed >= BATCH:  # the rest later: the node stays open with its f
+                node.pending = kits
+                depth = -bin(node.done).count("1")
+                heapq.heappush(self.heap, (f, depth, next(self.tick), node))
+                return
 
     def _complete(self, child: Node, makespan: float) -> None:
         """A complete plan below the incumbent: the new incumbent, or a relaxed plan's

@@ -24,7 +24,8 @@ state whose vector is componentwise at most another's with the same ``J`` domina
 .. math::
 
    LB = \max\Bigl(b + B_U,\ a + P_U,\
-        \max(b,\ a + o_R + d + \min_{i\ \mathrm{ready}} r_i) + B_U,\
+        \min\bigl(\max(b,\ a + o_R + d + \rho_U) + B_U,\
+                  \max(b,\ a + o_R + d + \min_{i\ \mathrm{ready}} r_i) + B_U + o_H\bigr),\
         [T = 1]\ a + r(U) + k_0 (o_R + d + o_H) + \min_{i \in U\ \mathrm{sink}} h_i\Bigr)
 
 with :math:`B_U = h(U) + k_0 o_H` and :math:`P_U = \max_j (\sum_{i \le j} a_i +
@@ -32,7 +33,10 @@ with :math:`B_U = h(U) + k_0 o_H` and :math:`P_U = \max_j (\sum_{i \le j} a_i +
 ``k0`` overhead jobs :math:`(o_R + d, o_H)`: the two-machine flow-shop bound (d) of
 :mod:`bilevel_kit.bounds` with machines free at ``a`` and ``b`` (Johnson's order minimises
 the second term, the first does not depend on the order), the first kit's arrival (it holds a
-ready task) and the one-tray robot bound (b) of the same module from ``a``. Every term depends
+ready task, and when the rest takes exactly ``k0`` kits the area the other ``k0 - 1`` cannot:
+``rho_U`` is the larger of the least ready ``r_i`` and :func:`_least_robot_time` of
+``area(U) - (k0 - 1)`` tray areas; with more kits the human has one more ``o_H``) and the
+one-tray robot bound (b) of the same module from ``a``. Every term depends
 on the state only through ``a`` and ``b`` plus a per-``U`` constant, cached per ideal.
 """
 
