@@ -429,20 +429,26 @@ def test_bound_with_exactly_k0_kits_left_rises(trays):
 
 @pytest.mark.parametrize("trays", TRAYS)
 @pytest.mark.parametrize("seed", SEEDS)
-def test_partial_expansion_equals_the_brute_force(seed, trays, monkeypatch):
-    """With one child pushed per expansion (:data:`search.BATCH`), every node goes back on
-    the heap until its kits are all generated: the search still finds and proves the optimum,
-    and a bound at an early stop (a parent partly expanded among the open nodes) is below it."""
-    from bilevel_kit.models.bbr import search as search_module
-
-    monkeypatch.setattr(search_module, "BATCH", 1)
+def test_partial_expansion_equals_the_brute_force(seed, trays):
+    """With one child pushed per expansion (``batch=1``), every node goes back on the heap
+    until its kits are all generated: the search still finds and proves the optimum, and a
+    bound at an early stop (a parent partly expanded among the open nodes) is below it."""
     inst = case(seed, trays)
     opt, _ = best_makespan(inst)
-    out = search(Space(inst), brute_fits(inst))
+    out = search(Space(inst), brute_fits(inst), batch=1)
     assert out.exhausted and out.stop == "exhausted"
     assert out.value == pytest.approx(opt, abs=1e-9)
     assert out.bound == pytest.approx(opt, abs=1e-9)
     assert out.counters["resumed"] > 0
     for k in (1, 2, 4):
-        early = search(Space(inst), brute_fits(inst), max_expansions=k)
+        early = search(Space(inst), brute_fits(inst), max_expansions=k, batch=1)
         assert early.bound <= opt + 1e-9
+
+
+def test_batch_option_reaches_the_search():
+    """``-p batch=N`` of the method: the search resumes nodes (``extra["resumed"]``); without
+    it none is."""
+    inst = load(INSTANCES / "hrc_table.json")
+    whole = solve(inst, "bbr", start="quick", expansions=30)
+    part = solve(inst, "bbr", start="quick", expansions=30, batch=2)
+    assert whole.extra["resumed"] == 0 and part.extra["resumed"] > 0

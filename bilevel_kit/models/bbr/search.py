@@ -7,9 +7,9 @@ tasks). The search is best-first on the node's lower bound ``f``
 (:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
 
 * **branch**: a node's children are its kits (:meth:`.space.Space.children`), each the node's
-  ideal plus a down-set extension whose parts fit the tray; a node pushes at most
-  :data:`BATCH` children per expansion and then goes back on the heap with its own ``f``, the
-  rest of its kits generated when it is popped again (partial expansion: a node with a
+  ideal plus a down-set extension whose parts fit the tray; with ``batch``, a node pushes at
+  most that many children per expansion and then goes back on the heap with its own ``f``,
+  the rest of its kits generated when it is popped again (partial expansion: a node with a
   million kits below the incumbent does not hold the search until all are generated, and its
   ``f`` still bounds every plan through the kits not yet generated);
 * **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
@@ -53,8 +53,6 @@ from ..packing import ANY_ANGLE, AXIS_ALIGNED
 FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
 #: What the search does with a kit (:meth:`_Search.fit`).
 FITS, NO, RELAXED = "fits", "no", "relaxed"
-#: Children a node pushes per expansion before it goes back on the heap (partial expansion).
-BATCH = 256
 
 
 class Space(Protocol):
@@ -141,12 +139,15 @@ def search(
     max_expansions: int | None = None,
     max_nodes: int = 2_000_000,
     relax: bool = True,
+    batch: int | None = None,
 ) -> Outcome:
     """Best-first branch, bound and remember (module docstring) below ``upper`` (a known
     plan's makespan; inf: none), until exhausted, ``deadline`` (a ``perf_counter`` time),
     ``max_expansions`` nodes expanded or ``max_nodes`` nodes kept; ``relax``: kits without a
-    layout nor a proof for every layout are relaxed (module docstring)."""
+    layout nor a proof for every layout are relaxed (module docstring); ``batch``: children
+    pushed per expansion (partial expansion, module docstring; None: every child at once)."""
     run = _Search(space, fits, upper, deadline, relax)
+    run.batch = batch
     while run.heap and run.stop == "exhausted":
         f, _, _, node = run.heap[0]
         if f >= min(run.upper, run.relaxed_best) - run.tol:
@@ -195,6 +196,7 @@ class _Search:
             "resumed": 0,
         }
         self.stop = "exhausted"
+        self.batch: int | None = None
 
     def fit(self, mask: int) -> str:
         """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
@@ -237,9 +239,9 @@ class _Search:
 
     def expand(self, node: Node, f: float) -> None:
         """Push the node's children that survive the bound and the dominance test, at most
-        :data:`BATCH` of them: with more kits left the node goes back on the heap with its
-        ``f`` (deeper children first among equal bounds) and the next pop resumes it
-        (``resumed``; module docstring)."""
+        ``batch`` of them: with more kits left the node goes back on the heap with its ``f``
+        (deeper children first among equal bounds) and the next pop resumes it (``resumed``;
+        module docstring)."""
         space, counts = self.space, self.counts
         kits = node.pending
         if kits is None:
@@ -248,7 +250,7 @@ class _Search:
         else:
             counts["resumed"] += 1
         node.pending = None
-        pushed = 0
+        pushed, batch = 0, self.batch
         for mask, r, h, station in kits:
             counts["generated"] += 1
             if not counts["generated"] & 63 and self._late():
@@ -274,7 +276,9 @@ class _Search:
             depth = -bin(done).count("1")
             heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
             pushed += 1
-            if pushed >= BATCH:  # the rest later: the node stays open with its f
+            if (
+                batch is not None and pushed >= batch
+            ):  # the rest later: the node stays open with its f
                 node.pending = kits
                 depth = -bin(node.done).count("1")
                 heapq.heappush(self.heap, (f, depth, next(self.tick), node))
