@@ -4,6 +4,7 @@ optimum against the brute force with 1, 2 and unlimited trays, and the method's 
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import pytest
@@ -343,3 +344,111 @@ def test_given_upper_proves_what_it_can_and_claims_no_more():
                 plain.bound,
             )
     assert checked == 14  # the cases where the quick start is not optimal (of 36)
+
+
+def _prefix_states(inst, sp):
+    """Every (ideal, state) after a prefix of a plan whose kits fit (the states the search
+    may meet), each once."""
+    pos = {t: i for i, t in enumerate(sp.ids)}
+    seen = {}
+    for kits in segmentations(inst):
+        if not all(fits(inst, k) for k in kits):
+            continue
+        state, done = sp.root(), 0
+        for kit in kits[:-1]:
+            mask = sum(1 << pos[t] for t in kit)
+            r = sum(sp.r[pos[t]] for t in kit)
+            h = sum(sp.h[pos[t]] for t in kit)
+            state, done = sp.step(state, r, h), done | mask
+            seen[(done, state)] = None
+    return list(seen)
+
+
+@pytest.mark.parametrize("trays", (None, 1, 2))
+@pytest.mark.parametrize("seed", range(8))
+def test_kit_cut_drops_only_kits_the_bound_drops(seed, trays):
+    """The kits a node generates under :meth:`Space.kit_cut` are every kit whose child's
+    bound is below ``below`` (and no kit that is not one): the cut on robot time and area
+    only saves the generation of children the bound test would drop."""
+    inst = case(seed, trays, tray=(200.0, 120.0))
+    sp = Space(inst)
+    for done, state in _prefix_states(inst, sp):
+        every = {m: (r, h) for m, r, h, _ in sp.kits(done)}
+        for slack in (0.0, 0.5, 1.0, 3.0, 10.0):
+            below = sp.lower_bound(done, state) + slack
+            got = {m for m, *_ in sp.children(done, state, below)}
+            assert got <= set(every)
+            need = {
+                m
+                for m, (r, h) in every.items()
+                if sp.lower_bound(done | m, sp.step(state, r, h)) < below
+            }
+            assert need <= got
+
+
+def test_kit_cut_on_area_cuts_what_the_robot_cap_keeps():
+    """A kit that leaves as many kits to the rest as its node had must fit one more o_H: on
+    the node after the first kit {t45} of a KitBench record below its best-known 1350 s,
+    where bbr generated over 200,000 children (all dropped by the bound), the robot cap alone
+    keeps kits the cut on area leaves out, and every kit left out would fail the bound."""
+    inst = load(INSTANCES / "kitbench" / "sparse_n50_s1_tu_loose_d0.json")
+    sp = Space(inst)
+    first = sp.ids.index("t45")
+    done = 1 << first
+    state = sp.step(sp.root(), sp.r[first], sp.h[first])
+    below = 1350.0 * (1 - 1e-9)
+    cut = sp.kit_cut(done, state, below)
+    assert cut.same_r < cut.max_r and cut.min_area > 0
+    plain = list(itertools.islice(sp.kits(done, cut.max_r), 2000))
+    kept = {m for m, *_ in sp.children(done, state, below)}
+    dropped = [(m, r, h) for m, r, h, _ in plain if m not in kept]
+    assert len(dropped) >= 1000
+    for m, r, h in dropped:
+        assert sp.lower_bound(done | m, sp.step(state, r, h)) >= below
+
+
+@pytest.mark.parametrize("trays", (None, 1, 2))
+def test_bound_with_exactly_k0_kits_left_rises(trays):
+    """The bound's term for the kits left: with exactly k0 of them the next holds the area the
+    others cannot (its robot time), with more the human has one more overhead. On small
+    cases it rises above the bound without it somewhere (and stays below every plan:
+    test_transition_and_bound_on_every_plan)."""
+    raised = 0
+    for seed in range(12):
+        inst = case(seed, trays, tray=(200.0, 120.0))
+        sp = Space(inst)
+        for done, state in [(0, sp.root()), *_prefix_states(inst, sp)]:
+            c = sp.constants(done)
+            b, a = state[0], state[1]
+            old = max(b + c.human, a + c.flow, max(b, a + c.first) + c.human, a + c.robot_one)
+            new = sp.lower_bound(done, state)
+            assert new >= old - 1e-9
+            raised += new > old + 1e-9
+    assert raised >= 3
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", SEEDS)
+def test_partial_expansion_equals_the_brute_force(seed, trays):
+    """With one child pushed per expansion (``batch=1``), every node goes back on the heap
+    until its kits are all generated: the search still finds and proves the optimum, and a
+    bound at an early stop (a parent partly expanded among the open nodes) is below it."""
+    inst = case(seed, trays)
+    opt, _ = best_makespan(inst)
+    out = search(Space(inst), brute_fits(inst), batch=1)
+    assert out.exhausted and out.stop == "exhausted"
+    assert out.value == pytest.approx(opt, abs=1e-9)
+    assert out.bound == pytest.approx(opt, abs=1e-9)
+    assert out.counters["resumed"] > 0
+    for k in (1, 2, 4):
+        early = search(Space(inst), brute_fits(inst), max_expansions=k, batch=1)
+        assert early.bound <= opt + 1e-9
+
+
+def test_batch_option_reaches_the_search():
+    """``-p batch=N`` of the method: the search resumes nodes (``extra["resumed"]``); without
+    it none is."""
+    inst = load(INSTANCES / "hrc_table.json")
+    whole = solve(inst, "bbr", start="quick", expansions=30)
+    part = solve(inst, "bbr", start="quick", expansions=30, batch=2)
+    assert whole.extra["resumed"] == 0 and part.extra["resumed"] > 0

@@ -79,8 +79,10 @@ def test_exhausted_search_proves_the_committed_instance_without_a_model(root, me
     assert res.extra["master_solves"] == 0
 
 
-#: The search before the model stopped after this many expansions (deterministic work).
-EXPANSIONS = 3
+#: The search before the model stopped after this many expansions (deterministic work; 2
+#: since the bound counts the kits left, docs/formulations.md: at 3 its bound on seed 0's
+#: cases reaches their optimum, 55.5 s, where it stayed at 53.5 s before).
+EXPANSIONS = 2
 #: The cases where it stops before its proof there with a bound above the stations' closed
 #: form (measured; the others reach the closed form only, or a kit relaxed)
 EARLY = [c for c in CASES if c[:2] in {(0, 2), (2, 2), (3, 2), (3, 3)}]

@@ -21,7 +21,8 @@
 The makespan, one or more trays, one station (:mod:`.space`) or several (:mod:`.stations`,
 docs/timeline.md#several-stations); no other objective. ``extra``: ``start_method``,
 ``start_makespan``, ``stop`` (``exhausted``, ``time_limit``, ``expansions``, ``memory``),
-``expanded``, ``generated``, ``kept``, ``dominated``, ``oracle`` (packing calls), ``ideals``,
+``expanded``, ``resumed`` (partial expansions resumed, option ``batch``), ``generated``, ``kept``,
+``dominated``, ``oracle`` (packing calls), ``ideals``,
 ``bound_source`` (``bbr`` or the start's), ``bound_axis_aligned`` and
 ``optimal_axis_aligned`` (what the searches proved for 0/90-degree plans), ``relaxed_kits``,
 ``axis_aligned`` (the second pass's stop, bound and counters), ``proof_scope``, ``makespan``,
@@ -66,6 +67,12 @@ class BbrOptions:
     max_nodes: int = option(
         1_000_000, "nodes kept in memory before the search stops (about 0.5 kB each)", min=1
     )
+    batch: int | None = option(
+        None,
+        "children a node pushes per expansion before it goes back on the heap (partial "
+        "expansion; none: all at once)",
+        min=1,
+    )
     pack_time: float = option(2.0, "deterministic time per packing call (about seconds)", min=0.01)
     upper: float | None = option(
         None,
@@ -106,6 +113,7 @@ def bbr(
             max_expansions=expansions,
             max_nodes=options.max_nodes,
             relax=relax,
+            batch=options.batch,
         )
 
     every = run(upper, True, options.expansions)

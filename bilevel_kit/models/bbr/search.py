@@ -7,7 +7,11 @@ tasks). The search is best-first on the node's lower bound ``f``
 (:meth:`.space.Space.lower_bound`), deeper nodes first among equal bounds:
 
 * **branch**: a node's children are its kits (:meth:`.space.Space.children`), each the node's
-  ideal plus a down-set extension whose parts fit the tray;
+  ideal plus a down-set extension whose parts fit the tray; with ``batch``, a node pushes at
+  most that many children per expansion and then goes back on the heap with its own ``f``,
+  the rest of its kits generated when it is popped again (partial expansion: a node with a
+  million kits below the incumbent does not hold the search until all are generated, and its
+  ``f`` still bounds every plan through the kits not yet generated);
 * **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
 * **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
   componentwise at most); a dominated child is dropped, a dominating one retires the nodes it
@@ -86,6 +90,8 @@ class Node:
     verified: bool = False
     #: a kit on its path is relaxed (module docstring)
     relaxed: bool = False
+    #: the kits not yet generated of a node partly expanded (module docstring)
+    pending: Iterator[tuple[int, float, float, int]] | None = None
 
 
 @dataclass
@@ -133,12 +139,15 @@ def search(
     max_expansions: int | None = None,
     max_nodes: int = 2_000_000,
     relax: bool = True,
+    batch: int | None = None,
 ) -> Outcome:
     """Best-first branch, bound and remember (module docstring) below ``upper`` (a known
     plan's makespan; inf: none), until exhausted, ``deadline`` (a ``perf_counter`` time),
     ``max_expansions`` nodes expanded or ``max_nodes`` nodes kept; ``relax``: kits without a
-    layout nor a proof for every layout are relaxed (module docstring)."""
+    layout nor a proof for every layout are relaxed (module docstring); ``batch``: children
+    pushed per expansion (partial expansion, module docstring; None: every child at once)."""
     run = _Search(space, fits, upper, deadline, relax)
+    run.batch = batch
     while run.heap and run.stop == "exhausted":
         f, _, _, node = run.heap[0]
         if f >= min(run.upper, run.relaxed_best) - run.tol:
@@ -153,6 +162,8 @@ def search(
             heapq.heappop(run.heap)
             if node.alive and run.verify(node):
                 run.expand(node, f)
+            else:
+                node.pending = None
     return run.outcome()
 
 
@@ -182,8 +193,10 @@ class _Search:
             "dominated": 0,
             "oracle": 0,
             "relaxed_kits": 0,
+            "resumed": 0,
         }
         self.stop = "exhausted"
+        self.batch: int | None = None
 
     def fit(self, mask: int) -> str:
         """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
@@ -225,13 +238,24 @@ class _Search:
         return True
 
     def expand(self, node: Node, f: float) -> None:
-        """Push the node's children that survive the bound and the dominance test."""
+        """Push the node's children that survive the bound and the dominance test, at most
+        ``batch`` of them: with more kits left the node goes back on the heap with its ``f``
+        (deeper children first among equal bounds) and the next pop resumes it (``resumed``;
+        module docstring)."""
         space, counts = self.space, self.counts
-        counts["expanded"] += 1
-        for mask, r, h, station in space.children(node.done, node.state, self.upper - self.tol):
+        kits = node.pending
+        if kits is None:
+            counts["expanded"] += 1
+            kits = space.children(node.done, node.state, self.upper - self.tol)
+        else:
+            counts["resumed"] += 1
+        node.pending = None
+        pushed, batch = 0, self.batch
+        for mask, r, h, station in kits:
             counts["generated"] += 1
             if not counts["generated"] & 63 and self._late():
                 self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
+                node.pending = kits
                 heapq.heappush(self.heap, (f, 0, next(self.tick), node))
                 return
             done = node.done | mask
@@ -251,6 +275,14 @@ class _Search:
             counts["kept"] += 1
             depth = -bin(done).count("1")
             heapq.heappush(self.heap, (bound, depth, next(self.tick), child))
+            pushed += 1
+            if (
+                batch is not None and pushed >= batch
+            ):  # the rest later: the node stays open with its f
+                node.pending = kits
+                depth = -bin(node.done).count("1")
+                heapq.heappush(self.heap, (f, depth, next(self.tick), node))
+                return
 
     def _complete(self, child: Node, makespan: float) -> None:
         """A complete plan below the incumbent: the new incumbent, or a relaxed plan's

@@ -24,7 +24,8 @@ state whose vector is componentwise at most another's with the same ``J`` domina
 .. math::
 
    LB = \max\Bigl(b + B_U,\ a + P_U,\
-        \max(b,\ a + o_R + d + \min_{i\ \mathrm{ready}} r_i) + B_U,\
+        \min\bigl(\max(b,\ a + o_R + d + \rho_U) + B_U,\
+                  \max(b,\ a + o_R + d + \min_{i\ \mathrm{ready}} r_i) + B_U + o_H\bigr),\
         [T = 1]\ a + r(U) + k_0 (o_R + d + o_H) + \min_{i \in U\ \mathrm{sink}} h_i\Bigr)
 
 with :math:`B_U = h(U) + k_0 o_H` and :math:`P_U = \max_j (\sum_{i \le j} a_i +
@@ -32,7 +33,10 @@ with :math:`B_U = h(U) + k_0 o_H` and :math:`P_U = \max_j (\sum_{i \le j} a_i +
 ``k0`` overhead jobs :math:`(o_R + d, o_H)`: the two-machine flow-shop bound (d) of
 :mod:`bilevel_kit.bounds` with machines free at ``a`` and ``b`` (Johnson's order minimises
 the second term, the first does not depend on the order), the first kit's arrival (it holds a
-ready task) and the one-tray robot bound (b) of the same module from ``a``. Every term depends
+ready task, and when the rest takes exactly ``k0`` kits the area the other ``k0 - 1`` cannot:
+``rho_U`` is the larger of the least ready ``r_i`` and :func:`_least_robot_time` of
+``area(U) - (k0 - 1)`` tray areas; with more kits the human has one more ``o_H``) and the
+one-tray robot bound (b) of the same module from ``a``. Every term depends
 on the state only through ``a`` and ``b`` plus a per-``U`` constant, cached per ideal.
 """
 
@@ -41,6 +45,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from ...bounds import flow_shop_makespan, johnson_order
 from ...instance import Instance
@@ -58,8 +63,21 @@ class Constants:
     flow: float  # P_U
     robot_one: float  # r(U) + k0 (o_R + d + o_H) + min sink h (one tray), else -inf
     first: float  # o_R + d + min ready r
+    exact: float  # o_R + d + the least robot time of a first kit of k0 kits (>= first)
     robot: float  # r(U) + k0 (o_R + d): the robot's least work on U
     sink: float  # min sink h
+    area: float  # area(U)
+    kits: int  # k0(U), at least 1
+
+
+class Cut(NamedTuple):
+    """The cut on a node's kits from the human's bound (:meth:`Space.kit_cut`): a kit ``S``
+    may lead below the incumbent only if ``r(S) <= max_r``, and, when ``r(S) > same_r``,
+    ``area(S) >= min_area`` (it leaves one kit fewer to the rest)."""
+
+    max_r: float
+    same_r: float
+    min_area: float
 
 
 @dataclass
@@ -112,6 +130,11 @@ class Space:
         self.rank = [0] * self.n
         for j, i in enumerate(self.johnson):
             self.rank[i] = j
+        #: the tasks with parts, most area per robot second first (:func:`_least_robot_time`)
+        self.dense = sorted(
+            (i for i in range(self.n) if self.area[i] > 0),
+            key=lambda i: -math.inf if self.r[i] <= 0 else -self.area[i] / self.r[i],
+        )
 
     def _twins(self) -> list[int]:
         """For each task, the task of next lower number it is interchangeable with (the same
@@ -159,17 +182,51 @@ class Space:
         self, done: int, state: tuple[float, ...], below: float
     ) -> Iterator[tuple[int, float, float, int]]:
         """The kits from a node that may lead below ``below``: :meth:`kits` under
-        :meth:`robot_cap` (the search's branching, :mod:`.search`)."""
-        return self.kits(done, self.robot_cap(done, state, below))
+        :meth:`kit_cut` (the search's branching, :mod:`.search`)."""
+        return self.kits(done, *self.kit_cut(done, state, below))
 
-    def kits(self, done: int, max_r: float = math.inf) -> Iterator[tuple[int, float, float, int]]:
+    def kits(
+        self,
+        done: int,
+        max_r: float = math.inf,
+        same_r: float = math.inf,
+        min_area: float = -math.inf,
+    ) -> Iterator[tuple[int, float, float, int]]:
         """Every kit from the ideal ``done`` whose parts' area fits the tray and that holds a
         task needing a kit: ``(mask, r(S), h(S), station)`` (station 0, the one), each set
-        once (tasks added in increasing number). ``max_r``: a kit's robot time above it cuts
-        that kit and every larger one (:meth:`robot_cap`)."""
+        once (tasks added in increasing number), under the cut :class:`Cut` ``(max_r, same_r,
+        min_area)`` (:meth:`kit_cut`): a kit's robot time above ``max_r`` cuts that kit and
+        every larger one; a kit whose robot time is above ``same_r`` is left out when its
+        area is below ``min_area``, and with every larger one when even the most area the
+        tasks after it could add within the robot time left to ``max_r`` (a fractional
+        knapsack by area per robot second, precedence ignored) stays below ``min_area``."""
         n, pred, cap = self.n, self.pred, self.tray_area * (1 + 1e-12)
         r, h, area, needs, twin = self.r, self.h, self.area, self.needs, self.twin
         free = [i for i in range(n) if not done >> i & 1]
+        # the free tasks' positions, most area per robot second first (the knapsack's order)
+        dense = sorted(
+            range(len(free)),
+            key=lambda j: -math.inf if r[free[j]] <= 0 else -area[free[j]] / r[free[j]],
+        )
+
+        def reach(after: int, budget: float, want: float) -> bool:
+            """Whether tasks at positions after ``after`` within ``budget`` robot seconds may
+            add ``want`` area (the fractional knapsack's upper bound)."""
+            got = 0.0
+            for j in dense:
+                if j <= after:
+                    continue
+                i = free[j]
+                if r[i] <= budget:
+                    got += area[i]
+                    budget -= r[i]
+                else:
+                    got += area[i] * budget / r[i]
+                    return got >= want
+                if got >= want:
+                    return True
+            return got >= want
+
         stack: list[tuple[int, int, float, float, float, bool]] = [(0, 0, 0.0, 0.0, 0.0, False)]
         while stack:
             start, mask, rs, hs, ar, real = stack.pop()
@@ -182,9 +239,38 @@ class Space:
                 if a2 > cap or r2 > max_r:
                     continue
                 m2, real2 = mask | 1 << i, real or needs[i]
+                if r2 > same_r and a2 < min_area:  # needs more area: only a larger kit may
+                    if reach(j, max_r - r2, min_area - a2):
+                        stack.append((j + 1, m2, r2, hs + h[i], a2, real2))
+                    continue
                 if real2:  # a kit of part-less tasks alone is never needed
                     yield m2, r2, hs + h[i], 0
                 stack.append((j + 1, m2, r2, hs + h[i], a2, real2))
+
+    def kit_cut(self, done: int, state: tuple[float, ...], below: float) -> Cut:
+        r"""The cut on the kits from this node for a plan below ``below`` (:class:`Cut`,
+        :meth:`kits`), from the first term of the child's bound: after a kit ``S`` the human
+        ends at least at ``max(nxt + o_R + d + r(S), E) + o_H + h(S)`` and then still needs
+        ``h(U \ S)`` and ``o_H`` for each of ``k0(U \ S)`` kits, so
+
+        .. math:: \max(nxt + o_R + d + r(S), E) + h(U) + (1 + k_0(U \setminus S))\, o_H < below
+
+        is needed. A kit takes at most a tray's area, so ``k0(U \ S)`` is ``k0(U) - 1`` or
+        ``k0(U)``: ``max_r`` (:meth:`robot_cap`) is the cap with one kit fewer, ``same_r``
+        (one ``o_H`` less, plus a margin of ``1e-9 below`` over the float sums' error) the cap
+        for a kit that leaves ``k0(U)`` kits, i.e. whose area is below ``min_area = area(U) -
+        (k0(U) - 1)`` tray areas (slightly less, a relative margin of 1e-9): a kit these cut
+        would fail the search's bound test (:mod:`.search`) anyway, so the children pushed
+        are the same, only not generated. ``-inf``: no such kit."""
+        c = self.constants(done)
+        max_r = self.robot_cap(done, state, below)
+        margin = 1e-9 * max(1.0, abs(below))
+        slack = below - c.human - self.o_h + margin
+        same_r = -math.inf if state[0] >= slack else slack - state[1] - self.o_r - self.d
+        if same_r >= max_r:
+            return Cut(max_r, math.inf, -math.inf)
+        min_area = c.area * (1 - 1e-9) - (c.kits - 1 + _AREA_EPS) * self.tray_area * (1 + 1e-9)
+        return Cut(max_r, same_r, min_area)
 
     def robot_cap(self, done: int, state: tuple[float, ...], below: float) -> float:
         r"""The most robot time a kit from this node may have for a plan below ``below``: after
@@ -226,7 +312,11 @@ class Space:
         sink = min(self.h[i] for i in left if not self.succ[i] & ~done)
         robot_one = r_u + k0 * (a0 + b0) + sink if self.trays == 1 else -math.inf
         ready = min(self.r[i] for i in left if not self.pred[i] & ~done)
-        out = Constants(human, flow, robot_one, a0 + ready, robot, sink)
+        # exactly k0 kits: the next leaves at most (k0 - 1) trays' area to the rest
+        need = area_u * (1 - 1e-9) - (k0 - 1) * self.tray_area * (1 + 1e-9)
+        least = _least_robot_time(self.dense, self.r, self.area, done, need)
+        exact = a0 + (least if least > ready else ready)
+        out = Constants(human, flow, robot_one, a0 + ready, exact, robot, sink, area_u, k0)
         self._consts[done] = out
         return out
 
@@ -249,13 +339,36 @@ class Space:
             return state[0]
         c = self.constants(done)
         b, a = state[0], state[1]
-        first = a + c.first
+        first, exact = a + c.first, a + c.exact
+        # the next kit holds a ready task; with exactly k0 kits left it holds the area the
+        # others cannot, with more the human has one more overhead (>= the first's alone)
+        fewest = (exact if exact > b else b) + c.human
+        more = (first if first > b else b) + c.human + self.o_h
         return max(
             b + c.human,
             a + c.flow,
-            (first if first > b else b) + c.human,
+            fewest if fewest < more else more,
             a + c.robot_one,
         )
+
+
+def _least_robot_time(
+    dense: list[int], r: list[float], area: list[float], done: int, need: float
+) -> float:
+    """A lower bound on the robot time of a set of the tasks outside ``done`` whose area is at
+    least ``need``: the fractional knapsack over ``dense`` (most area per robot second first;
+    precedence ignored). 0 when ``need <= 0``, inf when even every task falls short."""
+    got = spent = 0.0
+    if need <= 0:
+        return 0.0
+    for i in dense:
+        if done >> i & 1:
+            continue
+        if got + area[i] >= need:
+            return spent + r[i] * (need - got) / area[i]
+        got += area[i]
+        spent += r[i]
+    return math.inf
 
 
 def _johnson_value(

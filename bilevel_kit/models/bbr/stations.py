@@ -32,8 +32,8 @@ with ``LB_s`` the one-station bound of :mod:`.space` on ``U_s`` with the robot f
 other stations' kits only delay the robot, so it holds for ``C_s``. The second term is the
 robot's: it builds every kit left one after another, at least ``k_0(U_s)`` for station ``s``,
 and the last kit's human works at least its overhead and a task with no successor left after
-it arrives. The one-station cut on a kit's robot time (:meth:`.space.Space.robot_cap`) holds
-per station with ``(g_s, E_s)``.
+it arrives. The one-station cut on a kit's robot time and area (:meth:`.space.Space.kit_cut`)
+holds per station with ``(g_s, E_s)``.
 """
 
 from __future__ import annotations
@@ -129,18 +129,18 @@ class StationSpace:
         self, done: int, state: tuple[float, ...], below: float
     ) -> Iterator[tuple[int, float, float, int]]:
         """Every kit of one station from a node (:meth:`.space.Space.kits` of each station
-        with tasks left) under that station's cap on its robot time for a plan below
-        ``below`` (:meth:`.space.Space.robot_cap` with ``(g_s, E_s)``, module docstring):
+        with tasks left) under that station's cut on its robot time and area for a plan
+        below ``below`` (:meth:`.space.Space.kit_cut` with ``(g_s, E_s)``, module docstring):
         ``(mask, r(S), h(S), station)``."""
         for s, sp in enumerate(self.spaces):
             part = self._part(done, s)
             if part == sp.full:
                 continue
-            cap = sp.robot_cap(part, (state[self.at[s]], self._robot_free(state, s)), below)
-            if cap == -math.inf:
+            cut = sp.kit_cut(part, (state[self.at[s]], self._robot_free(state, s)), below)
+            if cut.max_r == -math.inf:
                 continue
             off = self.offsets[s]
-            for mask, r, h, _ in sp.kits(part, cap):
+            for mask, r, h, _ in sp.kits(part, *cut):
                 yield mask << off, r, h, s
 
     def order(self, mask: int) -> list[str]:
