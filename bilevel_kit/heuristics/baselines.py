@@ -19,7 +19,7 @@ cannot be laid out raises
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ..errors import KitDoesNotFit
 from ..instance import Instance, topological_order
@@ -112,18 +112,35 @@ def _interleaved(
     instance: Instance, queues: dict[str, list[list[str]]], label: str
 ) -> MethodOutput:
     """Each station's kits in its own order, interleaved by earliest need (the module
-    docstring): the station whose human is free first gets the next kit."""
+    docstring), each laid out by the shelf packer."""
+    plan = interleave(
+        instance, queues, lambda tasks: packed_kit(instance, tasks, f"{label} {', '.join(tasks)}")
+    )
+    return MethodOutput(plan, Status.FEASIBLE)
+
+
+def interleave(
+    instance: Instance,
+    queues: dict[str, list[list[str]]],
+    make: Callable[[list[str]], Kit] = lambda tasks: Kit(tuple(tasks)),
+    head: Sequence[Kit] = (),
+) -> Plan:
+    """``head``, then each station's kits of ``queues`` in its own order, interleaved by
+    earliest need (the module docstring): the station whose human is free first gets the next
+    kit (ties to the station listed first); ``make`` builds a kit from its tasks (no layout by
+    default)."""
     timeline = TimelineBuilder(instance)
+    kits = list(head)
+    for kit in kits:
+        timeline.append(kit)
     heads = dict.fromkeys(queues, 0)
-    kits: list[Kit] = []
     while True:
         ready = [s for s in queues if heads[s] < len(queues[s])]
         if not ready:
             break
-        station = min(ready, key=lambda s: timeline.station_free(s))  # stable: file order
-        tasks = queues[station][heads[station]]
+        station = min(ready, key=timeline.station_free)  # stable: file order
+        kit = make(queues[station][heads[station]])
         heads[station] += 1
-        kit = packed_kit(instance, tasks, f"{label} {', '.join(tasks)}")
         timeline.append(kit)
         kits.append(kit)
-    return MethodOutput(Plan(tuple(kits)), Status.FEASIBLE)
+    return Plan(tuple(kits))

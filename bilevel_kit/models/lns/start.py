@@ -16,8 +16,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ...errors import BilevelKitError
+from ...heuristics.baselines import interleave
 from ...instance import Instance, topological_order
-from ...plan import Kit, Plan, TimelineBuilder, evaluate
+from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import johnson_topological_order, kit_order, split_greedily
 from .fit import FastFit
@@ -155,15 +156,15 @@ def _fixed(
 #: Tasks per kit of the stations' fixed-size cuts: :data:`SIZES` and larger ones. Measured on
 #: 1,800 sparse tasks on 3 stations (bench/results/lns_scale.md), where the robot serving three
 #: humans is the bottleneck, the best cut held 32 tasks per kit: 23,592 s, against
-#: 32,775-33,530 s for greedy-ce at 20 s and 28,429 s for greedy-ce run to its end (53 s).
+#: 32,775-32,833 s for greedy-ce at 20 s.
 STATION_SIZES = (*SIZES, 32, 48)
 
 
 def station_cuts(instance: Instance, fit: FastFit, budget: Budget) -> list[tuple[int, float, Plan]]:
     """The fixed-size cuts with several stations: each station's tasks in topological order
     cut into kits of :data:`STATION_SIZES` tasks (split greedily where one does not fit), the
-    stations' kits interleaved by earliest need (:func:`interleave`); (size, seconds it took,
-    plan) for each size, smallest first, while the budget lasts."""
+    stations' kits interleaved by earliest need (:func:`...heuristics.baselines.interleave`);
+    (size, seconds it took, plan) for each size, smallest first, while the budget lasts."""
     import time
 
     order = topological_order(instance)
@@ -178,7 +179,7 @@ def station_cuts(instance: Instance, fit: FastFit, budget: Budget) -> list[tuple
         cut = _station_fixed(instance, queues, size, fit, budget)
         if cut is None:
             break
-        out.append((size, time.perf_counter() - t0, interleave(instance, [], cut)))
+        out.append((size, time.perf_counter() - t0, interleave(instance, cut)))
     return out
 
 
@@ -195,7 +196,7 @@ def recut_tail(
     if cut is None:
         return None
     head = [k for k, tail in zip(plan.kits, in_tail, strict=True) if not tail]
-    return interleave(instance, head, cut)
+    return interleave(instance, cut, head=head)
 
 
 def _tails(instance: Instance, plan: Plan) -> tuple[dict[str, list[str]], list[bool]]:
@@ -253,24 +254,3 @@ def _station_fixed(
             kits = merged
         out[s] = kits
     return out
-
-
-def interleave(instance: Instance, head: Sequence[Kit], queues: dict[str, list[list[str]]]) -> Plan:
-    """``head``, then each station's kits of ``queues`` in its own order, interleaved by
-    earliest need: the next kit is the station's whose human is free first (ties to the
-    station listed first), as the baselines interleave theirs (:mod:`...heuristics.baselines`)."""
-    timeline = TimelineBuilder(instance)
-    kits = list(head)
-    for kit in kits:
-        timeline.append(kit)
-    heads = dict.fromkeys(queues, 0)
-    while True:
-        ready = [s for s in queues if heads[s] < len(queues[s])]
-        if not ready:
-            break
-        station = min(ready, key=timeline.station_free)
-        kit = Kit(tuple(queues[station][heads[station]]))
-        heads[station] += 1
-        timeline.append(kit)
-        kits.append(kit)
-    return Plan(tuple(kits))
