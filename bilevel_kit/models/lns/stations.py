@@ -138,7 +138,7 @@ def station_search(
     extra["bound_source"] = "given" if known_bound is not None else "closed_form"
     if not run.optimal():
         run.search(np.random.default_rng(seed), stop_at, options.iterations, options.stall)
-    if cut is not None and finished and run.assess(cut[3]) < run.real - 1e-9:
+    if cut is not None and finished and cut[2] < run.real - 1e-9:  # (its value, assessed)
         started = extra["start_method"]
         run.consider(cut[3], f"fixed cut {cut[0]}")  # held back, and better than the search's
         extra.update(start_method=started, cut_after_search=True)
