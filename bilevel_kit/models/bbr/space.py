@@ -130,7 +130,8 @@ class Space:
         self.rank = [0] * self.n
         for j, i in enumerate(self.johnson):
             self.rank[i] = j
-        #: the tasks with parts, most area per robot second first (:func:`_least_robot_time`)
+        #: the tasks with parts, most area per robot second first (:func:`_least_robot_time`,
+        #: :meth:`kits`)
         self.dense = sorted(
             (i for i in range(self.n) if self.area[i] > 0),
             key=lambda i: -math.inf if self.r[i] <= 0 else -self.area[i] / self.r[i],
@@ -203,11 +204,10 @@ class Space:
         n, pred, cap = self.n, self.pred, self.tray_area * (1 + 1e-12)
         r, h, area, needs, twin = self.r, self.h, self.area, self.needs, self.twin
         free = [i for i in range(n) if not done >> i & 1]
-        # the free tasks' positions, most area per robot second first (the knapsack's order)
-        dense = sorted(
-            range(len(free)),
-            key=lambda j: -math.inf if r[free[j]] <= 0 else -area[free[j]] / r[free[j]],
-        )
+        # the free tasks' positions in the knapsack's order (:attr:`dense`; a task without
+        # area adds none, so leaving it out changes no answer)
+        at = {i: j for j, i in enumerate(free)}
+        dense = [at[i] for i in self.dense if not done >> i & 1]
 
         def reach(after: int, budget: float, want: float) -> bool:
             """Whether tasks at positions after ``after`` within ``budget`` robot seconds may
