@@ -59,13 +59,6 @@ def corners(x: float, y: float, w: float, h: float, theta_deg: float) -> np.ndar
     return local @ rot.T + np.array([x, y])
 
 
-def rotated_extent(w: float, h: float, theta_deg: float) -> tuple[float, float]:
-    """Half-extents (ex, ey) of the axis-aligned bounding box of a rotated w x h rectangle."""
-    t = math.radians(theta_deg)
-    c, s = abs(math.cos(t)), abs(math.sin(t))
-    return (w * c + h * s) / 2.0, (w * s + h * c) / 2.0
-
-
 def _axis_overlaps(a: np.ndarray, b: np.ndarray) -> Iterator[float]:
     """The overlap of the two shapes' projections on each of their 8 edge normals, in order."""
     for poly in (a, b):

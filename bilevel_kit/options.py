@@ -310,16 +310,6 @@ def parse_options(
     return options
 
 
-def as_params(options: Any) -> dict[str, Any]:
-    """The options that differ from their defaults, as a plain dict (for result files)."""
-    out = {}
-    for info, f in zip(describe(type(options)), dataclasses.fields(options), strict=True):
-        value = getattr(options, f.name)
-        if value != info.default:
-            out[f.name] = value
-    return out
-
-
 def import_target(target: str) -> Any:
     """The object a ``"module:name"`` import path names, imported now."""
     module, name = target.split(":")

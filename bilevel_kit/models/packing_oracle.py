@@ -229,15 +229,6 @@ def _record(cache: _FitCache, counts: dict[str, int], res: PackResult) -> Fit | 
     return Fit(True, typed)
 
 
-def fit_counts(
-    tray: _Rect, part_types: Mapping[str, PartType], counts: Mapping[str, int], **options: Any
-) -> tuple[bool | None, TypedLayout | None]:
-    """:func:`fit_verdict` (with its keyword ``options``) as (fits, layout by type): False
-    only with a proof (of either scope), None when unknown."""
-    fit = fit_verdict(tray, part_types, counts, **options)
-    return fit.fits, fit.layout
-
-
 def kit_fits(
     instance: Instance,
     part_counts: Mapping[str, int],

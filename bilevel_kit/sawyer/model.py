@@ -94,11 +94,6 @@ L5_RADIUS = 0.1053
 L5_RISE = 0.11
 
 
-def clamp(q: np.ndarray) -> np.ndarray:
-    """Project a configuration onto the joint position limits."""
-    return np.minimum(np.maximum(q, Q_LOWER), Q_UPPER)
-
-
 def within_limits(q: np.ndarray, tol: float = 1e-9) -> bool:
     """True when every joint lies in its position range (within ``tol`` rad)."""
     q = np.asarray(q, dtype=float)
