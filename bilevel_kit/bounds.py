@@ -84,6 +84,37 @@ if TYPE_CHECKING:
 _AREA_EPS = 1e-9
 
 
+def instance_times(instance: Instance) -> list[float]:
+    """Every time the timeline adds (docs/timeline.md): each task's robot and human time, the
+    robot's kit overhead, each station's delivery time and human overhead."""
+    ids = [t.id for t in instance.tasks]
+    params = [instance.params_of(s) for s in instance.station_ids]  # (Instance.params_of)
+    return (
+        [instance.robot_time(i) for i in ids]
+        + [instance.human_time(i) for i in ids]
+        + [instance.kit_overhead_robot]
+        + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
+    )
+
+
+def makespan_grid(instance: Instance) -> float | None:
+    """The coarsest grid every makespan lies on (docs/formulations.md#what-optimal-means): the
+    greatest common divisor of :func:`instance_times` (the timeline only adds them and takes
+    maxima, so every start, end and makespan is a sum of them), e.g. 1 s when all are whole
+    seconds; None when a time is no fraction of denominator up to 10^6."""
+    from .models.packing import exact_resolution
+
+    return exact_resolution([v for v in instance_times(instance) if v > 0], max_units=None)
+
+
+def on_grid(value: float, grid: float | None) -> float:
+    """``value`` (a lower bound on a makespan) rounded up to the makespan's grid (every
+    makespan lies on it, :func:`makespan_grid`), or as is (no grid, or not finite)."""
+    if grid is None or not math.isfinite(value):
+        return value
+    return round(math.ceil(value / grid - 1e-9) * grid, 9)
+
+
 def min_kits(instance: Instance) -> int:
     """(c): the area-based minimum number of kits, ``ceil(total part area / tray area)``."""
     total = sum(instance.part_types[p].area * n for t in instance.tasks for p, n in t.parts)

@@ -21,7 +21,7 @@ import enum
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .errors import PluginError, UsageError, one_line
@@ -443,7 +443,7 @@ def solve(
     receives the live incumbent, bound and gap of the exact methods (:mod:`.progress`); it
     changes nothing in the result.
     """
-    from .bounds import best_bound
+    from .bounds import best_bound, makespan_grid, on_grid
     from .reachability import ensure_kit_placeable
 
     spec = get_method(method)
@@ -464,15 +464,15 @@ def solve(
     timeline = evaluate(instance, out.plan) if out.plan is not None else None
     makespan = timeline.makespan if timeline is not None else None
     bounds = [b for b in (out.bound, best_bound(instance)) if b is not None]
-    makespan_bound = max(bounds) if bounds else None
-    if (
-        out.status == Status.OPTIMAL
-        and is_top_level(out.status_objective)
-        and out.bound is None
-        and makespan is not None
-    ):
-        makespan_bound = makespan  # a proof of optimality is a bound equal to the objective
+    grid = makespan_grid(instance)
+    makespan_bound = on_grid(max(bounds), grid) if bounds else None
     extra = dict(out.extra)
+    if is_top_level(out.status_objective) and makespan is not None:
+        if out.status == Status.OPTIMAL and out.bound is None:
+            makespan_bound = makespan  # a proof of optimality is a bound equal to the objective
+        elif out.status == Status.FEASIBLE and _meets(makespan_bound, makespan):
+            out = replace(out, status=Status.OPTIMAL)  # the bound, on the makespan's grid
+            extra["optimal_by_grid"] = grid
     value, bound, obj_gap = _optimised(instance, out, timeline, extra)
     if is_top_level(out.status_objective):
         value, bound, obj_gap = makespan, makespan_bound, gap(makespan, makespan_bound)
@@ -508,6 +508,13 @@ def solve(
         found = run_check(instance, out.plan, claims=result_claims(result))
         extra["violations"] = [v.to_dict() for v in found]
     return result
+
+
+def _meets(bound: float | None, makespan: float) -> bool:
+    """A makespan bound that proves ``makespan`` optimal (within the evaluator's float noise):
+    rounded up onto the makespan's grid (:func:`.bounds.makespan_grid`), a bound less than one
+    step below a plan reaches it (docs/formulations.md#what-optimal-means)."""
+    return bound is not None and bound >= makespan - 1e-9 * max(1.0, abs(makespan))
 
 
 def _optimised(

@@ -160,11 +160,13 @@ def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
     return all(abs(v / resolution - round(v / resolution)) < 1e-6 for v in values)
 
 
-def exact_resolution(values: Sequence[float]) -> float | None:
+def exact_resolution(
+    values: Sequence[float], max_units: int | None = MAX_EXACT_UNITS
+) -> float | None:
     """The coarsest grid (mm) of which every value is a multiple: the greatest common divisor
     of the values as fractions with denominators up to 10^6 (152.4, 12.7 and 300 give 0.1);
     None when a value is no such fraction or the largest value would span more than
-    :data:`MAX_EXACT_UNITS` units (module docstring, "Grid")."""
+    ``max_units`` units (module docstring, "Grid"; None: no cap)."""
     from fractions import Fraction
 
     fracs = []
@@ -182,7 +184,7 @@ def exact_resolution(values: Sequence[float]) -> float | None:
     for f in fracs:
         num = math.gcd(num, f.numerator * (den // f.denominator))
     step = Fraction(num, den)
-    if max(fracs) / step > MAX_EXACT_UNITS:
+    if max_units is not None and max(fracs) / step > max_units:
         return None
     return float(step)
 

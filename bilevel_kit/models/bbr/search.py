@@ -12,7 +12,11 @@ tasks). The search is best-first on the node's lower bound ``f``
   the rest of its kits generated when it is popped again (partial expansion: a node with a
   million kits below the incumbent does not hold the search until all are generated, and its
   ``f`` still bounds every plan through the kits not yet generated);
-* **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped;
+* **bound**: a child whose ``f`` is not below the incumbent's makespan is dropped; on the
+  makespan's grid ``g`` (:func:`~bilevel_kit.bounds.makespan_grid`: every makespan a multiple
+  of it) a plan better than the incumbent is at least ``g`` better, so a child whose ``f`` is
+  above the incumbent's makespan minus ``g / 2`` is dropped too (the margin ``g / 2`` also
+  covers the float sums' error; without a grid it is ``1e-9`` of the makespan);
 * **remember**: the nodes kept per ideal are those no other dominates (same ideal, state
   componentwise at most); a dominated child is dropped, a dominating one retires the nodes it
   dominates.
@@ -174,9 +178,12 @@ class _Search:
         self, space: Space, fits: FitTest, upper: float, deadline: float | None, relax: bool
     ) -> None:
         self.space, self.fits, self.deadline, self.relax = space, fits, deadline, relax
+        from ...bounds import makespan_grid
+
         self.relaxed_best = math.inf
+        self.step = makespan_grid(space.instance)
         self.upper = upper
-        self.tol = 1e-9 * max(1.0, abs(upper)) if upper < math.inf else 0.0
+        self.tol = self.margin(upper)
         root = Node(0, space.root(), None, 0, verified=True)
         self.tick = itertools.count(1)
         self.heap: list[tuple[float, int, int, Node]] = [
@@ -294,7 +301,14 @@ class _Search:
             self.relaxed_best = min(self.relaxed_best, makespan)
             return
         self.upper, self.best = makespan, child
-        self.tol = 1e-9 * max(1.0, abs(self.upper))
+        self.tol = self.margin(makespan)
+
+    def margin(self, upper: float) -> float:
+        """How far below ``upper`` a bound must be for a plan that is better (module
+        docstring, "bound"): half the makespan's grid, else ``1e-9`` of ``upper``."""
+        if self.step is not None:
+            return self.step / 2
+        return 1e-9 * max(1.0, abs(upper)) if upper < math.inf else 0.0
 
     def _late(self) -> bool:
         return self.deadline is not None and time.perf_counter() >= self.deadline

@@ -15,7 +15,17 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
-from ...bounds import best_bound, johnson_lines, lines_value, lower_bounds, min_kits, tray_wait
+from ...bounds import (
+    best_bound,
+    instance_times,
+    johnson_lines,
+    lines_value,
+    lower_bounds,
+    makespan_grid,
+    min_kits,
+    on_grid,
+    tray_wait,
+)
 from ...instance import Instance
 from .kit_lp import kit_count_bound
 from .precedence import head_tail_bounds
@@ -118,25 +128,11 @@ def time_grid(
     None."""
     from ..packing import is_grid_exact
 
-    ids = [t.id for t in instance.tasks]
-    params = [instance.params_of(s) for s in instance.station_ids]  # (Instance.params_of)
-    values = (
-        [instance.robot_time(i) for i in ids]
-        + [instance.human_time(i) for i in ids]
-        + [instance.kit_overhead_robot]
-        + [v for p in params for v in (p.delivery_time, p.kit_overhead_human)]
-    )
+    values = instance_times(instance)
     for q in refine:
         if is_grid_exact(values, resolution / q):
             return resolution / q
     return None
-
-
-def on_grid(value: float, grid: float | None) -> float:
-    """``value`` rounded up to the makespan's grid (every makespan lies on it), or as is."""
-    if grid is None or not math.isfinite(value):
-        return value
-    return round(math.ceil(value / grid - 1e-9) * grid, 9)
 
 
 def proven_bound(
@@ -164,7 +160,7 @@ def proven_bound(
         "closed_form_flow": lb["flow"],
     }
     sources.update(head_tail_bounds(instance))
-    grid = time_grid(instance)
+    grid = makespan_grid(instance)
     per: dict[int, float] = {}
     stop = int(lb["min_kits"])
     net = False
