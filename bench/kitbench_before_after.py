@@ -10,9 +10,10 @@ the best plan and bound of the pass.
 ``--commit`` copies the passes' ``results.csv`` and ``run.json`` to
 ``bench/results/kitbench_LABEL_{before,after}.csv`` and ``..._run.json`` (with the wall time,
 ``wall_s``, read from ``/usr/bin/time -v``'s report when its log is given by ``--time-log``).
-Without it the script renders the ``kitbench-before-after:LABEL`` blocks of docs/kitbench.md
-and ``bench/results/kitbench_LABEL.md`` from the committed rows; ``--check`` exits 1 when a page
-disagrees (tests/experiments/test_kitbench_before_after.py checks the same).
+Then (and without it) the ``kitbench-before-after:LABEL`` blocks of docs/kitbench.md and
+``bench/results/kitbench_LABEL.md`` are rendered from the committed rows, with every other
+generated KitBench block, by ``bench/kitbench_docs.py``'s one loop; ``--check`` exits 1 when a
+page disagrees (tests/experiments/test_kitbench_before_after.py checks the same).
 """
 
 from __future__ import annotations
@@ -30,13 +31,13 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 from bilevel_kit.experiments.kitbench.profiles import methods_of, plan_makespan, read_rows  # noqa: E402
 from bilevel_kit.experiments.kitbench.versus import number, run_text  # noqa: E402
 from bilevel_kit.experiments.tables import fill_blocks, markdown_lines, marked_blocks  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
-PAGES = (ROOT / "docs" / "kitbench.md",)
 #: Relative change below which two makespans or bounds are the same (equal plans computed in
 #: another order differ in the last bits).
 SAME = 1e-9
@@ -248,9 +249,9 @@ def labels() -> list[str]:
     return sorted(p.name[9:-11] for p in RESULTS.glob("kitbench_*_before.csv"))
 
 
-def pages() -> list[Path]:
-    """The pages with blocks: docs/kitbench.md and each committed run's table."""
-    return [*PAGES, *(RESULTS / f"kitbench_{x}.md" for x in labels())]
+def tables() -> list[Path]:
+    """Each committed run's per-cell page (``bench/results/kitbench_LABEL.md``)."""
+    return [RESULTS / f"kitbench_{x}.md" for x in labels()]
 
 
 if __name__ == "__main__":
@@ -261,13 +262,10 @@ if __name__ == "__main__":
     args = ap.parse_args()
     if args.commit:
         commit(Path(args.commit[0]), Path(args.commit[1]), args.commit[2], args.time_log)
-    stale = []
-    for page in pages():
-        text = page.read_text(encoding="utf-8")
-        new = render(text)
-        if new != text:
-            stale.append(page)
-            if not args.check:
-                page.write_text(new, encoding="utf-8")
+    import kitbench_docs
+
+    stale = kitbench_docs.rewrite(
+        kitbench_docs.Library.at(ROOT / "instances" / "kitbench"), args.check
+    )
     if args.check and stale:
         raise SystemExit(f"out of date: {', '.join(str(p) for p in stale)}")

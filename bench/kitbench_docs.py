@@ -1,7 +1,8 @@
 """Rewrite the KitBench tables of docs/kitbench.md, instances/kitbench/README.md and README.md from
 instances/kitbench/index.csv, and the profile prose of docs/kitbench.md from the passes'
 committed rows (bench/results/kitbench_LABEL.csv), and the exact models against lns (the
-kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp*_10s.md) likewise;
+kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp*_10s.md) and the
+side-by-side runs of two code versions (bench/kitbench_before_after.py) likewise;
 with --figures, also redraw a run's profile and gap-versus-size figures into docs/figures/;
 with --profiles, redraw the profile figures of the committed passes
 (docs/figures/kitbench-profile-60s.png and -10s.png) from their rows.
@@ -25,6 +26,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+import kitbench_before_after as before_after  # noqa: E402
 
 from bilevel_kit.experiments.kitbench import Library, read_cells, render_blocks  # noqa: E402
 from bilevel_kit.experiments.kitbench.profiles import (  # noqa: E402
@@ -111,6 +115,22 @@ def figures(run: Path, label: str, library: Library) -> list[Path]:
     return final
 
 
+def rewrite(library: Library, check: bool = False) -> list[Path]:
+    """Render every generated block of the pages (:data:`PAGES`, :data:`VERSUS_PAGES` and the
+    before-and-after tables); the pages that disagreed, rewritten unless ``check``."""
+    records = library.read()
+    stale = []
+    for page in (*PAGES, *VERSUS_PAGES, *before_after.tables()):
+        text = page.read_text(encoding="utf-8")
+        new = render_profile_blocks(render_blocks(text, records), records, RESULTS)
+        new = before_after.render(render_versus_blocks(new, RESULTS), RESULTS)
+        if new != text:
+            stale.append(page)
+            if not check:
+                page.write_text(new, encoding="utf-8")
+    return stale
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true")
@@ -119,16 +139,7 @@ if __name__ == "__main__":
     ap.add_argument("--gap-size", action="store_true")
     args = ap.parse_args()
     library = Library.at(ROOT / "instances" / "kitbench")
-    records = library.read()
-    stale = []
-    for page in (*PAGES, *VERSUS_PAGES):
-        text = page.read_text(encoding="utf-8")
-        new = render_profile_blocks(render_blocks(text, records), records, RESULTS)
-        new = render_versus_blocks(new, RESULTS)
-        if new != text:
-            stale.append(page)
-            if not args.check:
-                page.write_text(new, encoding="utf-8")
+    stale = rewrite(library, args.check)
     if args.check and stale:
         raise SystemExit(f"out of date: {', '.join(str(p) for p in stale)}")
     if args.figures:

@@ -5,6 +5,7 @@ from its rows (docs/kitbench.md#before-and-after-a-change)."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 from pathlib import Path
 
@@ -117,3 +118,38 @@ def test_the_pages_are_rendered_from_the_committed_rows(page) -> None:
     assert ba.render(text) == text, (
         f"{page} disagrees with its rows: run python bench/kitbench_before_after.py"
     )
+
+
+def test_the_changelog_numbers_of_the_issue_36_run():
+    """CHANGELOG (Added, KitBench before and after): the counts it quotes."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    table = ba.cells(
+        read_rows(results / "kitbench_i36_60s_before.csv"),
+        read_rows(results / "kitbench_i36_60s_after.csv"),
+    )
+    rec = ba.record_summary(table)
+    assert (rec["records"], rec["better"], len(rec["worse"])) == (50, 4, 3)
+    assert rec["worse"][0][0] == "sparse_n25_s1_tu_tight_d10"
+    assert round(100 * rec["worse"][0][1], 3) == 0.161
+    counts = {m: ba.method_summary(table, m) for m in ("cpsat", "milp", "lns", "greedy-ce")}
+    assert [(counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+        (20, 2),
+        (18, 2),
+        (3, 4),
+        (0, 0),
+    ]
+    assert all(s["optimal_before"] == s["optimal_after"] for s in counts.values())
+    assert [round(counts[m]["median_ratio"], 2) for m in ("cpsat", "milp", "lns")] == [
+        1.0,
+        1.0,
+        1.01,
+    ]
+    bm = ba.method_summary(table, "bilevel-milp")["median_ratio"]
+    assert round(bm, 2) == 1.0
+    walls = [
+        round(json.loads((results / f"kitbench_i36_60s_{s}_run.json").read_text())["wall_s"])
+        for s in ("before", "after")
+    ]
+    assert walls == [5239, 5311]
