@@ -37,7 +37,7 @@ def records():
 @pytest.mark.parametrize(
     ("label", "lowered", "zeros"),
     [
-        ("60s", 102, {"cpsat": 22, "milp": 23, "lns": 29}),
+        ("60s", 108, {"cpsat": 22, "milp": 23, "lns": 30}),
         ("10s", 172, {"cpsat": 14, "milp": 18, "lns": 0}),
     ],
 )
