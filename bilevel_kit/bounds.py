@@ -102,9 +102,9 @@ def makespan_grid(instance: Instance) -> float | None:
     greatest common divisor of :func:`instance_times` (the timeline only adds them and takes
     maxima, so every start, end and makespan is a sum of them), e.g. 1 s when all are whole
     seconds; None when a time is no fraction of denominator up to 10^6."""
-    from .models.packing import exact_resolution
+    from .geometry import exact_step
 
-    return exact_resolution([v for v in instance_times(instance) if v > 0], max_units=None)
+    return exact_step([v for v in instance_times(instance) if v > 0])
 
 
 def on_grid(value: float, grid: float | None) -> float:

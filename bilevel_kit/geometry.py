@@ -384,3 +384,30 @@ def exactly_valid(
     """True when :func:`layout_violations` finds nothing: every footprint inside the tray and no
     pair penetrating deeper than ``tol`` mm (the checker's own test)."""
     return not layout_violations(parts, width, height, tol, first=True)
+
+
+def exact_step(values: Sequence[float], max_units: int | None = None) -> float | None:
+    """The coarsest step of which every value is a multiple: the greatest common divisor of
+    the values as fractions with denominators up to 10^6 (152.4, 12.7 and 300 give 0.1);
+    None when a value is no such fraction (or not positive), or the largest value would span
+    more than ``max_units`` steps (None: no cap)."""
+    from fractions import Fraction
+
+    fracs = []
+    for v in values:
+        f = Fraction(v).limit_denominator(10**6)
+        if f <= 0 or abs(float(f) - v) > 1e-9 * max(1.0, abs(v)):
+            return None
+        fracs.append(f)
+    if not fracs:
+        return None
+    den = 1
+    for f in fracs:
+        den = den * f.denominator // math.gcd(den, f.denominator)
+    num = 0
+    for f in fracs:
+        num = math.gcd(num, f.numerator * (den // f.denominator))
+    step = Fraction(num, den)
+    if max_units is not None and max(fracs) / step > max_units:
+        return None
+    return float(step)

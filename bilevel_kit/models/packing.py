@@ -76,7 +76,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..geometry import TOL, cells_available, cells_needed
+from ..geometry import TOL, cells_available, cells_needed, exact_step
 from ..instance import DEFAULT_WEIGHTS, PartType
 from ..plan import Placement
 from .packing_reach import ReachTables, add_reach, corners_reachable, reach_tables
@@ -163,30 +163,10 @@ def is_grid_exact(values: Sequence[float], resolution: float) -> bool:
 def exact_resolution(
     values: Sequence[float], max_units: int | None = MAX_EXACT_UNITS
 ) -> float | None:
-    """The coarsest grid (mm) of which every value is a multiple: the greatest common divisor
-    of the values as fractions with denominators up to 10^6 (152.4, 12.7 and 300 give 0.1);
-    None when a value is no such fraction or the largest value would span more than
-    ``max_units`` units (module docstring, "Grid"; None: no cap)."""
-    from fractions import Fraction
-
-    fracs = []
-    for v in values:
-        f = Fraction(v).limit_denominator(10**6)
-        if f <= 0 or abs(float(f) - v) > 1e-9 * max(1.0, abs(v)):
-            return None
-        fracs.append(f)
-    if not fracs:
-        return None
-    num = 0
-    den = 1
-    for f in fracs:
-        den = den * f.denominator // math.gcd(den, f.denominator)
-    for f in fracs:
-        num = math.gcd(num, f.numerator * (den // f.denominator))
-    step = Fraction(num, den)
-    if max_units is not None and max(fracs) / step > max_units:
-        return None
-    return float(step)
+    """The coarsest grid (mm) of which every value is a multiple (152.4, 12.7 and 300 give
+    0.1; :func:`~bilevel_kit.geometry.exact_step`), None when there is none or the largest
+    value would span more than ``max_units`` units (module docstring, "Grid")."""
+    return exact_step(values, max_units)
 
 
 # ---------------------------------------------------------------------------------------------
