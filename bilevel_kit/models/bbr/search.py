@@ -49,6 +49,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from ...bounds import makespan_grid
 from ...instance import Instance
 from ..common import Packer
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
@@ -178,8 +179,6 @@ class _Search:
         self, space: Space, fits: FitTest, upper: float, deadline: float | None, relax: bool
     ) -> None:
         self.space, self.fits, self.deadline, self.relax = space, fits, deadline, relax
-        from ...bounds import makespan_grid
-
         self.relaxed_best = math.inf
         self.step = makespan_grid(space.instance)
         self.upper = upper
