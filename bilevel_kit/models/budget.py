@@ -11,7 +11,9 @@ kernel kill), one that cannot be built in time leaves the run with its incumbent
 
 from __future__ import annotations
 
+import contextlib
 import time
+from collections.abc import Iterator
 
 #: Seconds a method runs when the caller gives no time limit.
 DEFAULT_TIME_LIMIT = 60.0
@@ -100,6 +102,18 @@ class Budget:
     def head(self, fraction: float) -> Budget:
         """The first ``fraction`` of the time limit (a quick first step), within the deadline."""
         return self._sub(min(self.deadline, self.start + self._part(fraction) * self.time_limit))
+
+    @contextlib.contextmanager
+    def capped(self, deadline: float) -> Iterator[None]:
+        """This budget ending at ``deadline`` at the latest while the block runs (the sub-budgets
+        made in it keep that end), its own deadline restored after it: a step that must leave
+        time for a later one (the exact models' LNS after the model, docs/formulations.md)."""
+        saved = self.deadline
+        self.deadline = min(saved, deadline)
+        try:
+            yield
+        finally:
+            self.deadline = saved
 
     def _sub(self, deadline: float) -> Budget:
         return Budget(

@@ -415,7 +415,11 @@ class _Cpsat:
     def solve(self, state: State | None) -> MethodOutput:
         incumbent = None if state is None else state.kits
         upper = None if state is None else state.obj
-        return _solve_model(self, upper, incumbent)
+        budget = self.ctx.budget
+        try:
+            return _solve_model(self, upper, incumbent)
+        finally:  # (the model's budget ends earlier: its overrun, the LNS after it)
+            self.ctx.budget = budget
 
 
 def _context(

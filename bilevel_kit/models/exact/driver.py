@@ -72,10 +72,11 @@ def drive(
         built = buildable(spec, backend.instance, backend.K, cells, budget, margin, extra, True)
     if built:
         t_model = budget.elapsed()
-        out = lns_first.after_model(backend, backend.solve(inc), t_model)
+        with lns_first.model_share(backend, inc is not None and not releases):
+            out = lns_first.after_model(backend, backend.solve(inc), t_model)
         if inc is None or releases:  # (the model's makespan is the released one: cpsat)
             return out
-        return never_worse(backend, inc, out)
+        return lns_first.after_share(backend, never_worse(backend, inc, out))
     if inc is None:
         return backend.finish(None, Status.UNKNOWN, backend.known_bound())
     if fallback == "lns":  # the time left to the LNS from the incumbent

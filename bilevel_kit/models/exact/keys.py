@@ -54,6 +54,11 @@ LNS_MAX_WINDOWS = "max_windows"
 #: windows without improvement, ``max_windows`` windows solved (0: a small instance), the cap.
 LNS_STOPS = ("optimal", "local_optimum", "stall", "iterations", "time_limit")
 
+#: The LNS after the model's share (:func:`.lns_first.after_share`): its report, and the
+#: seconds the model was given (``model_cap_s``).
+LNS_AFTER = "lns_after"
+MODEL_CAP_S = "model_cap_s"
+
 #: The model's plan, when it was missing or worse than its incumbent (:func:`.driver.never_worse`).
 MODEL_PLAN_WORSE = "model_plan_worse"
 

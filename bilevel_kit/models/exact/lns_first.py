@@ -25,8 +25,12 @@ hand-off (:mod:`.nomodel`).
 
 from __future__ import annotations
 
+import contextlib
+import time
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
+from ...methods import Status
 from ...plan import evaluate
 from . import keys
 from .backend import Backend, Inc
@@ -45,6 +49,12 @@ STALL_WINDOWS = 4
 HAND_OFF_KEY = "fallback"
 #: Tolerance (s) of "the same makespan".
 TOL = 1e-6
+#: The most of the time left after the LNS first that the model may use when the LNS first
+#: ran; the LNS resumes from the better plan in the rest unless the model proved it
+#: (:func:`after_share`; docs/formulations.md, "The LNS after the model").
+MODEL_SHARE = 0.5
+#: Seconds the LNS after the model needs at least (fewer left: it does not run).
+MIN_AFTER_S = 0.5
 
 
 def limits(seconds: float) -> HandOff:
@@ -92,6 +102,54 @@ def after_model(backend: Backend[Any], out: MethodOutput, t_model: float) -> Met
         if makespan < info["makespan_after"] - TOL:
             out.extra["improved_by"] = "model"
     return out
+
+
+@contextlib.contextmanager
+def model_share(backend: Backend[Any], resume: bool) -> Iterator[None]:
+    """The model's time: at most :data:`MODEL_SHARE` of what is left when the LNS first ran
+    and may ``resume`` after it (:func:`after_share`), else all of it."""
+    info = backend.extra.get(keys.LNS_FIRST)
+    if not resume or info is None or "skipped" in info:
+        yield
+        return
+    budget = backend.budget
+    cap = MODEL_SHARE * max(0.0, budget.remaining(backend.margin))
+    info[keys.MODEL_CAP_S] = round(cap, 3)
+    with budget.capped(time.perf_counter() + cap):
+        yield
+
+
+def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
+    """``out``, or the better plan the LNS finds from ``out``'s plan in the time the model's
+    share left (:func:`model_share`): the model's search stalls where the LNS's windows still
+    improve (``mixed_u2_t1_tight_d10`` at 60 s: the model's 47 s left the LNS first's 1,703.9 s
+    plan, ``lns`` alone found 1,651.9 s). Not after a proof (``optimal``, ``infeasible``), nor
+    without a plan; the model's bound, which holds for every plan, concludes the result (as
+    :func:`.driver.never_worse`). ``extra["lns_after"]`` reports the LNS (as the LNS first's)
+    and ``improved_by`` is ``lns`` when it improved the plan."""
+    extra, budget = backend.extra, backend.budget
+    info = extra.get(keys.LNS_FIRST)
+    if info is None or "skipped" in info or keys.MODEL_CAP_S not in info:
+        return out
+    if out.plan is None or out.status in (Status.OPTIMAL, Status.INFEASIBLE):
+        return out
+    if budget.remaining(backend.margin) < MIN_AFTER_S:
+        extra[keys.LNS_AFTER] = {"skipped": "no time left after the model"}
+        return out
+    makespan = evaluate(backend.instance, out.plan).makespan
+    if out.bound is not None and out.bound <= makespan + TOL:
+        if out.bound > backend.known_bound() + TOL:
+            backend.raise_bound(out.bound, "model")
+    t0, saved, before = budget.elapsed(), extra.pop(HAND_OFF_KEY, None), extra.get("improved_by")
+    inc = backend.hand_off(backend.adopt(out.plan))
+    report: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
+    if saved is not None:
+        extra[HAND_OFF_KEY] = saved
+    report[keys.LNS_USED_S] = round(budget.elapsed() - t0, 3)
+    extra[keys.LNS_AFTER] = report
+    if extra.get("improved_by") is None:
+        extra["improved_by"] = before
+    return backend.conclude(inc)
 
 
 def _skipped(backend: Backend[Any], fallback: str) -> str | None:
