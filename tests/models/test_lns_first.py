@@ -7,6 +7,7 @@ table keeps its proven optimum."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 from typing import Any
@@ -74,8 +75,16 @@ def test_the_exact_plan_is_never_worse_than_the_lns_first(method, name, generate
             assert info["windows"] >= lns_first.STALL_WINDOWS
     assert out.objective <= info["makespan_after"] + 1e-6 <= info["makespan_before"] + 2e-6
     assert extra["improved_by"] in ("lns", "model", None)
-    if extra["improved_by"] == "lns":  # the plan is the LNS's
-        assert out.objective == pytest.approx(info["makespan_after"], abs=1e-6)
+    after = extra.get(keys.LNS_AFTER, {})
+    if "makespan_after" in after:  # the LNS resumed after the model's share, from its plan
+        assert keys.MODEL_CAP_S in info and out.status != "optimal" and info["improvements"]
+        assert info[keys.MODEL_CAP_S] <= lns_first.MODEL_SHARE * LIMIT
+        assert out.objective <= after["makespan_after"] + 1e-6 <= after["makespan_before"] + 2e-6
+        last = after if after["makespan_after"] < after["makespan_before"] - 1e-6 else info
+    else:
+        last = info
+    if extra["improved_by"] == "lns":  # the plan is the LNS's (the last one that improved)
+        assert out.objective == pytest.approx(last["makespan_after"], abs=1e-6)
     assert extra["wall_time_s"] <= _slack(LIMIT)
 
 
@@ -277,3 +286,131 @@ def test_improved_by_names_the_model_when_it_beats_the_lns(tiny):
     res = MethodOutput(out.plan, Status.FEASIBLE, None, dict(stub.extra))
     assert lns_first.after_model(stub, res, 0.0).extra["improved_by"] == "lns"
     assert stub.extra["lns_first"]["model_s"] >= 0.0
+
+
+# -- the LNS after the model's share (docs/formulations.md, "The LNS after the model") ------
+
+
+def _ran_first(stub: _Stub, improvements: int = 1) -> _Stub:
+    info = {"method": "lns", "makespan_after": 100.0, "improvements": improvements}
+    stub.extra[keys.LNS_FIRST] = info
+    return stub
+
+
+@pytest.mark.parametrize("resume", [True, False])
+def test_the_model_gets_its_share_of_the_time_left(resume):
+    stub = _ran_first(_Stub(after=None, bound=10.0))
+    left = stub.budget.remaining(stub.margin)
+    with lns_first.model_share(stub, resume):
+        inside = stub.budget.remaining(stub.margin)
+        sub = stub.budget.cut(0.0)  # a sub-budget made in the model keeps the model's end
+    after = stub.budget.remaining(stub.margin)
+    if resume:
+        cap = stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S]
+        assert cap == pytest.approx(lns_first.MODEL_SHARE * left, abs=0.05)
+        assert inside == pytest.approx(cap - stub.margin, abs=0.05)
+        assert sub.deadline == pytest.approx(
+            stub.budget.deadline - (left - cap) - stub.margin, abs=0.05
+        )
+    else:  # (release times: the LNS cannot resume) the whole time left
+        assert keys.MODEL_CAP_S not in stub.extra[keys.LNS_FIRST]
+        assert inside == pytest.approx(left, abs=0.05)
+    assert after == pytest.approx(left, abs=0.05)  # restored
+
+
+@pytest.mark.parametrize("info", [{"skipped": "option fallback=none"}, {"improvements": 0}])
+def test_no_share_when_the_lns_first_did_not_run_or_improve(info):
+    # (its windows found nothing: the model keeps the time its proof may need)
+    stub = _Stub(after=None, bound=10.0)
+    stub.extra[keys.LNS_FIRST] = dict(info)
+    left = stub.budget.remaining()
+    with lns_first.model_share(stub, True):
+        assert stub.budget.remaining() == pytest.approx(left, abs=0.05)
+    assert keys.MODEL_CAP_S not in stub.extra[keys.LNS_FIRST]
+
+
+@dataclass
+class _After(_Stub):
+    """A stub whose incumbents are plans of ``tiny``: the LNS returns ``better`` (or nothing),
+    :meth:`conclude` states the plan with the bound known."""
+
+    better: Any = None
+    raised: list[tuple[float, str]] = field(default_factory=list)
+
+    def adopt(self, plan):
+        return plan
+
+    def hand_off(self, inc, limit: HandOff = WHOLE):
+        super().hand_off(inc, limit)
+        self.extra["improved_by"] = None if self.better is None else "lns"
+        return inc if self.better is None else self.better
+
+    def raise_bound(self, value: float, source: str) -> None:
+        self.raised.append((value, source))
+        self.bound = value
+
+    def conclude(self, inc):
+        return MethodOutput(inc, Status.FEASIBLE, self.bound, self.extra)
+
+
+def _model_out(tiny, status=Status.FEASIBLE, bound=None):
+    plan = solve(tiny, "single-task").plan
+    return MethodOutput(plan, status, bound, {})
+
+
+def test_the_lns_resumes_from_the_model_plan_with_the_model_bound(tiny):
+    better = solve(tiny, "greedy-ce", seed=0).plan
+    stub = _ran_first(_After(after=None, bound=10.0, better=better))
+    stub.instance = tiny
+    stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S] = 1.0
+    stub.extra["improved_by"] = "model"
+    out = lns_first.after_share(stub, _model_out(tiny, bound=20.0))
+    assert out.plan is better and stub.raised == [(20.0, "model")]  # the model's bound kept
+    assert stub.given == math.inf  # the whole time left (the hand-off's own limit)
+    report = stub.extra[keys.LNS_AFTER]
+    assert report["method"] == "lns" and report[keys.LNS_USED_S] >= 0.0
+    assert stub.extra["improved_by"] == "lns" and "fallback" not in stub.extra
+
+
+def test_the_lns_after_finding_nothing_keeps_improved_by(tiny):
+    stub = _ran_first(_After(after=None, bound=10.0))
+    stub.instance = tiny
+    stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S] = 1.0
+    stub.extra.update(improved_by="model", fallback={"kept": True})
+    model = _model_out(tiny, bound=5.0)  # below the known bound: not raised
+    out = lns_first.after_share(stub, model)
+    assert out.plan is model.plan and stub.raised == []
+    assert stub.extra["improved_by"] == "model" and stub.extra["fallback"] == {"kept": True}
+
+
+def test_a_model_bound_above_its_plan_is_not_taken(tiny):
+    stub = _ran_first(_After(after=None, bound=10.0))
+    stub.instance = tiny
+    stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S] = 1.0
+    lns_first.after_share(stub, _model_out(tiny, bound=1e6))
+    assert stub.raised == []
+
+
+@pytest.mark.parametrize(
+    ("status", "plan", "cap", "limit"),
+    [
+        (Status.OPTIMAL, True, True, 10.0),  # proven: nothing to resume
+        (Status.INFEASIBLE, False, True, 10.0),
+        (Status.UNKNOWN, False, True, 10.0),  # no plan
+        (Status.FEASIBLE, True, False, 10.0),  # the model had all the time (no share)
+        (Status.FEASIBLE, True, True, 0.3),  # less than MIN_AFTER_S left
+    ],
+)
+def test_no_lns_after(tiny, status, plan, cap, limit):
+    stub = _ran_first(_After(after=None, bound=10.0))
+    stub.instance, stub.budget = tiny, Budget(limit)
+    if cap:
+        stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S] = 1.0
+    out = _model_out(tiny, status=status)
+    if not plan:
+        out = MethodOutput(None, status, None, {})
+    assert lns_first.after_share(stub, out) is out and stub.given is None
+    if limit < 1.0:
+        assert "no time left" in stub.extra[keys.LNS_AFTER]["skipped"]
+    else:
+        assert keys.LNS_AFTER not in stub.extra

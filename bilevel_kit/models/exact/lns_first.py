@@ -49,9 +49,9 @@ STALL_WINDOWS = 4
 HAND_OFF_KEY = "fallback"
 #: Tolerance (s) of "the same makespan".
 TOL = 1e-6
-#: The most of the time left after the LNS first that the model may use when the LNS first
-#: ran; the LNS resumes from the better plan in the rest unless the model proved it
-#: (:func:`after_share`; docs/formulations.md, "The LNS after the model").
+#: The most of the time left after the LNS first that the model may use when the LNS first's
+#: windows improved the plan; the LNS resumes from the better plan in the rest unless the
+#: model proved it (:func:`after_share`; docs/formulations.md, "The LNS after the model").
 MODEL_SHARE = 0.5
 #: Seconds the LNS after the model needs at least (fewer left: it does not run).
 MIN_AFTER_S = 0.5
@@ -106,10 +106,12 @@ def after_model(backend: Backend[Any], out: MethodOutput, t_model: float) -> Met
 
 @contextlib.contextmanager
 def model_share(backend: Backend[Any], resume: bool) -> Iterator[None]:
-    """The model's time: at most :data:`MODEL_SHARE` of what is left when the LNS first ran
-    and may ``resume`` after it (:func:`after_share`), else all of it."""
+    """The model's time: at most :data:`MODEL_SHARE` of what is left when the LNS first's
+    windows improved the plan and the LNS may ``resume`` after the model (:func:`after_share`),
+    else all of it: where its windows found nothing (a local optimum of small windows, as on
+    most small records) the model keeps the time its proof may need."""
     info = backend.extra.get(keys.LNS_FIRST)
-    if not resume or info is None or "skipped" in info:
+    if not resume or info is None or not info.get("improvements"):
         yield
         return
     budget = backend.budget
@@ -136,10 +138,9 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     if budget.remaining(backend.margin) < MIN_AFTER_S:
         extra[keys.LNS_AFTER] = {"skipped": "no time left after the model"}
         return out
-    makespan = evaluate(backend.instance, out.plan).makespan
-    if out.bound is not None and out.bound <= makespan + TOL:
-        if out.bound > backend.known_bound() + TOL:
-            backend.raise_bound(out.bound, "model")
+    makespan, bound = evaluate(backend.instance, out.plan).makespan, out.bound
+    if bound is not None and backend.known_bound() + TOL < bound <= makespan + TOL:
+        backend.raise_bound(bound, "model")
     t0, saved, before = budget.elapsed(), extra.pop(HAND_OFF_KEY, None), extra.get("improved_by")
     inc = backend.hand_off(backend.adopt(out.plan))
     report: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
