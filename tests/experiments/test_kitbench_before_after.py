@@ -92,6 +92,29 @@ def test_the_text_says_what_ran_and_lists_every_worse_cell() -> None:
     assert "median ratio after / before 0.75" in text
 
 
+def test_the_exact_models_are_held_to_lns_of_the_same_pass() -> None:
+    table = ba.cells(BEFORE, AFTER)
+    v = ba.versus_reference(table, "cpsat")
+    assert (v["records"], v["before"], v["after"]) == (2, 2, 1)  # b: 200 <= 201; lost after
+    assert v["misses_before"] == [] and v["misses_after"] == [("b", math.inf)]
+    close = ba.cells(
+        [
+            row("c", "cpsat", 100.1, "feasible", 90.0, 9.0),
+            row("c", "lns", 100.0, "feasible", 90, 9),
+        ],
+        [
+            row("c", "cpsat", 100.11, "feasible", 90.0, 9.0),
+            row("c", "lns", 100.0, "feasible", 90, 9),
+        ],
+    )
+    w = ba.versus_reference(close, "cpsat")  # 0.1 % above: within; 0.11 %: not
+    assert (w["before"], w["after"]) == (1, 0) and w["misses_after"][0][0] == "c"
+    runs = [{"command": "x", "commit": c, "started": "t"} for c in ("old", "new")]
+    text = ba.before_after_text(BEFORE, AFTER, runs)
+    assert "**Against lns in the same pass**" in text
+    assert "cpsat 2 before, 1 after (missing it after: `b` plan lost)" in text
+
+
 def test_wall_seconds_reads_time_v(tmp_path) -> None:
     log = tmp_path / "time.log"
     log.write_text("\tElapsed (wall clock) time (h:mm:ss or m:ss): 1:02:03.5\n")
@@ -100,8 +123,10 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
     assert ba.wall_seconds(log) == 123.25
 
 
-#: The committed side-by-side runs: issue 36's refactors, the 60 s pass up to 130 tasks.
-LABELS = ("i36_60s",)
+#: The committed side-by-side runs: issue 36's refactors, the 60 s pass up to 130 tasks; the
+#: LNS after the model (docs/formulations.md): 10 s up to 130 tasks, 60 s on 11 records, and
+#: the rule's first version at 10 s.
+LABELS = ("i36_60s", "lnsafter_10s", "lnsafter_60s", "lnsafter_uncond_10s")
 
 
 def test_the_committed_runs_are_listed() -> None:
@@ -153,3 +178,47 @@ def test_the_changelog_numbers_of_the_issue_36_run():
         for s in ("before", "after")
     ]
     assert walls == [5239, 5311]
+
+
+def test_the_changelog_numbers_of_the_lns_after_runs():
+    """CHANGELOG (Changed, the LNS after the model): the counts it quotes."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+
+    def summary(label):
+        table = ba.cells(
+            read_rows(results / f"kitbench_{label}_before.csv"),
+            read_rows(results / f"kitbench_{label}_after.csv"),
+        )
+        return {m: ba.method_summary(table, m) for m in ("cpsat", "milp")}
+
+    ten = summary("lnsafter_10s")
+    assert [(ten[m]["cells"], ten[m]["better"], len(ten[m]["worse"])) for m in ten] == [
+        (50, 9, 0),
+        (50, 6, 1),
+    ]
+    assert round(100 * ten["milp"]["worse"][0][1], 3) == 0.039
+    assert [(ten[m]["optimal_before"], ten[m]["optimal_after"]) for m in ten] == [
+        (20, 20),
+        (20, 19),
+    ]
+    sixty = summary("lnsafter_60s")
+    assert (
+        sum(sixty[m]["same"] for m in sixty) == 19 and sum(s["cells"] for s in sixty.values()) == 22
+    )
+    assert all(s["optimal_before"] == s["optimal_after"] == 4 for s in sixty.values())
+    first = summary("lnsafter_uncond_10s")
+    assert [(first[m]["optimal_before"], first[m]["optimal_after"]) for m in first] == [
+        (19, 17),
+        (18, 17),
+    ]
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    for quoted in (
+        "`cpsat` better on 9 records, worse on 0",
+        "`milp` better on 6, worse on 1",
+        "20 -> 20 (`cpsat`) and 20 -> 19 (`milp`)",
+        "the same on 19 of\n  22 cells",
+        "(`cpsat` 19 -> 17, `milp` 18 -> 17)",
+    ):
+        assert quoted in text, quoted

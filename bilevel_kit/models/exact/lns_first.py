@@ -11,6 +11,11 @@ than the exact one, and solved within its deterministic time it found plans the 
 find in the rest of the time (docs/formulations.md, "The LNS first", issue 37).
 ``extra["lns_first"]`` reports the rule and how it ran (:mod:`.keys`).
 
+**The LNS after the model.** When the LNS first's windows improved the plan, the model gets
+at most :data:`MODEL_SHARE` of the time left (:func:`model_share`), and unless it proves its
+plan the LNS resumes from it in the rest (:func:`after_share`, ``extra["lns_after"]``): the
+LNS's later, larger windows kept improving where the model's search found nothing.
+
 When the LNS's plan meets the proven bound the model is not built (the plan is optimal by the
 bound computed before the model, as in the driver's shortcut). Otherwise the status stays the
 model's: a plan the LNS found is ``optimal`` only when the model proves it or it meets that

@@ -35,14 +35,15 @@ def hint_field() -> str:
 
 
 def fallback_field() -> Fallback:
-    """Option ``fallback``: what a run without a model (docs/formulations.md, "Model too
-    large") returns."""
+    """Option ``fallback``: the LNS around the model (docs/formulations.md, "The LNS first",
+    "The LNS after the model") and what a run without a model returns ("Model too large")."""
     default: Fallback = "lns"
     return option(
         default,
-        "no model built (too large, too slow): lns from the plan, or none "
-        "(several stations: cpsat runs lns's station search, milp returns the plan; "
-        "extra['fallback'])",
+        "lns: the LNS from the plan before the model, after its share, and when no model "
+        "is built (too large, too slow); none: the model alone, the plan when none is "
+        "built (several stations: cpsat runs lns's station search, milp returns the plan; "
+        "extra['lns_first'], extra['lns_after'], extra['fallback'])",
     )
 
 
