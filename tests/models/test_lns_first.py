@@ -391,6 +391,19 @@ def test_a_model_bound_above_its_plan_is_not_taken(tiny):
     assert stub.raised == []
 
 
+@pytest.mark.parametrize("ended", [{keys.SOLVER_STATUS: "optimal"}, {"optimal_axis_aligned": True}])
+def test_no_lns_after_a_model_whose_search_ended(tiny, ended):
+    # (optimal among the 0/90-degree plans: concluding the LNS's plan would drop that claim,
+    # as the brute-force tests of cpsat and milp found)
+    stub = _ran_first(_After(after=None, bound=10.0))
+    stub.instance = tiny
+    stub.extra[keys.LNS_FIRST][keys.MODEL_CAP_S] = 1.0
+    stub.extra.update(ended)
+    out = _model_out(tiny)
+    assert lns_first.after_share(stub, out) is out and stub.given is None
+    assert keys.LNS_AFTER not in stub.extra
+
+
 @pytest.mark.parametrize(
     ("status", "plan", "cap", "limit"),
     [

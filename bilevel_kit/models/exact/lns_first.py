@@ -131,6 +131,8 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     share left (:func:`model_share`): the model's search stalls where the LNS's windows still
     improve (``mixed_u2_t1_tight_d10`` at 60 s: the model's 47 s left the LNS first's 1,703.9 s
     plan, ``lns`` alone found 1,651.9 s). Not after a proof (``optimal``, ``infeasible``), nor
+    when the model's search ended (``solver_status`` ``optimal``, e.g. optimal among the
+    0/90-degree plans, ``optimal_axis_aligned``: a claim the LNS's result would drop), nor
     without a plan; the model's bound, which holds for every plan, concludes the result (as
     :func:`.driver.never_worse`). ``extra["lns_after"]`` reports the LNS (as the LNS first's)
     and ``improved_by`` is ``lns`` when it improved the plan."""
@@ -140,6 +142,8 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
         return out
     if out.plan is None or out.status in (Status.OPTIMAL, Status.INFEASIBLE):
         return out
+    if extra.get(keys.SOLVER_STATUS) == "optimal" or extra.get("optimal_axis_aligned"):
+        return out  # the model's search ended: its plan optimal among the plans it proves for
     if budget.remaining(backend.margin) < MIN_AFTER_S:
         extra[keys.LNS_AFTER] = {"skipped": "no time left after the model"}
         return out
@@ -147,6 +151,7 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     if bound is not None and backend.known_bound() + TOL < bound <= makespan + TOL:
         backend.raise_bound(bound, "model")
     t0, saved, before = budget.elapsed(), extra.pop(HAND_OFF_KEY, None), extra.get("improved_by")
+    extra.pop("status_reason", None)  # (the model's; the conclusion below states its own)
     inc = backend.hand_off(backend.adopt(out.plan))
     report: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
     if saved is not None:
