@@ -159,9 +159,13 @@ def test_exact_models_take_the_station_search_plan(method):
     assert out.extra["improved_by"] == "lns"
     report = out.extra["lns_first"] if method == "cpsat" else out.extra["fallback"]
     assert report["method"] == "lns" and report["makespan_after"] < report["makespan_before"]
-    # the search's plan is theirs; how far below its start it gets is the time's doing (17 %
+    # the search's plan is theirs (the LNS after the model's, when it ran: docs/formulations.md,
+    # "The LNS after the model"); how far below its start it gets is the time's doing (17 %
     # below greedy-ce's plan measured on an idle machine, docs/stations.md): not asserted
-    assert out.objective == pytest.approx(report["makespan_after"], abs=1e-6)
+    after = out.extra.get("lns_after", {})
+    final = after.get("makespan_after", report["makespan_after"])
+    assert final <= report["makespan_after"] + 1e-6
+    assert out.objective == pytest.approx(final, abs=1e-6)
     assert out.objective < greedy.objective or report["makespan_before"] > greedy.objective
     assert out.bound <= out.objective
 
