@@ -39,7 +39,7 @@ from ...methods import Status
 from ...plan import evaluate
 from . import keys
 from .backend import Backend, Inc
-from .nomodel import HandOff
+from .nomodel import WHOLE, HandOff
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
@@ -77,13 +77,9 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
     if skipped is not None:
         extra[keys.LNS_FIRST] = {"skipped": skipped}
         return inc, False
-    t0, saved = budget.elapsed(), extra.pop(HAND_OFF_KEY, None)
     limit = limits(SHARE * max(0.0, budget.remaining(backend.margin)))
-    inc = backend.hand_off(inc, limit)
-    info: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
-    if saved is not None:
-        extra[HAND_OFF_KEY] = saved
-    info.update({"share": SHARE, keys.LNS_USED_S: round(budget.elapsed() - t0, 3)})
+    inc, info = _reported_hand_off(backend, inc, limit)
+    info["share"] = SHARE
     info.update({keys.LNS_STALL: limit.stall, keys.LNS_MAX_WINDOWS: limit.windows})
     extra[keys.LNS_FIRST] = info
     after = info.get("makespan_after")
@@ -150,17 +146,28 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     makespan, bound = evaluate(backend.instance, out.plan).makespan, out.bound
     if bound is not None and backend.known_bound() + TOL < bound <= makespan + TOL:
         backend.raise_bound(bound, "model")
-    t0, saved, before = budget.elapsed(), extra.pop(HAND_OFF_KEY, None), extra.get("improved_by")
+    before = extra.get("improved_by")
     extra.pop("status_reason", None)  # (the model's; the conclusion below states its own)
-    inc = backend.hand_off(backend.adopt(out.plan))
+    inc, extra[keys.LNS_AFTER] = _reported_hand_off(backend, backend.adopt(out.plan), WHOLE)
+    if extra.get("improved_by") is None:
+        extra["improved_by"] = before
+    return backend.conclude(inc)
+
+
+def _reported_hand_off(
+    backend: Backend[Inc], inc: Inc, limit: HandOff
+) -> tuple[Inc, dict[str, Any]]:
+    """The backend's LNS from ``inc`` within ``limit``, and its report (``used_s`` added),
+    taken from ``extra["fallback"]``, which keeps what it held before (the no-model hand-off's
+    key)."""
+    extra, budget = backend.extra, backend.budget
+    t0, saved = budget.elapsed(), extra.pop(HAND_OFF_KEY, None)
+    inc = backend.hand_off(inc, limit)
     report: dict[str, Any] = extra.pop(HAND_OFF_KEY, None) or {"skipped": "the LNS did not run"}
     if saved is not None:
         extra[HAND_OFF_KEY] = saved
     report[keys.LNS_USED_S] = round(budget.elapsed() - t0, 3)
-    extra[keys.LNS_AFTER] = report
-    if extra.get("improved_by") is None:
-        extra["improved_by"] = before
-    return backend.conclude(inc)
+    return inc, report
 
 
 def _skipped(backend: Backend[Any], fallback: str) -> str | None:
