@@ -124,6 +124,16 @@ def report(exc: BaseException | None, stream: IO[str]) -> None:
         _REPORTED.set()
 
 
+def say(line: str, stream: IO[str]) -> None:
+    """Print one whole line while a signal may end the process: one write of the line and its
+    newline, under the lock the watchdog's forced line waits for, so that line never lands
+    on the end of this one (``print`` writes the text and the newline apart; seen once beside
+    two busy loops)."""
+    with _REPORTING:
+        stream.write(line + "\n")
+        stream.flush()
+
+
 def exit_now(code: int) -> NoReturn:
     """End the process with ``code`` at once, its output flushed, without the interpreter's
     exit. For an interrupted command line: every cleanup has run on the way up (the

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypedDict, Unpack
 import numpy as np
 
 from .. import atomic
-from ..interrupt import on_forced_exit, remove_path
+from ..interrupt import on_forced_exit, remove_path, say
 from .provenance import CODE, code_identity, describe, reusable, without_code
 
 if TYPE_CHECKING:
@@ -629,11 +629,11 @@ def run_sweep(
             owned.close()
         report.wall_s = time.perf_counter() - t0
         if report.foreign and loud:
-            print(report.foreign_line(), file=sys.stderr, flush=True)
+            say(report.foreign_line(), sys.stderr)
         if session is not None:
             session.reports.append(report)
             if session.summary:
-                print(report.line(), file=sys.stderr, flush=True)
+                say(report.line(), sys.stderr)
     return [r for r in records if r is not None], report
 
 

@@ -74,6 +74,33 @@ def test_a_forced_exit_while_the_commands_line_is_written_waits_for_it(forced):
     assert written == [] and [str(e) for e in fired] == ["130"]
 
 
+def test_a_forced_exit_during_a_summary_line_writes_its_own_after_that_lines_end(forced):
+    """The race a busy machine hit once: a sweep's summary ("compare: 1 done ...
+    (interrupted)") and the watchdog's line on one line. ``say`` writes the line with its
+    newline in one write under the watchdog's lock, so the forced line comes after it."""
+    guard, written = forced
+    order: list[str] = []
+    fired: list[BaseException] = []
+
+    class SlowStream(io.StringIO):
+        def write(self, text: str) -> int:
+            thread = threading.Thread(target=lambda: _force_into(guard, fired))
+            thread.start()
+            thread.join(timeout=0.2)  # held at the lock while the line is written
+            assert thread.is_alive()
+            order.append(text)
+            self._thread = thread
+            return len(text)
+
+    stream = SlowStream()
+    interrupt.say("compare: 1 done, 0 skipped, 0 failed of 2 cells in 3.0 s (interrupted)", stream)
+    assert order == ["compare: 1 done, 0 skipped, 0 failed of 2 cells in 3.0 s (interrupted)\n"]
+    stream._thread.join(timeout=5.0)
+    # not a command's interrupt line: the watchdog still writes its own, on a line of its own
+    assert written == [b"bilevel-kit: interrupted (SIGTERM) (forced)\n"]
+    assert [str(e) for e in fired] == ["130"]
+
+
 def _force_into(guard, fired: list[BaseException]) -> None:
     try:
         guard._force(signal.SIGTERM)
