@@ -431,6 +431,14 @@ def scope_claims(scope: str | None) -> dict[str, Any]:
     }
 
 
+def claim_scope(extra: dict[str, Any], scope: str | None) -> None:
+    """Put :func:`scope_claims` in ``extra``: a conclusion states its own claims, so an
+    earlier ``status_reason`` (the model's, before the conclusion of an LNS after it or of the
+    incumbent kept by :func:`.exact.driver.never_worse`) goes when this one has none."""
+    extra.pop("status_reason", None)
+    extra.update(scope_claims(scope))
+
+
 def split_greedily(
     kit: Sequence[str],
     fits: Callable[[list[str]], bool | None],

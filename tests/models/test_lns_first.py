@@ -19,9 +19,11 @@ from bilevel_kit.generate import generate
 from bilevel_kit.instance import from_dict
 from bilevel_kit.methods import MethodOutput, Status
 from bilevel_kit.models.budget import Budget
+from bilevel_kit.models.common import claim_scope, scope_claims
 from bilevel_kit.models.exact import keys, lns_first
 from bilevel_kit.models.exact.nomodel import CPSAT, MILP, WHOLE, HandOff, NoModelSpec
 from bilevel_kit.models.lns import method as lns_method
+from bilevel_kit.models.packing import ANY_ANGLE, AXIS_ALIGNED
 from bilevel_kit.validate import check
 
 LIMIT = 6.0
@@ -427,3 +429,13 @@ def test_no_lns_after(tiny, status, plan, cap, limit):
         assert "no time left" in stub.extra[keys.LNS_AFTER]["skipped"]
     else:
         assert keys.LNS_AFTER not in stub.extra
+
+
+def test_a_conclusion_drops_the_model_status_reason():
+    """The model's reason for a weaker claim goes with its claim: the LNS after the model (or
+    the incumbent ``never_worse`` keeps) is concluded with claims of its own."""
+    extra = {"keep": 1, **scope_claims(None)}  # the model's: a kit excluded without a proof
+    claim_scope(extra, ANY_ANGLE)
+    assert extra == {"keep": 1, "proof_scope": ANY_ANGLE}
+    claim_scope(extra, AXIS_ALIGNED)
+    assert extra["proof_scope"] == AXIS_ALIGNED and "0/90-degree" in extra["status_reason"]

@@ -40,7 +40,7 @@ from ...methods import MethodOutput, Status, gap
 from ...options import option
 from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
-from ..common import Packer, scope_claims, unfit_outcome
+from ..common import Packer, claim_scope, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from .search import Outcome, packer_fits, search
 from .search import Space as SearchSpace
@@ -233,7 +233,7 @@ def _conclude(
         optimal_axis_aligned=optimal_axis and plan is not None,
         wall_time_s=budget.elapsed(),
     )
-    extra.update(scope_claims(AXIS_ALIGNED if optimal_axis and not optimal else ANY_ANGLE))
+    claim_scope(extra, AXIS_ALIGNED if optimal_axis and not optimal else ANY_ANGLE)
     if plan is None:
         if every.stop == "exhausted" and math.isinf(every.bound):
             extra["reason"] = "no plan: every kit order was ruled out"

@@ -13,7 +13,7 @@ from ...methods import MethodOutput, Status, gap
 from ...plan import Kit, Placement, Plan, evaluate
 from .. import packing_oracle
 from ..budget import Budget
-from ..common import Packer, kit_order, plan_extra, scope_claims
+from ..common import Packer, claim_scope, kit_order, plan_extra
 from ..packing import ANY_ANGLE
 from .context import Context, Model, State
 from .proven import bound_source, known_bound
@@ -90,7 +90,7 @@ def conclude(ctx: Context, mdl: Model | None, state: State, report: Report) -> M
         obj_bound, lower_s = extra["objective_bound"], None  # (lower: not on the makespan)
     else:
         bound_s, optimal, obj_bound, obj_axis = _objective_claims(ctx, mdl, state, closed, extra)
-    extra.update(scope_claims(ANY_ANGLE if optimal else state.scope))
+    claim_scope(extra, ANY_ANGLE if optimal else state.scope)
     missing = [k for k in plan.kits if not k.layout and instance.kit_parts(k.tasks)]
     if missing:  # a kit without a layout (packing timed out at the very end): not a valid plan
         extra["reason"] = "no layout for some kit within the time limit"

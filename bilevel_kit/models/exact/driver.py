@@ -111,11 +111,7 @@ def never_worse(backend: Backend[Inc], inc: Inc, out: MethodOutput) -> MethodOut
     if after is not None and after <= before + lns_first.TOL:
         return out
     worse = {"makespan": after, "status": str(out.status), "bound": out.bound}
-    bound = out.bound
-    taken = bound is not None and bound <= before + lns_first.TOL
-    if bound is not None and taken and bound > backend.known_bound() + lns_first.TOL:
-        backend.raise_bound(bound, "model")
-    worse["bound_taken"] = taken
+    worse["bound_taken"] = lns_first.take_model_bound(backend, out.bound, before)
     result = backend.conclude(inc)
     result.extra[keys.MODEL_PLAN_WORSE] = worse
     return result

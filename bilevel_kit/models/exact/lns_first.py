@@ -115,10 +115,9 @@ def model_share(backend: Backend[Any], resume: bool) -> Iterator[None]:
     if not resume or info is None or not info.get("improvements"):
         yield
         return
-    budget = backend.budget
-    cap = MODEL_SHARE * max(0.0, budget.remaining(backend.margin))
-    info[keys.MODEL_CAP_S] = round(cap, 3)
-    with budget.capped(time.perf_counter() + cap):
+    end = backend.budget.share(MODEL_SHARE, backend.margin)
+    info[keys.MODEL_CAP_S] = round(end - time.perf_counter(), 3)
+    with backend.budget.capped(end):
         yield
 
 
@@ -143,15 +142,22 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     if budget.remaining(backend.margin) < MIN_AFTER_S:
         extra[keys.LNS_AFTER] = {"skipped": "no time left after the model"}
         return out
-    makespan, bound = evaluate(backend.instance, out.plan).makespan, out.bound
-    if bound is not None and backend.known_bound() + TOL < bound <= makespan + TOL:
-        backend.raise_bound(bound, "model")
+    take_model_bound(backend, out.bound, evaluate(backend.instance, out.plan).makespan)
     before = extra.get("improved_by")
-    extra.pop("status_reason", None)  # (the model's; the conclusion below states its own)
     inc, extra[keys.LNS_AFTER] = _reported_hand_off(backend, backend.adopt(out.plan), WHOLE)
     if extra.get("improved_by") is None:
         extra["improved_by"] = before
     return backend.conclude(inc)
+
+
+def take_model_bound(backend: Backend[Any], bound: float | None, makespan: float) -> bool:
+    """Conclude with the model's ``bound`` (it holds for every plan,
+    :func:`..common.scope_claims`) where it is above the bound known before the model; not
+    taken (False) when it is above ``makespan``, a plan's it would contradict."""
+    taken = bound is not None and bound <= makespan + TOL
+    if taken and bound is not None and bound > backend.known_bound() + TOL:
+        backend.raise_bound(bound, "model")
+    return taken
 
 
 def _reported_hand_off(

@@ -56,11 +56,11 @@ from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import (
     Packer,
+    claim_scope,
     closed_form_plan,
     pack_time_limit,
     plan_extra,
     quick_plan,
-    scope_claims,
 )
 from ..exact.driver import (
     HINT_SHARE,
@@ -418,7 +418,7 @@ def _conclude(
     if objective.is_makespan:
         axis = r.best if lower is None else max(r.best, lower)
         r.extra.update(bound_axis_aligned=min(real, axis), bound_model=lower)
-    r.extra.update(scope_claims(ANY_ANGLE if optimal else scope))
+    claim_scope(r.extra, ANY_ANGLE if optimal else scope)
     # docs/timeline.md#several-stations: its value, bound and gap not the result's own
     if not objective.top_level:
         proofs = (optimal, bool(r.extra["optimal_axis_aligned"]))
