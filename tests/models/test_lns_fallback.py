@@ -100,3 +100,18 @@ def test_lns_from_a_given_plan_is_never_worse(intree):
     assert out.plan is not None and check(intree, out.plan) == []
     assert evaluate(intree, out.plan).makespan <= evaluate(intree, given).makespan + 1e-9
     assert out.extra["start_method"] is not None
+
+
+@pytest.mark.parametrize(("window", "first"), [(None, 24), (36, 36), (80, 80)])
+def test_the_fallback_starts_at_a_given_window(intree, window, first):
+    """The LNS after the model resumes at the LNS first's last window size
+    (docs/formulations.md, "The LNS after the model"): one window of that size, reported; one
+    above the default largest window raises that limit instead of being refused."""
+    from bilevel_kit.models.lns.fallback import improve
+
+    given = solve(intree, "single-task", seed=0).plan
+    better, info = improve(
+        intree, given, bound=None, seed=0, time_limit=20.0, iterations=1, window=window
+    )
+    assert info["windows"] == 1 and info["stop"] == "iterations" and info["window"] == first
+    assert better is None or check(intree, better) == []

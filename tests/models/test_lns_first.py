@@ -294,7 +294,7 @@ def test_improved_by_names_the_model_when_it_beats_the_lns(tiny):
 
 
 def _ran_first(stub: _Stub, improvements: int = 1) -> _Stub:
-    info = {"method": "lns", "makespan_after": 100.0, "improvements": improvements}
+    info = {"method": "lns", "makespan_after": 100.0, "improvements": improvements, "window": 36}
     stub.extra[keys.LNS_FIRST] = info
     return stub
 
@@ -369,6 +369,8 @@ def test_the_lns_resumes_from_the_model_plan_with_the_model_bound(tiny):
     out = lns_first.after_share(stub, _model_out(tiny, bound=20.0))
     assert out.plan is better and stub.raised == [(20.0, "model")]  # the model's bound kept
     assert stub.given == math.inf  # the whole time left (the hand-off's own limit)
+    # where the LNS first ended: its last window size, other windows (another seed)
+    assert stub.limit.window == 36 and stub.limit.reseed == lns_first.RESEED == 1
     report = stub.extra[keys.LNS_AFTER]
     assert report["method"] == "lns" and report[keys.LNS_USED_S] >= 0.0
     assert stub.extra["improved_by"] == "lns" and "fallback" not in stub.extra

@@ -39,7 +39,7 @@ from ...methods import Status
 from ...plan import evaluate
 from . import keys
 from .backend import Backend, Inc
-from .nomodel import WHOLE, HandOff
+from .nomodel import HandOff
 
 if TYPE_CHECKING:
     from ...methods import MethodOutput
@@ -58,6 +58,9 @@ TOL = 1e-6
 #: windows improved the plan; the LNS resumes from the better plan in the rest unless the
 #: model proved it (:func:`after_share`; docs/formulations.md, "The LNS after the model").
 MODEL_SHARE = 0.5
+#: Added to the run's seed for the LNS after the model: it starts at the LNS first's last
+#: window size and draws other windows than the LNS first's (:class:`.nomodel.HandOff`).
+RESEED = 1
 #: Seconds the LNS after the model needs at least (fewer left: it does not run).
 MIN_AFTER_S = 0.5
 
@@ -129,8 +132,10 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     when the model's search ended (``solver_status`` ``optimal``, e.g. optimal among the
     0/90-degree plans, ``optimal_axis_aligned``: a claim the LNS's result would drop), nor
     without a plan; the model's bound, which holds for every plan, concludes the result (as
-    :func:`.driver.never_worse`). ``extra["lns_after"]`` reports the LNS (as the LNS first's)
-    and ``improved_by`` is ``lns`` when it improved the plan."""
+    :func:`.driver.never_worse`). The LNS resumes at the LNS first's last window size with
+    another seed (:data:`RESEED`): the first sweep at the default size and seed would try again
+    the windows the LNS first found nothing in. ``extra["lns_after"]`` reports the LNS (as the
+    LNS first's) and ``improved_by`` is ``lns`` when it improved the plan."""
     extra, budget = backend.extra, backend.budget
     info = extra.get(keys.LNS_FIRST)
     if info is None or "skipped" in info or keys.MODEL_CAP_S not in info:
@@ -144,7 +149,8 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
         return out
     take_model_bound(backend, out.bound, evaluate(backend.instance, out.plan).makespan)
     before = extra.get("improved_by")
-    inc, extra[keys.LNS_AFTER] = _reported_hand_off(backend, backend.adopt(out.plan), WHOLE)
+    resume = HandOff(window=info.get("window"), reseed=RESEED)  # where the LNS first ended
+    inc, extra[keys.LNS_AFTER] = _reported_hand_off(backend, backend.adopt(out.plan), resume)
     if extra.get("improved_by") is None:
         extra["improved_by"] = before
     return backend.conclude(inc)

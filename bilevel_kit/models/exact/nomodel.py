@@ -66,11 +66,16 @@ def buildable(
 class HandOff:
     """How long the LNS of :meth:`.backend.Backend.hand_off` may run: at most ``seconds``, and
     (the LNS first, :mod:`.lns_first`) ``stall`` windows in a row without improvement and
-    ``windows`` windows in all (None: no such limit)."""
+    ``windows`` windows in all (None: no such limit). The LNS after the model resumes where
+    the LNS first ended: its first ``window`` (tasks; None: ``lns``'s own; one station) is the
+    LNS first's last, and its seed is the run's plus ``reseed``, so that it draws other
+    windows than those the LNS first tried."""
 
     seconds: float = math.inf
     stall: int | None = None
     windows: int | None = None
+    window: int | None = None
+    reseed: int = 0
 
     def within(self, left: float) -> HandOff:
         """These limits with at most ``left`` seconds (the backend's time left)."""
@@ -99,10 +104,11 @@ def improve(
         instance,
         plan,
         bound=bound,
-        seed=seed,
+        seed=seed + limit.reseed,
         time_limit=limit.seconds,
         stall=limit.stall,
         iterations=limit.windows,
+        window=limit.window,
     )
     extra.update(improved_by=None, fallback=info)
     if better is not None:

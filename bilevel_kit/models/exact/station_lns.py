@@ -51,7 +51,10 @@ def station_lns(
     # first's stall of W windows is W sweeps of visits here
     stall = None if limit.stall is None else limit.stall * max(1, len(plan.kits))
     options = LnsOptions(start="quick", stall=stall, iterations=limit.windows, objective=chosen)
-    out = lns(instance, options, seed=seed, time_limit=limit.seconds, start_plan=plan)
+    # (its visits free one kit each: the one-station window size does not apply)
+    out = lns(
+        instance, options, seed=seed + limit.reseed, time_limit=limit.seconds, start_plan=plan
+    )
     info.update(
         windows=out.extra.get("iterations", 0),
         improvements=out.extra.get("improvements", 0),

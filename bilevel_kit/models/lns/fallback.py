@@ -13,6 +13,7 @@ time left (:mod:`..exact.lns_first`, docs/formulations.md, "The LNS first").
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from ...instance import Instance
@@ -34,13 +35,15 @@ def improve(
     time_limit: float,
     stall: int | None = None,
     iterations: int | None = None,
+    window: int | None = None,
 ) -> tuple[Plan | None, dict[str, Any]]:
-    """The LNS's plan from ``plan`` within ``time_limit`` s (and its options ``stall`` and
-    ``iterations``) when it is strictly better (else None), and what happened
-    (``extra['fallback']`` of the caller): ``method``, ``time_s`` (the time given),
-    ``makespan_before``, ``makespan_after``, ``windows`` (windows solved), ``improvements``,
-    ``start_method``, ``start_time_s``, ``stop``, ``skipped`` (why the LNS did not run) when it
-    did not, and ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
+    """The LNS's plan from ``plan`` within ``time_limit`` s (and its options ``stall``,
+    ``iterations`` and its first ``window``, None: its default) when it is strictly better
+    (else None), and what happened (``extra['fallback']`` of the caller): ``method``,
+    ``time_s`` (the time given), ``makespan_before``, ``makespan_after``, ``windows`` (windows
+    solved), ``improvements``, ``start_method``, ``start_time_s``, ``stop``, ``window`` (its
+    last window's size), ``skipped`` (why the LNS did not run) when it did not, and
+    ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
     from .method import LnsOptions, lns
 
     before = evaluate(instance, plan).makespan
@@ -54,6 +57,10 @@ def improve(
         return None, info
     # the callers' warm starts ran greedy-ce already
     options = LnsOptions(start="quick", stall=stall, iterations=iterations)
+    if window is not None:
+        options = dataclasses.replace(
+            options, window=window, max_window=max(window, options.max_window)
+        )
     out = lns(
         instance, options, seed=seed, time_limit=time_limit, start_plan=plan, known_bound=bound
     )
@@ -64,6 +71,7 @@ def improve(
         start_method=extra.get("start_method"),
         start_time_s=round(extra.get("start_time_s", 0.0), 3),
         stop=extra.get("stop"),
+        window=extra.get("window"),
     )
     after = None if out.plan is None else evaluate(instance, out.plan).makespan
     if out.plan is None or after is None or after >= before - 1e-9:
