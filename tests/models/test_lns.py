@@ -56,6 +56,38 @@ def test_lns_options_are_checked(tiny):
         solve(tiny, "lns", window=1)
     with pytest.raises(UsageError, match="lns"):
         solve(tiny, "lns", start="all")
+    with pytest.raises(UsageError, match="cut_share"):
+        solve(tiny, "lns", cut_share=1.5)
+
+
+@pytest.mark.parametrize(
+    ("share", "names"),
+    [
+        (0.0, ["single-task", "topological one-tray cut", "johnson one-tray cut"]),
+        (
+            0.25,
+            [
+                *("single-task", "topological one-tray cut", "topological fixed cut"),
+                *("johnson one-tray cut", "johnson fixed cut"),
+            ],
+        ),
+    ],
+)
+def test_the_cut_share_bounds_the_start_plans_cut_from_task_orders(root, share, names):
+    """Option ``cut_share``: the fixed-size cuts run within it (none at 0; the exact one-tray
+    cuts then take no fit probe); whole-assembly's plan does not fit this tray."""
+    from bilevel_kit.models.budget import Budget
+    from bilevel_kit.models.common import Packer
+    from bilevel_kit.models.lns.fit import FastFit
+    from bilevel_kit.models.lns.start import start_plans
+
+    inst = load(root / "instances" / "kitbench" / "intree_n25_s1_t1_tight_d10.json")
+    budget = Budget(60.0)
+    fit = FastFit(inst, Packer(inst, 0.5, budget))
+    plans = start_plans(inst, fit, budget, greedy=False, share=0.1, seed=0, cut_share=share)
+    assert [name for name, _ in plans] == names
+    every = sorted(t.id for t in inst.tasks)
+    assert all(sorted(t for k in plan.kits for t in k.tasks) == every for _, plan in plans)
 
 
 @pytest.mark.parametrize("trays", [1, 2, 3, None])

@@ -225,7 +225,8 @@ def test_the_lns_gets_its_share_and_a_plan_above_the_bound_goes_to_the_model():
     assert info["makespan_after"] == 90.0
     assert "solver_status" not in stub.extra  # no status claimed: the model decides
     # stopped by STALL_WINDOWS windows without improvement, no window cap
-    assert stub.limit == HandOff(stub.given, lns_first.STALL_WINDOWS, None)
+    assert stub.limit == lns_first.limits(stub.given, 10.0)
+    assert (stub.limit.stall, stub.limit.windows) == (lns_first.STALL_WINDOWS, None)
     assert info[keys.LNS_STALL] == 4 and info[keys.LNS_MAX_WINDOWS] is None
     assert info[keys.LNS_USED_S] >= 0.0 and info["share"] == lns_first.SHARE == 0.8
 
@@ -236,8 +237,26 @@ def test_every_instance_gets_windows(n):
     # lns at 10 s, bench/results/kitbench_cmp_10s.csv)
     stub = _Stub(after=None, bound=80.0, n_tasks=n)
     lns_first.before_model(stub, 0, "lns")
-    assert stub.limit == HandOff(stub.given, lns_first.STALL_WINDOWS, None)
+    assert stub.limit == lns_first.limits(stub.given, 10.0)
+    assert (stub.limit.stall, stub.limit.windows) == (lns_first.STALL_WINDOWS, None)
     assert stub.extra[keys.LNS_FIRST][keys.LNS_MAX_WINDOWS] is None
+    assert stub.extra[keys.LNS_FIRST]["cut_share"] == stub.limit.cut_share
+
+
+@pytest.mark.parametrize(
+    ("seconds", "time_limit", "share"),
+    [
+        (5.0, 10.0, 0.5),  # lns's 2.5 s at 10 s: half of a 5 s cap
+        (40.0, 60.0, 0.375),  # 15 s of 40
+        (8.0, 10.0, 0.3125),
+        (100.0, 100.0, 0.25),  # never below lns's own share
+        (1.0, 10.0, 0.5),  # nor above MAX_CUT_SHARE of the cap
+        (0.0, 10.0, 0.25),
+    ],
+)
+def test_the_lns_first_cuts_its_start_plans_in_lns_seconds(seconds, time_limit, share):
+    limit = lns_first.limits(seconds, time_limit)
+    assert limit.cut_share == pytest.approx(share, rel=1e-12) and limit.seconds == seconds
 
 
 @pytest.mark.parametrize("spec", [CPSAT, MILP])
@@ -294,7 +313,7 @@ def test_improved_by_names_the_model_when_it_beats_the_lns(tiny):
 
 
 def _ran_first(stub: _Stub, improvements: int = 1) -> _Stub:
-    info = {"method": "lns", "makespan_after": 100.0, "improvements": improvements, "window": 36}
+    info = {"method": "lns", "makespan_after": 100.0, "improvements": improvements}
     stub.extra[keys.LNS_FIRST] = info
     return stub
 
@@ -369,8 +388,7 @@ def test_the_lns_resumes_from_the_model_plan_with_the_model_bound(tiny):
     out = lns_first.after_share(stub, _model_out(tiny, bound=20.0))
     assert out.plan is better and stub.raised == [(20.0, "model")]  # the model's bound kept
     assert stub.given == math.inf  # the whole time left (the hand-off's own limit)
-    # where the LNS first ended: its last window size, other windows (another seed)
-    assert stub.limit.window == 36 and stub.limit.reseed == lns_first.RESEED == 1
+    assert stub.limit.cut_share == 0.0  # no start plans cut again
     report = stub.extra[keys.LNS_AFTER]
     assert report["method"] == "lns" and report[keys.LNS_USED_S] >= 0.0
     assert stub.extra["improved_by"] == "lns" and "fallback" not in stub.extra

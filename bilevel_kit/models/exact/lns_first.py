@@ -58,17 +58,26 @@ TOL = 1e-6
 #: windows improved the plan; the LNS resumes from the better plan in the rest unless the
 #: model proved it (:func:`after_share`; docs/formulations.md, "The LNS after the model").
 MODEL_SHARE = 0.5
-#: Added to the run's seed for the LNS after the model: it starts at the LNS first's last
-#: window size and draws other windows than the LNS first's (:class:`.nomodel.HandOff`).
-RESEED = 1
+#: The most of the LNS first's time its start plans cut from task orders may take
+#: (:func:`limits`).
+MAX_CUT_SHARE = 0.5
 #: Seconds the LNS after the model needs at least (fewer left: it does not run).
 MIN_AFTER_S = 0.5
 
 
-def limits(seconds: float) -> HandOff:
+def limits(seconds: float, time_limit: float) -> HandOff:
     """The LNS first's limits with ``seconds`` at most (module docstring): no window cap, on
-    small instances too."""
-    return HandOff(seconds, STALL_WINDOWS, None)
+    small instances too. Its start plans cut from task orders get the seconds they get in
+    ``lns`` at the run's ``time_limit`` (``CUT_SHARE`` of it), at most :data:`MAX_CUT_SHARE`
+    of ``seconds``: within the LNS first's share alone they missed ``lns``'s start plan
+    (``sp_n100_s2_t1_loose_d10`` at 10 s: 2,942 s for Johnson's one-tray cut in the 1.2 s of
+    a 5 s share, 2,423 s in 1.75 s)."""
+    from ..lns.start import CUT_SHARE  # (lns imports the exact models' warm start)
+
+    share = CUT_SHARE if seconds <= 0 else CUT_SHARE * time_limit / seconds
+    return HandOff(
+        seconds, STALL_WINDOWS, None, cut_share=min(MAX_CUT_SHARE, max(CUT_SHARE, share))
+    )
 
 
 def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
@@ -80,10 +89,11 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
     if skipped is not None:
         extra[keys.LNS_FIRST] = {"skipped": skipped}
         return inc, False
-    limit = limits(SHARE * max(0.0, budget.remaining(backend.margin)))
+    limit = limits(SHARE * max(0.0, budget.remaining(backend.margin)), budget.time_limit)
     inc, info = _reported_hand_off(backend, inc, limit)
     info["share"] = SHARE
     info.update({keys.LNS_STALL: limit.stall, keys.LNS_MAX_WINDOWS: limit.windows})
+    info["cut_share"] = limit.cut_share
     extra[keys.LNS_FIRST] = info
     after = info.get("makespan_after")
     met = after is not None and after <= backend.known_bound() + TOL
@@ -132,9 +142,8 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
     when the model's search ended (``solver_status`` ``optimal``, e.g. optimal among the
     0/90-degree plans, ``optimal_axis_aligned``: a claim the LNS's result would drop), nor
     without a plan; the model's bound, which holds for every plan, concludes the result (as
-    :func:`.driver.never_worse`). The LNS resumes at the LNS first's last window size with
-    another seed (:data:`RESEED`): the first sweep at the default size and seed would try again
-    the windows the LNS first found nothing in. ``extra["lns_after"]`` reports the LNS (as the
+    :func:`.driver.never_worse`). It cuts no start plans from task orders again (the LNS
+    first had them: option ``cut_share`` 0). ``extra["lns_after"]`` reports the LNS (as the
     LNS first's) and ``improved_by`` is ``lns`` when it improved the plan."""
     extra, budget = backend.extra, backend.budget
     info = extra.get(keys.LNS_FIRST)
@@ -149,7 +158,7 @@ def after_share(backend: Backend[Inc], out: MethodOutput) -> MethodOutput:
         return out
     take_model_bound(backend, out.bound, evaluate(backend.instance, out.plan).makespan)
     before = extra.get("improved_by")
-    resume = HandOff(window=info.get("window"), reseed=RESEED)  # where the LNS first ended
+    resume = HandOff(cut_share=0.0)  # no start plans cut again: the LNS first had them
     inc, extra[keys.LNS_AFTER] = _reported_hand_off(backend, backend.adopt(out.plan), resume)
     if extra.get("improved_by") is None:
         extra["improved_by"] = before

@@ -66,16 +66,14 @@ def buildable(
 class HandOff:
     """How long the LNS of :meth:`.backend.Backend.hand_off` may run: at most ``seconds``, and
     (the LNS first, :mod:`.lns_first`) ``stall`` windows in a row without improvement and
-    ``windows`` windows in all (None: no such limit). The LNS after the model resumes where
-    the LNS first ended: its first ``window`` (tasks; None: ``lns``'s own; one station) is the
-    LNS first's last, and its seed is the run's plus ``reseed``, so that it draws other
-    windows than those the LNS first tried."""
+    ``windows`` windows in all (None: no such limit); ``cut_share``: ``lns``'s option of that
+    name (None: its default), the share of ``seconds`` for its start plans cut from task
+    orders."""
 
     seconds: float = math.inf
     stall: int | None = None
     windows: int | None = None
-    window: int | None = None
-    reseed: int = 0
+    cut_share: float | None = None
 
     def within(self, left: float) -> HandOff:
         """These limits with at most ``left`` seconds (the backend's time left)."""
@@ -104,11 +102,11 @@ def improve(
         instance,
         plan,
         bound=bound,
-        seed=seed + limit.reseed,
+        seed=seed,
         time_limit=limit.seconds,
         stall=limit.stall,
         iterations=limit.windows,
-        window=limit.window,
+        cut_share=limit.cut_share,
     )
     extra.update(improved_by=None, fallback=info)
     if better is not None:

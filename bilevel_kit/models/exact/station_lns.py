@@ -5,6 +5,7 @@ objective). ``cpsat`` and ``milp`` call it alike; each turns the plan into its i
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from ...instance import Instance
@@ -51,10 +52,9 @@ def station_lns(
     # first's stall of W windows is W sweeps of visits here
     stall = None if limit.stall is None else limit.stall * max(1, len(plan.kits))
     options = LnsOptions(start="quick", stall=stall, iterations=limit.windows, objective=chosen)
-    # (its visits free one kit each: the one-station window size does not apply)
-    out = lns(
-        instance, options, seed=seed + limit.reseed, time_limit=limit.seconds, start_plan=plan
-    )
+    if limit.cut_share is not None:
+        options = replace(options, cut_share=limit.cut_share)
+    out = lns(instance, options, seed=seed, time_limit=limit.seconds, start_plan=plan)
     info.update(
         windows=out.extra.get("iterations", 0),
         improvements=out.extra.get("improvements", 0),

@@ -35,15 +35,15 @@ def improve(
     time_limit: float,
     stall: int | None = None,
     iterations: int | None = None,
-    window: int | None = None,
+    cut_share: float | None = None,
 ) -> tuple[Plan | None, dict[str, Any]]:
     """The LNS's plan from ``plan`` within ``time_limit`` s (and its options ``stall``,
-    ``iterations`` and its first ``window``, None: its default) when it is strictly better
-    (else None), and what happened (``extra['fallback']`` of the caller): ``method``,
-    ``time_s`` (the time given), ``makespan_before``, ``makespan_after``, ``windows`` (windows
-    solved), ``improvements``, ``start_method``, ``start_time_s``, ``stop``, ``window`` (its
-    last window's size), ``skipped`` (why the LNS did not run) when it did not, and
-    ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
+    ``iterations`` and ``cut_share``, None: their defaults) when it
+    is strictly better (else None), and what happened (``extra['fallback']`` of the caller):
+    ``method``, ``time_s`` (the time given), ``makespan_before``, ``makespan_after``,
+    ``windows`` (windows solved), ``improvements``, ``start_method``, ``start_time_s``,
+    ``stop``, ``window`` (its last window's size), ``skipped`` (why the LNS did not run) when
+    it did not, and ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
     from .method import LnsOptions, lns
 
     before = evaluate(instance, plan).makespan
@@ -57,10 +57,8 @@ def improve(
         return None, info
     # the callers' warm starts ran greedy-ce already
     options = LnsOptions(start="quick", stall=stall, iterations=iterations)
-    if window is not None:
-        options = dataclasses.replace(
-            options, window=window, max_window=max(window, options.max_window)
-        )
+    if cut_share is not None:
+        options = dataclasses.replace(options, cut_share=cut_share)
     out = lns(
         instance, options, seed=seed, time_limit=time_limit, start_plan=plan, known_bound=bound
     )

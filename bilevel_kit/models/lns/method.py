@@ -66,6 +66,7 @@ from ..common import Packer, pack_time_limit, unfit_outcome
 from ..cpsat.scaling import scale_times, scaled_makespan
 from ..exact.station_options import HONOURED, Refused, check_station_options, declare
 from .fit import FastFit
+from .start import CUT_SHARE
 from .window import Context, solve_window
 
 #: Seconds kept back for the final layouts, plus this share of the time limit.
@@ -101,6 +102,13 @@ class LnsOptions:
         "auto", "start plans: auto (quick plans and greedy-ce) or quick (no greedy-ce)"
     )
     start_share: float = option(0.1, "share of the time limit for greedy-ce's start", min=0.0)
+    cut_share: float = option(
+        CUT_SHARE,
+        "share of the time limit for the start plans cut from task orders (the exact "
+        "one-tray cut and the fixed-size cuts)",
+        min=0.0,
+        max=1.0,
+    )
     bound_share: float = option(0.1, "share of the time limit for the kit-count LP bound", min=0.0)
     objective: Literal[
         "makespan", "expected_makespan", "cvar_makespan", "sum_completion", "human_idle"
@@ -145,6 +153,7 @@ STATION_OPTIONS = declare(
         "workers": Refused(_NO_WINDOWS),
         "start": HONOURED,
         "start_share": HONOURED,
+        "cut_share": HONOURED,
         "bound_share": Refused("the bound is the objective's closed form"),
         "objective": Refused(_SCENARIOS, also=("sum_completion", "human_idle")),
         "alpha": Refused(_SCENARIOS),
@@ -257,6 +266,7 @@ class _Run:
             self.stop_at,
             greedy=self.options.start == "auto",
             share=self.options.start_share,
+            cut_share=self.options.cut_share,
             seed=self.seed,
         )
         for name, plan in plans:

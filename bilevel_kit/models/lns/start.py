@@ -50,8 +50,10 @@ def start_plans(
     greedy: bool,
     share: float,
     seed: int,
+    cut_share: float = CUT_SHARE,
 ) -> list[tuple[str, Plan]]:
-    """Every start plan found within the budget, named by where it comes from."""
+    """Every start plan found within the budget, named by where it comes from: the cuts of
+    two task orders within ``cut_share`` of its time limit, greedy-ce's within ``share``."""
     from ..cpsat.warm import best_heuristic_plan
 
     out: list[tuple[str, Plan]] = []
@@ -63,7 +65,7 @@ def start_plans(
         ("topological", topological_order(instance)),
         ("johnson", johnson_topological_order(instance)),
     ]
-    end = min(budget.deadline, budget.start + CUT_SHARE * budget.time_limit)
+    end = min(budget.deadline, budget.start + cut_share * budget.time_limit)
     for (name, order), part in zip(orders, (0.6, 1.0), strict=True):
         cuts = Budget(budget.time_limit, start=budget.start, deadline=_part(end, part))
         for label, kits in _cuts(instance, order, fit, cuts):

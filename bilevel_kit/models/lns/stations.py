@@ -74,7 +74,7 @@ from ..cpsat.scaling import Clock, Scaled, clock_after, scale_times, scaled_obje
 from .clock import dominated, end_key
 from .enumerate import Kits, rearrangements
 from .fit import FastFit
-from .start import CUT_SHARE, GREEDY_TASKS, recut_tail, station_cuts
+from .start import GREEDY_TASKS, recut_tail, station_cuts
 from .trail import Trail
 
 #: The most tasks an exact window frees (a window of 5 tasks of one station has at most 541
@@ -120,7 +120,7 @@ def station_search(
         plan, _ = best_heuristic_plan(instance, (name,), seed=seed, objective=run.name)
         if plan is not None:
             run.consider(plan, name)
-    cut = _best_cut(run, stop_at)
+    cut = _best_cut(run, stop_at, options.cut_share)
     finished = False
     if options.start == "auto":
         finished = _greedy_start(
@@ -145,12 +145,12 @@ def station_search(
     return run.finish(budget)
 
 
-def _best_cut(run: _Search, stop_at: Budget) -> tuple[int, float, float, Plan] | None:
-    """The best of the fixed-size cuts of :func:`.start.station_cuts`, made within
-    :data:`.start.CUT_SHARE` of the time limit: (its kit size, the seconds it took, its
-    value, the plan); None when none was made."""
+def _best_cut(run: _Search, stop_at: Budget, share: float) -> tuple[int, float, float, Plan] | None:
+    """The best of the fixed-size cuts of :func:`.start.station_cuts`, made within ``share``
+    of the time limit (option ``cut_share``): (its kit size, the seconds it took, its value,
+    the plan); None when none was made."""
     best: tuple[int, float, float, Plan] | None = None
-    for size, took, plan in station_cuts(run.instance, run.fit, stop_at.head(CUT_SHARE)):
+    for size, took, plan in station_cuts(run.instance, run.fit, stop_at.head(share)):
         value = run.assess(plan)
         if best is None or value < best[2]:
             best = (size, took, value, plan)
