@@ -38,12 +38,12 @@ def improve(
     cut_share: float | None = None,
 ) -> tuple[Plan | None, dict[str, Any]]:
     """The LNS's plan from ``plan`` within ``time_limit`` s (and its options ``stall``,
-    ``iterations`` and ``cut_share``, None: their defaults) when it
-    is strictly better (else None), and what happened (``extra['fallback']`` of the caller):
-    ``method``, ``time_s`` (the time given), ``makespan_before``, ``makespan_after``,
-    ``windows`` (windows solved), ``improvements``, ``start_method``, ``start_time_s``,
-    ``stop``, ``window`` (its last window's size), ``skipped`` (why the LNS did not run) when
-    it did not, and ``rejected`` when :func:`bilevel_kit.validate.check` refused its plan."""
+    ``iterations`` and ``cut_share``, None: their defaults) when it is strictly better (else
+    None), and what happened (``extra['fallback']`` of the caller): ``method``, ``time_s``
+    (the time given), ``makespan_before``, ``makespan_after``, ``windows`` (windows solved),
+    ``improvements``, ``start_method``, ``start_time_s``, ``stop``, ``window`` (its last
+    window's size), ``skipped`` (why the LNS did not run) when it did not, and ``rejected``
+    when :func:`bilevel_kit.validate.check` refused its plan."""
     from .method import LnsOptions, lns
 
     before = evaluate(instance, plan).makespan
