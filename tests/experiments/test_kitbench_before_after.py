@@ -126,7 +126,7 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 #: The committed side-by-side runs: issue 36's refactors, the 60 s pass up to 130 tasks; the
 #: LNS after the model (docs/formulations.md): 10 s up to 130 tasks, 60 s on 11 records, and
 #: the rule's first version at 10 s.
-LABELS = ("i36_60s", "lnsafter_10s", "lnsafter_60s", "lnsafter_uncond_10s")
+LABELS = ("i36_60s", "lnsafter_10s", "lnsafter_60s", "lnsafter_uncond_10s", "cutshare_10s")
 
 
 def test_the_committed_runs_are_listed() -> None:
@@ -222,3 +222,36 @@ def test_the_changelog_numbers_of_the_lns_after_runs():
         "(`cpsat` 19 -> 17, `milp` 18 -> 17)",
     ):
         assert quoted in text, quoted
+
+
+def test_the_changelog_numbers_of_the_cut_share_run():
+    """CHANGELOG (Changed, the LNS first's start plans): the counts it quotes."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    table = ba.cells(
+        read_rows(results / "kitbench_cutshare_10s_before.csv"),
+        read_rows(results / "kitbench_cutshare_10s_after.csv"),
+    )
+    counts = {m: ba.method_summary(table, m) for m in ("cpsat", "milp", "lns")}
+    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+        (50, 4, 1),
+        (50, 1, 3),
+        (50, 1, 3),
+    ]
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    for quoted in (
+        "`cpsat` better on 4 cells, worse on 1, within 0.1 % of `lns` on 43 -> 47",
+        "`milp` better on 1, worse on 3, within 0.1 % of `lns` on 48 -> 48",
+        "`lns`, whose\n  code did not change, better on 1, worse on 3",
+    ):
+        assert quoted in text, quoted
+    page = (ROOT / "bench" / "results" / "kitbench_cutshare_10s.md").read_text(encoding="utf-8")
+    assert "cpsat 43 before, 47 after" in page and "milp 48 before, 48 after" in page
+    case = [
+        float(row["makespan"])
+        for side in ("before", "after")
+        for row in read_rows(results / f"kitbench_cutshare_10s_{side}.csv")
+        if (row["instance"], row["method"]) == ("sp_n100_s2_t1_loose_d10", "cpsat")
+    ]
+    assert case == [2449.0, 2423.0] and "(`cpsat` 2,449 -> 2,423 s)" in text

@@ -262,6 +262,17 @@ def test_lns_on_stations_starts_from_the_best_fixed_size_cut():
     assert best < min(solve(inst, m).objective for m in ("single-task", "whole-assembly"))
 
 
+def test_lns_on_stations_takes_no_cut_with_a_cut_share_of_zero():
+    """Option ``cut_share`` with stations: the fixed-size cuts run within it (none at 0, the
+    LNS after the model's setting), so the start is a baseline's."""
+    from bilevel_kit.generate import generate
+
+    inst = from_dict(generate("intree", 30, seed=0, stations=3))
+    out = solve(inst, "lns", time_limit=60, iterations=1, start="quick", cut_share=0.0)
+    assert "start_cut_size" not in out.extra
+    assert out.extra["start_method"] in ("single-task", "whole-assembly")
+
+
 def test_lns_on_stations_holds_the_cut_back_behind_a_finished_greedy_ce():
     """A finished greedy-ce's plan is the search's start even where a fixed-size cut is
     better (from greedy-ce's kits the search ended better, bench/results/lns_scale.md), and

@@ -69,9 +69,8 @@ def limits(seconds: float, time_limit: float) -> HandOff:
     """The LNS first's limits with ``seconds`` at most (module docstring): no window cap, on
     small instances too. Its start plans cut from task orders get the seconds they get in
     ``lns`` at the run's ``time_limit`` (``CUT_SHARE`` of it), at most :data:`MAX_CUT_SHARE`
-    of ``seconds``: within the LNS first's share alone they missed ``lns``'s start plan
-    (``sp_n100_s2_t1_loose_d10`` at 10 s: 2,942 s for Johnson's one-tray cut in the 1.2 s of
-    a 5 s share, 2,423 s in 1.75 s)."""
+    of ``seconds``: within 25 % of the LNS first's cap they missed ``lns``'s start plan
+    (docs/formulations.md, "The LNS first": ``sp_n100_s2_t1_loose_d10`` at 10 s)."""
     from ..lns.start import CUT_SHARE  # (lns imports the exact models' warm start)
 
     share = CUT_SHARE if seconds <= 0 else CUT_SHARE * time_limit / seconds
