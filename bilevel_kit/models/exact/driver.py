@@ -29,7 +29,7 @@ from ...instance import Instance
 from ...methods import REGISTRY, MethodOutput, Status
 from ...plan import evaluate
 from ..budget import Budget
-from ..common import scope_claims, unfit_outcome
+from ..common import claim_scope, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
 from . import keys, lns_first, search_first
 from .backend import Backend, Inc
@@ -125,7 +125,8 @@ def without_plan(backend: Backend[Inc], infeasible: bool, scope: str | None) -> 
     if infeasible and scope == ANY_ANGLE:
         return backend.finish(None, Status.INFEASIBLE, None)
     if infeasible and scope == AXIS_ALIGNED:
-        backend.extra.update(infeasible_axis_aligned=True, **scope_claims(scope))
+        backend.extra["infeasible_axis_aligned"] = True
+        claim_scope(backend.extra, scope)
     return backend.finish(None, Status.UNKNOWN, backend.known_bound())
 
 

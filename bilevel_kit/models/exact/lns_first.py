@@ -90,9 +90,14 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
         return inc, False
     limit = limits(SHARE * max(0.0, budget.remaining(backend.margin)), budget.time_limit)
     inc, info = _reported_hand_off(backend, inc, limit)
-    info["share"] = SHARE
-    info.update({keys.LNS_STALL: limit.stall, keys.LNS_MAX_WINDOWS: limit.windows})
-    info["cut_share"] = limit.cut_share
+    info.update(
+        {
+            "share": SHARE,
+            "cut_share": limit.cut_share,
+            keys.LNS_STALL: limit.stall,
+            keys.LNS_MAX_WINDOWS: limit.windows,
+        }
+    )
     extra[keys.LNS_FIRST] = info
     after = info.get("makespan_after")
     met = after is not None and after <= backend.known_bound() + TOL
@@ -168,10 +173,11 @@ def take_model_bound(backend: Backend[Any], bound: float | None, makespan: float
     """Conclude with the model's ``bound`` (it holds for every plan,
     :func:`..common.scope_claims`) where it is above the bound known before the model; not
     taken (False) when it is above ``makespan``, a plan's it would contradict."""
-    taken = bound is not None and bound <= makespan + TOL
-    if taken and bound is not None and bound > backend.known_bound() + TOL:
+    if bound is None or bound > makespan + TOL:
+        return False
+    if bound > backend.known_bound() + TOL:
         backend.raise_bound(bound, "model")
-    return taken
+    return True
 
 
 def _reported_hand_off(

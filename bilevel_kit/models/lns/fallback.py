@@ -13,7 +13,7 @@ time left (:mod:`..exact.lns_first`, docs/formulations.md, "The LNS first").
 
 from __future__ import annotations
 
-import dataclasses
+from dataclasses import replace
 from typing import Any
 
 from ...instance import Instance
@@ -58,7 +58,7 @@ def improve(
     # the callers' warm starts ran greedy-ce already
     options = LnsOptions(start="quick", stall=stall, iterations=iterations)
     if cut_share is not None:
-        options = dataclasses.replace(options, cut_share=cut_share)
+        options = replace(options, cut_share=cut_share)
     out = lns(
         instance, options, seed=seed, time_limit=time_limit, start_plan=plan, known_bound=bound
     )
