@@ -65,7 +65,7 @@ MAX_CUT_SHARE = 0.5
 MIN_AFTER_S = 0.5
 
 
-def limits(seconds: float, time_limit: float) -> HandOff:
+def limits(seconds: float, time_limit: float, kits: int = 0) -> HandOff:
     """The LNS first's limits with ``seconds`` at most (module docstring): no window cap, on
     small instances too. Its start plans cut from task orders get the seconds they get in
     ``lns`` at the run's ``time_limit`` (``CUT_SHARE`` of it), at most :data:`MAX_CUT_SHARE`
@@ -74,9 +74,8 @@ def limits(seconds: float, time_limit: float) -> HandOff:
     from ..lns.start import CUT_SHARE  # (lns imports the exact models' warm start)
 
     share = CUT_SHARE if seconds <= 0 else CUT_SHARE * time_limit / seconds
-    return HandOff(
-        seconds, STALL_WINDOWS, None, cut_share=min(MAX_CUT_SHARE, max(CUT_SHARE, share))
-    )
+    stall = max(STALL_WINDOWS, kits - 1)
+    return HandOff(seconds, stall, None, cut_share=min(MAX_CUT_SHARE, max(CUT_SHARE, share)))
 
 
 def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
@@ -88,7 +87,8 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
     if skipped is not None:
         extra[keys.LNS_FIRST] = {"skipped": skipped}
         return inc, False
-    limit = limits(SHARE * max(0.0, budget.remaining(backend.margin)), budget.time_limit)
+    seconds = SHARE * max(0.0, budget.remaining(backend.margin))
+    limit = limits(seconds, budget.time_limit, len(backend.plan(inc).kits))
     inc, info = _reported_hand_off(backend, inc, limit)
     info.update(
         {
