@@ -125,8 +125,16 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 
 #: The committed side-by-side runs: issue 36's refactors, the 60 s pass up to 130 tasks; the
 #: LNS after the model (docs/formulations.md): 10 s up to 130 tasks, 60 s on 11 records, and
-#: the rule's first version at 10 s.
-LABELS = ("i36_60s", "lnsafter_10s", "lnsafter_60s", "lnsafter_uncond_10s", "cutshare_10s")
+#: the rule's first version at 10 s; the LNS first's cut share and its stall of a sweep at 10 s.
+LABELS = (
+    "i36_60s",
+    "lnsafter_10s",
+    "lnsafter_60s",
+    "lnsafter_uncond_10s",
+    "cutshare_10s",
+    "sweepstall_10s",
+    "sweepstall_250_10s",
+)
 
 
 def test_the_committed_runs_are_listed() -> None:
@@ -255,3 +263,67 @@ def test_the_changelog_numbers_of_the_cut_share_run():
         if (row["instance"], row["method"]) == ("sp_n100_s2_t1_loose_d10", "cpsat")
     ]
     assert case == [2449.0, 2423.0] and "(`cpsat` 2,449 -> 2,423 s)" in text
+
+
+def test_the_changelog_numbers_of_the_sweep_stall_run():
+    """CHANGELOG (Changed, the LNS first's stall of a sweep): the counts it quotes."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    rows = {
+        side: read_rows(results / f"kitbench_sweepstall_10s_{side}.csv")
+        for side in ("before", "after")
+    }
+    table = ba.cells(rows["before"], rows["after"])
+    counts = {m: ba.method_summary(table, m) for m in ("cpsat", "milp", "lns")}
+    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+        (50, 8, 4),
+        (50, 4, 5),
+        (50, 2, 2),
+    ]
+    assert [(counts[m]["optimal_before"], counts[m]["optimal_after"]) for m in counts] == [
+        (21, 25),
+        (21, 24),
+        (8, 9),
+    ]
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    for quoted in (
+        "`cpsat` better on 8 cells, worse on 4, within 0.1 % of\n  `lns` on 45 -> 47 records, "
+        "proven optimal 21 -> 25",
+        "`milp` better on 4, worse on 5, within\n  0.1 % of `lns` on 47 -> 48, proven optimal "
+        "21 -> 24",
+        "`lns`, whose code did not change, better\n  on 2, worse on 2",
+    ):
+        assert quoted in text, quoted
+    page = (ROOT / "bench" / "results" / "kitbench_sweepstall_10s.md").read_text(encoding="utf-8")
+    assert "cpsat 45 before, 47 after" in page and "milp 47 before, 48 after" in page
+    page = (ROOT / "bench" / "results" / "kitbench_sweepstall_250_10s.md").read_text(
+        encoding="utf-8"
+    )
+    assert "cpsat 12 before, 12 after" in page and "milp 11 before, 12 after" in page
+    assert "within 0.1 % of `lns` on 12 -> 12 (`cpsat`) and\n  11 -> 12 (`milp`)" in text
+    # the misses up to 250 tasks after: the two passes' after rows, every record once
+    misses = {}
+    for label, records in (("sweepstall_10s", 50), ("sweepstall_250_10s", 12)):
+        after = read_rows(results / f"kitbench_{label}_after.csv")
+        best = {r["instance"]: float(r["makespan"]) for r in after if r["method"] == "lns"}
+        assert len(best) == records
+        for m in ("cpsat", "milp"):
+            misses[m] = misses.get(m, 0) + sum(
+                float(r["makespan"]) > best[r["instance"]] * (1 + 1e-3)
+                for r in after
+                if r["method"] == m
+            )
+    assert misses == {"cpsat": 3, "milp": 2}
+    assert (
+        "`cpsat` now misses that goal on 3 of the 62 records up to 250\n  tasks, `milp` on 2"
+        in text
+    )
+    case = [
+        float(row["makespan"])
+        for side in ("before", "after")
+        for row in rows[side]
+        if (row["instance"], row["method"]) == ("table_u5_tu_loose_d30", "cpsat")
+    ]
+    assert case == pytest.approx([2018.9, 2003.815], abs=1e-6)
+    assert "(`cpsat` 2,018.9 -> 2,003.815 s at 10 s)" in text

@@ -4,11 +4,12 @@ start, so that their plan at a time limit is never worse than the LNS's. The mod
 searches from the better incumbent (a tighter C <= U and a better hint) in the rest of the time.
 
 The hand-off is adaptive, and counted in windows (so deterministic for a seed up to the cap):
-the LNS stops after :data:`STALL_WINDOWS` windows in a row without improvement, at a local
-optimum, or when its plan meets the proven bound; :data:`SHARE` of the time left is only its
-cap. Small instances solve windows too: a window that frees the whole plan is a smaller model
-than the exact one, and solved within its deterministic time it found plans the model did not
-find in the rest of the time (docs/formulations.md, "The LNS first", issue 37).
+the LNS stops after a sweep's worth of windows in a row without improvement
+(:func:`stall_windows`), at a local optimum, or when its plan meets the proven bound;
+:data:`SHARE` of the time left is only its cap. Small instances solve windows too: a window
+that frees the whole plan is a smaller model than the exact one, and solved within its
+deterministic time it found plans the model did not find in the rest of the time
+(docs/formulations.md, "The LNS first", issue 37).
 ``extra["lns_first"]`` reports the rule and how it ran (:mod:`.keys`).
 
 **The LNS after the model.** When the LNS first's windows improved the plan, the model gets
@@ -48,7 +49,8 @@ if TYPE_CHECKING:
 #: before the model; measured in docs/formulations.md, "The LNS first" (0.5 left ``cpsat``
 #: 15 % above ``lns`` at 10 s on a 100-task record whose LNS improved in every window).
 SHARE = 0.8
-#: Windows in a row without improvement that end the LNS first.
+#: Windows in a row without improvement that end the LNS first at least (:func:`stall_windows`),
+#: and with several stations (sweeps of kit visits there, :mod:`.station_lns`).
 STALL_WINDOWS = 4
 #: The ``extra`` key the backends' :meth:`~.backend.Backend.hand_off` reports the LNS under.
 HAND_OFF_KEY = "fallback"
@@ -65,17 +67,29 @@ MAX_CUT_SHARE = 0.5
 MIN_AFTER_S = 0.5
 
 
+def stall_windows(kits: int) -> int:
+    """The LNS first's stall with a one-station incumbent of ``kits`` kits: the windows of one
+    sweep of ``lns`` (one from every kit but the last, :mod:`..lns.method`), at least
+    :data:`STALL_WINDOWS`; so it stops at a local optimum of the windows it solves, not within a
+    sweep (``table_u5_tu_loose_d30`` at 10 s: 4 windows found nothing in 0.25 s, the model
+    nothing in 7 s, while ``lns``'s fifth window improved the plan; docs/formulations.md,
+    "The LNS first")."""
+    return max(STALL_WINDOWS, kits - 1)
+
+
 def limits(seconds: float, time_limit: float, kits: int = 0) -> HandOff:
     """The LNS first's limits with ``seconds`` at most (module docstring): no window cap, on
-    small instances too. Its start plans cut from task orders get the seconds they get in
-    ``lns`` at the run's ``time_limit`` (``CUT_SHARE`` of it), at most :data:`MAX_CUT_SHARE`
-    of ``seconds``: within 25 % of the LNS first's cap they missed ``lns``'s start plan
-    (docs/formulations.md, "The LNS first": ``sp_n100_s2_t1_loose_d10`` at 10 s)."""
+    small instances too; the stall of :func:`stall_windows` for an incumbent of ``kits`` kits
+    (0: :data:`STALL_WINDOWS`, as with several stations). Its start plans cut from task orders
+    get the seconds they get in ``lns`` at the run's ``time_limit`` (``CUT_SHARE`` of it), at
+    most :data:`MAX_CUT_SHARE` of ``seconds``: within 25 % of the LNS first's cap they missed
+    ``lns``'s start plan (docs/formulations.md, "The LNS first": ``sp_n100_s2_t1_loose_d10``
+    at 10 s)."""
     from ..lns.start import CUT_SHARE  # (lns imports the exact models' warm start)
 
     share = CUT_SHARE if seconds <= 0 else CUT_SHARE * time_limit / seconds
-    stall = max(STALL_WINDOWS, kits - 1)
-    return HandOff(seconds, stall, None, cut_share=min(MAX_CUT_SHARE, max(CUT_SHARE, share)))
+    cut = min(MAX_CUT_SHARE, max(CUT_SHARE, share))
+    return HandOff(seconds, stall_windows(kits), None, cut_share=cut)
 
 
 def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, bool]:
@@ -88,7 +102,9 @@ def before_model(backend: Backend[Inc], inc: Inc, fallback: str) -> tuple[Inc, b
         extra[keys.LNS_FIRST] = {"skipped": skipped}
         return inc, False
     seconds = SHARE * max(0.0, budget.remaining(backend.margin))
-    limit = limits(seconds, budget.time_limit, len(backend.plan(inc).kits))
+    # with several stations the station search counts its stall in sweeps of its own
+    kits = 0 if backend.instance.stations else len(backend.plan(inc).kits)
+    limit = limits(seconds, budget.time_limit, kits)
     inc, info = _reported_hand_off(backend, inc, limit)
     info.update(
         {
