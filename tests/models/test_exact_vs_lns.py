@@ -40,7 +40,8 @@ def record(root):
 
 @pytest.fixture(scope="module")
 def lns_plan(record):
-    """``lns`` with the LNS first's options: quick starts, stopped by its stall count."""
+    """``lns`` with the LNS first's options: quick starts, stopped by its least stall count
+    (4 windows; the LNS first's, a sweep's windows, is at least that)."""
     opts = lns_method.LnsOptions(start="quick", stall=lns_first.STALL_WINDOWS)
     out = lns_method.lns(record, opts, seed=0, time_limit=LIMIT)
     assert out.extra["stop"] == "stall" and check(record, out.plan) == []
