@@ -159,6 +159,35 @@ def dff_violated(sizes: Sizes, W: int, H: int) -> bool:
     return bool((lhs > rhs + 1e-9).any())
 
 
+def dff_cut(
+    types: dict[str, tuple[int, int, bool]], counts: dict[str, int], W: int, H: int
+) -> tuple[dict[str, int], int] | None:
+    """The most violated pair of dual-feasible functions for the part multiset ``counts``
+    (``types``: each type's grid size and rotatability), as a linear inequality over part
+    counts, ``sum_t coef[t] n_t <= cap``, valid for every 0/90-degree layout; None when no
+    pair proves the misfit."""
+    names = [t for t in types if _orientations(*types[t], W, H)]
+    if any(counts.get(t, 0) and t not in names for t in types):
+        return None
+    orients = [_orientations(*types[t], W, H) for t in names]
+    n = len(names)
+    a = np.array([o[0] for o in orients], dtype=np.int64)
+    b = np.array([o[-1] for o in orients], dtype=np.int64)
+    fx, capx = dff_table(W, np.concatenate([a[:, 0], b[:, 0]]))
+    gy, capy = dff_table(H, np.concatenate([a[:, 1], b[:, 1]]))
+    coef = np.minimum(
+        fx[:, None, :n] * gy[None, :, :n], fx[:, None, n:] * gy[None, :, n:]
+    )  # (fx, gy, type)
+    x = np.array([counts.get(t, 0) for t in names], dtype=np.int64)
+    lhs = coef @ x
+    rhs = capx[:, None] * capy[None, :]
+    excess = (lhs - rhs) / rhs
+    i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    if lhs[i, j] <= rhs[i, j]:
+        return None
+    return {t: int(coef[i, j, k]) for k, t in enumerate(names)}, int(rhs[i, j])
+
+
 def incompatible_pair(sizes: Sizes, W: int, H: int) -> bool:
     """True when two parts can be neither side by side nor stacked, whatever their rotation."""
     orients = [_orientations(w, h, r, W, H) for w, h, r in sizes]

@@ -66,6 +66,7 @@ class Context:
     edges: list[tuple[int, int]] = field(default_factory=list)
     cuts: list[dict[str, int]] = field(default_factory=list)
     cut_keys: set[frozenset[tuple[str, int]]] = field(default_factory=set)
+    dff_rows: list[tuple[dict[str, int], int]] = field(default_factory=list)
 
     @classmethod
     def of(
@@ -97,6 +98,23 @@ class Context:
         if key not in self.cut_keys:
             self.cut_keys.add(key)
             self.cuts.append(dict(key))
+            self._dff_row(dict(key))
+
+    def _dff_row(self, counts: dict[str, int]) -> None:
+        """The dual-feasible-function inequality that proves ``counts`` misfit, if one does:
+        it cuts every kit it proves, not only supersets of ``counts``."""
+        from ..packing_bounds import dff_cut
+
+        res = self.fit.packer.res
+        tray = self.instance.tray
+        types = {
+            p.id: (packing.grid_up(p.width, res), packing.grid_up(p.height, res), p.rotatable)
+            for p in self.instance.part_types.values()
+        }
+        W, H = packing.grid_down(tray.width, res), packing.grid_down(tray.height, res)
+        row = dff_cut(types, counts, W, H)
+        if row is not None and row not in self.dff_rows:
+            self.dff_rows.append(row)
 
     def fits(self, kit: Sequence[int]) -> bool:
         """Does the kit pack (an unknown verdict counts as no); cuts it if not (a proven misfit
@@ -245,6 +263,12 @@ class _WindowModel:
                 sum(ctx.area[i] * xs[p] for i, xs in zip(self.tasks, self.x, strict=True))
                 <= ctx.tray_area
             )
+        for coef, cap in ctx.dff_rows:
+            w = [sum(coef.get(t, 0) * c for t, c in ctx.parts[i].items()) for i in self.tasks]
+            if sum(w) <= cap:
+                continue  # the whole window fits this inequality in one kit
+            for p in range(self.P):
+                m.add(sum(wi * xs[p] for wi, xs in zip(w, self.x, strict=True) if wi) <= cap)
         total: dict[str, int] = {}
         for i in self.tasks:
             for t, c in ctx.parts[i].items():
