@@ -113,3 +113,32 @@ def test_dff_catches_what_area_misses() -> None:
     assert not pb.incompatible_pair(sizes, 10, 10)
     assert pb.infeasibility_reason(sizes, 10, 10) == "dual-feasible function bound"
     assert pb.infeasibility_reason(sizes[:4], 10, 10) is None
+
+
+def test_the_dff_cut_is_the_proof_as_an_inequality_over_part_counts() -> None:
+    """``dff_cut`` (the LNS windows' learned inequality): a row exactly when a pair of
+    dual-feasible functions proves the multiset misfit; the multiset breaks it, and no
+    multiset that fits on the grid (brute force) does."""
+    rng = random.Random(11)
+    rows = found = 0
+    for _ in range(300):
+        W, H = rng.randint(3, 6), rng.randint(3, 6)
+        types = {
+            f"t{k}": (rng.randint(1, W), rng.randint(1, H), rng.random() < 0.5) for k in range(3)
+        }
+        counts = {t: rng.randint(0, 3) for t in types}
+        sizes = [types[t] for t, n in counts.items() for _ in range(n)]
+        row = pb.dff_cut(types, counts, W, H)
+        assert (row is not None) == pb.dff_violated(sizes, W, H)
+        if row is None:
+            continue
+        coef, cap = row
+        found += 1
+        assert sum(coef[t] * n for t, n in counts.items()) > cap
+        for _ in range(10):  # sub-multisets that fit satisfy it
+            sub = {t: rng.randint(0, n) for t, n in counts.items()}
+            subsizes = [types[t] for t, n in sub.items() for _ in range(n)]
+            if len(subsizes) <= 5 and fits_on_grid(subsizes, W, H):
+                assert sum(coef[t] * n for t, n in sub.items()) <= cap
+                rows += 1
+    assert found > 30 and rows > 30

@@ -182,7 +182,7 @@ class _WindowModel:
         tasks = [i for k in kits[k0:k1] for i in k]
         flexible = sc.trays is None or sc.trays == 1
         n_pos = min(len(tasks), k1 - k0 + max(2, (k1 - k0) // 2)) if flexible else k1 - k0
-        win = cls(ctx, tasks, n_pos, flexible, k0, upper)
+        win = cls(ctx, tasks, n_pos, flexible, k0, upper, kits[k0:k1])
         win.timeline(window_edge(sc, kits, k0))
         # the suffix's first kit: at k1 when the count is fixed; with one tray at 1 or later
         win.objective(tail_response(sc, kits[k1:], k0 + 1 if flexible else k1))
@@ -215,7 +215,14 @@ class _WindowModel:
         return self.kits(solver), st == cp_model.OPTIMAL, False
 
     def __init__(
-        self, ctx: Context, tasks: list[int], n_pos: int, flexible: bool, k0: int, upper: int
+        self,
+        ctx: Context,
+        tasks: list[int],
+        n_pos: int,
+        flexible: bool,
+        k0: int,
+        upper: int,
+        current: Sequence[Sequence[int]] = (),
     ) -> None:
         from ortools.sat.python import cp_model
 
@@ -253,10 +260,13 @@ class _WindowModel:
         else:
             for p in range(n_pos):
                 m.add_bool_or([xs[p] for xs in self.x])
-        self._tray()
+        self._tray(current)
 
-    def _tray(self) -> None:
-        """The area relaxation and the cuts that can bind in this window."""
+    def _tray(self, current: Sequence[Sequence[int]]) -> None:
+        """The area relaxation, the cuts and the dual-feasible-function inequalities that can
+        bind in this window; an inequality a ``current`` kit breaks (a kit laid out at another
+        angle than 0/90 degrees, known from a warm start) is left out, so that the current
+        kits stay a solution."""
         ctx, m = self.ctx, self.m
         for p in range(self.P):
             m.add(
@@ -264,9 +274,12 @@ class _WindowModel:
                 <= ctx.tray_area
             )
         for coef, cap in ctx.dff_rows:
-            w = [sum(coef.get(t, 0) * c for t, c in ctx.parts[i].items()) for i in self.tasks]
-            if sum(w) <= cap:
+            lhs = {i: sum(coef.get(t, 0) * c for t, c in ctx.parts[i].items()) for i in self.tasks}
+            if sum(lhs.values()) <= cap:
                 continue  # the whole window fits this inequality in one kit
+            if any(sum(lhs[i] for i in kit) > cap for kit in current):
+                continue
+            w = [lhs[i] for i in self.tasks]
             for p in range(self.P):
                 m.add(sum(wi * xs[p] for wi, xs in zip(w, self.x, strict=True) if wi) <= cap)
         total: dict[str, int] = {}
