@@ -126,7 +126,8 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 #: The committed side-by-side runs: issue 36's refactors, the 60 s pass up to 130 tasks; the
 #: LNS after the model (docs/formulations.md): 10 s up to 130 tasks, 60 s on 11 records, and
 #: the rule's first version at 10 s; the LNS first's cut share at 10 s and its stall of a sweep
-#: at 10 s (up to 130 tasks, 131 to 250) and 60 s (9 records).
+#: at 10 s (up to 130 tasks, 131 to 250) and 60 s (9 records); the windows' dual-feasible-function
+#: inequalities at 10 s (tight trays up to 130 tasks).
 LABELS = (
     "i36_60s",
     "lnsafter_10s",
@@ -136,6 +137,7 @@ LABELS = (
     "sweepstall_10s",
     "sweepstall_250_10s",
     "sweepstall_60s",
+    "dffrows_10s",
 )
 
 
@@ -350,3 +352,30 @@ def test_the_changelog_numbers_of_the_sweep_stall_run():
     ]
     assert case == pytest.approx([2018.9, 2003.815], abs=1e-6)
     assert "(`cpsat` 2,018.9 -> 2,003.815 s at 10 s)" in text
+
+
+def test_the_changelog_numbers_of_the_dff_rows_run():
+    """CHANGELOG (Changed, the LNS windows' dual-feasible-function inequalities)."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    table = ba.cells(
+        read_rows(results / "kitbench_dffrows_10s_before.csv"),
+        read_rows(results / "kitbench_dffrows_10s_after.csv"),
+    )
+    counts = {m: ba.method_summary(table, m) for m in ("lns", "cpsat", "milp")}
+    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+        (24, 5, 1),
+        (24, 3, 2),
+        (24, 3, 1),
+    ]
+    assert (counts["lns"]["optimal_before"], counts["lns"]["optimal_after"]) == (1, 3)
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    for quoted in (
+        "`lns` better on 5\n  cells, worse on 1, proven optimal 1 -> 3",
+        "`cpsat` better on 3, worse on 2; `milp` better on\n  3, worse on 1",
+    ):
+        assert quoted in text, quoted
+    page = (ROOT / "bench" / "results" / "kitbench_dffrows_10s.md").read_text(encoding="utf-8")
+    assert "the best plan better on 6, worse on 0" in page
+    assert "of the pass better on 6 records, worse on none" in text

@@ -12,9 +12,11 @@ the rest of the plan fixed (docs/formulations.md, "Large-neighbourhood search"):
 * the timeline of docs/timeline.md from the prefix's state (:class:`.state.Edge`), exactly on
   the integer times, and the makespan as the suffix's max-plus response to the window's end
   state (:func:`.state.tail_response`), so the objective is the whole plan's makespan;
-* the tray: the area relaxation per kit and the no-good cuts of every part multiset found not
-  to fit so far; a solution's kits are packed by the oracle, a kit that does not fit is cut and
-  the window solved again (:data:`PACK_ROUNDS` times at most).
+* the tray: the area relaxation per kit, the no-good cuts of every part multiset found not
+  to fit so far and, for each one a pair of dual-feasible functions proves, that pair's
+  inequality over every kit's part counts (:func:`..packing_bounds.dff_cut`); a solution's
+  kits are packed by the oracle, a kit that does not fit is cut and the window solved again
+  (:data:`PACK_ROUNDS` times at most).
 
 The current assignment is the hint and :math:`C \le` the current makespan, so a solve returns
 the plan or a better one. CP-SAT runs with a deterministic time limit (``dtime``) and the
