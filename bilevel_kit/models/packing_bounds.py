@@ -141,22 +141,29 @@ def dff_table(C: int, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(rows), np.asarray(caps, dtype=np.int64)
 
 
+def _dff_pairs(
+    orients: Sequence[list[tuple[int, int]]], W: int, H: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair (f, g) of dual-feasible functions for the tray (f on x, g on y): each item's
+    contribution, the smaller of its two orientations' f(x) g(y), shape (f, g, item), and each
+    pair's capacity f(W) g(H), shape (f, g). ``orients``: each item's orientations that fit,
+    none empty. Integers, so comparisons are exact."""
+    n = len(orients)
+    a = np.array([o[0] for o in orients], dtype=np.int64)  # first orientation
+    b = np.array([o[-1] for o in orients], dtype=np.int64)  # second (== first if one)
+    fx, capx = dff_table(W, np.concatenate([a[:, 0], b[:, 0]]))
+    gy, capy = dff_table(H, np.concatenate([a[:, 1], b[:, 1]]))
+    coef = np.minimum(fx[:, None, :n] * gy[None, :, :n], fx[:, None, n:] * gy[None, :, n:])
+    return coef, capx[:, None] * capy[None, :]
+
+
 def dff_violated(sizes: Sizes, W: int, H: int) -> bool:
     """True when some pair of dual-feasible functions proves that the parts do not fit."""
     orients = [_orientations(w, h, r, W, H) for w, h, r in sizes]
     if not sizes or any(not o for o in orients):
         return False
-    a = np.array([o[0] for o in orients], dtype=np.int64)  # first orientation
-    b = np.array([o[-1] for o in orients], dtype=np.int64)  # second (== first if one)
-    fx, capx = dff_table(W, np.concatenate([a[:, 0], b[:, 0]]))
-    gy, capy = dff_table(H, np.concatenate([a[:, 1], b[:, 1]]))
-    n = len(sizes)
-    fa, fb = fx[:, :n].astype(float), fx[:, n:].astype(float)
-    ga, gb = gy[:, :n].astype(float), gy[:, n:].astype(float)
-    # contribution of part i to the pair (f, g): the smaller of its two orientations
-    lhs = np.minimum(fa[:, None, :] * ga[None, :, :], fb[:, None, :] * gb[None, :, :]).sum(axis=2)
-    rhs = capx.astype(float)[:, None] * capy.astype(float)[None, :]
-    return bool((lhs > rhs + 1e-9).any())
+    coef, rhs = _dff_pairs(orients, W, H)
+    return bool((coef.sum(axis=2) > rhs).any())
 
 
 def dff_cut(
@@ -165,24 +172,13 @@ def dff_cut(
     """The most violated pair of dual-feasible functions for the part multiset ``counts``
     (``types``: each type's grid size and rotatability), as a linear inequality over part
     counts, ``sum_t coef[t] n_t <= cap``, valid for every 0/90-degree layout; None when no
-    pair proves the misfit."""
+    pair proves the misfit (the test of :func:`dff_violated`, by type)."""
     names = [t for t in types if _orientations(*types[t], W, H)]
     if any(counts.get(t, 0) and t not in names for t in types):
         return None
-    orients = [_orientations(*types[t], W, H) for t in names]
-    n = len(names)
-    a = np.array([o[0] for o in orients], dtype=np.int64)
-    b = np.array([o[-1] for o in orients], dtype=np.int64)
-    fx, capx = dff_table(W, np.concatenate([a[:, 0], b[:, 0]]))
-    gy, capy = dff_table(H, np.concatenate([a[:, 1], b[:, 1]]))
-    coef = np.minimum(
-        fx[:, None, :n] * gy[None, :, :n], fx[:, None, n:] * gy[None, :, n:]
-    )  # (fx, gy, type)
-    x = np.array([counts.get(t, 0) for t in names], dtype=np.int64)
-    lhs = coef @ x
-    rhs = capx[:, None] * capy[None, :]
-    excess = (lhs - rhs) / rhs
-    i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    coef, rhs = _dff_pairs([_orientations(*types[t], W, H) for t in names], W, H)
+    lhs = coef @ np.array([counts.get(t, 0) for t in names], dtype=np.int64)
+    i, j = np.unravel_index(int(np.argmax((lhs - rhs) / rhs)), rhs.shape)
     if lhs[i, j] <= rhs[i, j]:
         return None
     return {t: int(coef[i, j, k]) for k, t in enumerate(names)}, int(rhs[i, j])

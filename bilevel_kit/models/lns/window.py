@@ -69,6 +69,9 @@ class Context:
     cuts: list[dict[str, int]] = field(default_factory=list)
     cut_keys: set[frozenset[tuple[str, int]]] = field(default_factory=set)
     dff_rows: list[tuple[dict[str, int], int]] = field(default_factory=list)
+    #: each part type's size on the packing grid and rotatability, and the tray's grid size
+    grid_types: dict[str, tuple[int, int, bool]] = field(default_factory=dict)
+    grid_tray: tuple[int, int] = (0, 0)
 
     @classmethod
     def of(
@@ -78,10 +81,11 @@ class Context:
 
         res = fit.packer.res
         tray = instance.tray
-        gsize = {
-            p.id: packing.grid_up(p.width, res) * packing.grid_up(p.height, res)
+        types = {
+            p.id: (packing.grid_up(p.width, res), packing.grid_up(p.height, res), p.rotatable)
             for p in instance.part_types.values()
         }
+        W, H = packing.grid_down(tray.width, res), packing.grid_down(tray.height, res)
         idx = instance.index
         return cls(
             instance,
@@ -89,10 +93,12 @@ class Context:
             fit,
             workers,
             dtime,
-            area=[sum(gsize[p] * c for p, c in t.parts) for t in instance.tasks],
-            tray_area=packing.grid_down(tray.width, res) * packing.grid_down(tray.height, res),
+            area=[sum(types[p][0] * types[p][1] * c for p, c in t.parts) for t in instance.tasks],
+            tray_area=W * H,
             parts=[dict(t.parts) for t in instance.tasks],
             edges=[(idx[a], idx[b]) for a, b in reduced_edges(instance)],
+            grid_types=types,
+            grid_tray=(W, H),
         )
 
     def add_cut(self, counts: Mapping[str, int]) -> None:
@@ -107,14 +113,7 @@ class Context:
         it cuts every kit it proves, not only supersets of ``counts``."""
         from ..packing_bounds import dff_cut
 
-        res = self.fit.packer.res
-        tray = self.instance.tray
-        types = {
-            p.id: (packing.grid_up(p.width, res), packing.grid_up(p.height, res), p.rotatable)
-            for p in self.instance.part_types.values()
-        }
-        W, H = packing.grid_down(tray.width, res), packing.grid_down(tray.height, res)
-        row = dff_cut(types, counts, W, H)
+        row = dff_cut(self.grid_types, counts, *self.grid_tray)
         if row is not None and row not in self.dff_rows:
             self.dff_rows.append(row)
 
