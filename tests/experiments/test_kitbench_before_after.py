@@ -17,6 +17,21 @@ _spec = importlib.util.spec_from_file_location(
 )
 ba = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(ba)
+RESULTS = ROOT / "bench" / "results"
+
+
+def _summaries(label: str, methods: tuple[str, ...]) -> dict[str, dict]:
+    """Each method's summary of the committed side-by-side pass ``label``."""
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    before, after = (read_rows(RESULTS / f"kitbench_{label}_{s}.csv") for s in ("before", "after"))
+    table = ba.cells(before, after)
+    return {m: ba.method_summary(table, m) for m in methods}
+
+
+def _moves(counts: dict[str, dict]) -> list[tuple[int, int, int]]:
+    """(cells, better, worse) of each method, in the order of ``counts``."""
+    return [(s["cells"], s["better"], len(s["worse"])) for s in counts.values()]
 
 
 def row(instance, method, makespan, status, bound, time):
@@ -194,19 +209,12 @@ def test_the_changelog_numbers_of_the_issue_36_run():
 
 def test_the_changelog_numbers_of_the_lns_after_runs():
     """CHANGELOG (Changed, the LNS after the model): the counts it quotes."""
-    from bilevel_kit.experiments.kitbench.profiles import read_rows
-
-    results = ROOT / "bench" / "results"
 
     def summary(label):
-        table = ba.cells(
-            read_rows(results / f"kitbench_{label}_before.csv"),
-            read_rows(results / f"kitbench_{label}_after.csv"),
-        )
-        return {m: ba.method_summary(table, m) for m in ("cpsat", "milp")}
+        return _summaries(label, ("cpsat", "milp"))
 
     ten = summary("lnsafter_10s")
-    assert [(ten[m]["cells"], ten[m]["better"], len(ten[m]["worse"])) for m in ten] == [
+    assert _moves(ten) == [
         (50, 9, 0),
         (50, 6, 1),
     ]
@@ -241,12 +249,8 @@ def test_the_changelog_numbers_of_the_cut_share_run():
     from bilevel_kit.experiments.kitbench.profiles import read_rows
 
     results = ROOT / "bench" / "results"
-    table = ba.cells(
-        read_rows(results / "kitbench_cutshare_10s_before.csv"),
-        read_rows(results / "kitbench_cutshare_10s_after.csv"),
-    )
-    counts = {m: ba.method_summary(table, m) for m in ("cpsat", "milp", "lns")}
-    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+    counts = _summaries("cutshare_10s", ("cpsat", "milp", "lns"))
+    assert _moves(counts) == [
         (50, 4, 1),
         (50, 1, 3),
         (50, 1, 3),
@@ -278,9 +282,8 @@ def test_the_changelog_numbers_of_the_sweep_stall_run():
         side: read_rows(results / f"kitbench_sweepstall_10s_{side}.csv")
         for side in ("before", "after")
     }
-    table = ba.cells(rows["before"], rows["after"])
-    counts = {m: ba.method_summary(table, m) for m in ("cpsat", "milp", "lns")}
-    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+    counts = _summaries("sweepstall_10s", ("cpsat", "milp", "lns"))
+    assert _moves(counts) == [
         (50, 8, 4),
         (50, 4, 5),
         (50, 2, 2),
@@ -319,12 +322,8 @@ def test_the_changelog_numbers_of_the_sweep_stall_run():
                 if r["method"] == m
             )
     assert misses == {"cpsat": 3, "milp": 2}
-    sixty = ba.cells(
-        read_rows(results / "kitbench_sweepstall_60s_before.csv"),
-        read_rows(results / "kitbench_sweepstall_60s_after.csv"),
-    )
-    at60 = {m: ba.method_summary(sixty, m) for m in ("cpsat", "milp")}
-    assert [(at60[m]["cells"], at60[m]["better"], len(at60[m]["worse"])) for m in at60] == [
+    at60 = _summaries("sweepstall_60s", ("cpsat", "milp"))
+    assert _moves(at60) == [
         (9, 4, 0),
         (9, 3, 0),
     ]
@@ -356,15 +355,8 @@ def test_the_changelog_numbers_of_the_sweep_stall_run():
 
 def test_the_changelog_numbers_of_the_dff_rows_run():
     """CHANGELOG (Changed, the LNS windows' dual-feasible-function inequalities)."""
-    from bilevel_kit.experiments.kitbench.profiles import read_rows
-
-    results = ROOT / "bench" / "results"
-    table = ba.cells(
-        read_rows(results / "kitbench_dffrows_10s_before.csv"),
-        read_rows(results / "kitbench_dffrows_10s_after.csv"),
-    )
-    counts = {m: ba.method_summary(table, m) for m in ("lns", "cpsat", "milp")}
-    assert [(counts[m]["cells"], counts[m]["better"], len(counts[m]["worse"])) for m in counts] == [
+    counts = _summaries("dffrows_10s", ("lns", "cpsat", "milp"))
+    assert _moves(counts) == [
         (24, 5, 1),
         (24, 3, 2),
         (24, 3, 1),
