@@ -153,6 +153,8 @@ LABELS = (
     "sweepstall_250_10s",
     "sweepstall_60s",
     "dffrows_10s",
+    "sweepcap_10s",
+    "sweepcap_60s",
 )
 
 
@@ -371,3 +373,32 @@ def test_the_changelog_numbers_of_the_dff_rows_run():
     page = (ROOT / "bench" / "results" / "kitbench_dffrows_10s.md").read_text(encoding="utf-8")
     assert "the best plan better on 6, worse on 0" in page
     assert "of the pass better on 6 records, worse on none" in text
+
+
+def test_the_changelog_numbers_of_the_sweepcap_runs():
+    """CHANGELOG (Changed, KitBench records) and docs/formulations.md ("The LNS after the
+    model"): the counts of the two passes of the change measured and not adopted."""
+    at10 = _summaries("sweepcap_10s", ("cpsat", "milp", "lns"))
+    assert _moves(at10) == [(50, 3, 3), (50, 2, 2), (50, 4, 2)]
+    assert [(at10[m]["optimal_before"], at10[m]["optimal_after"]) for m in ("cpsat", "milp")] == [
+        (24, 22),
+        (24, 24),
+    ]
+    at60 = _summaries("sweepcap_60s", ("cpsat", "milp"))
+    assert _moves(at60) == [(13, 1, 1), (13, 1, 1)]
+    assert (at60["milp"]["optimal_before"], at60["milp"]["optimal_after"]) == (2, 3)
+    text = " ".join((ROOT / "CHANGELOG.md").read_text(encoding="utf-8").split())
+    for quoted in (
+        "At 10 s `cpsat` was better on 3 cells and worse on 3, `milp` better on 2 and worse on "
+        "2, and `lns`, whose code did not change, better on 4 and worse on 2",
+        "at 60 s on 13 records `cpsat` and `milp` were better on 1 and worse on 1 each",
+    ):
+        assert quoted in text, quoted
+    docs = " ".join((ROOT / "docs" / "formulations.md").read_text(encoding="utf-8").split())
+    for quoted in (
+        "`cpsat` was better on 3 cells and worse on 3, `milp` better on 2 and worse on 2, `lns` "
+        "(the same code in both checkouts) better on 4 and worse on 2; `cpsat` proved 24 -> 22, "
+        "`milp` 24 -> 24",
+        "`cpsat` and `milp` were better on 1 cell and worse on 1 each, and `milp` proved 2 -> 3",
+    ):
+        assert quoted in docs, quoted

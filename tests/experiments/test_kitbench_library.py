@@ -70,3 +70,43 @@ def test_published_tables_are_the_index(library, page):
     assert render_blocks(text, library.read()) == text, (
         f"{page} disagrees with instances/kitbench/index.csv: run python bench/kitbench_docs.py"
     )
+
+
+def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
+    """docs/kitbench.md#the-records, step 10: ``bench update`` from the ``before`` side of the
+    committed pass ``sweepcap_10s`` raised 3 bounds to the 1 s grid and set no plan; the index's
+    provenance columns name that pass's commit exactly there, with the values its rows hold."""
+    import csv
+    import json
+
+    results = ROOT / "bench" / "results"
+    run = json.loads((results / "kitbench_sweepcap_10s_before_run.json").read_text())
+    with (results / "kitbench_sweepcap_10s_before.csv").open(encoding="utf-8") as f:
+        rows = {(r["instance"], r["method"]): r for r in csv.DictReader(f)}
+    records = library.read()
+    raised = {
+        r.instance: r.best_bound
+        for r in records
+        if r.bound is not None and r.bound.commit == run["commit"]
+    }
+    assert raised == {
+        "intree_n100_s1_t1_tight_d30": 2550.0,
+        "wide_n100_s2_tu_tight_d30": 2626.0,
+        "sparse_n100_s1_tu_tight_d30": 2449.0,
+    }
+    for r in records:
+        if r.instance in raised:
+            assert (r.bound.method, r.bound.time_limit) == ("cpsat", 10.0)
+            assert float(rows[(r.instance, "cpsat")]["bound"]) == raised[r.instance]
+            assert r.status == "open"
+    assert not [r for r in records if r.plan is not None and r.plan.commit == run["commit"]]
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
+    for quoted in (
+        "`intree_n100_s1_t1_tight_d30` 2,549.6 -> 2,550 s",
+        "`wide_n100_s2_tu_tight_d30` 2,625.3 -> 2,626 s",
+        "`sparse_n100_s1_tu_tight_d30` 2,448.4 -> 2,449 s",
+        f"commit `{run['commit']}`",
+        "(957 s of wall time, 677 MB peak",
+    ):
+        assert quoted in docs, quoted
+    assert run["wall_s"] == pytest.approx(957.4, abs=0.1)

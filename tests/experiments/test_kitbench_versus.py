@@ -149,15 +149,16 @@ def test_the_pass_is_one_run_of_the_three_methods_on_every_record_up_to_250_task
 
 def test_the_records_name_the_bounds_the_pass_raised() -> None:
     """docs/kitbench.md#the-records says the pass raised 8 bounds and set no plan: the index's
-    provenance columns name its commit exactly there."""
+    provenance columns name its commit on 6 of them, the 2 others raised again since (step 10,
+    tests/experiments/test_kitbench_library.py)."""
     run = json.loads((RESULTS / f"kitbench_{LABEL}_run.json").read_text())
     records = Library.at(ROOT / "instances" / "kitbench").read()
     bounds = [r for r in records if r.bound is not None and r.bound.commit == run["commit"]]
-    assert len(bounds) == 8 and {r.bound.method for r in bounds} == {"cpsat", "lns"}
+    assert len(bounds) == 6 and {r.bound.method for r in bounds} == {"cpsat", "lns"}
     assert all(r.bound.time_limit == 10.0 and r.instance in run["instances"] for r in bounds)
     assert not [r for r in records if r.plan is not None and r.plan.commit == run["commit"]]
     docs = " ".join((ROOT / "docs" / "kitbench.md").read_text().split())
-    assert "raised 8 bounds by 1 to 2 s" in docs and f"commit `{run['commit']}`" in docs
+    assert "raised 8 bounds by 1 to 2 s" in docs and f"commit `{run['commit']}`, 6 of them" in docs
 
 
 @pytest.mark.parametrize("label", LABELS)
