@@ -349,6 +349,16 @@ def test_a_signal_as_the_command_exits_keeps_its_exit_code(linger):
 #: The stop time the randomized test allows: the goal is 1 s (bench/signals.py measures
 #: it), the test's bound is generous for a busy machine.
 RANDOM_STOP_S = 3.0
+#: The longest delay between the guard and the signal at first: a run that ends before its
+#: signal narrows the range to half the time it took at most (:func:`_narrowed`), so that on a
+#: fast machine (greedy-ce on 10 units ends in about a second) most signals still come during
+#: a run; 3 s at every draw once left 2 interrupted runs of 12.
+MAX_DELAY_S = 3.0
+
+
+def _narrowed(upper: float, t_guard: float) -> float:
+    """The delay range after a run that ended by ``time.monotonic() - t_guard`` s."""
+    return max(0.05, min(upper, 0.5 * (time.monotonic() - t_guard)))
 
 
 @pytest.mark.slow
@@ -361,7 +371,8 @@ def test_a_signal_at_a_random_moment_stops_cleanly(tmp_path, units10, method):
     at scale (50 runs per method)."""
     rng = random.Random(f"{method}-{os.getpid()}")
     interrupted = 0
-    for k in range(12):  # until 3 runs took their signal (a fast run may end before it)
+    upper = MAX_DELAY_S  # the delay's range, narrowed to the runs' length when one ends first
+    for k in range(20):  # until 3 runs took their signal (a fast run may end before it)
         if interrupted == 3:
             break
         work = tmp_path / str(k)
@@ -370,10 +381,12 @@ def test_a_signal_at_a_random_moment_stops_cleanly(tmp_path, units10, method):
         args = ("solve", str(units10), "-m", method, "--time-limit", "60", "-o", str(out))
         cmd = Command(work, *args)
         cmd.wait_for(cmd.guarded, "the signal guard")
+        t_guard = time.monotonic()
         sig = rng.choice([signal.SIGINT, signal.SIGTERM])
-        time.sleep(rng.uniform(0.0, 3.0))
+        time.sleep(rng.uniform(0.0, upper))
         if cmd.proc.poll() is not None:  # done already on a fast machine: nothing to test
             assert cmd.proc.returncode == 0
+            upper = _narrowed(upper, t_guard)
             continue
         guard_gone, t_sig = not cmd.guarded(), time.time()
         code, err, seconds = cmd.stop(sig)
@@ -382,6 +395,7 @@ def test_a_signal_at_a_random_moment_stops_cleanly(tmp_path, units10, method):
             # its own exit code, nothing on stderr, its whole result written before the signal
             assert code == 0 and err == "", (code, err[-2000:])
             assert "kits" in json.loads(out.read_text()) and out.stat().st_mtime <= t_sig
+            upper = _narrowed(upper, t_guard)
             continue
         assert_clean(cmd, sig, code, err, seconds)
         assert one_line(sig, err), err[-2000:]
