@@ -454,3 +454,18 @@ def test_command_runs(command: Command, workdirs: dict[str, Path]) -> None:
             f"lines not found (in order): {missing}\nstdout: {done.stdout[-3000:]}\n"
             f"stderr: {done.stderr[-2000:]}"
         )
+
+
+def test_the_license_is_an_spdx_expression_the_build_backend_reads():
+    """The README's install builds the project with the newest setuptools from the index:
+    a ``license`` table (``{text = ...}``) is deprecated there and stops building after
+    2027-02-18, so the licence is an SPDX expression with its file, which setuptools reads from
+    version 77 on (the build requirement says so)."""
+    import tomllib
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    project = config["project"]
+    assert project["license"] == "MIT" and project["license-files"] == ["LICENSE"]
+    assert (ROOT / "LICENSE").read_text(encoding="utf-8").startswith("MIT License")
+    assert "setuptools>=77" in config["build-system"]["requires"]
+    assert not any(c.startswith("License ::") for c in project.get("classifiers", []))
