@@ -173,10 +173,11 @@ def dff_cut(
     (``types``: each type's grid size and rotatability), as a linear inequality over part
     counts, ``sum_t coef[t] n_t <= cap``, valid for every 0/90-degree layout; None when no
     pair proves the misfit (the test of :func:`dff_violated`, by type)."""
-    names = [t for t in types if _orientations(*types[t], W, H)]
-    if any(counts.get(t, 0) and t not in names for t in types):
+    orients = {t: _orientations(*size, W, H) for t, size in types.items()}
+    names = [t for t, o in orients.items() if o]
+    if any(counts.get(t, 0) and not orients[t] for t in types):
         return None
-    coef, rhs = _dff_pairs([_orientations(*types[t], W, H) for t in names], W, H)
+    coef, rhs = _dff_pairs([orients[t] for t in names], W, H)
     lhs = coef @ np.array([counts.get(t, 0) for t in names], dtype=np.int64)
     i, j = np.unravel_index(int(np.argmax((lhs - rhs) / rhs)), rhs.shape)
     if lhs[i, j] <= rhs[i, j]:

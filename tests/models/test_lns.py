@@ -139,3 +139,43 @@ def test_window_packing_does_not_depend_on_the_clock(monkeypatch):
         ends.append(res.objective)
     packing_oracle.clear_cache()
     assert ends == [pytest.approx(170.0)] * 2
+
+
+def test_the_windows_learn_each_dff_proof_as_task_weights(root, monkeypatch):
+    """A misfit that a pair of dual-feasible functions proves becomes one inequality over
+    every task (:meth:`bilevel_kit.models.lns.window.Context.add_cut`): each task's weight is
+    its parts' coefficients of :func:`~bilevel_kit.models.packing_bounds.dff_cut`, learnt once;
+    the run's plan, on a tight tray where windows meet such misfits, passes the checker and
+    every kit of it meets every inequality learnt."""
+    from bilevel_kit.models import packing_bounds
+    from bilevel_kit.models.lns import method as lns_method
+    from bilevel_kit.models.lns import window
+
+    inst = load(root / "instances" / "kitbench" / "mixed_u2_tu_tight_d0.json")
+    made: list[window.Context] = []
+    of = window.Context.of.__func__
+
+    def capture(cls, *args, **kwargs):
+        made.append(of(cls, *args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(window.Context, "of", classmethod(capture))
+    opts = lns_method.LnsOptions(start="quick", iterations=12)
+    out = lns_method.lns(inst, opts, seed=0, time_limit=120.0)
+    assert out.plan is not None and check(inst, out.plan) == []
+    (ctx,) = made
+    assert ctx.dff_rows, "the windows met no misfit a dual-feasible pair proves"
+    index = inst.index
+    for weights, cap in ctx.dff_rows:
+        assert len(weights) == len(inst.tasks)
+        for kit in out.plan.kits:
+            assert sum(weights[index[t]] for t in kit.tasks) <= cap
+    # the same misfit again adds nothing; the weights are the parts' coefficients
+    learnt = [dict(c) for c in ctx.cuts]
+    proven = next(c for c in learnt if packing_bounds.dff_cut(ctx.grid_types, c, *ctx.grid_tray))
+    coef, cap = packing_bounds.dff_cut(ctx.grid_types, proven, *ctx.grid_tray)
+    weights = [sum(coef.get(t, 0) * n for t, n in parts.items()) for parts in ctx.parts]
+    assert (weights, cap) in ctx.dff_rows
+    rows = list(ctx.dff_rows)
+    ctx._dff_row(proven)
+    assert ctx.dff_rows == rows

@@ -68,7 +68,9 @@ class Context:
     edges: list[tuple[int, int]] = field(default_factory=list)
     cuts: list[dict[str, int]] = field(default_factory=list)
     cut_keys: set[frozenset[tuple[str, int]]] = field(default_factory=set)
-    dff_rows: list[tuple[dict[str, int], int]] = field(default_factory=list)
+    #: the dual-feasible-function inequalities learnt so far, each as every task's weight (its
+    #: parts' coefficients) and the capacity: a kit's weights sum to at most the capacity
+    dff_rows: list[tuple[list[int], int]] = field(default_factory=list)
     #: each part type's size on the packing grid and rotatability, and the tray's grid size
     grid_types: dict[str, tuple[int, int, bool]] = field(default_factory=dict)
     grid_tray: tuple[int, int] = (0, 0)
@@ -114,8 +116,12 @@ class Context:
         from ..packing_bounds import dff_cut
 
         row = dff_cut(self.grid_types, counts, *self.grid_tray)
-        if row is not None and row not in self.dff_rows:
-            self.dff_rows.append(row)
+        if row is None:
+            return
+        coef, cap = row
+        weights = [sum(coef.get(t, 0) * c for t, c in parts.items()) for parts in self.parts]
+        if (weights, cap) not in self.dff_rows:
+            self.dff_rows.append((weights, cap))
 
     def fits(self, kit: Sequence[int]) -> bool:
         """Does the kit pack (an unknown verdict counts as no); cuts it if not (a proven misfit
@@ -274,13 +280,12 @@ class _WindowModel:
                 sum(ctx.area[i] * xs[p] for i, xs in zip(self.tasks, self.x, strict=True))
                 <= ctx.tray_area
             )
-        for coef, cap in ctx.dff_rows:
-            lhs = {i: sum(coef.get(t, 0) * c for t, c in ctx.parts[i].items()) for i in self.tasks}
-            if sum(lhs.values()) <= cap:
+        for weights, cap in ctx.dff_rows:
+            w = [weights[i] for i in self.tasks]
+            if sum(w) <= cap:
                 continue  # the whole window fits this inequality in one kit
-            if any(sum(lhs[i] for i in kit) > cap for kit in current):
+            if any(sum(weights[i] for i in kit) > cap for kit in current):
                 continue
-            w = [lhs[i] for i in self.tasks]
             for p in range(self.P):
                 m.add(sum(wi * xs[p] for wi, xs in zip(w, self.x, strict=True) if wi) <= cap)
         total: dict[str, int] = {}
