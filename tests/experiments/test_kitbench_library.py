@@ -76,13 +76,14 @@ def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
     """docs/kitbench.md#the-records, step 10: ``bench update`` from the ``before`` side of the
     committed pass ``sweepcap_10s`` raised 3 bounds to the 1 s grid and set no plan; the index's
     provenance columns name that pass's commit exactly there, with the values its rows hold."""
-    import csv
     import json
+
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
 
     results = ROOT / "bench" / "results"
     run = json.loads((results / "kitbench_sweepcap_10s_before_run.json").read_text())
-    with (results / "kitbench_sweepcap_10s_before.csv").open(encoding="utf-8") as f:
-        rows = {(r["instance"], r["method"]): r for r in csv.DictReader(f)}
+    before = read_rows(results / "kitbench_sweepcap_10s_before.csv")
+    rows = {(r["instance"], r["method"]): r for r in before}
     records = library.read()
     raised = {
         r.instance: r.best_bound
