@@ -452,3 +452,22 @@ def test_batch_option_reaches_the_search():
     whole = solve(inst, "bbr", start="quick", expansions=30)
     part = solve(inst, "bbr", start="quick", expansions=30, batch=2)
     assert whole.extra["resumed"] == 0 and part.extra["resumed"] > 0
+
+
+@pytest.mark.parametrize("trays", TRAYS)
+@pytest.mark.parametrize("seed", SEEDS[:6])
+def test_node_cap_holds_within_an_expansion(seed, trays):
+    """``max_nodes`` caps the nodes kept inside one expansion too (one node of a sparse graph
+    with a loose tray has millions of kits): the search stops with ``memory`` at the cap, its
+    bound below the optimum, and it reaches the cap from every cap below the root's kits."""
+    inst = case(seed, trays, tray=(400.0, 400.0))
+    opt, _ = best_makespan(inst)
+    whole = search(Space(inst), brute_fits(inst), max_expansions=1)
+    root_kits = whole.counters["kept"] - 1
+    assert root_kits >= 3
+    for cap in (2, root_kits // 2 + 1, root_kits):
+        out = search(Space(inst), brute_fits(inst), max_nodes=cap)
+        assert out.stop == "memory"
+        assert out.counters["kept"] == cap
+        assert out.counters["expanded"] == 1
+        assert out.bound <= opt + 1e-9

@@ -42,7 +42,7 @@ from ...plan import Kit, Plan, evaluate
 from ..budget import Budget
 from ..common import Packer, claim_scope, unfit_outcome
 from ..packing import ANY_ANGLE, AXIS_ALIGNED
-from .search import Outcome, packer_fits, search
+from .search import MAX_NODES, Outcome, packer_fits, search
 from .search import Space as SearchSpace
 from .space import Space
 from .stations import StationSpace
@@ -65,7 +65,7 @@ class BbrOptions:
         None, "nodes to expand (none: until exhausted or the time limit)", min=1
     )
     max_nodes: int = option(
-        1_000_000, "nodes kept in memory before the search stops (about 0.5 kB each)", min=1
+        MAX_NODES, "nodes kept in memory before the search stops (about 1.1 kB each)", min=1
     )
     batch: int | None = option(
         None,

@@ -35,8 +35,9 @@ proves to the plans it covers (``scope``, docs/formulations.md#what-optimal-mean
 is below it, no plan is better: the incumbent is optimal (within ``scope``: every plan with
 ``relax``). At any stop the least of the open nodes' ``f``, the relaxed plans' makespans and
 the incumbent's makespan is a lower bound on every plan's makespan (within ``scope``). Work
-is counted in expanded nodes, so a run to a node limit is deterministic; the wall clock is
-checked between expansions, and the number of nodes kept is capped (memory).
+is counted in expanded nodes, so a run to a node limit is deterministic; the wall clock and
+the number of nodes kept (memory) are checked within an expansion too, as one node may have
+millions of kits: a search stopped there keeps the node open with the kits it has not pushed.
 """
 
 from __future__ import annotations
@@ -58,6 +59,10 @@ from ..packing import ANY_ANGLE, AXIS_ALIGNED
 FitTest = Callable[[dict[str, int]], "tuple[bool, str | None]"]
 #: What the search does with a kit (:meth:`_Search.fit`).
 FITS, NO, RELAXED = "fits", "no", "relaxed"
+#: Nodes kept before the search stops (``stop`` ``memory``): about 1.1 kB each, so with the
+#: process's own 0.25 GB about 1.3 GB at the cap (``bbr`` on ``sparse_n50_s1_tu_loose_d0``:
+#: 1.32 GB peak at 1,000,000 nodes, 2.40 GB at 2,000,000; docs/formulations.md).
+MAX_NODES = 1_000_000
 
 
 class Space(Protocol):
@@ -142,7 +147,7 @@ def search(
     upper: float = math.inf,
     deadline: float | None = None,
     max_expansions: int | None = None,
-    max_nodes: int = 2_000_000,
+    max_nodes: int = MAX_NODES,
     relax: bool = True,
     batch: int | None = None,
 ) -> Outcome:
@@ -152,7 +157,7 @@ def search(
     layout nor a proof for every layout are relaxed (module docstring); ``batch``: children
     pushed per expansion (partial expansion, module docstring; None: every child at once)."""
     run = _Search(space, fits, upper, deadline, relax)
-    run.batch = batch
+    run.batch, run.max_nodes = batch, max_nodes
     while run.heap and run.stop == "exhausted":
         f, _, _, node = run.heap[0]
         if f >= min(run.upper, run.relaxed_best) - run.tol:
@@ -203,6 +208,7 @@ class _Search:
         }
         self.stop = "exhausted"
         self.batch: int | None = None
+        self.max_nodes: int | None = None
 
     def fit(self, mask: int) -> str:
         """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
@@ -259,8 +265,9 @@ class _Search:
         pushed, batch = 0, self.batch
         for mask, r, h, station in kits:
             counts["generated"] += 1
-            if not counts["generated"] & 63 and self._late():
-                self.stop = "time_limit"  # the node's other kits are not pushed: keep it open
+            stop = self._stop_within(counts)
+            if stop is not None:  # the node's other kits are not pushed: keep it open
+                self.stop = stop
                 node.pending = kits
                 heapq.heappush(self.heap, (f, 0, next(self.tick), node))
                 return
@@ -311,6 +318,17 @@ class _Search:
 
     def _late(self) -> bool:
         return self.deadline is not None and time.perf_counter() >= self.deadline
+
+    def _stop_within(self, counts: dict[str, int]) -> str | None:
+        """Why an expansion stops before its next kit (None: it goes on): the deadline, or
+        ``max_nodes`` kept. One node of a sparse precedence graph with a loose tray has
+        millions of kits (``sparse_n50_s1_tu_loose_d0``: 9.6 million nodes kept in 3
+        expansions, 10.7 GB), so the cap between expansions alone does not bound memory."""
+        if self.max_nodes is not None and counts["kept"] >= self.max_nodes:
+            return "memory"
+        if not counts["generated"] & 63 and self._late():
+            return "time_limit"
+        return None
 
     def outcome(self) -> Outcome:
         """The incumbent found, the bound, the scope and the counters (module docstring)."""
