@@ -26,7 +26,8 @@ rectangles never share a lower-left corner, so the order is strict and loses no 
 
 **Before search** (both objectives): the cheap infeasibility tests of
 :mod:`bilevel_kit.models.packing_bounds` (a part larger than the tray, area, incompatible pairs,
-tall parts, dual-feasible-function bounds) answer "infeasible" without a model.
+tall parts, dual-feasible-function bounds) answer "infeasible" without a model; deciding, the
+shelf packer and then the maximal-rectangles packer (:mod:`.maxrects`) answer "feasible".
 
 **Decision model** (``objective="feasible"``): one redundant ``add_cumulative`` per axis on the
 same intervals (the parts crossing any vertical line have heights summing to at most H, and
@@ -349,6 +350,12 @@ def _before_search(
         if shelf is not None and corners_reachable(grid.tables, shelf, grid.sizes):
             done.extra["reason"] = "shelf heuristic"
             return done("feasible", shelf)
+        from .maxrects import maxrects_pack
+
+        rects = maxrects_pack(grid.sizes, grid.W, grid.H)
+        if rects is not None and corners_reachable(grid.tables, rects, grid.sizes):
+            done.extra["reason"] = "maxrects heuristic"
+            return done("feasible", rects)
     return None
 
 

@@ -1,0 +1,108 @@
+"""The maximal-rectangles packer, the packing oracle's fast "yes" before CP-SAT: every layout
+it returns is valid on the grid, it finds layouts where the shelf packer and a short CP-SAT
+limit do not, and the oracle uses it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bilevel_kit import geometry
+from bilevel_kit.instance import load
+from bilevel_kit.models import maxrects as mr
+from bilevel_kit.models import packing as pk
+
+KITBENCH = Path(__file__).resolve().parents[2] / "instances" / "kitbench"
+
+
+def _valid(sizes, width, height, corners) -> bool:
+    """Inside the tray, no two overlapping, a part turned only when it may rotate."""
+    boxes = []
+    for (w, h, may_rotate), (x, y, rot) in zip(sizes, corners, strict=True):
+        if rot and not may_rotate:
+            return False
+        ww, hh = (h, w) if rot else (w, h)
+        if x < 0 or y < 0 or x + ww > width or y + hh > height:
+            return False
+        boxes.append((x, y, x + ww, y + hh))
+    return not any(
+        a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+        for i, a in enumerate(boxes)
+        for b in boxes[:i]
+    )
+
+
+sizes_st = st.lists(
+    st.tuples(st.integers(1, 12), st.integers(1, 12), st.booleans()), min_size=0, max_size=9
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(sizes=sizes_st, width=st.integers(1, 30), height=st.integers(1, 30))
+def test_every_layout_is_valid(sizes, width, height):
+    out = mr.maxrects_pack(sizes, width, height)
+    if out is not None:
+        assert len(out) == len(sizes)
+        assert _valid(sizes, width, height, out)
+    if sum(w * h for w, h, _ in sizes) > width * height:
+        assert out is None
+
+
+def test_the_transposed_tray_turns_back():
+    """Only the attempts on the transposed tray lay these out; the layout comes back in the
+    tray's own axes, the part that may not rotate unturned."""
+    sizes = [(9, 8, True), (9, 4, True), (8, 5, True), (8, 9, True), (9, 6, True), (7, 8, False)]
+    direct = [
+        mr._pack(sizes, 19, 18, sorted(range(6), key=lambda j: key(sizes[j])), rule)
+        for key in mr.ORDERS.values()
+        for rule in mr.RULES.values()
+    ]
+    assert direct == [None] * len(direct)
+    out = mr.maxrects_pack(sizes, 19, 18)
+    assert out is not None and _valid(sizes, 19, 18, out)
+    assert out[5][2] is False
+
+
+def test_a_kit_cpsat_left_undecided_is_laid_out_before_the_model():
+    """A kit of 45 parts (86 % of the tray) of `sparse_n50_s1_tu_loose_d0` that a 60 s `cpsat`
+    run left undecided at a 0.2 s packing limit, and that the shelf packer does not lay out:
+    `pack` answers with the maximal-rectangles layout, valid at the true sizes, without a
+    model."""
+    inst = load(KITBENCH / "sparse_n50_s1_tu_loose_d0.json")
+    counts = {"p0": 13, "p1": 11, "p2": 7, "p3": 3, "p4": 9, "p5": 2}
+    items = [(f"{k}{j}", inst.part_types[k]) for k, n in counts.items() for j in range(n)]
+    grid = pk._grid(inst.tray, items, 1.0, None)
+    assert pk._shelf(grid.sizes, grid.W, grid.H) is None
+    res = pk.pack(inst.tray, items, time_limit=0.2)
+    assert res.status == "feasible"
+    assert res.extra["reason"] == "maxrects heuristic"
+    assert "cpsat_status" not in res.extra
+    assert sorted(p.part for p in res.layout) == sorted(pid for pid, _ in items)
+    polys = [geometry.corners(p.x, p.y, p.w, p.h, p.theta) for p in res.layout]
+    assert all(geometry.inside_tray(c, inst.tray.width, inst.tray.height) for c in polys)
+    assert not any(geometry.rects_overlap(a, b) for i, a in enumerate(polys) for b in polys[:i])
+
+
+def test_no_layout_is_no_answer():
+    """Two 6 x 6 squares in 10 x 10: area allows them, no layout exists; the packer says None
+    (not a proof: `pack` proves it with its pre-search tests or CP-SAT)."""
+    assert mr.maxrects_pack([(6, 6, True)] * 2, 10, 10) is None
+    assert mr.maxrects_pack([], 3, 3) == []
+
+
+@pytest.mark.parametrize("rule", list(mr.RULES))
+def test_each_rule_fills_a_tray_exactly(rule):
+    """Four 5 x 5 squares fill 10 x 10 with every rule and order."""
+    sizes = [(5, 5, False)] * 4
+    for key in mr.ORDERS.values():
+        order = sorted(range(4), key=lambda j: key(sizes[j]))
+        out = mr._pack(sizes, 10, 10, order, mr.RULES[rule])
+        assert out is not None and sorted(out) == [
+            (0, 0, False),
+            (0, 5, False),
+            (5, 0, False),
+            (5, 5, False),
+        ]
