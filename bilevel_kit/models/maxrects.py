@@ -10,9 +10,9 @@ of :data:`RULES`, on the tray as given and transposed, and returns the first com
 
 Sizes are on the packing grid (integers, rounded up from the true sizes), so a layout holds for
 the true parts. It is a heuristic: finding no layout proves nothing, and the oracle's CP-SAT
-model decides then. On the kits a 60 s `cpsat` run on `sparse_n50_s1_tu_loose_d0` left
-undecided (CP-SAT's 0.05-2 s packing limits), it laid out 47 of 61 in at most 0.4 ms an attempt
-(the shelf packer, tried first, none of them).
+model decides then. Of the kits a 60 s `cpsat` run on `sparse_n50_s1_tu_loose_d0` left
+undecided at CP-SAT's packing limits it lays out 46 of 60, in milliseconds, the shelf packer
+(tried first) none of them (bench/data/oracle_undecided.json, tests/models/test_maxrects.py).
 """
 
 from __future__ import annotations

@@ -142,7 +142,8 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 #: LNS after the model (docs/formulations.md): 10 s up to 130 tasks, 60 s on 11 records, and
 #: the rule's first version at 10 s; the LNS first's cut share at 10 s and its stall of a sweep
 #: at 10 s (up to 130 tasks, 131 to 250) and 60 s (9 records); the windows' dual-feasible-function
-#: inequalities at 10 s (tight trays up to 130 tasks).
+#: inequalities at 10 s (tight trays up to 130 tasks); the maximal-rectangles packer in the
+#: packing oracle at 10 s (up to 130 tasks).
 LABELS = (
     "i36_60s",
     "lnsafter_10s",
@@ -155,6 +156,7 @@ LABELS = (
     "dffrows_10s",
     "sweepcap_10s",
     "sweepcap_60s",
+    "maxrects_10s",
 )
 
 

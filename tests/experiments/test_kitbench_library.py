@@ -111,3 +111,42 @@ def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
     ):
         assert quoted in docs, quoted
     assert run["wall_s"] == pytest.approx(957.4, abs=0.1)
+
+
+def test_the_records_name_the_plans_the_maxrects_pass_set(library):
+    """docs/kitbench.md#the-records, step 11: ``bench update`` from the ``after`` side of the
+    committed pass ``maxrects_10s`` set 2 plans (``lns``'s) and no bound; the index's provenance
+    names that pass's commit exactly there, with the makespans its rows hold."""
+    import json
+
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    run = json.loads((results / "kitbench_maxrects_10s_after_run.json").read_text())
+    rows = {
+        (r["instance"], r["method"]): r
+        for r in read_rows(results / "kitbench_maxrects_10s_after.csv")
+    }
+    records = library.read()
+    set_here = {
+        r.instance: r.best_known
+        for r in records
+        if r.plan is not None and r.plan.commit == run["commit"]
+    }
+    assert set_here == {"mixed_u5_t1_loose_d0": 3926.9, "mixed_u5_tu_loose_d30": 3998.9}
+    for r in records:
+        if r.instance in set_here:
+            assert (r.plan.method, r.plan.time_limit) == ("lns", 10.0)
+            assert float(rows[(r.instance, "lns")]["makespan"]) == pytest.approx(
+                set_here[r.instance], abs=1e-6
+            )
+    assert not [r for r in records if r.bound is not None and r.bound.commit == run["commit"]]
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
+    for quoted in (
+        "`mixed_u5_t1_loose_d0` 3,930.9 -> 3,926.9 s",
+        "`mixed_u5_tu_loose_d30` 4,003.9 -> 3,998.9 s",
+        f"commit `{run['commit']}`",
+        "(921 s of wall time, 651 MB peak",
+    ):
+        assert quoted in docs, quoted
+    assert run["wall_s"] == pytest.approx(921.1, abs=0.1)

@@ -4,6 +4,7 @@ limit do not, and the oracle uses it."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -15,7 +16,9 @@ from bilevel_kit.instance import load
 from bilevel_kit.models import maxrects as mr
 from bilevel_kit.models import packing as pk
 
-KITBENCH = Path(__file__).resolve().parents[2] / "instances" / "kitbench"
+ROOT = Path(__file__).resolve().parents[2]
+KITBENCH = ROOT / "instances" / "kitbench"
+BENCH_DATA = ROOT / "bench" / "data"
 
 
 def _valid(sizes, width, height, corners) -> bool:
@@ -106,3 +109,68 @@ def test_each_rule_fills_a_tray_exactly(rule):
             (5, 0, False),
             (5, 5, False),
         ]
+
+
+def _kit_sizes(inst, counts):
+    items = [(f"{k}{j}", inst.part_types[k]) for k, n in counts.items() for j in range(n)]
+    grid = pk._grid(inst.tray, items, 1.0, None)
+    return grid.sizes, grid.W, grid.H
+
+
+def test_the_kits_cpsat_left_undecided():
+    """docs/formulations.md, "CP-SAT packing": of the kits a 60 s `cpsat` run left undecided
+    (bench/data/oracle_undecided.json), the packer lays out 46 of 60 on
+    `sparse_n50_s1_tu_loose_d0` and 10 of 34 on `sp_n50_s2_t1_tight_d30`, the shelf packer
+    none; none of the 9 kits with a 0/90-degree proof of no fit (it must not)."""
+    doc = json.loads((BENCH_DATA / "oracle_undecided.json").read_text())
+    counts = {}
+    for name, kinds in doc["records"].items():
+        inst = load(KITBENCH / f"{name}.json")
+        for kind, kits in kinds.items():
+            laid = shelf = 0
+            for kit in kits:
+                sizes, width, height = _kit_sizes(inst, kit)
+                out = mr.maxrects_pack(sizes, width, height)
+                laid += out is not None and _valid(sizes, width, height, out)
+                shelf += pk._shelf(sizes, width, height) is not None
+            counts[name, kind] = (len(kits), laid, shelf)
+    assert counts == {
+        ("sparse_n50_s1_tu_loose_d0", "unknown"): (60, 46, 0),
+        ("sparse_n50_s1_tu_loose_d0", "nofit_axis_aligned"): (0, 0, 0),
+        ("sp_n50_s2_t1_tight_d30", "unknown"): (34, 10, 0),
+        ("sp_n50_s2_t1_tight_d30", "nofit_axis_aligned"): (9, 0, 0),
+    }
+
+
+def test_the_packing_benchmark_instances_it_lays_out():
+    """docs/formulations.md, "CP-SAT packing": of the packing benchmark's 62 instances it lays
+    out 10, all but `K_in1_2` ones the shelf packer does not."""
+    import sys
+
+    sys.path.insert(0, str(BENCH_DATA.parent))
+    from bench_packing import load as load_packing
+
+    laid, shelf = [], []
+    paths = sorted((BENCH_DATA / "packing").glob("*/*.json"))
+    for path in paths:
+        width, height, sizes = load_packing(path)
+        out = mr.maxrects_pack(sizes, width, height)
+        if out is not None:
+            assert _valid(sizes, width, height, out)
+            laid.append(path.stem)
+            if pk._shelf(sizes, width, height) is not None:
+                shelf.append(path.stem)
+    assert len(paths) == 62
+    assert laid == [
+        "E02F22",
+        "E04F17",
+        "E05F20",
+        "E07F15",
+        "E20X15",
+        "K_in1_2",
+        "K_in2_0",
+        "K_in4_0",
+        "K_in4_2",
+        "K_se3_2",
+    ]
+    assert shelf == ["K_in1_2"]
