@@ -31,25 +31,17 @@ def test_pack_perfect_packing_and_one_unit_smaller(tmp_path, capsys):
     assert ": infeasible in" in capsys.readouterr().out
 
 
-def _guillotine(n: int) -> list[dict]:
-    """n rectangles cut from the 100 x 100 tray (a perfect packing the shelf packer misses)."""
-    import numpy as np
-
-    rng = np.random.default_rng(0)
-    rects = [(100, 100)]
-    while len(rects) < n:
-        w, h = rects.pop(int(np.argmax([a * b for a, b in rects])))
-        if w >= h:
-            c = int(rng.integers(1, w))
-            rects += [(c, h), (w - c, h)]
-        else:
-            c = int(rng.integers(1, h))
-            rects += [(w, c), (w, h - c)]
-    return [{"id": f"r{i}", "width": w, "height": h} for i, (w, h) in enumerate(rects)]
-
-
 def test_pack_unknown_within_the_time_limit_exits_3(tmp_path, capsys):
-    path = _pack_file(tmp_path, 100, _guillotine(12))
+    """A kit that neither fast packer lays out (CJCM E02F17, tests/slowclock.py): CP-SAT's
+    answer needs more than a microsecond."""
+    from slowclock import SIZES
+
+    items = [
+        {"id": f"p{j}", "width": w, "height": h, "rotatable": False}
+        for j, (w, h) in enumerate(SIZES)
+    ]
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({"tray": {"width": 20, "height": 20}, "items": items}))
     assert main(["pack", str(path), "--time-limit", "1e-6"]) == 3
     assert ": unknown in" in capsys.readouterr().out
     assert main(["pack", str(path), "--time-limit", "20"]) == 0
