@@ -46,7 +46,7 @@ PAGES = (
 )
 RESULTS = ROOT / "bench" / "results"
 #: The committed tables with a per-instance block of the exact models against lns.
-VERSUS_PAGES = (RESULTS / "kitbench_cmp_10s.md", RESULTS / "kitbench_cmp2_10s.md")
+VERSUS_PAGES = tuple(sorted(RESULTS.glob("kitbench_cmp*_10s.md")))
 #: The committed passes drawn by --profiles: label -> (its rows, a separate pass's rows).
 PASSES = {"60s": ("kitbench_60s.csv", None), "10s": ("kitbench_10s.csv", "kitbench_10s_lns.csv")}
 

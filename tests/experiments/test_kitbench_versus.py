@@ -212,5 +212,8 @@ def test_the_pass_of_131_to_250_tasks_and_the_records_it_set() -> None:
     by_name = {r.instance: r for r in records}
     assert by_name["intree_n150_s1_t1_loose_d10"].status == "optimal"
     assert by_name["intree_n150_s1_t1_loose_d10"].best_known == 3578.0
+    page = (RESULTS / f"kitbench_{label}.md").read_text(encoding="utf-8")
+    assert label in versus_blocks_in(page) and render_versus_blocks(page, RESULTS) == page
+    assert page.count("| `") == 12  # the per-instance table is rendered
     docs = " ".join((ROOT / "docs" / "kitbench.md").read_text().split())
     assert "set 5 plans and 4 bounds" in docs and "(327 s of wall time, 464 MB peak" in docs
