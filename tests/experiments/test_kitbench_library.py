@@ -72,44 +72,50 @@ def test_published_tables_are_the_index(library, page):
     )
 
 
-def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
-    """docs/kitbench.md#the-records, step 10: ``bench update`` from the ``before`` side of the
-    committed pass ``sweepcap_10s`` raised 3 bounds to the 1 s grid and set no plan; the index's
-    provenance columns name that pass's commit exactly there, with the values its rows hold."""
+def _pass_in_the_records(library, stem: str):
+    """A committed pass (``bench/results/kitbench_STEM``'s rows and run) and what the index's
+    provenance columns name its commit on: {record: best-known} and {record: best bound}."""
     import json
 
     from bilevel_kit.experiments.kitbench.profiles import read_rows
 
     results = ROOT / "bench" / "results"
-    run = json.loads((results / "kitbench_sweepcap_10s_before_run.json").read_text())
-    before = read_rows(results / "kitbench_sweepcap_10s_before.csv")
-    rows = {(r["instance"], r["method"]): r for r in before}
+    run = json.loads((results / f"kitbench_{stem}_run.json").read_text())
+    rows = {(r["instance"], r["method"]): r for r in read_rows(results / f"kitbench_{stem}.csv")}
     records = library.read()
-    raised = {
-        r.instance: r.best_bound
-        for r in records
-        if r.bound is not None and r.bound.commit == run["commit"]
-    }
-    assert raised == {
+    commit = run["commit"]
+    plans = {r.instance: r for r in records if r.plan is not None and r.plan.commit == commit}
+    bounds = {r.instance: r for r in records if r.bound is not None and r.bound.commit == commit}
+    return run, rows, plans, bounds
+
+
+def _quoted_in_the_records_page(*quoted: str) -> None:
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
+    for text in quoted:
+        assert text in docs, text
+
+
+def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
+    """docs/kitbench.md#the-records, step 10: ``bench update`` from the ``before`` side of the
+    committed pass ``sweepcap_10s`` raised 3 bounds to the 1 s grid and set no plan; the index's
+    provenance columns name that pass's commit exactly there, with the values its rows hold."""
+    run, rows, plans, bounds = _pass_in_the_records(library, "sweepcap_10s_before")
+    assert {name: r.best_bound for name, r in bounds.items()} == {
         "intree_n100_s1_t1_tight_d30": 2550.0,
         "wide_n100_s2_tu_tight_d30": 2626.0,
         "sparse_n100_s1_tu_tight_d30": 2449.0,
     }
-    for r in records:
-        if r.instance in raised:
-            assert (r.bound.method, r.bound.time_limit) == ("cpsat", 10.0)
-            assert float(rows[(r.instance, "cpsat")]["bound"]) == raised[r.instance]
-            assert r.status == "open"
-    assert not [r for r in records if r.plan is not None and r.plan.commit == run["commit"]]
-    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
-    for quoted in (
+    for name, r in bounds.items():
+        assert (r.bound.method, r.bound.time_limit, r.status) == ("cpsat", 10.0, "open")
+        assert float(rows[(name, "cpsat")]["bound"]) == r.best_bound
+    assert not plans
+    _quoted_in_the_records_page(
         "`intree_n100_s1_t1_tight_d30` 2,549.6 -> 2,550 s",
         "`wide_n100_s2_tu_tight_d30` 2,625.3 -> 2,626 s",
         "`sparse_n100_s1_tu_tight_d30` 2,448.4 -> 2,449 s",
         f"commit `{run['commit']}`",
         "(957 s of wall time, 677 MB peak",
-    ):
-        assert quoted in docs, quoted
+    )
     assert run["wall_s"] == pytest.approx(957.4, abs=0.1)
 
 
@@ -117,36 +123,19 @@ def test_the_records_name_the_plans_the_maxrects_pass_set(library):
     """docs/kitbench.md#the-records, step 11: ``bench update`` from the ``after`` side of the
     committed pass ``maxrects_10s`` set 2 plans (``lns``'s) and no bound; the index's provenance
     names that pass's commit exactly there, with the makespans its rows hold."""
-    import json
-
-    from bilevel_kit.experiments.kitbench.profiles import read_rows
-
-    results = ROOT / "bench" / "results"
-    run = json.loads((results / "kitbench_maxrects_10s_after_run.json").read_text())
-    rows = {
-        (r["instance"], r["method"]): r
-        for r in read_rows(results / "kitbench_maxrects_10s_after.csv")
+    run, rows, plans, bounds = _pass_in_the_records(library, "maxrects_10s_after")
+    assert {name: r.best_known for name, r in plans.items()} == {
+        "mixed_u5_t1_loose_d0": 3926.9,
+        "mixed_u5_tu_loose_d30": 3998.9,
     }
-    records = library.read()
-    set_here = {
-        r.instance: r.best_known
-        for r in records
-        if r.plan is not None and r.plan.commit == run["commit"]
-    }
-    assert set_here == {"mixed_u5_t1_loose_d0": 3926.9, "mixed_u5_tu_loose_d30": 3998.9}
-    for r in records:
-        if r.instance in set_here:
-            assert (r.plan.method, r.plan.time_limit) == ("lns", 10.0)
-            assert float(rows[(r.instance, "lns")]["makespan"]) == pytest.approx(
-                set_here[r.instance], abs=1e-6
-            )
-    assert not [r for r in records if r.bound is not None and r.bound.commit == run["commit"]]
-    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
-    for quoted in (
+    for name, r in plans.items():
+        assert (r.plan.method, r.plan.time_limit) == ("lns", 10.0)
+        assert float(rows[(name, "lns")]["makespan"]) == pytest.approx(r.best_known, abs=1e-6)
+    assert not bounds
+    _quoted_in_the_records_page(
         "`mixed_u5_t1_loose_d0` 3,930.9 -> 3,926.9 s",
         "`mixed_u5_tu_loose_d30` 4,003.9 -> 3,998.9 s",
         f"commit `{run['commit']}`",
         "(921 s of wall time, 651 MB peak",
-    ):
-        assert quoted in docs, quoted
+    )
     assert run["wall_s"] == pytest.approx(921.1, abs=0.1)

@@ -5,6 +5,7 @@ limit do not, and the oracle uses it."""
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -19,23 +20,15 @@ from bilevel_kit.models import packing as pk
 ROOT = Path(__file__).resolve().parents[2]
 KITBENCH = ROOT / "instances" / "kitbench"
 BENCH_DATA = ROOT / "bench" / "data"
+sys.path.insert(0, str(ROOT / "bench"))
+from bench_packing import load as load_packing  # noqa: E402
+from bench_packing import valid  # noqa: E402
 
 
 def _valid(sizes, width, height, corners) -> bool:
-    """Inside the tray, no two overlapping, a part turned only when it may rotate."""
-    boxes = []
-    for (w, h, may_rotate), (x, y, rot) in zip(sizes, corners, strict=True):
-        if rot and not may_rotate:
-            return False
-        ww, hh = (h, w) if rot else (w, h)
-        if x < 0 or y < 0 or x + ww > width or y + hh > height:
-            return False
-        boxes.append((x, y, x + ww, y + hh))
-    return not any(
-        a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
-        for i, a in enumerate(boxes)
-        for b in boxes[:i]
-    )
+    """Inside the tray, no two overlapping, a part turned only when it may rotate (the packing
+    benchmark's check, bench/bench_packing.py)."""
+    return valid(width, height, sizes, corners)
 
 
 sizes_st = st.lists(
@@ -145,11 +138,6 @@ def test_the_kits_cpsat_left_undecided():
 def test_the_packing_benchmark_instances_it_lays_out():
     """docs/formulations.md, "CP-SAT packing": of the packing benchmark's 62 instances it lays
     out 10, all but `K_in1_2` ones the shelf packer does not."""
-    import sys
-
-    sys.path.insert(0, str(BENCH_DATA.parent))
-    from bench_packing import load as load_packing
-
     laid, shelf = [], []
     paths = sorted((BENCH_DATA / "packing").glob("*/*.json"))
     for path in paths:
