@@ -35,6 +35,10 @@ ORDERS: dict[str, Callable[[Size], tuple[int, ...]]] = {
     "width": lambda s: (-s[0], -s[1]),
     "height": lambda s: (-s[1], -s[0]),
 }
+#: The attempts' work budget (:func:`attempts`): parts squared times attempts.
+WORK = 48 * 30**2
+#: The fewest attempts a kit gets, however many its parts.
+MIN_ATTEMPTS = 4
 #: Placement rules (Jylänki's): each scores placing a ``w x h`` part at the corner of the free
 #: rectangle ``(x, y, fw, fh)``, least first: bottom-left, best short side fit, best long side
 #: fit, best area fit.
@@ -46,21 +50,36 @@ RULES: dict[str, Callable[[int, int, int, int, int, int], tuple[int, int]]] = {
 }
 
 
+def attempts(parts: int) -> int:
+    """How many attempts a kit of ``parts`` parts gets: all 48 up to 30 parts, then fewer as an
+    attempt's work grows with the square of the parts (the parts times the free rectangles),
+    at least :data:`MIN_ATTEMPTS`; so a kit that does not fit costs about as much as one of 30
+    parts (tens of milliseconds), whatever its size."""
+    return max(MIN_ATTEMPTS, min(2 * len(ORDERS) * len(RULES), WORK // max(1, parts) ** 2))
+
+
 def maxrects_pack(sizes: Sequence[Size], width: int, height: int) -> list[Corner] | None:
     """A layout of ``sizes`` in the ``width x height`` tray (module docstring), each part's
-    lower-left corner and rotation, in the order of ``sizes``; None when no attempt finds one."""
+    lower-left corner and rotation, in the order of ``sizes``; None when none of the first
+    :func:`attempts` attempts finds one (orders outermost, then rules, the tray then its
+    transpose)."""
     if not sizes:
         return []
     transposed = [(h, w, rot) for w, h, rot in sizes]
+    left = attempts(len(sizes))
     for key in ORDERS.values():
         order = sorted(range(len(sizes)), key=lambda j: key(sizes[j]))
         for rule in RULES.values():
-            out = _pack(sizes, width, height, order, rule)
-            if out is not None:
-                return out
-            out = _pack(transposed, height, width, order, rule)
-            if out is not None:  # back from the transposed tray: x and y swap
-                return [(y, x, rot) for x, y, rot in out]
+            for parts, (w, h), back in (
+                (sizes, (width, height), False),
+                (transposed, (height, width), True),
+            ):
+                if left <= 0:
+                    return None
+                left -= 1
+                out = _pack(parts, w, h, order, rule)
+                if out is not None:  # from the transposed tray, x and y swap back
+                    return [(y, x, rot) for x, y, rot in out] if back else out
     return None
 
 
@@ -93,11 +112,14 @@ def _pack(
 
 
 def _split(free: list[Free], x: int, y: int, w: int, h: int) -> list[Free]:
-    """The maximal free rectangles after a part takes ``(x, y, w, h)``."""
+    """The maximal free rectangles after a part takes ``(x, y, w, h)``. Only the pieces cut
+    from the rectangles the part overlaps can be inside another: a rectangle it leaves alone
+    was inside no other before, and each piece lies inside the rectangle it was cut from."""
+    kept: list[Free] = []
     pieces: set[Free] = set()
     for fx, fy, fw, fh in free:
         if x >= fx + fw or x + w <= fx or y >= fy + fh or y + h <= fy:
-            pieces.add((fx, fy, fw, fh))
+            kept.append((fx, fy, fw, fh))
             continue
         if x > fx:
             pieces.add((fx, fy, x - fx, fh))
@@ -107,7 +129,13 @@ def _split(free: list[Free], x: int, y: int, w: int, h: int) -> list[Free]:
             pieces.add((fx, fy, fw, y - fy))
         if y + h < fy + fh:
             pieces.add((fx, y + h, fw, fy + fh - y - h))
-    return sorted(a for a in pieces if not any(b != a and _inside(a, b) for b in pieces))
+    new = [
+        a
+        for a in pieces
+        if not any(_inside(a, b) for b in kept)
+        and not any(b != a and _inside(a, b) for b in pieces)
+    ]
+    return sorted(kept + new)
 
 
 def _inside(a: Free, b: Free) -> bool:

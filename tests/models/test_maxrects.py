@@ -162,3 +162,23 @@ def test_the_packing_benchmark_instances_it_lays_out():
         "K_se3_2",
     ]
     assert shelf == ["K_in1_2"]
+
+
+def test_large_kits_get_fewer_attempts(monkeypatch):
+    """All 48 attempts up to 30 parts, then fewer (the work per attempt grows with the parts
+    squared), at least 4: a kit of 100 parts that no attempt lays out costs 4 attempts."""
+    assert [mr.attempts(n) for n in (1, 30, 31, 50, 100, 1000)] == [48, 48, 44, 17, 4, 4]
+    calls = []
+    real = mr._pack
+
+    def counted(*args):
+        calls.append(args[1:3])
+        return real(*args)
+
+    monkeypatch.setattr(mr, "_pack", counted)
+    assert mr.maxrects_pack([(6, 6, True)] * 2, 10, 10) is None
+    assert len(calls) == 48
+    calls.clear()
+    assert mr.maxrects_pack([(11, 9, True)] * 100, 100, 100) is None  # (99 in a grid)
+    assert len(calls) == 4
+    assert calls[1] == (100, 100)  # the transposed tray second
