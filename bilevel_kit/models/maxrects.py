@@ -35,10 +35,6 @@ ORDERS: dict[str, Callable[[Size], tuple[int, ...]]] = {
     "width": lambda s: (-s[0], -s[1]),
     "height": lambda s: (-s[1], -s[0]),
 }
-#: The attempts' work budget (:func:`attempts`): parts squared times attempts.
-WORK = 48 * 30**2
-#: The fewest attempts a kit gets, however many its parts.
-MIN_ATTEMPTS = 4
 #: Placement rules (Jylänki's): each scores placing a ``w x h`` part at the corner of the free
 #: rectangle ``(x, y, fw, fh)``, least first: bottom-left, best short side fit, best long side
 #: fit, best area fit.
@@ -48,6 +44,13 @@ RULES: dict[str, Callable[[int, int, int, int, int, int], tuple[int, int]]] = {
     "long side": lambda x, y, fw, fh, w, h: (max(fw - w, fh - h), min(fw - w, fh - h)),
     "area": lambda x, y, fw, fh, w, h: (fw * fh - w * h, min(fw - w, fh - h)),
 }
+#: Every attempt: each order with each rule, on the tray and on its transpose.
+ALL_ATTEMPTS = 2 * len(ORDERS) * len(RULES)
+#: The attempts' work budget (:func:`attempts`): parts squared times attempts, all of them up to
+#: 30 parts.
+WORK = ALL_ATTEMPTS * 30**2
+#: The fewest attempts a kit gets, however many its parts.
+MIN_ATTEMPTS = 4
 
 
 def attempts(parts: int) -> int:
@@ -55,18 +58,20 @@ def attempts(parts: int) -> int:
     attempt's work grows with the square of the parts (the parts times the free rectangles),
     at least :data:`MIN_ATTEMPTS`; so a kit that does not fit costs about as much as one of 30
     parts (tens of milliseconds), whatever its size."""
-    return max(MIN_ATTEMPTS, min(2 * len(ORDERS) * len(RULES), WORK // max(1, parts) ** 2))
+    return max(MIN_ATTEMPTS, min(ALL_ATTEMPTS, WORK // max(1, parts) ** 2))
 
 
-def maxrects_pack(sizes: Sequence[Size], width: int, height: int) -> list[Corner] | None:
+def maxrects_pack(
+    sizes: Sequence[Size], width: int, height: int, max_attempts: int | None = None
+) -> list[Corner] | None:
     """A layout of ``sizes`` in the ``width x height`` tray (module docstring), each part's
     lower-left corner and rotation, in the order of ``sizes``; None when none of the first
-    :func:`attempts` attempts finds one (orders outermost, then rules, the tray then its
-    transpose)."""
+    ``max_attempts`` attempts (default :func:`attempts`) finds one (orders outermost, then
+    rules, the tray then its transpose)."""
     if not sizes:
         return []
     transposed = [(h, w, rot) for w, h, rot in sizes]
-    left = attempts(len(sizes))
+    left = attempts(len(sizes)) if max_attempts is None else max_attempts
     for key in ORDERS.values():
         order = sorted(range(len(sizes)), key=lambda j: key(sizes[j]))
         for rule in RULES.values():

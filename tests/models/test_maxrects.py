@@ -25,10 +25,10 @@ from bench_packing import load as load_packing  # noqa: E402
 from bench_packing import valid  # noqa: E402
 
 
-def _valid(sizes, width, height, corners) -> bool:
-    """Inside the tray, no two overlapping, a part turned only when it may rotate (the packing
-    benchmark's check, bench/bench_packing.py)."""
-    return valid(width, height, sizes, corners)
+def _kit_items(inst, counts):
+    """A kit's parts as (part id, part type) pairs, as :func:`bilevel_kit.models.packing.pack`
+    takes them."""
+    return [(f"{k}{j}", inst.part_types[k]) for k, n in counts.items() for j in range(n)]
 
 
 sizes_st = st.lists(
@@ -42,7 +42,7 @@ def test_every_layout_is_valid(sizes, width, height):
     out = mr.maxrects_pack(sizes, width, height)
     if out is not None:
         assert len(out) == len(sizes)
-        assert _valid(sizes, width, height, out)
+        assert valid(width, height, sizes, out)
     if sum(w * h for w, h, _ in sizes) > width * height:
         assert out is None
 
@@ -58,7 +58,7 @@ def test_the_transposed_tray_turns_back():
     ]
     assert direct == [None] * len(direct)
     out = mr.maxrects_pack(sizes, 19, 18)
-    assert out is not None and _valid(sizes, 19, 18, out)
+    assert out is not None and valid(19, 18, sizes, out)
     assert out[5][2] is False
 
 
@@ -69,7 +69,7 @@ def test_a_kit_cpsat_left_undecided_is_laid_out_before_the_model():
     model."""
     inst = load(KITBENCH / "sparse_n50_s1_tu_loose_d0.json")
     counts = {"p0": 13, "p1": 11, "p2": 7, "p3": 3, "p4": 9, "p5": 2}
-    items = [(f"{k}{j}", inst.part_types[k]) for k, n in counts.items() for j in range(n)]
+    items = _kit_items(inst, counts)
     grid = pk._grid(inst.tray, items, 1.0, None)
     assert pk._shelf(grid.sizes, grid.W, grid.H) is None
     res = pk.pack(inst.tray, items, time_limit=0.2)
@@ -105,8 +105,7 @@ def test_each_rule_fills_a_tray_exactly(rule):
 
 
 def _kit_sizes(inst, counts):
-    items = [(f"{k}{j}", inst.part_types[k]) for k, n in counts.items() for j in range(n)]
-    grid = pk._grid(inst.tray, items, 1.0, None)
+    grid = pk._grid(inst.tray, _kit_items(inst, counts), 1.0, None)
     return grid.sizes, grid.W, grid.H
 
 
@@ -124,7 +123,7 @@ def test_the_kits_cpsat_left_undecided():
             for kit in kits:
                 sizes, width, height = _kit_sizes(inst, kit)
                 out = mr.maxrects_pack(sizes, width, height)
-                laid += out is not None and _valid(sizes, width, height, out)
+                laid += out is not None and valid(width, height, sizes, out)
                 shelf += pk._shelf(sizes, width, height) is not None
             counts[name, kind] = (len(kits), laid, shelf)
     assert counts == {
@@ -144,7 +143,7 @@ def test_the_packing_benchmark_instances_it_lays_out():
         width, height, sizes = load_packing(path)
         out = mr.maxrects_pack(sizes, width, height)
         if out is not None:
-            assert _valid(sizes, width, height, out)
+            assert valid(width, height, sizes, out)
             laid.append(path.stem)
             if pk._shelf(sizes, width, height) is not None:
                 shelf.append(path.stem)

@@ -208,7 +208,7 @@ class _Search:
         }
         self.stop = "exhausted"
         self.batch: int | None = None
-        self.max_nodes: int | None = None
+        self.max_nodes = MAX_NODES
 
     def fit(self, mask: int) -> str:
         """:data:`FITS`, :data:`NO` or :data:`RELAXED` for the kit (the oracle, memoised by
@@ -324,7 +324,7 @@ class _Search:
         ``max_nodes`` kept. One node of a sparse precedence graph with a loose tray has
         millions of kits (``sparse_n50_s1_tu_loose_d0``: 9.6 million nodes kept in 3
         expansions, 10.7 GB), so the cap between expansions alone does not bound memory."""
-        if self.max_nodes is not None and counts["kept"] >= self.max_nodes:
+        if counts["kept"] >= self.max_nodes:
             return "memory"
         if not counts["generated"] & 63 and self._late():
             return "time_limit"
