@@ -1,8 +1,9 @@
 """Rewrite the KitBench tables of docs/kitbench.md, instances/kitbench/README.md and README.md from
 instances/kitbench/index.csv, and the profile prose of docs/kitbench.md from the passes'
 committed rows (bench/results/kitbench_LABEL.csv), and the exact models against lns (the
-kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp*_10s.md) and the
-side-by-side runs of two code versions (bench/kitbench_before_after.py) likewise;
+kitbench-versus blocks of docs/kitbench.md and bench/results/kitbench_cmp*_10s.md and
+kitbench_cmp*_60s.md) and the side-by-side runs of two code versions
+(bench/kitbench_before_after.py) likewise;
 with --figures, also redraw a run's profile and gap-versus-size figures into docs/figures/;
 with --profiles, redraw the profile figures of the committed passes
 (docs/figures/kitbench-profile-60s.png and -10s.png) from their rows.
@@ -46,7 +47,9 @@ PAGES = (
 )
 RESULTS = ROOT / "bench" / "results"
 #: The committed tables with a per-instance block of the exact models against lns.
-VERSUS_PAGES = tuple(sorted(RESULTS.glob("kitbench_cmp*_10s.md")))
+VERSUS_PAGES = tuple(
+    sorted(p for s in ("10s", "60s") for p in RESULTS.glob(f"kitbench_cmp*_{s}.md"))
+)
 #: The committed passes drawn by --profiles: label -> (its rows, a separate pass's rows).
 PASSES = {"60s": ("kitbench_60s.csv", None), "10s": ("kitbench_10s.csv", "kitbench_10s_lns.csv")}
 

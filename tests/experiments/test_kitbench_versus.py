@@ -16,6 +16,8 @@ from bilevel_kit.experiments.kitbench.profiles import read_rows
 from bilevel_kit.experiments.kitbench.versus import (
     excess,
     number,
+    pass_proofs,
+    proofs_text,
     render_versus_blocks,
     run_text,
     versus_blocks_in,
@@ -217,3 +219,31 @@ def test_the_pass_of_131_to_250_tasks_and_the_records_it_set() -> None:
     assert page.count("| `") == 12  # the per-instance table is rendered
     docs = " ".join((ROOT / "docs" / "kitbench.md").read_text().split())
     assert "set 5 plans and 4 bounds" in docs and "(327 s of wall time, 464 MB peak" in docs
+
+
+def test_pass_proofs_count_proven_instances_by_size_and_list_the_wide_gaps() -> None:
+    """Issue 37's record goals counted on one pass: an instance is proven when any method's
+    cell (the reference's too) is optimal; the pass's gap is its best plan against its best
+    bound, and one without a bound has no certified gap."""
+    rows = [
+        *ROWS,
+        _row("d", "lns", 600.0, status="optimal", bound=600.0),
+        _row("d", "cpsat", 601.0, bound=590.0),
+        _row("d", "milp", 602.0),
+        _row("e", "lns", 1000.0, bound=980.0),  # 2 % open: wide
+        _row("e", "cpsat", 990.0, bound=970.0),  # best plan 990 against 980: 1.01 %
+        _row("e", "milp", 995.0),
+    ]
+    for r in rows:
+        r["tasks"] = "100" if r["instance"] == "e" else r["tasks"]
+    table = versus_rows(rows, ["cpsat", "milp"])
+    p = pass_proofs(table)
+    assert p["proven"] == {60: (2, 4), 130: (2, 5)}  # b (cpsat) and d (lns)
+    assert [n for n, _ in p["open"]] == ["c", "e"]  # a: 0.5 % open
+    assert p["open"][0][1] is None and p["open"][1][1] == pytest.approx(10 / 990, rel=1e-9)
+    text = proofs_text(table)
+    assert "on 2 of the 4 up to 60 tasks, 2 of the 5 up to 130 tasks" in text
+    assert "`c` no certified gap, `e` 1.01 %." in text
+    for r in rows:
+        r["tasks"] = "200"
+    assert proofs_text(versus_rows(rows, ["cpsat", "milp"])) == ""  # beyond the goals' sizes

@@ -20,6 +20,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ...objectives import relative_gap
 from ..tables import block_names, fill_blocks, markdown_lines, marked_blocks
 from .profiles import methods_of, plan_makespan, read_rows
 
@@ -27,6 +28,10 @@ Row = Mapping[str, Any]
 #: The reference method and the goal of issue 37: at most 0.1 % above it.
 REFERENCE = "lns"
 GOAL = 0.001
+#: Task counts of issue 37's proof goals (every record up to 60 tasks proven at 60 s, up to 130
+#: at ten minutes) and the largest certified gap it allows at 60 s up to 130 tasks.
+PROOF_SIZES = (60, 130)
+OPEN_GOAL = 0.01
 #: Slack of the comparison: equal plans computed in another order differ in the last bits.
 _EPS = 1e-12
 
@@ -60,6 +65,7 @@ def versus_rows(
             "instance": name,
             "tasks": int(next(c for c in mine if c is not None)["tasks"]),
             reference: ref,
+            f"{reference}_status": mine[0]["status"] if mine[0] is not None else None,
             "best_bound": max(bounds) if bounds else None,
         }
         for m in methods:
@@ -93,6 +99,52 @@ def versus_summary(
             "misses": misses,
         }
     return out
+
+
+def pass_proofs(
+    table: Sequence[Row], sizes: Sequence[int] = PROOF_SIZES, open_goal: float = OPEN_GOAL
+) -> dict[str, Any]:
+    """What the pass itself proved (the records' goals of issue 37, counted on one pass): per
+    size in ``sizes``, (instances proven optimal by some method of the pass, instances up to
+    that many tasks); and the instances up to the largest size whose certified gap in the pass
+    (its best plan against its best bound, :func:`...objectives.relative_gap`) is above
+    ``open_goal``, with that gap, worst first (no plan or no bound: gap None, listed first)."""
+    methods = [k.removesuffix("_status") for k in table[0] if k.endswith("_status")]
+    proven = {
+        r["instance"] for r in table if any(r.get(f"{m}_status") == "optimal" for m in methods)
+    }
+    counts = {}
+    for size in sizes:
+        names = [r["instance"] for r in table if r["tasks"] <= size]
+        counts[size] = (sum(n in proven for n in names), len(names))
+    wide = []
+    for r in table:
+        if r["tasks"] > max(sizes) or r["instance"] in proven:
+            continue
+        plans = [r[m] for m in methods if r.get(m) is not None]
+        g = relative_gap(min(plans), r["best_bound"]) if plans else None
+        if g is None or g > open_goal + _EPS:
+            wide.append((r["instance"], g))
+    wide.sort(key=lambda t: -math.inf if t[1] is None else -t[1])
+    return {"proven": counts, "open": wide}
+
+
+def proofs_text(table: Sequence[Row]) -> str:
+    """The sentence of :func:`pass_proofs` ("": no instance up to the proof goals' sizes)."""
+    p = pass_proofs(table)
+    if not any(n for _, n in p["proven"].values()):
+        return ""
+    counts = ", ".join(
+        f"{k} of the {n} up to {size} tasks" for size, (k, n) in p["proven"].items() if n
+    )
+    wide = ", ".join(
+        f"`{n}` {'no certified gap' if g is None else f'{100 * g:.2f} %'}" for n, g in p["open"]
+    )
+    return (
+        f"**The pass's proofs**: proven optimal by a method of the pass on {counts}; certified "
+        f"gap of the pass (its best plan against its best bound) above {100 * OPEN_GOAL:g} % up "
+        f"to {max(PROOF_SIZES)} tasks: {wide or 'none'}."
+    )
 
 
 def _pct(value: float | None) -> str:
@@ -153,6 +205,8 @@ def versus_text(
             f"{_pct_unit(s['worst'])}; missing the goal: {misses}."
         )
     head = f"Run: {run_text(run)}\n\n" if run else ""
+    if table and (proofs := proofs_text(table)):
+        parts.append(proofs)
     return (
         head + f"{len(table)} instances; excess = (makespan - {reference}'s) / {reference}'s, "
         "negative: better than " + reference + ".\n\n" + "\n\n".join(parts) + "\n"
@@ -209,6 +263,8 @@ __all__ = [
     "GOAL",
     "REFERENCE",
     "excess",
+    "pass_proofs",
+    "proofs_text",
     "render_versus_blocks",
     "run_text",
     "versus_blocks_in",
