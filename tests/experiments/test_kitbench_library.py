@@ -122,12 +122,10 @@ def test_the_records_name_the_bounds_the_sweepcap_pass_raised(library):
 def test_the_records_name_the_plans_the_maxrects_pass_set(library):
     """docs/kitbench.md#the-records, step 11: ``bench update`` from the ``after`` side of the
     committed pass ``maxrects_10s`` set 2 plans (``lns``'s) and no bound; the index's provenance
-    names that pass's commit exactly there, with the makespans its rows hold."""
+    names that pass's commit on the one step 13 did not improve again, with the makespan its
+    rows hold."""
     run, rows, plans, bounds = _pass_in_the_records(library, "maxrects_10s_after")
-    assert {name: r.best_known for name, r in plans.items()} == {
-        "mixed_u5_t1_loose_d0": 3926.9,
-        "mixed_u5_tu_loose_d30": 3998.9,
-    }
+    assert {name: r.best_known for name, r in plans.items()} == {"mixed_u5_t1_loose_d0": 3926.9}
     for name, r in plans.items():
         assert (r.plan.method, r.plan.time_limit) == ("lns", 10.0)
         assert float(rows[(name, "lns")]["makespan"]) == pytest.approx(r.best_known, abs=1e-6)
