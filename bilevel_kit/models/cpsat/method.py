@@ -72,10 +72,11 @@ from ...plan import Plan, evaluate
 from .. import packing, packing_oracle
 from ..budget import Budget
 from ..common import (
+    Johnson,
     Packer,
     assignment_cells,
     chain_groups_idx,
-    closed_form_plan,
+    johnson_plan,
     pack_time_limit,
     quick_plan,
     reduced_edges,
@@ -102,7 +103,7 @@ from .proven import kit_cap, known_bound, scaled_kit_bounds, scaled_lower, stron
 from .scaling import Scaled, scale_times, scaled_makespan, scaled_objective
 from .station_run import station_baselines, station_hand_off
 from .tray import embed_scope, tray_mode
-from .warm import MIN_RUN, best_heuristic_plan, closed_bound, closed_form_optimal
+from .warm import MIN_RUN, best_heuristic_plan, closed_bound
 
 if TYPE_CHECKING:
     from .live import Live as LiveProgress
@@ -196,8 +197,12 @@ def cpsat(
     live = progress.tracker(options.objective)
     live.report(bound=closed_bound(instance, objective), stage="warm start")
     kw: dict[str, Any] = {"seed": seed, "time_limit": hint_tl, "objective": options.objective}
-    if objective.is_makespan and one and closed_form_optimal(instance, budget):
-        pass  # the run proves a quick plan optimal at once: no warm start needed
+    johnson: Johnson | None = None
+    if objective.is_makespan and one:  # the closed-form check, its plan kept for the incumbent
+        packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
+        johnson = johnson_plan(instance, packer)
+    if johnson is not None and johnson[1]:
+        pass  # the run proves the Johnson-order plan optimal at once: no warm start needed
     elif options.hint == "auto":
         plan, source = best_heuristic_plan(instance, **kw)
     elif options.hint != "none":
@@ -208,7 +213,7 @@ def cpsat(
     if plan is not None and live.active:
         live.report(incumbent=objective.value(evaluate(instance, plan)))
     rest = max(MIN_RUN, budget.remaining())
-    out = run(instance, options, seed=seed, time_limit=rest, hint=plan)
+    out = run(instance, options, seed=seed, time_limit=rest, hint=plan, johnson=johnson)
     out.extra["hint_method"] = source if out.extra["hint_used"] else None  # (its plan is the start)
     out.extra["hint_time_s"] = budget.elapsed() - out.extra.get("wall_time_s", 0.0)
     out.extra["wall_time_s"] = budget.elapsed()
@@ -255,10 +260,13 @@ def run(
     cpsat_params: dict[str, Any] | None = None,
     releases: Mapping[str, float] | None = None,
     deterministic: bool = False,
+    johnson: Johnson | None = None,
 ) -> MethodOutput:
     """Minimise makespan (or human idle) over all segmentations and orders (module
     docstring); ``time_limit`` (None: 60 s) covers everything, packing included. Several
-    stations: :mod:`.station_model` and :mod:`.station_run`, without release times."""
+    stations: :mod:`.station_model` and :mod:`.station_run`, without release times.
+    ``johnson``: the Johnson-order plan :func:`cpsat` computed in its closed-form check (None:
+    the run computes it), a candidate incumbent."""
     instance = instance.as_one_station()  # one declared station: the S = 1 model
     if instance.stations and releases:
         raise UsageError(
@@ -288,6 +296,7 @@ def run(
         },
     )
     backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
+    backend.johnson = johnson
     return drive(backend, options.fallback, options.search, bool(releases))
 
 
@@ -315,6 +324,7 @@ class _Cpsat:
         self.extra = report.extra
         self.K = 1
         self.mode = "benders"
+        self.johnson: Johnson | None = None
         self.live: LiveProgress | None = None
         self.ctx: Context
 
@@ -328,7 +338,7 @@ class _Cpsat:
         """The incumbent (:func:`_incumbent`), the proven bound, the kit cap and tray mode."""
         instance, options, extra = self.instance, self.options, self.extra
         ctx = self.ctx = _context(instance, self.sc, options, self.packer, self.budget, extra)
-        incumbent = _incumbent(ctx, self.hint, pack_time_limit(self.budget), extra)
+        incumbent = _incumbent(ctx, self.hint, pack_time_limit(self.budget), extra, self.johnson)
         self.live = _start_live(ctx, incumbent)
         upper = None
         if incumbent is not None and ctx.minimised.is_makespan:
@@ -543,9 +553,15 @@ def _search(
 
 
 def _incumbent(
-    ctx: Context, hint: Plan | None, pack_tl: float, extra: dict[str, Any]
+    ctx: Context,
+    hint: Plan | None,
+    pack_tl: float,
+    extra: dict[str, Any],
+    johnson: Johnson | None = None,
 ) -> list[list[int]] | None:
-    """The better of the hint (if its kits fit) and a quick plan, in canonical chain order."""
+    """The best of the hint (if its kits fit), the topological order's quick plan and the
+    Johnson order's (``johnson``: computed already, by :func:`cpsat`'s closed-form check), in
+    canonical chain order; ties go to the hint, then the topological order's plan."""
     instance, packer = ctx.instance, ctx.packer
     ids = ctx.ids
     idx = instance.index
@@ -564,14 +580,18 @@ def _incumbent(
     if ctx.sc.station:  # several stations: the baselines (a quick plan would mix stations)
         candidates += station_baselines(instance)
     elif ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
-        qp = closed_form_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
-        if qp is not None:  # optimal by the closed-form bound: the run ends at once
-            return canonical([[idx[t] for t in k] for k in qp], ctx.groups)
+        if johnson is None:
+            johnson = johnson_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
+        if johnson[1]:  # optimal by the closed-form bound: the run ends at once
+            assert johnson[0] is not None
+            return canonical([[idx[t] for t in k] for k in johnson[0]], ctx.groups)
     if not ctx.sc.station:
         # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
         qp = quick_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.next(0.1)))
         if qp is not None:
             candidates.append([[idx[t] for t in k] for k in qp])
+        if johnson is not None and johnson[0] is not None:
+            candidates.append([[idx[t] for t in k] for k in johnson[0]])
     if not candidates:
         return None
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))

@@ -57,7 +57,7 @@ from ..budget import Budget
 from ..common import (
     Packer,
     claim_scope,
-    closed_form_plan,
+    johnson_plan,
     pack_time_limit,
     plan_extra,
     quick_plan,
@@ -291,16 +291,23 @@ class _Run:
 def _incumbent(
     r: _Run, pack_tl: float, seed: int
 ) -> tuple[list[list[str]] | None, float | None, float | None, int]:
-    """The quick plan (for makespan, first one attaining the closed-form bound) or the hint's
-    plan if better, its objective, the upper bound U and the kit cap K (valid only for plans
-    at least as good)."""
+    """The quick plan (for makespan, first the Johnson order's, optimal at once when it attains
+    the closed-form bound, else the better of it and the topological order's; ties: the
+    topological order's) or the hint's plan if better, its objective, the upper bound U and
+    the kit cap K (valid only for plans at least as good)."""
     instance, budget, objective = r.instance, r.budget, r.options.objective
     makespan = r.minimised.is_makespan
-    inc = None
-    if makespan:  # optimal at once if it attains the closed-form bound
-        inc = closed_form_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.05)))
+    johnson, optimal = None, False
+    if makespan:
+        packer = Packer(instance, min(0.2, pack_tl), budget.next(0.05))
+        johnson, optimal = johnson_plan(instance, packer)
+    inc = johnson if optimal else None
     inc = inc or quick_plan(instance, Packer(instance, min(0.2, pack_tl), budget.next(0.1)))
     inc_obj = None if inc is None else objective_value(instance, inc, objective)
+    if johnson is not None and not optimal:
+        johnson_obj = objective_value(instance, johnson, objective)
+        if inc_obj is None or johnson_obj < inc_obj - TOL:
+            inc, inc_obj = johnson, johnson_obj
     if r.options.hint != "none" and (inc is None or inc_obj is None or inc_obj > r.closed + TOL):
         inc, inc_obj = _hinted(r, inc, inc_obj, seed)
     upper = None
