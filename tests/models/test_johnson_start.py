@@ -1,5 +1,5 @@
 """The Johnson-order quick plan as a candidate incumbent of the exact models
-(docs/formulations.md, "Closed-form bounds"): the closed-form check computes it once, and when
+(docs/formulations.md, "Closed-form lower bounds"): the closed-form check computes it once, and when
 it does not attain the bound it still competes with the topological order's quick plan."""
 
 from __future__ import annotations
