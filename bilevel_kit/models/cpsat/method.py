@@ -295,8 +295,7 @@ def run(
             "hint_method": None,
         },
     )
-    backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params)
-    backend.johnson = johnson
+    backend = _Cpsat(instance, options, sc, packer, report, hint, seed, cpsat_params, johnson)
     return drive(backend, options.fallback, options.search, bool(releases))
 
 
@@ -317,14 +316,15 @@ class _Cpsat:
         hint: Plan | None,
         seed: int,
         cpsat_params: dict[str, Any] | None,
+        johnson: Johnson | None = None,
     ) -> None:
         self.instance, self.options, self.sc, self.packer = instance, options, sc, packer
         self.report, self.hint, self.seed, self.cpsat_params = report, hint, seed, cpsat_params
+        self.johnson = johnson  # the closed-form check's plan, when cpsat computed it
         self.budget = report.budget
         self.extra = report.extra
         self.K = 1
         self.mode = "benders"
-        self.johnson: Johnson | None = None
         self.live: LiveProgress | None = None
         self.ctx: Context
 
