@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 from ..instance import Instance, topological_order
 from ..methods import Status
@@ -563,8 +563,11 @@ def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | No
     return kits if optimal else None
 
 
-#: :func:`johnson_plan`'s answer: the plan (None: none found) and whether it is optimal.
-Johnson = tuple[list[list[str]] | None, bool]
+class Johnson(NamedTuple):
+    """:func:`johnson_plan`'s answer."""
+
+    kits: list[list[str]] | None  # None: no plan found
+    optimal: bool  # it attains the closed-form bound
 
 
 def johnson_plan(instance: Instance, packer: Packer) -> Johnson:
@@ -581,6 +584,6 @@ def johnson_plan(instance: Instance, packer: Packer) -> Johnson:
         instance, packer, order=johnson_topological_order(instance), target=bound + 1e-9
     )
     if kits is None:
-        return None, False
+        return Johnson(None, False)
     ms = evaluate(instance, Plan(tuple(Kit(tuple(k)) for k in kits))).makespan
-    return kits, ms <= bound + 1e-9
+    return Johnson(kits, ms <= bound + 1e-9)

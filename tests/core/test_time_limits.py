@@ -91,7 +91,7 @@ def test_the_cli_returns_the_incumbent_naming_the_size(tmp_path, monkeypatch, ca
     from bilevel_kit.cli import main
     from bilevel_kit.models.cpsat import method
 
-    monkeypatch.setattr(method, "johnson_plan", lambda *a, **k: (None, False))
+    monkeypatch.setattr(method, "johnson_plan", lambda *a, **k: method.Johnson(None, False))
     doc = generate("intree", 1000, seed=0)
     doc.update(delivery_time=0.0, kit_overhead={"robot": 0.0, "human": 0.0})
     path = tmp_path / "big.json"

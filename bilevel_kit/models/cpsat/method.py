@@ -201,7 +201,7 @@ def cpsat(
     if objective.is_makespan and one:  # the closed-form check, its plan kept for the incumbent
         packer = Packer(instance, min(0.2, pack_time_limit(budget)), budget.head(0.05))
         johnson = johnson_plan(instance, packer)
-    if johnson is not None and johnson[1]:
+    if johnson is not None and johnson.optimal:
         pass  # the run proves the Johnson-order plan optimal at once: no warm start needed
     elif options.hint == "auto":
         plan, source = best_heuristic_plan(instance, **kw)
@@ -582,16 +582,16 @@ def _incumbent(
     elif ctx.minimised.is_makespan and not any(ctx.sc.rel):  # (releases: not a bound of them)
         if johnson is None:
             johnson = johnson_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.head(0.05)))
-        if johnson[1]:  # optimal by the closed-form bound: the run ends at once
-            assert johnson[0] is not None
-            return canonical([[idx[t] for t in k] for k in johnson[0]], ctx.groups)
+        if johnson.optimal:  # optimal by the closed-form bound: the run ends at once
+            assert johnson.kits is not None
+            return canonical([[idx[t] for t in k] for k in johnson.kits], ctx.groups)
     if not ctx.sc.station:
         # the next 10 % of what is left (the hint's check can spend the first 10 % on large plans)
         qp = quick_plan(instance, packer.sub(min(0.2, pack_tl), ctx.budget.next(0.1)))
         if qp is not None:
             candidates.append([[idx[t] for t in k] for k in qp])
-        if johnson is not None and johnson[0] is not None:
-            candidates.append([[idx[t] for t in k] for k in johnson[0]])
+        if johnson is not None and johnson.kits is not None:
+            candidates.append([[idx[t] for t in k] for k in johnson.kits])
     if not candidates:
         return None
     best = min(candidates, key=lambda ks: scaled_objective(ctx.sc, ks, ctx.objective))
