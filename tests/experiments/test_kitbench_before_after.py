@@ -143,7 +143,8 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 #: the rule's first version at 10 s; the LNS first's cut share at 10 s and its stall of a sweep
 #: at 10 s (up to 130 tasks, 131 to 250) and 60 s (9 records); the windows' dual-feasible-function
 #: inequalities at 10 s (tight trays up to 130 tasks); the maximal-rectangles packer in the
-#: packing oracle at 10 s (up to 130 tasks), and its cap on attempts against it.
+#: packing oracle at 10 s (up to 130 tasks), and its cap on attempts against it; issue 37's
+#: changes together at 10 s (up to 250 tasks).
 LABELS = (
     "i36_60s",
     "lnsafter_10s",
@@ -159,6 +160,7 @@ LABELS = (
     "maxrects_10s",
     "maxcap_10s",
     "johnson_10s",
+    "i37_10s",
 )
 
 
@@ -414,6 +416,7 @@ def test_the_changelog_numbers_of_the_sweepcap_runs():
         ("maxrects_10s", [(6, 1), (6, 1), (7, 2)], [(25, 25), (23, 24), (9, 9)], (48, 48)),
         ("maxcap_10s", [(4, 0), (4, 0), (5, 2)], [(23, 23), (21, 21), (8, 8)], (50, 50)),
         ("johnson_10s", [(6, 1), (4, 3), (3, 1)], [(24, 24), (22, 22), (9, 9)], (50, 50)),
+        ("i37_10s", [(38, 0), (21, 1), (17, 2)], [(21, 25), (24, 23), (5, 11)], (59, 58)),
     ],
 )
 def test_the_changelog_numbers_of_the_packer_runs(label, moves, optimal, within_after):
@@ -438,6 +441,38 @@ def test_the_changelog_numbers_of_the_packer_runs(label, moves, optimal, within_
     elif label == "johnson_10s":  # (the Johnson-order incumbent, issue 37)
         assert "`cpsat` better on 6 cells and worse on 1, `milp` 4 and 3 (`lns`, unchanged" in text
         assert "within 0.1 % of `lns` on 48 records before and 50 after" in text
+    elif label == "i37_10s":  # (issue 37's closing measurement, up to 250 tasks)
+        assert "`cpsat` better on 38 cells and worse on none, `milp` 21 and 1 (`lns` 17 and 2)" in (
+            text
+        )
+        assert "proven optimal `cpsat` 21 -> 25, `milp` 24 -> 23, `lns` 5 -> 11" in text
+        assert "`cpsat` 33 -> 59 and `milp` 55 -> 58 of the 62 records" in text
     else:
         assert "better on 4 cells and worse on none, `milp` 4 and none, `lns` 5 and 2" in text
         assert "within 0.1 % of `lns` on all 50 records" in text
+
+
+def test_the_reading_of_the_issue_37_run() -> None:
+    """docs/kitbench.md, after block ``i37_10s``: the record whose proofs the exact models gave up
+    for the LNS first, and ``lns``'s spread on its worse record over every committed 10 s pass."""
+    from bilevel_kit.experiments.kitbench.profiles import plan_makespan, read_rows
+
+    results = ROOT / "bench" / "results"
+    table = ba.cells(
+        read_rows(results / "kitbench_i37_10s_before.csv"),
+        read_rows(results / "kitbench_i37_10s_after.csv"),
+    )
+    lost = [c for c in table if c["instance"] == "mixed_u1_tu_loose_d10" and c["method"] != "lns"]
+    assert [(c["status_before"], c["status_after"]) for c in lost] == [("optimal", "feasible")] * 2
+    assert {round(c["before"], 2) for c in lost} == {round(c["after"], 2) for c in lost} == {847.78}
+    assert [round(c["time_before"], 1) for c in lost] == [9.4, 4.7]
+    spread = [
+        plan_makespan(r)
+        for f in sorted(results.glob("kitbench_*_10s_*.csv"))
+        for r in read_rows(f)
+        if r["instance"] == "wide_n50_s1_t1_tight_d30" and r["method"] == "lns"
+    ]
+    assert (min(spread), max(spread)) == (1273.0, 1306.0)
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
+    assert "both models proved 847.78 s before (in 9.4 s and 4.7 s)" in docs
+    assert "give it between 1,273 s and 1,306 s" in docs
