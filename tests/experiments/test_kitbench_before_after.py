@@ -144,7 +144,7 @@ def test_wall_seconds_reads_time_v(tmp_path) -> None:
 #: at 10 s (up to 130 tasks, 131 to 250) and 60 s (9 records); the windows' dual-feasible-function
 #: inequalities at 10 s (tight trays up to 130 tasks); the maximal-rectangles packer in the
 #: packing oracle at 10 s (up to 130 tasks), and its cap on attempts against it; issue 37's
-#: changes together at 10 s (up to 250 tasks).
+#: changes together at 10 s (up to 250 tasks) and 60 s (the exact models up to 60 tasks).
 LABELS = (
     "i36_60s",
     "lnsafter_10s",
@@ -161,6 +161,7 @@ LABELS = (
     "maxcap_10s",
     "johnson_10s",
     "i37_10s",
+    "i37_60s",
 )
 
 
@@ -476,3 +477,42 @@ def test_the_reading_of_the_issue_37_run() -> None:
     docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
     assert "both models proved 847.78 s before (in 9.4 s and 4.7 s)" in docs
     assert "give it between 1,273 s and 1,306 s" in docs
+
+
+def test_the_proofs_of_the_issue_37_run_at_60_s() -> None:
+    """docs/kitbench.md, after block ``i37_60s`` (and the CHANGELOG): the records up to 60 tasks
+    that ``cpsat`` or ``milp`` proved within the minute, before and after, and which stay open."""
+    import csv
+
+    from bilevel_kit.experiments.kitbench.profiles import read_rows
+
+    results = ROOT / "bench" / "results"
+    proven = {}
+    for side in ("before", "after"):
+        rows = read_rows(results / f"kitbench_i37_60s_{side}.csv")
+        records = {r["instance"] for r in rows}
+        assert len(records) == 37
+        proven[side] = {r["instance"] for r in rows if r["status"] == "optimal"}
+        assert {r["method"] for r in rows} == {"cpsat", "milp"}
+    assert (len(proven["before"]), len(proven["after"])) == (23, 26)
+    unproven = sorted(records - proven["after"])
+    assert len(unproven) == 11
+    with open(ROOT / "instances" / "kitbench" / "index.csv", encoding="utf-8") as f:
+        status = {r["instance"]: r["status"] for r in csv.DictReader(f)}
+    assert sum(status[x] != "optimal" for x in unproven) == 7
+    docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
+    listed = ", ".join(f"`{x}`" for x in unproven[:-1]) + f" and `{unproven[-1]}`"
+    assert (
+        f"23 of the 37 records before, 26 after. The 11 that neither proves after: {listed}; 7 "
+        in docs
+    )
+    text = " ".join((ROOT / "CHANGELOG.md").read_text(encoding="utf-8").split())
+    assert "proven by `cpsat` or `milp` within the minute on 23 -> 26 of the 37" in text
+    table = ba.cells(
+        read_rows(results / "kitbench_i37_60s_before.csv"),
+        read_rows(results / "kitbench_i37_60s_after.csv"),
+    )
+    counts = [ba.method_summary(table, m) for m in ("cpsat", "milp")]
+    assert [(c["better"], len(c["worse"])) for c in counts] == [(12, 1), (11, 1)]
+    assert [(c["optimal_before"], c["optimal_after"]) for c in counts] == [(21, 25), (23, 26)]
+    assert "`cpsat` 21 -> 25, `milp` 23 -> 26), plans better on 12 and 11 cells, worse on 1" in text
