@@ -555,14 +555,6 @@ def best_cut(instance: Instance, order: Sequence[str], packer: Packer) -> list[l
     return None if ext is None else one_tray_cut(instance, order, ext)[1]
 
 
-def closed_form_plan(instance: Instance, packer: Packer) -> list[list[str]] | None:
-    """The quick plan on the Johnson-priority order (:func:`johnson_plan`) when it attains the
-    closed-form bound :func:`bilevel_kit.bounds.best_bound`, which proves it optimal (e.g.
-    Johnson's special case); else None."""
-    kits, optimal = johnson_plan(instance, packer)
-    return kits if optimal else None
-
-
 class Johnson(NamedTuple):
     """:func:`johnson_plan`'s answer."""
 
