@@ -482,8 +482,7 @@ def test_the_reading_of_the_issue_37_run() -> None:
 def test_the_proofs_of_the_issue_37_run_at_60_s() -> None:
     """docs/kitbench.md, after block ``i37_60s`` (and the CHANGELOG): the records up to 60 tasks
     that ``cpsat`` or ``milp`` proved within the minute, before and after, and which stay open."""
-    import csv
-
+    from bilevel_kit.experiments.kitbench.library import Library
     from bilevel_kit.experiments.kitbench.profiles import read_rows
 
     results = ROOT / "bench" / "results"
@@ -497,8 +496,8 @@ def test_the_proofs_of_the_issue_37_run_at_60_s() -> None:
     assert (len(proven["before"]), len(proven["after"])) == (23, 26)
     unproven = sorted(records - proven["after"])
     assert len(unproven) == 11
-    with open(ROOT / "instances" / "kitbench" / "index.csv", encoding="utf-8") as f:
-        status = {r["instance"]: r["status"] for r in csv.DictReader(f)}
+    library = Library.at(ROOT / "instances" / "kitbench").read()
+    status = {r.instance: r.status for r in library}
     assert sum(status[x] != "optimal" for x in unproven) == 7
     docs = " ".join((ROOT / "docs" / "kitbench.md").read_text(encoding="utf-8").split())
     listed = ", ".join(f"`{x}`" for x in unproven[:-1]) + f" and `{unproven[-1]}`"
