@@ -11,6 +11,7 @@ from bilevel_kit import load, solve
 from bilevel_kit.models.budget import Budget
 from bilevel_kit.models.common import Packer, johnson_plan, quick_plan
 from bilevel_kit.plan import Kit, Plan, evaluate
+from bilevel_kit.validate import check
 
 #: The record where the two orders' quick plans differ (the numbers docs/formulations.md cites).
 WIDE = ROOT / "instances" / "kitbench" / "wide_n50_s1_t1_tight_d30.json"
@@ -42,6 +43,7 @@ def test_the_exact_models_start_from_the_johnson_plan(wide, method) -> None:
     out = solve(wide, method, time_limit=6, hint="none", fallback="none")
     assert out.extra["upper_start"] == pytest.approx(1327.0, abs=1e-6)
     assert out.makespan <= 1327.0 + 1e-6
+    assert out.plan is not None and check(wide, out.plan) == []
 
 
 def test_cpsat_runs_the_closed_form_check_once(tiny, monkeypatch) -> None:
@@ -58,3 +60,4 @@ def test_cpsat_runs_the_closed_form_check_once(tiny, monkeypatch) -> None:
     monkeypatch.setattr(method, "johnson_plan", counted)
     out = solve(tiny, "cpsat", time_limit=5, fallback="none")
     assert len(calls) == 1 and out.plan is not None
+    assert check(tiny, out.plan) == []
